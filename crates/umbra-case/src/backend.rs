@@ -1,0 +1,108 @@
+//! The one interface every backend implements, object-safe so the runner can hold a
+//! `Box<dyn Backend>` per worker. A backend that cannot do what a case needs says so with
+//! [`Support::Unsupported`] and a reason: a skip, never a silent pass.
+
+use std::fmt;
+
+use crate::format::{Case, Compare, DepthFormat, DepthOrder, Filter, Light, Outside};
+use crate::frame::Frame;
+use crate::prepare::Prepared;
+
+/// A backend's identifier, `api/driver` (`ref`, `gl33/llvmpipe`, `wgpu-vk/lavapipe`).
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct BackendId(pub String);
+
+impl fmt::Display for BackendId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+/// What the driver says about itself, verbatim.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DriverInfo {
+    /// Vendor string.
+    pub vendor: String,
+    /// Renderer / adapter name.
+    pub renderer: String,
+    /// Version string.
+    pub version: String,
+    /// Extensions or features that matter to umbra.
+    pub extensions: Vec<String>,
+}
+
+/// What a case asks of a backend; derived from the case, so a case asks only for what its
+/// scene needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Needs {
+    /// A cube depth map (point light).
+    pub cube_map: bool,
+    /// The depth format.
+    pub format: DepthFormat,
+    /// Hardware or manual compare.
+    pub compare: Compare,
+    /// The filter.
+    pub filter: Filter,
+    /// The outside policy (clamp to border is optional on some APIs).
+    pub outside: Outside,
+    /// Forward or reversed depth.
+    pub depth_order: DepthOrder,
+    /// A polygon-offset clamp (Vulkan's depthBiasClamp).
+    pub polygon_offset_clamp: bool,
+}
+
+impl Needs {
+    /// The needs of `case`.
+    pub fn of(case: &Case) -> Self {
+        let s = &case.shadow;
+        Needs {
+            cube_map: matches!(case.light, Light::Point(_)),
+            format: s.format,
+            compare: s.compare,
+            filter: s.filter,
+            outside: s.outside,
+            depth_order: s.depth_order,
+            polygon_offset_clamp: s.bias.polygon_offset_clamp != 0.0,
+        }
+    }
+}
+
+/// Whether a backend can run a case.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Support {
+    /// It can.
+    Supported,
+    /// It cannot, and why (with the package or feature that would help).
+    Unsupported(String),
+}
+
+/// Why a render failed.
+#[derive(Debug, thiserror::Error)]
+pub enum BackendError {
+    /// The backend cannot run this case on this driver.
+    #[error("unsupported: {0}")]
+    Unsupported(String),
+    /// The API reported an error at a stage.
+    #[error("{stage}: {message}")]
+    Api {
+        /// Which stage (`shadow pass`, `readback`, ...).
+        stage: String,
+        /// The API's message.
+        message: String,
+    },
+    /// Anything else the driver or the backend got wrong.
+    #[error("{0}")]
+    Other(String),
+}
+
+/// A renderer of cases.
+pub trait Backend {
+    /// Its identifier.
+    fn id(&self) -> BackendId;
+    /// What its driver reports.
+    fn info(&self) -> DriverInfo;
+    /// Whether it can run a case with these needs.
+    fn supports(&self, needs: &Needs) -> Support;
+    /// Renders one run. Per-run GPU state is created and destroyed inside.
+    fn render(&mut self, run: &Prepared) -> Result<Frame, BackendError>;
+}

@@ -1,0 +1,678 @@
+//! The case format: the JSON a user writes, as serde types.
+//!
+//! Every struct denies unknown fields, so a misspelt key is an error rather than a silently
+//! ignored default. Every optional field has its default in the doc comment and in
+//! `cases/README.md`; the defaults live in the `default_*` functions at the bottom, one place.
+//! Values here are what the user wrote: [`crate::validate`] checks them and [`crate::prepare`]
+//! turns them into matrices. Nothing in this module computes anything.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+/// A 3-vector as written in JSON: `[x, y, z]`.
+pub type V3 = [f32; 3];
+
+/// One case: a scene, a camera, a light and a shadow-mapping technique.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Case {
+    /// Identifier: lower-case letters, digits, `-` and `_`. Required.
+    pub name: String,
+    /// One sentence: what the case checks and why. Required.
+    pub about: String,
+    /// The objects. Required, at least one.
+    pub scene: Scene,
+    /// The viewer. Required.
+    pub camera: Camera,
+    /// The one light. Required.
+    pub light: Light,
+    /// The shadow-mapping technique. Default: every field's default.
+    #[serde(default)]
+    pub shadow: Shadow,
+    /// The illumination model of EDGE_CASES.md 17. Default: every field's default.
+    #[serde(default)]
+    pub shading: Shading,
+    /// Parameters to sweep: JSON path (dots, as `light.directional.azimuth_deg`) to an axis.
+    /// Several axes expand to their cartesian product. Default: none (one run).
+    #[serde(default)]
+    pub sweep: BTreeMap<String, SweepAxis>,
+    /// What the judge may assume of this case. Default: every field's default.
+    #[serde(default)]
+    pub expect: Expect,
+}
+
+/// The objects of a scene. Every object casts and receives shadows.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// At least one object.
+    pub objects: Vec<Object>,
+}
+
+/// One primitive, written as `{ "box": { ... } }`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Object {
+    /// A finite square (or rectangle) plane, lit on its normal side.
+    Plane(Plane),
+    /// An axis-aligned box before its transform.
+    Box(BoxShape),
+    /// A UV sphere.
+    Sphere(Sphere),
+    /// An inline triangle mesh with flat normals.
+    Mesh(Mesh),
+}
+
+/// `plane`: a rectangle through `point` with normal `normal`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plane {
+    /// A point of the plane, its centre. Required.
+    pub point: V3,
+    /// The lit side's normal (need not be unit length). Default `[0, 1, 0]`.
+    #[serde(default = "default_up")]
+    pub normal: V3,
+    /// Half the side length, or `[half_u, half_v]` for a rectangle. Required.
+    pub half_extent: Extent,
+    /// Albedo, linear RGB in [0, 1]. Default `[0.8, 0.8, 0.8]`.
+    #[serde(default = "default_albedo")]
+    pub color: V3,
+    /// Placement after the primitive is built. Default: identity.
+    #[serde(default)]
+    pub transform: Option<Transform>,
+}
+
+/// `box`: an axis-aligned box, then its transform.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxShape {
+    /// Centre. Required.
+    pub center: V3,
+    /// Edge lengths along x, y, z. Required, each > 0.
+    pub size: V3,
+    /// Albedo. Default `[0.8, 0.8, 0.8]`.
+    #[serde(default = "default_albedo")]
+    pub color: V3,
+    /// Placement after the primitive is built. Default: identity.
+    #[serde(default)]
+    pub transform: Option<Transform>,
+}
+
+/// `sphere`: a UV sphere with `segments` around and `segments / 2` from pole to pole.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sphere {
+    /// Centre. Required.
+    pub center: V3,
+    /// Radius. Required, > 0.
+    pub radius: f32,
+    /// Segments around the equator. Default 32; 4 to 512.
+    #[serde(default = "default_segments")]
+    pub segments: u32,
+    /// Albedo. Default `[0.8, 0.8, 0.8]`.
+    #[serde(default = "default_albedo")]
+    pub color: V3,
+    /// Placement after the primitive is built. Default: identity.
+    #[serde(default)]
+    pub transform: Option<Transform>,
+}
+
+/// `mesh`: triangles given inline; counter-clockwise seen from the front.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mesh {
+    /// Vertex positions. Required.
+    pub positions: Vec<V3>,
+    /// Triangles as vertex indices, counter-clockwise from the front. Required.
+    pub triangles: Vec<[u32; 3]>,
+    /// Albedo. Default `[0.8, 0.8, 0.8]`.
+    #[serde(default = "default_albedo")]
+    pub color: V3,
+    /// Placement after the primitive is built. Default: identity.
+    #[serde(default)]
+    pub transform: Option<Transform>,
+}
+
+/// A half extent: one number for a square, two for a rectangle.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Extent {
+    /// Square.
+    Square(f32),
+    /// Rectangle `[half_u, half_v]`.
+    Rect([f32; 2]),
+}
+
+/// A uniform or per-axis scale.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Scale {
+    /// The same factor on every axis.
+    Uniform(f32),
+    /// `[sx, sy, sz]`.
+    PerAxis(V3),
+}
+
+/// Placement of a built primitive: `world = translate · rotate · scale · built`. The rotation
+/// and the scale act about the world origin, so a primitive built at the origin turns in place.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Transform {
+    /// Translation. Default `[0, 0, 0]`.
+    #[serde(default)]
+    pub translate: V3,
+    /// Rotation about an axis through the origin. Default: none.
+    #[serde(default)]
+    pub rotate_deg: Option<Rotation>,
+    /// Scale, each factor non-zero. Default 1.
+    #[serde(default = "default_scale")]
+    pub scale: Scale,
+}
+
+/// A rotation by `angle` degrees (right-handed) about `axis`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rotation {
+    /// Axis, any non-zero length. Required.
+    pub axis: V3,
+    /// Angle in degrees. Required.
+    pub angle: f32,
+}
+
+/// A perspective camera.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    /// Eye position. Required.
+    pub eye: V3,
+    /// Point looked at. Required, distinct from `eye`.
+    pub target: V3,
+    /// Up hint, not parallel to the view direction. Default `[0, 1, 0]`.
+    #[serde(default = "default_up")]
+    pub up: V3,
+    /// Vertical field of view in degrees, in (0, 180). Default 45.
+    #[serde(default = "default_fov")]
+    pub fov_y_deg: f32,
+    /// Near plane distance, > 0. Default 0.1.
+    #[serde(default = "default_near")]
+    pub near: f32,
+    /// Far plane distance, > near. Default 100.
+    #[serde(default = "default_far")]
+    pub far: f32,
+    /// Image size in pixels `[width, height]`, 1 to 8192 each. Default `[512, 512]`.
+    #[serde(default = "default_camera_size")]
+    pub size: [u32; 2],
+}
+
+/// The one light, written as `{ "spot": { ... } }`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Light {
+    /// A directional light with an orthographic shadow map.
+    Directional(Directional),
+    /// A spot light with a perspective shadow map.
+    Spot(Spot),
+    /// A point light with a six-face cube shadow map.
+    Point(Point),
+}
+
+/// `directional`: placed either by `position` (as the write-ups do: the light's eye, looking at
+/// `target`) or by `azimuth_deg` + `elevation_deg` (the direction *towards* the light:
+/// `(cos e · sin a, sin e, cos e · cos a)`, azimuth from +z towards +x) and `distance`.
+/// Bounds are either explicit (`ortho`) or fitted to the scene (`"fit": "scene"`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Directional {
+    /// The light's eye. Give this or the two angles.
+    #[serde(default)]
+    pub position: Option<V3>,
+    /// Azimuth of the direction towards the light, degrees.
+    #[serde(default)]
+    pub azimuth_deg: Option<f32>,
+    /// Elevation of the direction towards the light above the x-z plane, degrees.
+    #[serde(default)]
+    pub elevation_deg: Option<f32>,
+    /// Eye distance from `target` when placed by angles. Default 50.
+    #[serde(default = "default_distance")]
+    pub distance: f32,
+    /// Point looked at. Default `[0, 0, 0]`.
+    #[serde(default)]
+    pub target: V3,
+    /// Up hint of the light's view. Default `[0, 1, 0]`.
+    #[serde(default = "default_up")]
+    pub up: V3,
+    /// Explicit orthographic bounds in the light's view space.
+    #[serde(default)]
+    pub ortho: Option<Ortho>,
+    /// `"scene"`: fit the bounds to everything in the scene.
+    #[serde(default)]
+    pub fit: Option<Fit>,
+}
+
+/// Orthographic bounds, as `glOrtho` takes them.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Ortho {
+    /// Left, < right.
+    pub left: f32,
+    /// Right.
+    pub right: f32,
+    /// Bottom, < top.
+    pub bottom: f32,
+    /// Top.
+    pub top: f32,
+    /// Near plane distance (may be negative for an orthographic light), < far.
+    pub near: f32,
+    /// Far plane distance.
+    pub far: f32,
+}
+
+/// What a fitted frustum encloses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Fit {
+    /// Every object of the scene (casters and receivers).
+    Scene,
+}
+
+/// `spot`: a perspective light at `position` looking at `target`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Spot {
+    /// Light position. Required.
+    pub position: V3,
+    /// Point looked at. Required, distinct from `position`.
+    pub target: V3,
+    /// Up hint. Default `[0, 1, 0]`.
+    #[serde(default = "default_up")]
+    pub up: V3,
+    /// Vertical field of view, degrees, in (0, 180). Required.
+    pub fov_y_deg: f32,
+    /// Near plane, > 0. Default 1.
+    #[serde(default = "default_light_near")]
+    pub near: f32,
+    /// Far plane, > near. Default 100.
+    #[serde(default = "default_far")]
+    pub far: f32,
+}
+
+/// `point`: an omnidirectional light with a cube shadow map (six 90° faces).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Point {
+    /// Light position. Required.
+    pub position: V3,
+    /// Near plane, > 0. Default 0.1.
+    #[serde(default = "default_near")]
+    pub near: f32,
+    /// Far plane, > near. Default 100.
+    #[serde(default = "default_far")]
+    pub far: f32,
+}
+
+/// The shadow-mapping technique.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Shadow {
+    /// Map size `[width, height]` in texels, 1 to 16384 each; square for point lights.
+    /// Default `[1024, 1024]`.
+    #[serde(default = "default_map_size")]
+    pub size: [u32; 2],
+    /// Depth format. Default `depth24`.
+    #[serde(default)]
+    pub format: DepthFormat,
+    /// Lookup filter. Default `nearest`.
+    #[serde(default)]
+    pub filter: Filter,
+    /// Who compares: the sampler (`hardware`) or the shader (`manual`). Default `hardware`.
+    #[serde(default)]
+    pub compare: Compare,
+    /// Depth bias. Default: none at all.
+    #[serde(default)]
+    pub bias: Bias,
+    /// Face culling in the shadow pass (the lit pass never culls). Default `none`.
+    #[serde(default)]
+    pub cull: Cull,
+    /// Where the [0,1] bias matrix is applied relative to the perspective divide.
+    /// Default `before_divide`.
+    #[serde(default)]
+    pub bias_matrix: BiasMatrix,
+    /// Framebuffer attachments of the shadow pass. Default `depth_only`.
+    #[serde(default)]
+    pub attachments: Attachments,
+    /// What a lookup outside the map's [0,1]² footprint returns. Default `lit`.
+    #[serde(default)]
+    pub outside: Outside,
+    /// Skip the lookup (read lit) where the light-space w ≤ 0. Default `true`.
+    #[serde(default = "default_true")]
+    pub guard_behind_light: bool,
+    /// Depth order: `forward` (clear 1, LEQUAL) or `reversed` (clear 0, GEQUAL). Default
+    /// `forward`.
+    #[serde(default)]
+    pub depth_order: DepthOrder,
+}
+
+/// Depth texture formats.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DepthFormat {
+    /// `DEPTH_COMPONENT` with no size: the driver picks; the reference models it as 24 bits.
+    Unsized,
+    /// 16-bit unsigned normalised.
+    Depth16,
+    /// 24-bit unsigned normalised.
+    #[default]
+    Depth24,
+    /// 32-bit float.
+    Depth32f,
+}
+
+/// Lookup filters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Filter {
+    /// One texel, floor(u · size).
+    #[default]
+    Nearest,
+    /// 2x2 compare with bilinear weights (hardware PCF with a compare sampler).
+    Linear,
+    /// `{ "pcf": N }`: N x N NEAREST compares averaged in the shader, N in 2..=15.
+    Pcf(u32),
+}
+
+/// Who does the depth comparison.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Compare {
+    /// The sampler (`sampler2DShadow`, compare mode): the reference value is clamped to [0,1]
+    /// for fixed-point formats.
+    #[default]
+    Hardware,
+    /// The shader reads the depth and compares; nothing is clamped.
+    Manual,
+}
+
+/// Depth bias, each field a distance *away from the light*; umbra applies the sign that the
+/// depth order needs.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Bias {
+    /// Subtracted from the light-space depth before the compare, in [0,1] depth units.
+    /// Default 0.
+    #[serde(default)]
+    pub constant: f32,
+    /// `[factor, units]` of `glPolygonOffset` in the shadow pass. Default `[0, 0]`.
+    #[serde(default)]
+    pub polygon_offset: [f32; 2],
+    /// Largest polygon offset in depth units (Vulkan's depthBiasClamp); 0 = no clamp.
+    /// Default 0.
+    #[serde(default)]
+    pub polygon_offset_clamp: f32,
+    /// Shader slope bias: `min(scale · tan(acos(N·L)), max)` in depth units. Default: none.
+    #[serde(default)]
+    pub slope: Option<SlopeBias>,
+    /// World-space distance the lookup point moves along the surface normal. Default 0.
+    #[serde(default)]
+    pub normal_offset: f32,
+}
+
+/// Shader slope-scaled bias.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlopeBias {
+    /// Scale of tan(θ). Required, ≥ 0.
+    pub scale: f32,
+    /// Upper clamp. Required, ≥ 0.
+    pub max: f32,
+}
+
+/// Face culling.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Cull {
+    /// Draw both faces.
+    #[default]
+    None,
+    /// Cull back faces (counter-clockwise is front).
+    Back,
+    /// Cull front faces (moves acne to back faces).
+    Front,
+}
+
+/// Order of the bias matrix and the perspective divide.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BiasMatrix {
+    /// `textureProj(B · P · V · x)`: the classic texture matrix, divide last.
+    #[default]
+    BeforeDivide,
+    /// Divide by w first, then map NDC to [0,1].
+    AfterDivide,
+}
+
+/// Shadow-pass attachments.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Attachments {
+    /// Depth only; draw and read buffers NONE.
+    #[default]
+    DepthOnly,
+    /// A dummy RGBA8 colour attachment beside depth (the "AMD needs colour" variant).
+    WithColor,
+}
+
+/// Lookups whose (u, v) fall outside [0,1]².
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outside {
+    /// The shader tests the coordinates and reads lit.
+    #[default]
+    Lit,
+    /// Clamp to border with the clear depth as border (compares as lit inside the range).
+    Border,
+    /// Clamp to the edge texel.
+    ClampToEdge,
+    /// Repeat (the classic mistake; shadows repeat).
+    Repeat,
+}
+
+/// Depth order.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DepthOrder {
+    /// Near → 0, far → 1; clear 1, compare LEQUAL.
+    #[default]
+    Forward,
+    /// Near → 1, far → 0; clear 0, compare GEQUAL.
+    Reversed,
+}
+
+/// The illumination model (EDGE_CASES.md 17); `shade` ∈ [0,1] is the shadow lookup.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Shading {
+    /// `dimmed` or `classic`. Default `dimmed`.
+    #[serde(default)]
+    pub model: ShadingModel,
+    /// Ambient term in [0,1]. Default 0.2.
+    #[serde(default = "default_ambient")]
+    pub ambient: f32,
+    /// `dimmed`: share of diffuse kept in shadow, in [0,1]. Default 0.4.
+    #[serde(default = "default_dimming")]
+    pub dimming: f32,
+    /// `dimmed`: specular strength in [0,1]. Default 0.25.
+    #[serde(default = "default_specular")]
+    pub specular: f32,
+    /// `dimmed`: Blinn-Phong exponent, ≥ 1. Default 32.
+    #[serde(default = "default_shininess")]
+    pub shininess: f32,
+    /// `classic`: colour factor in full shadow, in [0,1]. Default 0.5.
+    #[serde(default = "default_shadowed_factor")]
+    pub shadowed_factor: f32,
+}
+
+/// Which illumination model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ShadingModel {
+    /// `(ambient + (dimming + (1 - dimming)·shade)·diffuse)·albedo + shade·specular`.
+    #[default]
+    Dimmed,
+    /// `(ambient + diffuse)·albedo · (shadowed_factor + (1 - shadowed_factor)·shade)`.
+    Classic,
+}
+
+/// One sweep axis: `{ "from": a, "to": b, "steps": n }` (inclusive, optionally
+/// `"scale": "log"`) or `{ "values": [...] }`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepAxis {
+    /// First value.
+    #[serde(default)]
+    pub from: Option<f64>,
+    /// Last value (inclusive).
+    #[serde(default)]
+    pub to: Option<f64>,
+    /// Number of values, ≥ 1 (1 gives `from`).
+    #[serde(default)]
+    pub steps: Option<u32>,
+    /// `linear` or `log` spacing. Default `linear`.
+    #[serde(default)]
+    pub scale: SweepScale,
+    /// Explicit values (any JSON), instead of from/to/steps.
+    #[serde(default)]
+    pub values: Option<Vec<serde_json::Value>>,
+}
+
+/// Spacing of a from/to sweep.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SweepScale {
+    /// Evenly spaced.
+    #[default]
+    Linear,
+    /// Evenly spaced in log10; both ends > 0.
+    Log,
+}
+
+/// What the judge may assume of a case.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Expect {
+    /// Every backend's shadows agree with the reference within the spec's freedom.
+    /// Default `true`.
+    #[serde(default = "default_true")]
+    pub backends_agree: bool,
+    /// What the reference's error against the truth must be away from shadow edges.
+    /// Default `reported`.
+    #[serde(default)]
+    pub interior_error: InteriorError,
+}
+
+impl Default for Expect {
+    fn default() -> Self {
+        Expect {
+            backends_agree: true,
+            interior_error: InteriorError::Reported,
+        }
+    }
+}
+
+/// Claim on the error against the truth away from shadow edges.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InteriorError {
+    /// Only reported (cases that show acne or leaks on purpose).
+    #[default]
+    Reported,
+    /// Must be exactly zero: a well-biased case, where any interior error is a bug.
+    Zero,
+    /// No false light (no leak, no peter-panning); acne is only reported.
+    NoFalseLight,
+    /// No false shadow (no acne); leaks are only reported.
+    NoFalseShadow,
+}
+
+impl Default for Shadow {
+    fn default() -> Self {
+        Shadow {
+            size: default_map_size(),
+            format: DepthFormat::default(),
+            filter: Filter::default(),
+            compare: Compare::default(),
+            bias: Bias::default(),
+            cull: Cull::default(),
+            bias_matrix: BiasMatrix::default(),
+            attachments: Attachments::default(),
+            outside: Outside::default(),
+            guard_behind_light: true,
+            depth_order: DepthOrder::default(),
+        }
+    }
+}
+
+impl Default for Shading {
+    fn default() -> Self {
+        Shading {
+            model: ShadingModel::default(),
+            ambient: default_ambient(),
+            dimming: default_dimming(),
+            specular: default_specular(),
+            shininess: default_shininess(),
+            shadowed_factor: default_shadowed_factor(),
+        }
+    }
+}
+
+fn default_up() -> V3 {
+    [0.0, 1.0, 0.0]
+}
+fn default_albedo() -> V3 {
+    [0.8, 0.8, 0.8]
+}
+fn default_segments() -> u32 {
+    32
+}
+fn default_scale() -> Scale {
+    Scale::Uniform(1.0)
+}
+fn default_fov() -> f32 {
+    45.0
+}
+fn default_near() -> f32 {
+    0.1
+}
+fn default_light_near() -> f32 {
+    1.0
+}
+fn default_far() -> f32 {
+    100.0
+}
+fn default_distance() -> f32 {
+    50.0
+}
+fn default_camera_size() -> [u32; 2] {
+    [512, 512]
+}
+fn default_map_size() -> [u32; 2] {
+    [1024, 1024]
+}
+fn default_true() -> bool {
+    true
+}
+fn default_ambient() -> f32 {
+    0.2
+}
+fn default_dimming() -> f32 {
+    0.4
+}
+fn default_specular() -> f32 {
+    0.25
+}
+fn default_shininess() -> f32 {
+    32.0
+}
+fn default_shadowed_factor() -> f32 {
+    0.5
+}

@@ -1,0 +1,38 @@
+//! umbra's lowest layer: the case format and everything every backend shares.
+//!
+//! - [`format`]: the JSON a user writes (serde types; every default documented there and in
+//!   `cases/README.md`).
+//! - [`validate`] and [`load`]: parsing with errors that name the file, the JSON path and the
+//!   fix; sweep expansion into [`load::CasePoint`]s.
+//! - [`scene`]: the one tessellation every backend draws.
+//! - [`conventions`]: clip ranges, projections, the bias matrix, window mapping, compares. The
+//!   only place a projection is built.
+//! - [`light`] and [`prepare`]: the light faces and camera of a run, fitted where asked.
+//! - [`depth`]: storage per depth format and the polygon-offset unit.
+//! - [`frame`] and [`backend`]: what a backend returns and the trait it implements.
+//!
+//! Design decision: the `Backend` trait and `Frame` live here rather than in the runner,
+//! because every backend crate implements them and none may depend on the runner (which
+//! depends on all of them). This crate depends on no GPU crate.
+
+pub mod backend;
+pub mod conventions;
+pub mod depth;
+pub mod error;
+pub mod format;
+pub mod frame;
+pub mod light;
+pub mod load;
+pub mod prepare;
+pub mod scene;
+pub mod validate;
+
+pub use backend::{Backend, BackendError, BackendId, DriverInfo, Needs, Support};
+pub use conventions::{ClipDepth, Convention, LookupMatrices, ShadowCoord};
+pub use error::{CaseError, CaseErrors};
+pub use format::Case;
+pub use frame::{Clock, DepthMap, Frame, Timings};
+pub use light::{LightKind, LightSetup};
+pub use load::{CasePoint, case_files, load_file, load_str};
+pub use prepare::Prepared;
+pub use scene::{Geometry, tessellate};

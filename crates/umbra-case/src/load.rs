@@ -1,0 +1,328 @@
+//! Reading case files and expanding their sweeps into runnable points.
+//!
+//! A sweep overrides a JSON path of the case *before* it is deserialised, so any field can be
+//! swept and every point goes through the same parsing and validation as a hand-written case:
+//! a sweep cannot create a value that a file could not hold.
+
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+
+use crate::error::{CaseError, CaseErrors};
+use crate::format::{Case, SweepAxis, SweepScale};
+use crate::validate::validate;
+
+/// Most points one case may expand to (a typo such as `"steps": 10000` should not queue hours).
+pub const MAX_SWEEP_POINTS: usize = 4096;
+
+/// One runnable point of a case: the case with its sweep values applied.
+#[derive(Clone, Debug)]
+pub struct CasePoint {
+    /// The file it came from.
+    pub file: PathBuf,
+    /// The case with this point's values (its `sweep` is empty).
+    pub case: Case,
+    /// `(path, value)` for each swept axis, in axis order.
+    pub values: Vec<(String, Value)>,
+}
+
+impl CasePoint {
+    /// A stable identifier: `name` or `name@path=value,path=value`.
+    pub fn id(&self) -> String {
+        if self.values.is_empty() {
+            return self.case.name.clone();
+        }
+        let parts: Vec<String> = self
+            .values
+            .iter()
+            .map(|(p, v)| format!("{p}={}", compact(v)))
+            .collect();
+        format!("{}@{}", self.case.name, parts.join(","))
+    }
+}
+
+fn compact(v: &Value) -> String {
+    match v {
+        Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// Reads, parses, validates and expands one case file.
+pub fn load_file(file: &Path) -> Result<Vec<CasePoint>, CaseErrors> {
+    let text = std::fs::read_to_string(file).map_err(|e| {
+        CaseError::new(
+            file,
+            "",
+            format!("cannot read the file: {e}"),
+            "check the path and its permissions",
+        )
+    })?;
+    load_str(&text, file)
+}
+
+/// Parses, validates and expands case text; `file` is used in messages only.
+pub fn load_str(text: &str, file: &Path) -> Result<Vec<CasePoint>, CaseErrors> {
+    let value: Value = serde_json::from_str(text).map_err(|e| {
+        CaseError::new(
+            file,
+            "",
+            format!(
+                "not valid JSON at line {} column {}: {e}",
+                e.line(),
+                e.column()
+            ),
+            "fix the JSON syntax (no comments or trailing commas)",
+        )
+    })?;
+    let case = parse_value(&value, file, "")?;
+    validate(&case, file)?;
+    if case.sweep.is_empty() {
+        return Ok(vec![CasePoint {
+            file: file.to_path_buf(),
+            case,
+            values: Vec::new(),
+        }]);
+    }
+    expand(&value, &case, file)
+}
+
+/// Deserialises a case from JSON, naming the path of the first type error.
+fn parse_value(value: &Value, file: &Path, context: &str) -> Result<Case, CaseError> {
+    serde_path_to_error::deserialize::<_, Case>(value).map_err(|e| {
+        let path = e.path().to_string();
+        let path = if path == "." { String::new() } else { path };
+        let inner = e.into_inner().to_string();
+        let fix = if inner.starts_with("unknown field") {
+            "remove the field or correct its spelling (cases/README.md lists every field)"
+        } else if inner.starts_with("missing field") {
+            "add the field (cases/README.md says which fields are required)"
+        } else if inner.starts_with("unknown variant") {
+            "use one of the listed names"
+        } else if inner.contains("untagged enum Extent") {
+            "give one number for a square or [half_u, half_v]"
+        } else if inner.contains("untagged enum Scale") {
+            "give one number or [sx, sy, sz]"
+        } else {
+            "give the field the type cases/README.md shows for it"
+        };
+        CaseError::new(file, path, format!("{context}{inner}"), fix)
+    })
+}
+
+fn expand(base: &Value, case: &Case, file: &Path) -> Result<Vec<CasePoint>, CaseErrors> {
+    let mut axes: Vec<(String, Vec<Value>)> = Vec::new();
+    let mut errors = Vec::new();
+    for (path, axis) in &case.sweep {
+        match axis_values(axis) {
+            Ok(vals) => axes.push((path.clone(), vals)),
+            Err((field, msg, fix)) => errors.push(CaseError::new(
+                file,
+                format!("sweep.{path}.{field}"),
+                msg,
+                fix,
+            )),
+        }
+    }
+    if !errors.is_empty() {
+        return Err(CaseErrors(errors));
+    }
+    let total: usize = axes.iter().map(|(_, v)| v.len()).product();
+    if total > MAX_SWEEP_POINTS {
+        return Err(CaseError::new(
+            file,
+            "sweep",
+            format!("the sweep expands to {total} points, more than {MAX_SWEEP_POINTS}"),
+            "use fewer steps or split the case",
+        )
+        .into());
+    }
+    let mut points = Vec::with_capacity(total);
+    for index in 0..total {
+        let mut rest = index;
+        let mut doc = base.clone();
+        if let Value::Object(map) = &mut doc {
+            map.remove("sweep");
+        }
+        let mut values = Vec::with_capacity(axes.len());
+        for (path, vals) in axes.iter().rev() {
+            let v = vals[rest % vals.len()].clone();
+            rest /= vals.len();
+            if let Err(msg) = set_path(&mut doc, path).map(|slot| *slot = v.clone()) {
+                return Err(CaseError::new(
+                    file,
+                    format!("sweep.{path}"),
+                    msg,
+                    "give a dotted path into the case, such as light.spot.fov_y_deg",
+                )
+                .into());
+            }
+            values.push((path.clone(), v));
+        }
+        values.reverse();
+        let label = values
+            .iter()
+            .map(|(p, v)| format!("{p}={}", compact(v)))
+            .collect::<Vec<_>>()
+            .join(",");
+        let context = format!("at sweep point {label}: ");
+        let point = parse_value(&doc, file, &context).map_err(|mut e| {
+            e.fix = format!(
+                "{} (the value comes from sweep.{})",
+                e.fix,
+                values.first().map(|v| v.0.as_str()).unwrap_or("")
+            );
+            e
+        })?;
+        validate(&point, file).map_err(|CaseErrors(es)| {
+            CaseErrors(
+                es.into_iter()
+                    .map(|mut e| {
+                        e.message = format!("{context}{}", e.message);
+                        e
+                    })
+                    .collect(),
+            )
+        })?;
+        points.push(CasePoint {
+            file: file.to_path_buf(),
+            case: point,
+            values,
+        });
+    }
+    Ok(points)
+}
+
+type AxisError = (&'static str, String, &'static str);
+
+fn axis_values(axis: &SweepAxis) -> Result<Vec<Value>, AxisError> {
+    if let Some(vals) = &axis.values {
+        if axis.from.is_some() || axis.to.is_some() || axis.steps.is_some() {
+            return Err((
+                "values",
+                "both values and from/to/steps are given".into(),
+                "keep one form",
+            ));
+        }
+        if vals.is_empty() {
+            return Err((
+                "values",
+                "the list is empty".into(),
+                "give at least one value",
+            ));
+        }
+        return Ok(vals.clone());
+    }
+    let (Some(from), Some(to), Some(steps)) = (axis.from, axis.to, axis.steps) else {
+        return Err((
+            "from",
+            "an axis needs from, to and steps, or values".into(),
+            "give all three, or a values list",
+        ));
+    };
+    if steps == 0 {
+        return Err((
+            "steps",
+            "must be at least 1".into(),
+            "use 1 for a single value",
+        ));
+    }
+    if !from.is_finite() || !to.is_finite() {
+        return Err((
+            "from",
+            "from and to must be finite".into(),
+            "use finite numbers",
+        ));
+    }
+    if axis.scale == SweepScale::Log && (from <= 0.0 || to <= 0.0) {
+        return Err((
+            "scale",
+            format!("log spacing needs from and to > 0, got {from} and {to}"),
+            "use positive ends or linear spacing",
+        ));
+    }
+    let n = steps as usize;
+    Ok((0..n)
+        .map(|i| {
+            let t = if n == 1 {
+                0.0
+            } else {
+                i as f64 / (n - 1) as f64
+            };
+            let x = match axis.scale {
+                SweepScale::Linear => from + (to - from) * t,
+                SweepScale::Log => 10f64.powf(from.log10() + (to.log10() - from.log10()) * t),
+            };
+            number(x)
+        })
+        .collect())
+}
+
+/// A JSON number, integral when the value is (so u32 fields accept it), otherwise rounded to 9
+/// significant digits so that point names stay readable and stable.
+fn number(x: f64) -> Value {
+    if x.fract() == 0.0 && x.abs() < 9.0e15 {
+        return Value::from(x as i64);
+    }
+    let rounded: f64 = format!("{x:.8e}").parse().unwrap_or(x);
+    Value::from(rounded)
+}
+
+/// The slot at a dotted path (`a.b[2].c`), creating objects along the way.
+fn set_path<'v>(doc: &'v mut Value, path: &str) -> Result<&'v mut Value, String> {
+    let mut cur = doc;
+    if path.is_empty() {
+        return Err("the path is empty".into());
+    }
+    for seg in path.split('.') {
+        let (key, index) = match seg.find('[') {
+            Some(open) if seg.ends_with(']') => {
+                let idx: usize = seg[open + 1..seg.len() - 1]
+                    .parse()
+                    .map_err(|_| format!("bad index in segment {seg:?}"))?;
+                (&seg[..open], Some(idx))
+            }
+            _ => (seg, None),
+        };
+        if key.is_empty() {
+            return Err(format!("empty segment in path {path:?}"));
+        }
+        if cur.is_null() {
+            *cur = Value::Object(Default::default());
+        }
+        let Value::Object(map) = cur else {
+            return Err(format!(
+                "{key:?} is reached through a value that is not an object"
+            ));
+        };
+        cur = map.entry(key.to_string()).or_insert(Value::Null);
+        if let Some(i) = index {
+            let Value::Array(items) = cur else {
+                return Err(format!("{key:?} is not an array, so [{i}] cannot index it"));
+            };
+            let len = items.len();
+            cur = items
+                .get_mut(i)
+                .ok_or_else(|| format!("index {i} is past the end of {key:?} ({len} items)"))?;
+        }
+    }
+    Ok(cur)
+}
+
+/// Every `*.json` under `dir`, recursively, sorted by path.
+pub fn case_files(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d)? {
+            let path = entry?.path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.extension().is_some_and(|e| e == "json") {
+                out.push(path);
+            }
+        }
+    }
+    out.sort();
+    Ok(out)
+}

@@ -1,0 +1,87 @@
+//! A run ready to render: the case point, its tessellation and its camera and light set-ups.
+//! Built once per run and shared by every backend, so that all draw the same triangles.
+
+use std::sync::Arc;
+
+use glam::{Mat4, Vec3};
+
+use crate::conventions::{Convention, look_at};
+use crate::light::LightSetup;
+use crate::load::CasePoint;
+use crate::scene::{Geometry, tessellate};
+
+/// The camera of a case.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraSetup {
+    /// Eye position.
+    pub eye: Vec3,
+    /// World → view.
+    pub view: Mat4,
+    /// Vertical field of view, radians.
+    pub fov_y: f32,
+    /// Near plane.
+    pub near: f32,
+    /// Far plane.
+    pub far: f32,
+    /// Image `[width, height]`.
+    pub size: [u32; 2],
+}
+
+impl CameraSetup {
+    /// P · V under `conv` (the camera pass always uses forward depth).
+    pub fn view_proj(&self, conv: Convention) -> Mat4 {
+        let conv = conv.with_order(crate::format::DepthOrder::Forward);
+        conv.perspective(
+            self.fov_y,
+            self.size[0] as f32 / self.size[1] as f32,
+            self.near,
+            self.far,
+        ) * self.view
+    }
+}
+
+/// One run's inputs.
+#[derive(Clone, Debug)]
+pub struct Prepared {
+    /// The case point.
+    pub point: CasePoint,
+    /// Its triangles.
+    pub geometry: Arc<Geometry>,
+    /// Its camera.
+    pub camera: CameraSetup,
+    /// Its light.
+    pub light: LightSetup,
+}
+
+impl Prepared {
+    /// Tessellates and sets up a validated case point.
+    pub fn new(point: CasePoint) -> Self {
+        let geometry = Arc::new(tessellate(&point.case.scene));
+        Self::with_geometry(point, geometry)
+    }
+
+    /// Sets up a point whose scene was already tessellated (sweep points share it).
+    pub fn with_geometry(point: CasePoint, geometry: Arc<Geometry>) -> Self {
+        let c = &point.case.camera;
+        let camera = CameraSetup {
+            eye: Vec3::from(c.eye),
+            view: look_at(Vec3::from(c.eye), Vec3::from(c.target), Vec3::from(c.up)),
+            fov_y: c.fov_y_deg.to_radians(),
+            near: c.near,
+            far: c.far,
+            size: c.size,
+        };
+        let light = LightSetup::new(&point.case.light, point.case.shadow.size, &geometry);
+        Prepared {
+            point,
+            geometry,
+            camera,
+            light,
+        }
+    }
+
+    /// The case.
+    pub fn case(&self) -> &crate::format::Case {
+        &self.point.case
+    }
+}

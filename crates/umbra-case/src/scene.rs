@@ -1,0 +1,250 @@
+//! The one tessellation every backend draws.
+//!
+//! Each primitive becomes triangles, counter-clockwise seen from outside (from the normal side
+//! of a plane). Vertices are computed in f64 and rounded once to f32, so the list does not
+//! depend on the platform's f32 trig. Vertices on a sphere's seam and poles are shared by
+//! index, which keeps it watertight for the truth's ray test. Each triangle carries its object
+//! and its *face*: the planar face it belongs to (a box has 6, a plane 1; sphere and mesh
+//! triangles are faces of their own). Faces decide silhouettes in the judge and let the truth
+//! skip a surface's own plane.
+
+use glam::{DMat3, DMat4, DVec3, Mat3, Mat4, Vec3};
+
+use crate::format::{Object, Scene, Transform};
+
+/// The tessellated scene.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Geometry {
+    /// Vertex positions, world space.
+    pub positions: Vec<Vec3>,
+    /// Shading normals (unit), world space: flat for planes, boxes, meshes; smooth for spheres.
+    pub normals: Vec<Vec3>,
+    /// Triangles as vertex indices, counter-clockwise from the front.
+    pub triangles: Vec<[u32; 3]>,
+    /// Per triangle: its object's index in `scene.objects`.
+    pub object: Vec<u32>,
+    /// Per triangle: its planar face, numbered across the scene from 0.
+    pub face: Vec<u32>,
+    /// Per object: albedo, linear RGB.
+    pub albedo: Vec<Vec3>,
+}
+
+impl Geometry {
+    /// Axis-aligned bounds `(min, max)` of every vertex.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.positions.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        )
+    }
+
+    /// The three positions of triangle `t`.
+    pub fn corners(&self, t: usize) -> [Vec3; 3] {
+        self.triangles[t].map(|i| self.positions[i as usize])
+    }
+
+    /// Number of planar faces.
+    pub fn face_count(&self) -> u32 {
+        self.face.iter().max().map_or(0, |f| f + 1)
+    }
+}
+
+/// Tessellates `scene` (which must have passed validation).
+pub fn tessellate(scene: &Scene) -> Geometry {
+    let mut b = Builder::default();
+    for (index, object) in scene.objects.iter().enumerate() {
+        b.object = index as u32;
+        match object {
+            Object::Plane(p) => {
+                b.geo.albedo.push(Vec3::from(p.color));
+                let m = matrix(&p.transform);
+                let n = DVec3::from(p.normal.map(f64::from)).normalize();
+                let reference = if n.y.abs() < 0.9 { DVec3::Y } else { DVec3::X };
+                let t = (reference - n * n.dot(reference)).normalize();
+                let v = n.cross(t);
+                let (hu, hv) = p.half_extent.pair();
+                let c = DVec3::from(p.point.map(f64::from));
+                b.quad(&m, c, t * f64::from(hu), v * f64::from(hv), n);
+            }
+            Object::Box(bx) => {
+                b.geo.albedo.push(Vec3::from(bx.color));
+                let m = matrix(&bx.transform);
+                let c = DVec3::from(bx.center.map(f64::from));
+                let h = DVec3::from(bx.size.map(f64::from)) * 0.5;
+                for axis in 0..3 {
+                    let e = |k: usize| DVec3::AXES[k % 3] * h[k % 3];
+                    for sign in [1.0, -1.0] {
+                        let n = DVec3::AXES[axis] * sign;
+                        let (u, v) = if sign > 0.0 {
+                            (e(axis + 1), e(axis + 2))
+                        } else {
+                            (e(axis + 2), e(axis + 1))
+                        };
+                        b.quad(&m, c + e(axis) * sign, u, v, n);
+                    }
+                }
+            }
+            Object::Sphere(s) => {
+                b.geo.albedo.push(Vec3::from(s.color));
+                let m = matrix(&s.transform);
+                b.sphere(
+                    &m,
+                    DVec3::from(s.center.map(f64::from)),
+                    f64::from(s.radius),
+                    s.segments,
+                );
+            }
+            Object::Mesh(mesh) => {
+                b.geo.albedo.push(Vec3::from(mesh.color));
+                let m = matrix(&mesh.transform);
+                for t in &mesh.triangles {
+                    let p = t.map(|i| {
+                        m.transform_point3(DVec3::from(mesh.positions[i as usize].map(f64::from)))
+                    });
+                    let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
+                    let base = b.geo.positions.len() as u32;
+                    for q in p {
+                        b.vertex(q, n);
+                    }
+                    b.triangle([base, base + 1, base + 2]);
+                    b.next_face();
+                }
+            }
+        }
+    }
+    b.geo
+}
+
+/// `translate · rotate · scale` in f64.
+pub fn matrix(t: &Option<Transform>) -> DMat4 {
+    let Some(t) = t else { return DMat4::IDENTITY };
+    let translate = DMat4::from_translation(DVec3::from(t.translate.map(f64::from)));
+    let rotate = match &t.rotate_deg {
+        Some(r) => DMat4::from_axis_angle(
+            DVec3::from(r.axis.map(f64::from)).normalize(),
+            f64::from(r.angle).to_radians(),
+        ),
+        None => DMat4::IDENTITY,
+    };
+    let scale = DMat4::from_scale(DVec3::from(t.scale.vec().map(f64::from)));
+    translate * rotate * scale
+}
+
+/// The same placement in f32, for callers that transform in the GPU's precision.
+pub fn matrix_f32(t: &Option<Transform>) -> Mat4 {
+    matrix(t).as_mat4()
+}
+
+#[derive(Default)]
+struct Builder {
+    geo: Geometry,
+    object: u32,
+    face: u32,
+    normal_matrix: Option<DMat3>,
+}
+
+impl Builder {
+    fn normal_of(&self, m: &DMat4, n: DVec3) -> DVec3 {
+        let nm = self
+            .normal_matrix
+            .unwrap_or_else(|| DMat3::from_mat4(*m).inverse().transpose());
+        (nm * n).normalize()
+    }
+
+    fn vertex(&mut self, p: DVec3, n: DVec3) -> u32 {
+        self.geo.positions.push(p.as_vec3());
+        self.geo.normals.push(n.as_vec3().normalize());
+        (self.geo.positions.len() - 1) as u32
+    }
+
+    fn triangle(&mut self, t: [u32; 3]) {
+        self.geo.triangles.push(t);
+        self.geo.object.push(self.object);
+        self.geo.face.push(self.face);
+    }
+
+    fn next_face(&mut self) {
+        self.face += 1;
+    }
+
+    /// A planar quad centred at `c` spanning ±u, ±v with u × v along `n`, as one face.
+    fn quad(&mut self, m: &DMat4, c: DVec3, u: DVec3, v: DVec3, n: DVec3) {
+        self.normal_matrix = Some(DMat3::from_mat4(*m).inverse().transpose());
+        let wn = self.normal_of(m, n);
+        let corners = [c - u - v, c + u - v, c + u + v, c - u + v];
+        let base = self.geo.positions.len() as u32;
+        for q in corners {
+            self.vertex(m.transform_point3(q), wn);
+        }
+        // A mirroring transform (negative determinant) reverses the winding: restore it.
+        let flip = DMat3::from_mat4(*m).determinant() < 0.0;
+        let tris = if flip {
+            [[0, 2, 1], [0, 3, 2]]
+        } else {
+            [[0, 1, 2], [0, 2, 3]]
+        };
+        for t in tris {
+            self.triangle(t.map(|k| base + k));
+        }
+        self.next_face();
+        self.normal_matrix = None;
+    }
+
+    fn sphere(&mut self, m: &DMat4, c: DVec3, r: f64, segments: u32) {
+        let rings = (segments / 2).max(2);
+        let nm = DMat3::from_mat4(*m).inverse().transpose();
+        let put = |b: &mut Builder, dir: DVec3| {
+            let p = m.transform_point3(c + dir * r);
+            b.vertex(p, (nm * dir).normalize())
+        };
+        let top = put(self, DVec3::Y);
+        let mut ring_start = Vec::with_capacity(rings as usize);
+        for i in 1..rings {
+            let theta = std::f64::consts::PI * f64::from(i) / f64::from(rings);
+            ring_start.push(self.geo.positions.len() as u32);
+            for j in 0..segments {
+                let phi = std::f64::consts::TAU * f64::from(j) / f64::from(segments);
+                put(
+                    self,
+                    DVec3::new(
+                        theta.sin() * phi.sin(),
+                        theta.cos(),
+                        theta.sin() * phi.cos(),
+                    ),
+                );
+            }
+        }
+        let bottom = put(self, -DVec3::Y);
+        let at = |ring: usize, j: u32| ring_start[ring] + j % segments;
+        let mut tris = Vec::new();
+        for j in 0..segments {
+            tris.push([top, at(0, j), at(0, j + 1)]);
+            tris.push([
+                bottom,
+                at(ring_start.len() - 1, j + 1),
+                at(ring_start.len() - 1, j),
+            ]);
+        }
+        for ring in 0..ring_start.len() - 1 {
+            for j in 0..segments {
+                tris.push([at(ring, j), at(ring + 1, j), at(ring + 1, j + 1)]);
+                tris.push([at(ring, j), at(ring + 1, j + 1), at(ring, j + 1)]);
+            }
+        }
+        // Orient every triangle outward, whatever the winding above and the transform do.
+        let centre = m.transform_point3(c);
+        for mut t in tris {
+            let [a, b, cc] = t.map(|i| self.geo.positions[i as usize].as_dvec3());
+            if (b - a).cross(cc - a).dot((a + b + cc) / 3.0 - centre) < 0.0 {
+                t.swap(1, 2);
+            }
+            self.triangle(t);
+            self.next_face();
+        }
+    }
+}
+
+/// Normal matrix of a placement, f32 (for backends that transform normals themselves).
+pub fn normal_matrix(m: Mat4) -> Mat3 {
+    Mat3::from_mat4(m).inverse().transpose()
+}

@@ -1,0 +1,140 @@
+//! umbra's CPU reference renderer and exact shadow-ray ground truth.
+//!
+//! The reference *defines* the conventions the GPU backends are held to; it is written to be
+//! read next to the GL and Vulkan specs, stage by stage:
+//! [`raster`] (clipping, 8 sub-pixel bits, the tie rule, interpolation),
+//! [`shadow_pass`] (depth per format, polygon offset), [`lookup`] (bias matrix order, guard,
+//! outside policy, compare with the spec's clamp, NEAREST/LINEAR/PCF), [`lit_pass`] and
+//! [`shading`]. Work is split in bands of rows ([`bands`]) so it is parallel and still
+//! bit-identical whatever the thread count.
+//!
+//! [`truth`] is independent of all of that: it shoots f64 rays through pixel centres and
+//! shadow rays to the light against the same triangles, with a watertight ray/triangle test so
+//! that touching cubes cannot leak. It is what "error" is measured against.
+//!
+//! The reference renders in the GL clip convention by default (the write-ups' convention, with
+//! the 0.5/0.5 bias matrix); [`render`] takes the other one too, and the two agree (tested).
+
+pub mod bands;
+pub mod lit_pass;
+pub mod lookup;
+pub mod raster;
+pub mod shading;
+pub mod shadow_pass;
+pub mod truth;
+
+use std::time::Instant;
+
+use umbra_case::format::Case;
+use umbra_case::{
+    Backend, BackendError, BackendId, ClipDepth, Clock, Convention, DepthMap, DriverInfo, Frame,
+    LookupMatrices, Needs, Prepared, Support, Timings,
+};
+
+/// The reference's convention for a case: `clip` with the case's depth order.
+pub fn convention(case: &Case, clip: ClipDepth) -> Convention {
+    Convention {
+        clip,
+        order: case.shadow.depth_order,
+    }
+}
+
+/// Renders both passes of `run` in clip convention `clip`.
+pub fn render(run: &Prepared, clip: ClipDepth) -> Frame {
+    let start = Instant::now();
+    let case = run.case();
+    let conv = convention(case, clip);
+    let layers: Vec<_> = run
+        .light
+        .views
+        .iter()
+        .map(|v| shadow_pass::render_face(conv, &case.shadow, v.view_proj(conv), &run.geometry))
+        .collect();
+    let shadow_done = Instant::now();
+    let lookup = lookup::Lookup {
+        conv,
+        shadow: &case.shadow,
+        light: &run.light,
+        matrices: run
+            .light
+            .views
+            .iter()
+            .map(|v| LookupMatrices::new(conv, v.view_proj(conv)))
+            .collect(),
+        layers: &layers,
+    };
+    let lit = lit_pass::render(run, conv, &lookup);
+    let lit_done = Instant::now();
+    let [w, h] = run.camera.size;
+    let flip = !conv.window_y_down();
+    let [mw, mh] = case.shadow.size;
+    let mut values = Vec::with_capacity((mw * mh) as usize * layers.len());
+    for layer in &layers {
+        values.extend(top_first(&layer.values, mw as usize, 1, flip));
+    }
+    let frame = Frame {
+        width: w,
+        height: h,
+        color: top_first(&lit.color, w as usize, 4, flip),
+        visibility: top_first(&lit.visibility, w as usize, 1, flip),
+        surface: Some(top_first(&lit.surface, w as usize, 1, flip)),
+        shadow_map: Some(DepthMap {
+            width: mw,
+            height: mh,
+            layers: layers.len() as u32,
+            format: case.shadow.format,
+            values,
+        }),
+        timings: Timings::default(),
+    };
+    let end = Instant::now();
+    Frame {
+        timings: Timings {
+            shadow_pass: shadow_done - start,
+            lit_pass: lit_done - shadow_done,
+            readback: end - lit_done,
+            total: end - start,
+            clock: Some(Clock::CpuWall),
+        },
+        ..frame
+    }
+}
+
+/// Rows in top-first order: reversed when the raster's row 0 is the bottom (the one Y flip).
+fn top_first<T: Clone>(rows: &[T], width: usize, per_pixel: usize, flip: bool) -> Vec<T> {
+    if !flip {
+        return rows.to_vec();
+    }
+    rows.chunks(width * per_pixel)
+        .rev()
+        .flatten()
+        .cloned()
+        .collect()
+}
+
+/// The reference as a [`Backend`] (id `ref`, GL clip convention).
+#[derive(Debug, Default)]
+pub struct RefBackend;
+
+impl Backend for RefBackend {
+    fn id(&self) -> BackendId {
+        BackendId("ref".into())
+    }
+
+    fn info(&self) -> DriverInfo {
+        DriverInfo {
+            vendor: "umbra".into(),
+            renderer: format!("CPU reference ({} threads)", rayon::current_num_threads()),
+            version: env!("CARGO_PKG_VERSION").into(),
+            extensions: Vec::new(),
+        }
+    }
+
+    fn supports(&self, _needs: &Needs) -> Support {
+        Support::Supported
+    }
+
+    fn render(&mut self, run: &Prepared) -> Result<Frame, BackendError> {
+        Ok(render(run, ClipDepth::MinusOneToOne))
+    }
+}

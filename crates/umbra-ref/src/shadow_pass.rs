@@ -1,0 +1,87 @@
+//! The shadow pass: depth of every triangle as seen from each light face, into a map of the
+//! case's format.
+//!
+//! Per fragment: window depth (linear in screen space) + polygon offset
+//! o = m·factor + r·units (m = max |∂z/∂x|, |∂z/∂y|; r from [`DepthFormat::offset_unit`]),
+//! signed away from the light by the depth order and limited by the clamp if one is given;
+//! then clamped to the depth range [0,1], converted to the format and depth-tested (LESS
+//! forward, GREATER reversed) against the stored value in the format's own precision.
+
+use glam::Vec4;
+use umbra_case::format::{DepthFormat, Shadow};
+use umbra_case::{Convention, Geometry};
+
+use crate::bands::for_each_band;
+use crate::raster::{Rasterizer, Tri};
+
+/// One rendered face: stored depth per texel, in raster row order (row 0 = window y 0).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DepthLayer {
+    /// Stored values, `width * height`.
+    pub values: Vec<f32>,
+}
+
+/// Renders one light face with view-projection `light`.
+pub fn render_face(
+    conv: Convention,
+    shadow: &Shadow,
+    light: glam::Mat4,
+    geo: &Geometry,
+) -> DepthLayer {
+    let [w, h] = shadow.size;
+    let raster = Rasterizer {
+        conv,
+        width: w,
+        height: h,
+        cull: shadow.cull,
+    };
+    let tris = setup_all(&raster, light, geo);
+    let format = shadow.format;
+    let [factor, units] = shadow.bias.polygon_offset;
+    let clamp = shadow.bias.polygon_offset_clamp;
+    let sign = conv.toward_far();
+    let mut values = vec![format.store(conv.clear_depth()); (w * h) as usize];
+    for_each_band(&mut values, w as usize, 1, &tris, |rows, band, touching| {
+        for t in touching {
+            let offset = if factor != 0.0 || units != 0.0 {
+                polygon_offset(t, format, factor, units, clamp)
+            } else {
+                0.0
+            };
+            t.scan(rows.clone(), |x, y, frag| {
+                let z = (f64::from(t.depth(frag)) + f64::from(sign) * offset) as f32;
+                let stored = format.store(z.clamp(0.0, 1.0));
+                let i = (y - rows.start) as usize * w as usize + x as usize;
+                if conv.depth_test(stored, band[i]) {
+                    band[i] = stored;
+                }
+            });
+        }
+    });
+    DepthLayer { values }
+}
+
+/// The polygon offset of a triangle, as a positive distance away from the light.
+fn polygon_offset(t: &Tri, format: DepthFormat, factor: f32, units: f32, clamp: f32) -> f64 {
+    let o = t.max_depth_slope() * f64::from(factor)
+        + f64::from(format.offset_unit(t.max_abs_z())) * f64::from(units);
+    if clamp > 0.0 {
+        o.min(f64::from(clamp))
+    } else {
+        o
+    }
+}
+
+/// Clip-space corners of every triangle under `view_proj`, set up in source order.
+pub fn setup_all(raster: &Rasterizer, view_proj: glam::Mat4, geo: &Geometry) -> Vec<Tri> {
+    let clip: Vec<Vec4> = geo
+        .positions
+        .iter()
+        .map(|p| view_proj * p.extend(1.0))
+        .collect();
+    let mut tris = Vec::with_capacity(geo.triangles.len());
+    for (i, t) in geo.triangles.iter().enumerate() {
+        raster.setup(t.map(|k| clip[k as usize]), i as u32, &mut tris);
+    }
+    tris
+}

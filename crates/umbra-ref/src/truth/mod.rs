@@ -1,0 +1,280 @@
+//! The exact ground truth: for each camera pixel, the first surface along the ray through the
+//! pixel centre and whether a shadow ray from it reaches the light, in f64, against the same
+//! triangles every backend draws; the shadow map plays no part.
+//!
+//! Each pixel gets a [`Class`]:
+//! - `Background`: the ray hits nothing before the far plane.
+//! - `FacesAway`: the surface's geometric normal faces away from the light (N·L ≤ 0). The
+//!   shadow term does not show there (diffuse and specular are zero), and shadow maps
+//!   legitimately differ on such faces, so they are excluded from error and counted.
+//! - `Outside`: the point is outside the light's frustum (beyond its bounds, near or far), where
+//!   the map holds nothing and the case's outside policy decides; excluded and counted.
+//! - `Lit` or `Shadowed`: the answer of the shadow ray (skipping the surface's own planar face,
+//!   which cannot shadow itself).
+//!
+//! **Edge** flag: a shadow map samples the light's view at texel resolution, so within a texel
+//! or two of a true shadow boundary no technique can be expected to match a point-exact ray.
+//! For each judged pixel the truth also shoots shadow rays from the points of the receiver's
+//! tangent plane that the light sees through the texels around it (offsets −r..r texels in the
+//! map's grid, r = 1 for NEAREST and LINEAR, 1 + ⌈(N−1)/2⌉ for PCF N). If any answer differs
+//! from the centre's, the pixel is an edge pixel: error there is reported separately, and
+//! "error away from edges" must be zero for a well-biased technique. Extrapolating along the
+//! tangent plane (instead of using neighbouring surface points) keeps slanted receivers from
+//! being counted as their own occluders; a convex curved receiver lies behind its tangent plane
+//! as seen from the light, so it does not either.
+
+pub mod bvh;
+pub mod ray;
+
+use std::time::{Duration, Instant};
+
+use glam::{DMat4, DVec3, DVec4};
+use rayon::prelude::*;
+use umbra_case::format::Filter;
+use umbra_case::{Convention, LightKind, Prepared};
+
+use bvh::Bvh;
+use ray::Ray;
+
+/// What the truth says about one pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Class {
+    /// Nothing is hit.
+    Background,
+    /// The surface faces away from the light.
+    FacesAway,
+    /// Outside the light's frustum.
+    Outside,
+    /// Reached by the light.
+    Lit,
+    /// Blocked from the light.
+    Shadowed,
+}
+
+/// The truth for every pixel of a run, top row first.
+#[derive(Clone, Debug)]
+pub struct Truth {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Class per pixel.
+    pub class: Vec<Class>,
+    /// Per pixel: within the light's texel resolution of a true shadow boundary.
+    pub edge: Vec<bool>,
+    /// Per pixel: the hit triangle's face + 1, 0 for background.
+    pub face: Vec<u32>,
+    /// Per pixel: the world point hit (meaningless for background).
+    pub point: Vec<DVec3>,
+    /// Time taken.
+    pub elapsed: Duration,
+}
+
+impl Truth {
+    /// Whether pixel `i` is judged (lit or shadowed).
+    pub fn judged(&self, i: usize) -> bool {
+        matches!(self.class[i], Class::Lit | Class::Shadowed)
+    }
+}
+
+/// The texel radius of the edge test for a filter.
+pub fn edge_radius(filter: Filter) -> i32 {
+    match filter {
+        Filter::Nearest | Filter::Linear => 1,
+        Filter::Pcf(n) => 1 + (n as i32 - 1 + 1) / 2,
+    }
+}
+
+struct Scene<'a> {
+    bvh: Bvh,
+    face: &'a [u32],
+    light: LightKind,
+    faces: Vec<(DMat4, DMat4)>,
+    map: [u32; 2],
+    eps: f64,
+    radius: i32,
+}
+
+/// Computes the truth of `run`.
+pub fn ground_truth(run: &Prepared) -> Truth {
+    let start = Instant::now();
+    let case = run.case();
+    let geo = &run.geometry;
+    let conv = Convention::ZERO_TO_ONE;
+    let (lo, hi) = geo.bounds();
+    let extent = f64::from((hi - lo).max_element()).max(1e-6);
+    let faces = run
+        .light
+        .views
+        .iter()
+        .map(|v| {
+            let m = to_f64(v.view_proj(conv));
+            (m, m.inverse())
+        })
+        .collect();
+    let scene = Scene {
+        bvh: Bvh::new(geo),
+        face: &geo.face,
+        light: run.light.kind,
+        faces,
+        map: case.shadow.size,
+        eps: extent * 1e-9,
+        radius: edge_radius(case.shadow.filter),
+    };
+    let [w, h] = run.camera.size;
+    let inv_cam = to_f64(run.camera.view_proj(conv)).inverse();
+    let pixels: Vec<(Class, bool, u32, DVec3)> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let ndc_x = (f64::from(x) + 0.5) / f64::from(w) * 2.0 - 1.0;
+            let ndc_y = 1.0 - (f64::from(y) + 0.5) / f64::from(h) * 2.0;
+            let near = project(inv_cam, DVec3::new(ndc_x, ndc_y, 0.0));
+            let far = project(inv_cam, DVec3::new(ndc_x, ndc_y, 1.0));
+            scene.pixel(&Ray::new(near, far - near))
+        })
+        .collect();
+    let mut truth = Truth {
+        width: w,
+        height: h,
+        class: Vec::with_capacity(pixels.len()),
+        edge: Vec::with_capacity(pixels.len()),
+        face: Vec::with_capacity(pixels.len()),
+        point: Vec::with_capacity(pixels.len()),
+        elapsed: Duration::ZERO,
+    };
+    for (c, e, f, p) in pixels {
+        truth.class.push(c);
+        truth.edge.push(e);
+        truth.face.push(f);
+        truth.point.push(p);
+    }
+    truth.elapsed = start.elapsed();
+    truth
+}
+
+impl Scene<'_> {
+    fn pixel(&self, camera_ray: &Ray) -> (Class, bool, u32, DVec3) {
+        // t in (0, 1]: from the near plane to the far plane.
+        let Some(hit) = self.bvh.closest(camera_ray, 0.0, 1.0 + 1e-12) else {
+            return (Class::Background, false, 0, DVec3::ZERO);
+        };
+        let p = camera_ray.origin + camera_ray.dir * hit.t;
+        let face = self.face[hit.tri as usize];
+        let [a, b, c] = self.bvh.corners(hit.tri);
+        let n = (b - a).cross(c - a).normalize();
+        let to_light = self.to_light(p);
+        if n.dot(to_light) <= 0.0 {
+            return (Class::FacesAway, false, face + 1, p);
+        }
+        let light_face = self.face_for(p);
+        let (m, inv) = self.faces[light_face];
+        let clip = m * p.extend(1.0);
+        let inside = clip.w > 0.0
+            && clip.x.abs() <= clip.w
+            && clip.y.abs() <= clip.w
+            && clip.z >= 0.0
+            && clip.z <= clip.w;
+        if !inside {
+            return (Class::Outside, false, face + 1, p);
+        }
+        let shadowed = self.blocked(p, face);
+        let class = if shadowed {
+            Class::Shadowed
+        } else {
+            Class::Lit
+        };
+        let ndc = clip.truncate() / clip.w;
+        let edge = self.near_boundary(p, n, face, ndc, inv, shadowed);
+        (class, edge, face + 1, p)
+    }
+
+    fn to_light(&self, p: DVec3) -> DVec3 {
+        match self.light {
+            LightKind::Directional { towards } => towards.as_dvec3().normalize(),
+            LightKind::Spot { position } | LightKind::Point { position } => {
+                (position.as_dvec3() - p).normalize()
+            }
+        }
+    }
+
+    fn face_for(&self, p: DVec3) -> usize {
+        let LightKind::Point { position } = self.light else {
+            return 0;
+        };
+        let d = p - position.as_dvec3();
+        let a = d.abs();
+        if a.x >= a.y && a.x >= a.z {
+            usize::from(d.x < 0.0)
+        } else if a.y >= a.z {
+            2 + usize::from(d.y < 0.0)
+        } else {
+            4 + usize::from(d.z < 0.0)
+        }
+    }
+
+    /// Whether the segment from `p` to the light crosses anything but face `own`.
+    fn blocked(&self, p: DVec3, own: u32) -> bool {
+        let (dir, t_max) = match self.light {
+            LightKind::Directional { towards } => (towards.as_dvec3().normalize(), f64::INFINITY),
+            LightKind::Spot { position } | LightKind::Point { position } => {
+                let d = position.as_dvec3() - p;
+                let len = d.length();
+                (d / len, len)
+            }
+        };
+        self.bvh.occluded(&Ray::new(p, dir), self.eps, t_max, own)
+    }
+
+    fn near_boundary(
+        &self,
+        p: DVec3,
+        n: DVec3,
+        own: u32,
+        ndc: DVec3,
+        inv: DMat4,
+        centre: bool,
+    ) -> bool {
+        let r = self.radius;
+        let (sx, sy) = (2.0 / f64::from(self.map[0]), 2.0 / f64::from(self.map[1]));
+        for dy in -r..=r {
+            for dx in -r..=r {
+                if dx == 0 && dy == 0 {
+                    continue;
+                }
+                let q = project(
+                    inv,
+                    DVec3::new(
+                        ndc.x + f64::from(dx) * sx,
+                        ndc.y + f64::from(dy) * sy,
+                        ndc.z,
+                    ),
+                );
+                let d = match self.light {
+                    LightKind::Directional { towards } => towards.as_dvec3(),
+                    LightKind::Spot { position } | LightKind::Point { position } => {
+                        q - position.as_dvec3()
+                    }
+                };
+                let dn = d.dot(n);
+                if dn.abs() < 1e-12 * d.length() {
+                    return true; // the light grazes the receiver: every texel is a boundary
+                }
+                let on_plane = q + d * ((p - q).dot(n) / dn);
+                if self.blocked(on_plane, own) != centre {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+fn project(m: DMat4, p: DVec3) -> DVec3 {
+    let q: DVec4 = m * p.extend(1.0);
+    q.truncate() / q.w
+}
+
+fn to_f64(m: glam::Mat4) -> DMat4 {
+    m.as_dmat4()
+}

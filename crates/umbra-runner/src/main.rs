@@ -1,0 +1,29 @@
+//! The `umbra` binary: `umbra render` for one case at a desk, `umbra conformance` for CI.
+
+use std::process::ExitCode;
+
+use umbra_runner::{conformance, render_cmd};
+
+fn main() -> ExitCode {
+    let argv: Vec<String> = std::env::args().skip(1).collect();
+    let code = match argv.first().map(String::as_str) {
+        Some("render") => render_cmd::main(&argv[1..]),
+        Some("conformance") => conformance::main(&argv[1..]),
+        Some("-h" | "--help" | "help") => {
+            println!("usage:\n  {}\n  {}", render_cmd::USAGE, conformance::USAGE);
+            0
+        }
+        other => {
+            eprintln!(
+                "error: {}\nusage:\n  {}\n  {}",
+                other.map_or("no command given".to_string(), |c| format!(
+                    "unknown command {c:?}"
+                )),
+                render_cmd::USAGE,
+                conformance::USAGE
+            );
+            2
+        }
+    };
+    ExitCode::from(code.clamp(0, 255) as u8)
+}
