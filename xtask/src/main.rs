@@ -1,1 +1,81 @@
-fn main() {}
+//! umbra's developer commands, rust-analyzer style: one module per command, no dependencies.
+//!
+//! - `cargo xtask conformance [ARGS]`: installs the Mesa packages when missing and allowed,
+//!   then runs `umbra conformance ARGS` and passes its exit code through (0 as expected,
+//!   1 regressions, 125 could not run), so `git bisect run cargo xtask conformance` works.
+//! - `cargo xtask test`: the same set-up, then the whole test suite and a conformance run.
+
+mod mesa;
+
+use std::process::{Command, ExitCode};
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let code = match args.first().map(String::as_str) {
+        Some("conformance") => {
+            mesa::ensure();
+            umbra(&["conformance"], &args[1..])
+        }
+        Some("test") => test(&args[1..]),
+        _ => {
+            eprintln!(
+                "usage:\n  cargo xtask conformance [--filter GLOB] [--backend ID]... [--verbose]\n  \
+                 cargo xtask test [-- CARGO TEST ARGS]"
+            );
+            2
+        }
+    };
+    ExitCode::from(code.clamp(0, 255) as u8)
+}
+
+fn test(extra: &[String]) -> i32 {
+    mesa::ensure();
+    let mut cmd = cargo();
+    cmd.args(["test", "--workspace"]);
+    cmd.args(extra);
+    let code = status(cmd);
+    if code != 0 {
+        return code;
+    }
+    // The main job on every case, as CI will run it.
+    umbra(&["conformance"], &[])
+}
+
+/// Runs the `umbra` binary through cargo, so it is built with the workspace's profile.
+fn umbra(command: &[&str], args: &[String]) -> i32 {
+    let mut cmd = cargo();
+    cmd.args([
+        "run",
+        "--quiet",
+        "--package",
+        "umbra-runner",
+        "--bin",
+        "umbra",
+        "--",
+    ]);
+    cmd.args(command).args(args);
+    status(cmd)
+}
+
+fn cargo() -> Command {
+    let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    cmd.current_dir(workspace_root());
+    cmd
+}
+
+fn workspace_root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(|p| p.to_path_buf())
+        .unwrap_or_default()
+}
+
+fn status(mut cmd: Command) -> i32 {
+    match cmd.status() {
+        Ok(s) => s.code().unwrap_or(125),
+        Err(e) => {
+            eprintln!("error: cannot run {cmd:?}: {e}");
+            125
+        }
+    }
+}

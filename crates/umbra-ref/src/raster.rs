@@ -20,6 +20,9 @@
 //!   attributes perspective-correctly (weights b_i/w_i, normalised), in f64 from the exact
 //!   edge values.
 
+// Vertex attributes are parallel arrays indexed by vertex; index loops read as the spec does.
+#![allow(clippy::needless_range_loop)]
+
 use glam::{DVec3, Vec4};
 use umbra_case::Convention;
 use umbra_case::format::Cull;
@@ -384,16 +387,13 @@ mod tests {
                 ..back
             };
             assert!(tri(&front, ccw).is_empty(), "{conv:?}");
+            let none = Rasterizer {
+                cull: Cull::None,
+                ..back
+            };
             assert!(
-                tri(
-                    &Rasterizer {
-                        cull: Cull::None,
-                        ..back
-                    },
-                    cw
-                )[0]
-                .front
-                    == false
+                !tri(&none, cw)[0].front,
+                "{conv:?}: clockwise is a back face"
             );
         }
     }

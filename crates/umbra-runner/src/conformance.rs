@@ -161,13 +161,16 @@ pub fn main(argv: &[String]) -> i32 {
     }
     let count = |s: &str| rows.iter().filter(|r| r.1 == s).count();
     println!(
-        "\n{} runs in {:.1} s: {} pass, {} fail, {} skip; reports in {}",
+        "\n{} runs in {:.1} s; reports in {}",
         rows.len(),
         started.elapsed().as_secs_f64(),
+        out.join("latest").display()
+    );
+    println!(
+        "conformance: {} passed, {} failed, {} skipped",
         count("Pass"),
         count("Fail"),
-        count("Skip"),
-        out.join("latest").display()
+        count("Skip")
     );
     if failures.is_empty() { 0 } else { 1 }
 }

@@ -1,0 +1,508 @@
+//! Malformed and impossible cases: each must be refused with an error that names the file, the
+//! JSON path and a fix. One test per mistake, so a failure names the mistake.
+
+use std::path::Path;
+
+use serde_json::{Value, json};
+use umbra_case::{CaseErrors, load_str};
+
+const FILE: &str = "cases/test/bad.json";
+
+fn base() -> Value {
+    json!({
+        "name": "base",
+        "about": "a valid case that each test breaks in one place",
+        "scene": { "objects": [
+            { "plane": { "point": [0, 0, 0], "half_extent": 10 } },
+            { "box": { "center": [0, 1, 0], "size": [1, 1, 1] } },
+            { "sphere": { "center": [2, 1, 0], "radius": 0.5 } },
+            { "mesh": { "positions": [[0, 2, 0], [1, 2, 0], [0, 3, 0]], "triangles": [[0, 1, 2]] } }
+        ] },
+        "camera": { "eye": [0, 5, 10], "target": [0, 0, 0] },
+        "light": { "spot": { "position": [3, 10, 3], "target": [0, 0, 0], "fov_y_deg": 60 } },
+        "shadow": { "size": [256, 256] }
+    })
+}
+
+/// Sets the value at a JSON pointer, creating objects on the way.
+fn set(mut doc: Value, pointer: &str, v: Value) -> Value {
+    let (parent, key) = pointer.rsplit_once('/').expect("pointer");
+    let slot = if parent.is_empty() {
+        &mut doc
+    } else {
+        doc.pointer_mut(parent).expect("parent exists")
+    };
+    match slot {
+        Value::Object(m) => {
+            m.insert(key.to_string(), v);
+        }
+        Value::Array(a) => a[key.parse::<usize>().expect("index")] = v,
+        _ => panic!("not a container"),
+    }
+    doc
+}
+
+fn remove(mut doc: Value, pointer: &str) -> Value {
+    let (parent, key) = pointer.rsplit_once('/').expect("pointer");
+    doc.pointer_mut(parent)
+        .and_then(Value::as_object_mut)
+        .expect("object")
+        .remove(key);
+    doc
+}
+
+fn errors(doc: &Value) -> CaseErrors {
+    match load_str(&doc.to_string(), Path::new(FILE)) {
+        Ok(_) => panic!("accepted a malformed case: {doc}"),
+        Err(e) => e,
+    }
+}
+
+/// Asserts an error at `path` whose message contains `needle`, and that every error names the
+/// file and carries a fix.
+fn assert_error(doc: Value, path: &str, needle: &str) {
+    let e = errors(&doc);
+    assert!(
+        e.has(path, needle),
+        "expected an error at {path:?} containing {needle:?}, got:\n{e}"
+    );
+    for one in &e.0 {
+        assert_eq!(one.file, Path::new(FILE));
+        assert!(!one.fix.is_empty(), "no fix in {one}");
+        let shown = one.to_string();
+        assert!(
+            shown.starts_with(FILE) && shown.contains("fix: "),
+            "{shown}"
+        );
+    }
+}
+
+#[test]
+fn the_base_case_is_valid() {
+    let points = load_str(&base().to_string(), Path::new(FILE)).expect("valid");
+    assert_eq!(points.len(), 1);
+    assert_eq!(points[0].id(), "base");
+}
+
+#[test]
+fn syntax_error_names_line_and_column() {
+    let e = load_str("{\n  \"name\": \"x\",,\n}", Path::new(FILE)).expect_err("bad json");
+    assert!(e.first().message.contains("line 2 column"), "{e}");
+}
+
+#[test]
+fn unknown_field_is_an_error() {
+    assert_error(
+        set(base(), "/camera/fovy", json!(40)),
+        "camera.fovy",
+        "unknown field `fovy`",
+    );
+}
+
+#[test]
+fn unknown_field_deep_in_an_object() {
+    assert_error(
+        set(base(), "/scene/objects/1/box/centre", json!([0, 0, 0])),
+        "scene.objects[1].box.centre",
+        "unknown field `centre`",
+    );
+}
+
+#[test]
+fn missing_required_field() {
+    assert_error(
+        remove(base(), "/camera/eye"),
+        "camera",
+        "missing field `eye`",
+    );
+}
+
+#[test]
+fn wrong_type() {
+    assert_error(
+        set(base(), "/shadow/size", json!("large")),
+        "shadow.size",
+        "invalid type",
+    );
+}
+
+#[test]
+fn unknown_format_name() {
+    assert_error(
+        set(base(), "/shadow/format", json!("depth8")),
+        "shadow.format",
+        "unknown variant `depth8`",
+    );
+}
+
+#[test]
+fn zero_map_size() {
+    assert_error(
+        set(base(), "/shadow/size", json!([0, 256])),
+        "shadow.size[0]",
+        "from 1 to 16384",
+    );
+}
+
+#[test]
+fn huge_map_size() {
+    assert_error(
+        set(base(), "/shadow/size", json!([256, 100000])),
+        "shadow.size[1]",
+        "got 100000",
+    );
+}
+
+#[test]
+fn non_finite_number() {
+    // JSON has no NaN; 1e39 overflows f32 to infinity, the same hazard.
+    assert_error(
+        set(base(), "/camera/eye", json!([1e39, 0, 0])),
+        "camera.eye[0]",
+        "not a finite f32",
+    );
+}
+
+#[test]
+fn near_not_below_far() {
+    let doc = set(
+        set(base(), "/camera/near", json!(10)),
+        "/camera/far",
+        json!(10),
+    );
+    assert_error(doc, "camera.far", "must be greater than near");
+}
+
+#[test]
+fn perspective_near_must_be_positive() {
+    assert_error(
+        set(base(), "/light/spot/near", json!(0)),
+        "light.spot.near",
+        "must be > 0",
+    );
+}
+
+#[test]
+fn fov_out_of_range() {
+    assert_error(
+        set(base(), "/light/spot/fov_y_deg", json!(180)),
+        "light.spot.fov_y_deg",
+        "strictly between 0 and 180",
+    );
+}
+
+#[test]
+fn light_at_its_own_target() {
+    assert_error(
+        set(base(), "/light/spot/target", json!([3, 10, 3])),
+        "light.spot.target",
+        "same point",
+    );
+}
+
+#[test]
+fn camera_up_parallel_to_view() {
+    let doc = set(
+        set(base(), "/camera/eye", json!([0, 10, 0])),
+        "/camera/target",
+        json!([0, 0, 0]),
+    );
+    assert_error(doc, "camera.up", "parallel to the view direction");
+}
+
+#[test]
+fn empty_scene() {
+    assert_error(
+        set(base(), "/scene/objects", json!([])),
+        "scene.objects",
+        "the scene is empty",
+    );
+}
+
+#[test]
+fn sphere_radius_not_positive() {
+    assert_error(
+        set(base(), "/scene/objects/2/sphere/radius", json!(-1)),
+        "scene.objects[2].sphere.radius",
+        "must be > 0",
+    );
+}
+
+#[test]
+fn sphere_too_few_segments() {
+    assert_error(
+        set(base(), "/scene/objects/2/sphere/segments", json!(3)),
+        "scene.objects[2].sphere.segments",
+        "from 4 to 512",
+    );
+}
+
+#[test]
+fn box_with_a_flat_side() {
+    assert_error(
+        set(base(), "/scene/objects/1/box/size", json!([1, 0, 1])),
+        "scene.objects[1].box.size[1]",
+        "must be > 0",
+    );
+}
+
+#[test]
+fn plane_normal_zero() {
+    assert_error(
+        set(base(), "/scene/objects/0/plane/normal", json!([0, 0, 0])),
+        "scene.objects[0].plane.normal",
+        "zero vector",
+    );
+}
+
+#[test]
+fn rotation_axis_zero() {
+    let doc = set(
+        base(),
+        "/scene/objects/1/box/transform",
+        json!({ "rotate_deg": { "axis": [0, 0, 0], "angle": 30 } }),
+    );
+    assert_error(
+        doc,
+        "scene.objects[1].box.transform.rotate_deg.axis",
+        "zero vector",
+    );
+}
+
+#[test]
+fn zero_scale() {
+    let doc = set(
+        base(),
+        "/scene/objects/1/box/transform",
+        json!({ "scale": [1, 0, 1] }),
+    );
+    assert_error(doc, "scene.objects[1].box.transform.scale[1]", "zero scale");
+}
+
+#[test]
+fn mesh_index_out_of_range() {
+    assert_error(
+        set(
+            base(),
+            "/scene/objects/3/mesh/triangles",
+            json!([[0, 1, 3]]),
+        ),
+        "scene.objects[3].mesh.triangles[0]",
+        "out of range",
+    );
+}
+
+#[test]
+fn mesh_degenerate_triangle() {
+    assert_error(
+        set(
+            base(),
+            "/scene/objects/3/mesh/triangles",
+            json!([[0, 1, 1]]),
+        ),
+        "scene.objects[3].mesh.triangles[0]",
+        "zero area",
+    );
+}
+
+#[test]
+fn pcf_kernel_too_wide() {
+    assert_error(
+        set(base(), "/shadow/filter", json!({ "pcf": 31 })),
+        "shadow.filter.pcf",
+        "from 2 to 15",
+    );
+}
+
+#[test]
+fn directional_with_both_bounds() {
+    let doc = set(
+        base(),
+        "/light",
+        json!({ "directional": { "position": [0, 10, 1], "fit": "scene",
+                                 "ortho": { "left": -1, "right": 1, "bottom": -1, "top": 1, "near": 0, "far": 20 } } }),
+    );
+    assert_error(doc, "light.directional.fit", "both explicit bounds");
+}
+
+#[test]
+fn directional_without_bounds() {
+    let doc = set(
+        base(),
+        "/light",
+        json!({ "directional": { "position": [0, 10, 1] } }),
+    );
+    assert_error(doc, "light.directional.ortho", "needs bounds");
+}
+
+#[test]
+fn directional_half_placed_by_angles() {
+    let doc = set(
+        base(),
+        "/light",
+        json!({ "directional": { "azimuth_deg": 30, "fit": "scene" } }),
+    );
+    assert_error(doc, "light.directional.elevation_deg", "missing");
+}
+
+#[test]
+fn ortho_bounds_inverted() {
+    let doc = set(
+        base(),
+        "/light",
+        json!({ "directional": { "position": [0, 10, 1],
+                                 "ortho": { "left": 1, "right": -1, "bottom": -1, "top": 1, "near": 0, "far": 20 } } }),
+    );
+    assert_error(doc, "light.directional.ortho.right", "must exceed left");
+}
+
+#[test]
+fn point_light_needs_square_faces() {
+    let doc = set(
+        base(),
+        "/light",
+        json!({ "point": { "position": [0, 5, 0] } }),
+    );
+    assert_error(
+        set(doc, "/shadow/size", json!([256, 128])),
+        "shadow.size",
+        "square faces",
+    );
+}
+
+#[test]
+fn ambient_out_of_range() {
+    assert_error(
+        set(base(), "/shading", json!({ "ambient": 1.5 })),
+        "shading.ambient",
+        "must be in [0, 1]",
+    );
+}
+
+#[test]
+fn invalid_name() {
+    assert_error(
+        set(base(), "/name", json!("Packed Cubes")),
+        "name",
+        "not a valid case name",
+    );
+}
+
+#[test]
+fn empty_about() {
+    assert_error(set(base(), "/about", json!(" ")), "about", "is empty");
+}
+
+#[test]
+fn sweep_of_an_unknown_field() {
+    let doc = set(
+        base(),
+        "/sweep",
+        json!({ "light.spot.fov": { "values": [10, 20] } }),
+    );
+    let e = errors(&doc);
+    let first = e.first();
+    assert!(
+        first.message.contains("at sweep point light.spot.fov=10")
+            && first.message.contains("unknown field `fov`"),
+        "{e}"
+    );
+    assert!(first.fix.contains("sweep.light.spot.fov"), "{e}");
+}
+
+#[test]
+fn sweep_to_an_impossible_value() {
+    let doc = set(
+        base(),
+        "/sweep",
+        json!({ "light.spot.fov_y_deg": { "from": 90, "to": 270, "steps": 3 } }),
+    );
+    let e = errors(&doc);
+    assert!(
+        e.has(
+            "light.spot.fov_y_deg",
+            "at sweep point light.spot.fov_y_deg=180"
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn sweep_without_steps() {
+    let doc = set(
+        base(),
+        "/sweep",
+        json!({ "light.spot.fov_y_deg": { "from": 10, "to": 20 } }),
+    );
+    assert_error(
+        doc,
+        "sweep.light.spot.fov_y_deg.from",
+        "needs from, to and steps",
+    );
+}
+
+#[test]
+fn log_sweep_through_zero() {
+    let doc = set(
+        base(),
+        "/sweep",
+        json!({ "light.spot.near": { "from": 0, "to": 1, "steps": 3, "scale": "log" } }),
+    );
+    assert_error(doc, "sweep.light.spot.near.scale", "log spacing");
+}
+
+#[test]
+fn every_problem_is_reported_at_once() {
+    let doc = set(
+        set(base(), "/shadow/size", json!([0, 0])),
+        "/camera/fov_y_deg",
+        json!(0),
+    );
+    let e = errors(&doc);
+    assert!(e.0.len() >= 3, "{e}");
+}
+
+#[test]
+fn sweeps_expand_to_the_cartesian_product_in_order() {
+    let doc = set(
+        base(),
+        "/sweep",
+        json!({ "light.spot.fov_y_deg": { "from": 20, "to": 60, "steps": 3 },
+                "shadow.format": { "values": ["depth16", "depth32f"] } }),
+    );
+    let points = load_str(&doc.to_string(), Path::new(FILE)).expect("valid sweep");
+    let ids: Vec<String> = points.iter().map(|p| p.id()).collect();
+    assert_eq!(ids.len(), 6);
+    assert_eq!(ids[0], "base@light.spot.fov_y_deg=20,shadow.format=depth16");
+    assert_eq!(
+        ids[1],
+        "base@light.spot.fov_y_deg=20,shadow.format=depth32f"
+    );
+    assert_eq!(
+        ids[5],
+        "base@light.spot.fov_y_deg=60,shadow.format=depth32f"
+    );
+    assert!(points.iter().all(|p| p.case.sweep.is_empty()));
+    let umbra_case::format::Light::Spot(s) = &points[2].case.light else {
+        panic!("spot")
+    };
+    assert_eq!(s.fov_y_deg, 40.0);
+}
+
+#[test]
+fn log_sweeps_are_evenly_spaced_in_decades() {
+    let doc = set(
+        base(),
+        "/sweep",
+        json!({ "light.spot.near": { "from": 0.001, "to": 1, "steps": 4, "scale": "log" } }),
+    );
+    let points = load_str(&doc.to_string(), Path::new(FILE)).expect("valid");
+    let nears: Vec<f32> = points
+        .iter()
+        .map(|p| match &p.case.light {
+            umbra_case::format::Light::Spot(s) => s.near,
+            _ => unreachable!(),
+        })
+        .collect();
+    assert_eq!(nears, vec![0.001, 0.01, 0.1, 1.0]);
+}
