@@ -267,3 +267,57 @@ pub fn agreement(a: &Frame, b: &Frame, radius: u32) -> Agreement {
     }
     g
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use umbra_case::Timings;
+
+    fn frame(vis: Vec<f32>, w: u32) -> Frame {
+        let h = vis.len() as u32 / w;
+        Frame {
+            width: w,
+            height: h,
+            color: vec![0; vis.len() * 4],
+            visibility: vis,
+            surface: None,
+            shadow_map: None,
+            timings: Timings::default(),
+        }
+    }
+
+    #[test]
+    fn agreement_counts_and_explains_shifts() {
+        let n = f32::NAN;
+        // A one-pixel shift of a shadow edge, and one isolated flipped pixel.
+        let a = frame(
+            vec![
+                0.0, 0.0, 1.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0, n, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0,
+                0.0,
+            ],
+            6,
+        );
+        let b = frame(
+            vec![
+                0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0,
+                1.0, 1.0,
+            ],
+            6,
+        );
+        let strict = agreement(&a, &b, 0);
+        assert_eq!((strict.compared, strict.coverage_differs), (17, 1));
+        assert_eq!(
+            (
+                strict.only_a_shadowed,
+                strict.only_b_shadowed,
+                strict.within_radius
+            ),
+            (2, 0, 0)
+        );
+        let shifted = agreement(&a, &b, 1);
+        // Pixel 1 has a shadowed neighbour in b and a lit neighbour in a: a shift explains it.
+        // Pixel 17 has no shadowed pixel of b within one pixel: a real disagreement.
+        assert_eq!((shifted.within_radius, shifted.only_a_shadowed), (1, 1));
+        assert!(shifted.disagrees[17] && !shifted.disagrees[1]);
+    }
+}

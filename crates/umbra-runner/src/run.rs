@@ -57,8 +57,8 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
     };
     if shadow_bad || light_bad {
         problems.push(format!(
-            "expect.interior_error is {:?}, but away from shadow edges {} px are falsely shadowed and {} px falsely lit (of {} judged)",
-            prepared.case().expect.interior_error,
+            "expect.interior_error is {}, but away from shadow edges {} px are falsely shadowed and {} px falsely lit (of {} judged)",
+            serde_json::to_string(&prepared.case().expect.interior_error).unwrap_or_default(),
             a.false_shadow,
             a.false_light,
             a.judged
