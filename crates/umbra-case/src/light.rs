@@ -194,17 +194,9 @@ impl LightSetup {
 
     /// The face a world point is looked up in (0 unless this is a point light).
     pub fn face_for(&self, p: Vec3) -> usize {
-        let LightKind::Point { position } = self.kind else {
-            return 0;
-        };
-        let d = p - position;
-        let a = d.abs();
-        if a.x >= a.y && a.x >= a.z {
-            usize::from(d.x < 0.0)
-        } else if a.y >= a.z {
-            2 + usize::from(d.y < 0.0)
-        } else {
-            4 + usize::from(d.z < 0.0)
+        match self.kind {
+            LightKind::Point { position } => cube_face((p - position).as_dvec3()),
+            _ => 0,
         }
     }
 
@@ -216,6 +208,19 @@ impl LightSetup {
                 (position - p).normalize()
             }
         }
+    }
+}
+
+/// The cube face (+x, −x, +y, −y, +z, −z = 0..5) of direction `d`: its major axis, ties going
+/// to x, then y.
+pub fn cube_face(d: glam::DVec3) -> usize {
+    let a = d.abs();
+    if a.x >= a.y && a.x >= a.z {
+        usize::from(d.x < 0.0)
+    } else if a.y >= a.z {
+        2 + usize::from(d.y < 0.0)
+    } else {
+        4 + usize::from(d.z < 0.0)
     }
 }
 

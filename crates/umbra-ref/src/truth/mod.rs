@@ -199,17 +199,9 @@ impl Scene<'_> {
     }
 
     fn face_for(&self, p: DVec3) -> usize {
-        let LightKind::Point { position } = self.light else {
-            return 0;
-        };
-        let d = p - position.as_dvec3();
-        let a = d.abs();
-        if a.x >= a.y && a.x >= a.z {
-            usize::from(d.x < 0.0)
-        } else if a.y >= a.z {
-            2 + usize::from(d.y < 0.0)
-        } else {
-            4 + usize::from(d.z < 0.0)
+        match self.light {
+            LightKind::Point { position } => umbra_case::light::cube_face(p - position.as_dvec3()),
+            _ => 0,
         }
     }
 
