@@ -41,6 +41,17 @@ pub fn convention(case: &Case, clip: ClipDepth) -> Convention {
 
 /// Renders both passes of `run` in clip convention `clip`.
 pub fn render(run: &Prepared, clip: ClipDepth) -> Frame {
+    render_inner(run, clip, false).0
+}
+
+/// Renders like [`render`] and also returns, per pixel (top row first), the
+/// [`lookup::ambiguity`] flags: why another conformant implementation could answer
+/// differently there. The judge's agreement rule uses them.
+pub fn render_judged(run: &Prepared, clip: ClipDepth) -> (Frame, Vec<u8>) {
+    render_inner(run, clip, true)
+}
+
+fn render_inner(run: &Prepared, clip: ClipDepth, judge: bool) -> (Frame, Vec<u8>) {
     let start = Instant::now();
     let case = run.case();
     let conv = convention(case, clip);
@@ -63,7 +74,7 @@ pub fn render(run: &Prepared, clip: ClipDepth) -> Frame {
             .collect(),
         layers: &layers,
     };
-    let lit = lit_pass::render(run, conv, &lookup);
+    let lit = lit_pass::render(run, conv, &lookup, judge);
     let lit_done = Instant::now();
     let [w, h] = run.camera.size;
     let flip = !conv.window_y_down();
@@ -87,8 +98,9 @@ pub fn render(run: &Prepared, clip: ClipDepth) -> Frame {
         }),
         timings: Timings::default(),
     };
+    let ambiguity = top_first(&lit.ambiguity, w as usize, 1, flip);
     let end = Instant::now();
-    Frame {
+    let frame = Frame {
         timings: Timings {
             shadow_pass: shadow_done - start,
             lit_pass: lit_done - shadow_done,
@@ -97,7 +109,8 @@ pub fn render(run: &Prepared, clip: ClipDepth) -> Frame {
             clock: Some(Clock::CpuWall),
         },
         ..frame
-    }
+    };
+    (frame, ambiguity)
 }
 
 /// Rows in top-first order: reversed when the raster's row 0 is the bottom (the one Y flip).

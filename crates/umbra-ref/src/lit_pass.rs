@@ -32,10 +32,13 @@ pub struct LitImage {
     pub visibility: Vec<f32>,
     /// Face id + 1, 0 for background.
     pub surface: Vec<u32>,
+    /// [`crate::lookup::ambiguity`] flags per pixel (all 0 unless judged).
+    pub ambiguity: Vec<u8>,
 }
 
-/// Renders the camera view of `run`, looking shadows up with `lookup`.
-pub fn render(run: &Prepared, conv: Convention, lookup: &Lookup) -> LitImage {
+/// Renders the camera view of `run`, looking shadows up with `lookup`; with `judge`, also
+/// records why each lookup's answer could legally differ.
+pub fn render(run: &Prepared, conv: Convention, lookup: &Lookup, judge: bool) -> LitImage {
     let [w, h] = run.camera.size;
     let geo: &Geometry = &run.geometry;
     let raster = Rasterizer {
@@ -76,11 +79,11 @@ pub fn render(run: &Prepared, conv: Convention, lookup: &Lookup) -> LitImage {
     );
     let case = run.case();
     let eye = run.camera.eye;
-    let pixels: Vec<([u8; 4], f32, u32)> = nearest
+    let pixels: Vec<([u8; 4], f32, u32, u8)> = nearest
         .par_iter()
         .map(|px| {
             if px.tri == NONE {
-                return (BACKGROUND, f32::NAN, 0);
+                return (BACKGROUND, f32::NAN, 0, 0);
             }
             let t = px.tri as usize;
             let idx = geo.triangles[t].map(|k| k as usize);
@@ -92,7 +95,11 @@ pub fn render(run: &Prepared, conv: Convention, lookup: &Lookup) -> LitImage {
                 + geo.normals[idx[1]] * wt.y
                 + geo.normals[idx[2]] * wt.z)
                 .normalize_or_zero();
-            let vis = lookup.visibility(p, n);
+            let (vis, flags) = if judge {
+                lookup.visibility_judged(p, n)
+            } else {
+                (lookup.visibility(p, n), 0)
+            };
             let albedo: Vec3 = geo.albedo[geo.object[t] as usize];
             let color = shade(
                 &case.shading,
@@ -102,18 +109,21 @@ pub fn render(run: &Prepared, conv: Convention, lookup: &Lookup) -> LitImage {
                 (eye - p).normalize_or_zero(),
                 vis,
             );
-            (color, vis, geo.face[t] + 1)
+            (color, vis, geo.face[t] + 1, flags)
         })
         .collect();
+    let n = pixels.len();
     let mut out = LitImage {
-        color: Vec::with_capacity(pixels.len() * 4),
-        visibility: Vec::with_capacity(pixels.len()),
-        surface: Vec::with_capacity(pixels.len()),
+        color: Vec::with_capacity(n * 4),
+        visibility: Vec::with_capacity(n),
+        surface: Vec::with_capacity(n),
+        ambiguity: Vec::with_capacity(n),
     };
-    for (c, v, s) in pixels {
+    for (c, v, s, a) in pixels {
         out.color.extend_from_slice(&c);
         out.visibility.push(v);
         out.surface.push(s);
+        out.ambiguity.push(a);
     }
     out
 }

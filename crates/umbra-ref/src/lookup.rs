@@ -37,22 +37,46 @@ pub struct Lookup<'a> {
     pub layers: &'a [DepthLayer],
 }
 
+/// Why a lookup's answer is one that a conformant implementation could give differently.
+pub mod ambiguity {
+    /// A compared texel is within the stored-depth freedom of the reference value.
+    pub const DEPTH_TIE: u8 = 1;
+    /// The coordinate is within 1/16 texel (the minimum sub-texel precision) of a texel
+    /// whose compare differs.
+    pub const TEXEL_BOUNDARY: u8 = 2;
+    /// LINEAR taps disagree (weights are implementation-defined, NEAREST is allowed), or a
+    /// PCF average lies within one 8-bit result step of the 0.5 threshold.
+    pub const FILTER: u8 = 4;
+}
+
+/// Sub-texel precision the specs guarantee (4 bits).
+const SUBTEXEL: f32 = 1.0 / 16.0;
+
 impl Lookup<'_> {
     /// The shadow term at world point `p` with unit normal `n`: 1 lit .. 0 shadowed.
     pub fn visibility(&self, p: Vec3, n: Vec3) -> f32 {
+        self.lookup(p, n, false).0
+    }
+
+    /// The shadow term and the [`ambiguity`] flags of its decision.
+    pub fn visibility_judged(&self, p: Vec3, n: Vec3) -> (f32, u8) {
+        self.lookup(p, n, true)
+    }
+
+    fn lookup(&self, p: Vec3, n: Vec3, judge: bool) -> (f32, u8) {
         let s = self.shadow;
         let p = p + n * s.bias.normal_offset;
         let face = self.light.face_for(p);
         let cube = self.layers.len() == 6;
         let c = self.matrices[face].coord(self.conv, s.bias_matrix, p);
         if s.guard_behind_light && c.w <= 0.0 {
-            return 1.0;
+            return (1.0, 0);
         }
         if !cube
             && s.outside == Outside::Lit
             && !((0.0..=1.0).contains(&c.u) && (0.0..=1.0).contains(&c.v))
         {
-            return 1.0;
+            return (1.0, 0);
         }
         let mut bias = s.bias.constant;
         if let Some(slope) = s.bias.slope {
@@ -70,35 +94,81 @@ impl Lookup<'_> {
         } else {
             s.outside
         };
-        let tap = |i: i64, j: i64| -> f32 {
-            let d = texel(
-                layer,
-                w,
-                h,
-                i,
-                j,
-                outside,
-                self.conv.clear_depth(),
-                s.format,
-            );
-            if self.conv.compare_lit(reference, d) {
-                1.0
-            } else {
-                0.0
-            }
+        let clear = self.conv.clear_depth();
+        // One compare: (passes, within the stored depth's freedom).
+        let tap = |i: i64, j: i64| -> (bool, bool) {
+            let (d, slack) = texel(layer, w, h, i, j, outside, clear, s.format);
+            let pass = self.conv.compare_lit(reference, d);
+            let tie = judge
+                && (reference - d).abs()
+                    <= slack
+                        + s.format.step(reference) as f32
+                        + 4.0 * umbra_case::depth::f32_spacing(reference);
+            (pass, tie)
         };
         let (fw, fh) = (w as f32, h as f32);
-        match s.filter {
-            Filter::Nearest => tap((c.u * fw).floor() as i64, (c.v * fh).floor() as i64),
+        let mut flags = 0u8;
+        // NEAREST at (x, y) texels: the texel, and whether a neighbour within the sub-texel
+        // precision decides differently.
+        let nearest = |x: f32, y: f32, flags: &mut u8| -> f32 {
+            let (i, j) = (x.floor() as i64, y.floor() as i64);
+            let (pass, tie) = tap(i, j);
+            if judge {
+                if tie {
+                    *flags |= ambiguity::DEPTH_TIE;
+                }
+                let (fx, fy) = (x - x.floor(), y - y.floor());
+                let near_x = if fx < SUBTEXEL {
+                    Some(i - 1)
+                } else if fx > 1.0 - SUBTEXEL {
+                    Some(i + 1)
+                } else {
+                    None
+                };
+                let near_y = if fy < SUBTEXEL {
+                    Some(j - 1)
+                } else if fy > 1.0 - SUBTEXEL {
+                    Some(j + 1)
+                } else {
+                    None
+                };
+                let others = [
+                    near_x.map(|k| (k, j)),
+                    near_y.map(|k| (i, k)),
+                    near_x.zip(near_y),
+                ];
+                if others.iter().flatten().any(|&(a, b)| tap(a, b).0 != pass) {
+                    *flags |= ambiguity::TEXEL_BOUNDARY;
+                }
+            }
+            if pass { 1.0 } else { 0.0 }
+        };
+        let vis = match s.filter {
+            Filter::Nearest => nearest(c.u * fw, c.v * fh, &mut flags),
             Filter::Linear => {
                 let (x, y) = (c.u * fw - 0.5, c.v * fh - 0.5);
                 let (i0, j0) = (x.floor(), y.floor());
                 let (a, b) = (x - i0, y - j0);
                 let (i0, j0) = (i0 as i64, j0 as i64);
-                (1.0 - a) * (1.0 - b) * tap(i0, j0)
-                    + a * (1.0 - b) * tap(i0 + 1, j0)
-                    + (1.0 - a) * b * tap(i0, j0 + 1)
-                    + a * b * tap(i0 + 1, j0 + 1)
+                let taps = [
+                    tap(i0, j0),
+                    tap(i0 + 1, j0),
+                    tap(i0, j0 + 1),
+                    tap(i0 + 1, j0 + 1),
+                ];
+                let v = |t: (bool, bool)| if t.0 { 1.0 } else { 0.0 };
+                if judge {
+                    if taps.iter().any(|t| t.1) {
+                        flags |= ambiguity::DEPTH_TIE;
+                    }
+                    if taps.iter().any(|t| t.0 != taps[0].0) {
+                        flags |= ambiguity::FILTER;
+                    }
+                }
+                (1.0 - a) * (1.0 - b) * v(taps[0])
+                    + a * (1.0 - b) * v(taps[1])
+                    + (1.0 - a) * b * v(taps[2])
+                    + a * b * v(taps[3])
             }
             Filter::Pcf(k) => {
                 let half = (k as f32 - 1.0) * 0.5;
@@ -107,16 +177,22 @@ impl Lookup<'_> {
                     for dx in 0..k {
                         let u = c.u + (dx as f32 - half) / fw;
                         let v = c.v + (dy as f32 - half) / fh;
-                        sum += tap((u * fw).floor() as i64, (v * fh).floor() as i64);
+                        sum += nearest(u * fw, v * fh, &mut flags);
                     }
                 }
-                sum / (k * k) as f32
+                let avg = sum / (k * k) as f32;
+                if judge && (avg - 0.5).abs() <= 1.0 / 255.0 {
+                    flags |= ambiguity::FILTER;
+                }
+                avg
             }
-        }
+        };
+        (vis, flags)
     }
 }
 
-/// The stored depth at texel (i, j) under the wrap policy (border texels hold the clear depth).
+/// The stored depth and its slack at texel (i, j) under the wrap policy (border texels hold
+/// the clear depth, exactly).
 #[allow(clippy::too_many_arguments)]
 fn texel(
     layer: &DepthLayer,
@@ -127,17 +203,18 @@ fn texel(
     outside: Outside,
     clear: f32,
     format: DepthFormat,
-) -> f32 {
+) -> (f32, f32) {
     let (w, h) = (i64::from(w), i64::from(h));
     let (i, j) = match outside {
         Outside::Border => {
             if i < 0 || j < 0 || i >= w || j >= h {
-                return format.store(clear);
+                return (format.store(clear), 0.0);
             }
             (i, j)
         }
         Outside::Lit | Outside::ClampToEdge => (i.clamp(0, w - 1), j.clamp(0, h - 1)),
         Outside::Repeat => (i.rem_euclid(w), j.rem_euclid(h)),
     };
-    layer.values[(j * w + i) as usize]
+    let k = (j * w + i) as usize;
+    (layer.values[k], layer.slack[k])
 }

@@ -95,6 +95,12 @@ impl Tri {
     /// Max of |∂z/∂x| and |∂z/∂y| in window depth per pixel: the polygon-offset slope m
     /// (the approximation the specs allow, and what Mesa computes).
     pub fn max_depth_slope(&self) -> f64 {
+        let (dx, dy) = self.depth_slopes();
+        dx.abs().max(dy.abs())
+    }
+
+    /// (∂z/∂x, ∂z/∂y) of window depth per pixel, from the snapped vertices.
+    pub fn depth_slopes(&self) -> (f64, f64) {
         let px = |v: i64| v as f64 / ONE as f64;
         let (x0, y0, z0) = (px(self.x[0]), px(self.y[0]), f64::from(self.z[0]));
         let (x1, y1, z1) = (
@@ -108,9 +114,7 @@ impl Tri {
             f64::from(self.z[2]) - z0,
         );
         let det = x1 * y2 - x2 * y1;
-        let dzdx = (z1 * y2 - z2 * y1) / det;
-        let dzdy = (x1 * z2 - x2 * z1) / det;
-        dzdx.abs().max(dzdy.abs())
+        ((z1 * y2 - z2 * y1) / det, (x1 * z2 - x2 * z1) / det)
     }
 
     /// Largest |window z| of the vertices (for the float polygon-offset unit).

@@ -19,6 +19,26 @@ use crate::raster::{Rasterizer, Tri};
 pub struct DepthLayer {
     /// Stored values, `width * height`.
     pub values: Vec<f32>,
+    /// Per texel, how far another conformant implementation's stored value may lie from
+    /// ours (see [`slack`]); 0 where nothing was drawn.
+    pub slack: Vec<f32>,
+}
+
+/// The freedom the specs leave in a stored depth, for the winning triangle `t`
+/// (NUMERICS.md): the polygon-offset slope may be m = sqrt(dx² + dy²) instead of our
+/// max(|dx|, |dy|), which adds up to (sqrt − max)·|factor|; the unit r is an implementation
+/// constant (Vulkan allows up to 2 steps), so r·|units| either way; and storage may round
+/// either way (±1 step). f32 rounding of the interpolation adds a few ulps of z.
+fn slack(t: &Tri, format: DepthFormat, factor: f32, units: f32) -> f32 {
+    let (dx, dy) = t.depth_slopes();
+    let m_freedom = (dx.hypot(dy) - dx.abs().max(dy.abs())) * f64::from(factor.abs());
+    let z = t.max_abs_z();
+    let r = f64::from(format.offset_unit(z));
+    let step = format.step(z);
+    (m_freedom
+        + r * f64::from(units.abs())
+        + step
+        + 4.0 * f64::from(umbra_case::depth::f32_spacing(z))) as f32
 }
 
 /// Renders one light face with view-projection `light`.
@@ -40,25 +60,28 @@ pub fn render_face(
     let [factor, units] = shadow.bias.polygon_offset;
     let clamp = shadow.bias.polygon_offset_clamp;
     let sign = conv.toward_far();
-    let mut values = vec![format.store(conv.clear_depth()); (w * h) as usize];
-    for_each_band(&mut values, w as usize, 1, &tris, |rows, band, touching| {
+    // (stored value, slack) per texel.
+    let mut texels = vec![(format.store(conv.clear_depth()), 0.0f32); (w * h) as usize];
+    for_each_band(&mut texels, w as usize, 1, &tris, |rows, band, touching| {
         for t in touching {
             let offset = if factor != 0.0 || units != 0.0 {
                 polygon_offset(t, format, factor, units, clamp)
             } else {
                 0.0
             };
+            let freedom = slack(t, format, factor, units);
             t.scan(rows.clone(), |x, y, frag| {
                 let z = (f64::from(t.depth(frag)) + f64::from(sign) * offset) as f32;
                 let stored = format.store(z.clamp(0.0, 1.0));
                 let i = (y - rows.start) as usize * w as usize + x as usize;
-                if conv.depth_test(stored, band[i]) {
-                    band[i] = stored;
+                if conv.depth_test(stored, band[i].0) {
+                    band[i] = (stored, freedom);
                 }
             });
         }
     });
-    DepthLayer { values }
+    let (values, slack) = texels.into_iter().unzip();
+    DepthLayer { values, slack }
 }
 
 /// The polygon offset of a triangle, as a positive distance away from the light.

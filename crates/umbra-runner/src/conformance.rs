@@ -20,7 +20,11 @@ pub const USAGE: &str =
 
 /// Runs the command; returns the process exit code.
 pub fn main(argv: &[String]) -> i32 {
-    let args = match Args::parse(argv, &["cases", "filter", "backend", "out"], &["verbose"]) {
+    let args = match Args::parse(
+        argv,
+        &["cases", "filter", "backend", "out"],
+        &["verbose", "child"],
+    ) {
         Ok(a) => a,
         Err(e) => {
             eprintln!("error: {e}\nusage: {USAGE}");
@@ -30,7 +34,11 @@ pub fn main(argv: &[String]) -> i32 {
     let cases_dir = PathBuf::from(args.value("cases").unwrap_or("cases"));
     let out = PathBuf::from(args.value("out").unwrap_or("target/umbra"));
     let filter = args.value("filter").unwrap_or("*");
-    let mut ids: Vec<&str> = args.values("backend");
+    let mut ids: Vec<String> = args
+        .values("backend")
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
     if ids.is_empty() {
         ids = crate::registry::known();
     }
@@ -52,12 +60,56 @@ pub fn main(argv: &[String]) -> i32 {
     let mut failures = Vec::new();
     let started = Instant::now();
     for backend_id in &ids {
-        let mut backend = match crate::registry::create(backend_id) {
-            Ok(b) => b,
-            Err(e) => {
+        if !crate::registry::hostable_here(backend_id) {
+            // Another Mesa driver: run this backend in a child process with its environment.
+            let part = out
+                .join("parts")
+                .join(crate::render_cmd::file_name(backend_id));
+            let mut child_args = vec![
+                "conformance".to_string(),
+                "--child".into(),
+                "--backend".into(),
+                backend_id.clone(),
+            ];
+            child_args.extend([
+                "--cases".into(),
+                cases_dir.display().to_string(),
+                "--filter".into(),
+                filter.to_string(),
+                "--out".into(),
+                part.display().to_string(),
+            ]);
+            if args.has("verbose") {
+                child_args.push("--verbose".into());
+            }
+            let env = crate::registry::driver_env(backend_id).unwrap_or_default();
+            let code = crate::child::rerun(&child_args, &env);
+            match merge_part(&part.join("latest"), &mut rows, &mut errors_csv) {
+                Ok(()) if code == 0 || code == 1 => {}
+                Ok(()) | Err(_) => {
+                    let why = format!(
+                        "{backend_id}: its driver process ended with code {code} before reporting every run"
+                    );
+                    println!("Crash {why}");
+                    failures.push(why);
+                    rows.push((format!("{backend_id}/*"), "Crash", 0.0));
+                }
+            }
+            failures.extend(
+                rows.iter()
+                    .filter(|r| r.0.starts_with(&format!("{backend_id}/")) && r.1 == "Fail")
+                    .map(|r| r.0.clone()),
+            );
+            continue;
+        }
+        // An unavailable backend (no libEGL, no driver) turns every run into a skip with the reason.
+        let (mut backend, unavailable_reason) = match crate::registry::create(backend_id) {
+            Ok(b) => (Some(b), None),
+            Err(crate::registry::CreateError::Unknown(e)) => {
                 eprintln!("error: {e}");
                 return 125;
             }
+            Err(crate::registry::CreateError::Unavailable(why)) => (None, Some(why)),
         };
         for file in &files {
             let points = match umbra_case::load_file(file) {
@@ -78,7 +130,10 @@ pub fn main(argv: &[String]) -> i32 {
                     continue;
                 }
                 let t0 = Instant::now();
-                let outcome = run_point(backend.as_mut(), point);
+                let outcome = match (&mut backend, &unavailable_reason) {
+                    (Some(b), _) => run_point(b.as_mut(), point),
+                    (None, why) => Outcome::Skip(why.clone().unwrap_or_default()),
+                };
                 let secs = t0.elapsed().as_secs_f64();
                 let status = match &outcome {
                     Outcome::Skip(why) => {
@@ -173,6 +228,36 @@ pub fn main(argv: &[String]) -> i32 {
         count("Skip")
     );
     if failures.is_empty() { 0 } else { 1 }
+}
+
+/// Appends a child's `results.csv` and `errors.csv` rows to this run's.
+fn merge_part(
+    dir: &Path,
+    rows: &mut Vec<(String, &'static str, f64)>,
+    errors_csv: &mut String,
+) -> std::io::Result<()> {
+    let results = std::fs::read_to_string(dir.join("results.csv"))?;
+    for line in results.lines() {
+        let mut f = line.rsplitn(3, ',');
+        let (secs, status, test) = (
+            f.next().unwrap_or("0"),
+            f.next().unwrap_or(""),
+            f.next().unwrap_or(""),
+        );
+        let status: &'static str = match status {
+            "Pass" => "Pass",
+            "Skip" => "Skip",
+            "Crash" => "Crash",
+            _ => "Fail",
+        };
+        rows.push((test.to_string(), status, secs.parse().unwrap_or(0.0)));
+    }
+    let errors = std::fs::read_to_string(dir.join("errors.csv"))?;
+    for line in errors.lines().skip(1) {
+        errors_csv.push_str(line);
+        errors_csv.push('\n');
+    }
+    Ok(())
 }
 
 fn write_reports(out: &Path, results: &str, errors: &str) -> std::io::Result<()> {

@@ -1,11 +1,12 @@
 //! umbra's runner: the backend registry, running and judging one case point, and the commands
 //! of the `umbra` binary.
 //!
-//! For now the registry holds the CPU reference only; the GL and wgpu backends join it in
-//! their own crates, and process isolation, expectations, goldens and the full report set come
-//! with the conformance runner.
+//! The registry holds the CPU reference and the GL backends (one Mesa driver per process);
+//! wgpu joins it with its own crate, and per-run isolation, expectations, goldens and the full
+//! report set come with the conformance runner.
 
 pub mod args;
+pub mod child;
 pub mod conformance;
 pub mod glob;
 pub mod registry;

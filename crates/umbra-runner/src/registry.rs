@@ -1,19 +1,62 @@
-//! Backend ids and how to make them. Only the reference is registered so far.
+//! Backend ids and how to make them: `ref`, and `API/DRIVER` for GL (`gl33/llvmpipe`,
+//! `gles2/zink`, ...).
+//!
+//! A Mesa driver is chosen by environment before EGL loads, so a process hosts one driver.
+//! [`driver_env`] says which environment an id needs; the commands run ids whose driver this
+//! process did not load in a child process of their own ([`crate::child`]).
 
 use umbra_case::Backend;
 
 /// Every backend id this build knows, in report order.
-pub fn known() -> Vec<&'static str> {
-    vec!["ref"]
+pub fn known() -> Vec<String> {
+    let mut ids = vec!["ref".to_string()];
+    ids.extend(umbra_gl::ids());
+    ids
 }
 
-/// Creates the backend `id`, or says which ids exist.
-pub fn create(id: &str) -> Result<Box<dyn Backend>, String> {
-    match id {
-        "ref" => Ok(Box::new(umbra_ref::RefBackend)),
-        other => Err(format!(
-            "unknown backend {other:?}; this build has: {}",
+/// The environment the id's driver needs, if any.
+pub fn driver_env(id: &str) -> Option<Vec<(&'static str, &'static str)>> {
+    umbra_gl::parse_id(id).map(|(_, d)| d.env())
+}
+
+/// Whether this process can host the id (its driver environment is in place).
+pub fn hostable_here(id: &str) -> bool {
+    match umbra_gl::parse_id(id) {
+        Some((_, d)) => d.is_selected(),
+        None => true,
+    }
+}
+
+/// Creates the backend `id` in this process. `Err` says why it cannot exist here: an unknown
+/// id (with the list), or a driver that is unavailable (with the package to install).
+pub fn create(id: &str) -> Result<Box<dyn Backend>, CreateError> {
+    if id == "ref" {
+        return Ok(Box::new(umbra_ref::RefBackend));
+    }
+    match umbra_gl::parse_id(id) {
+        Some((api, driver)) => umbra_gl::GlBackend::new(api, driver)
+            .map(|b| Box::new(b) as Box<dyn Backend>)
+            .map_err(|e| CreateError::Unavailable(e.0)),
+        None => Err(CreateError::Unknown(format!(
+            "unknown backend {id:?}; this build has: {}",
             known().join(", ")
-        )),
+        ))),
+    }
+}
+
+/// Why a backend could not be created.
+#[derive(Debug)]
+pub enum CreateError {
+    /// No such id: a usage error.
+    Unknown(String),
+    /// The backend exists but cannot run here: every run is a skip with this reason.
+    Unavailable(String),
+}
+
+impl std::fmt::Display for CreateError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CreateError::Unknown(s) | CreateError::Unavailable(s) => f.write_str(s),
+        }
     }
 }

@@ -10,7 +10,8 @@ use crate::args::Args;
 use crate::run::{Outcome, describe, run_point};
 
 /// Usage line.
-pub const USAGE: &str = "umbra render CASE.json [--backend ref] [-o DIR] [--point GLOB]";
+pub const USAGE: &str =
+    "umbra render CASE.json [--backend ref|gl33/llvmpipe|gles2/zink|...] [-o DIR] [--point GLOB]";
 
 /// Runs the command; returns the process exit code.
 pub fn main(argv: &[String]) -> i32 {
@@ -27,9 +28,19 @@ pub fn main(argv: &[String]) -> i32 {
             .or(args.value("out"))
             .unwrap_or("target/umbra/render"),
     );
+    if !crate::registry::hostable_here(backend_id) {
+        let env = crate::registry::driver_env(backend_id).unwrap_or_default();
+        let mut again = vec!["render".to_string()];
+        again.extend(argv.iter().cloned());
+        return crate::child::rerun(&again, &env);
+    }
     let mut backend = match crate::registry::create(backend_id) {
         Ok(b) => b,
-        Err(e) => return usage_error(&e),
+        Err(crate::registry::CreateError::Unknown(e)) => return usage_error(&e),
+        Err(e) => {
+            println!("skip {backend_id}: {e}");
+            return 0;
+        }
     };
     let points = match umbra_case::load_file(Path::new(case)) {
         Ok(p) => p,

@@ -1,0 +1,130 @@
+//! [`GlBackend`]: the [`Backend`] trait over a [`Renderer`], with the driver's strings and
+//! what each API can and cannot do, decided before a run starts.
+
+use glow::HasContext;
+use umbra_case::format::{Compare, DepthFormat, Outside};
+use umbra_case::{Backend, BackendError, BackendId, DriverInfo, Frame, Needs, Prepared, Support};
+
+use crate::api::Api;
+use crate::context::Unavailable;
+use crate::driver::Driver;
+use crate::render::Renderer;
+
+/// Extensions worth recording in a report.
+const NOTABLE: &[&str] = &[
+    "GL_KHR_debug",
+    "GL_ARB_timer_query",
+    "GL_EXT_disjoint_timer_query",
+    "GL_ARB_clip_control",
+    "GL_ARB_seamless_cube_map",
+    "GL_ARB_polygon_offset_clamp",
+    "GL_EXT_polygon_offset_clamp",
+    "GL_EXT_texture_border_clamp",
+    "GL_OES_texture_border_clamp",
+    "GL_EXT_shadow_samplers",
+    "GL_OES_depth_texture",
+    "GL_OES_depth24",
+    "GL_OES_packed_depth_stencil",
+    "GL_OES_standard_derivatives",
+    "GL_EXT_frag_depth",
+];
+
+/// A GL backend: one API on the driver this process loaded.
+pub struct GlBackend {
+    renderer: Renderer,
+    id: BackendId,
+    info: DriverInfo,
+}
+
+impl GlBackend {
+    /// Opens `api` on `driver`. The driver must be the one this process's environment
+    /// selects (see [`Driver::env`]): Mesa reads it when EGL loads.
+    pub fn new(api: Api, driver: Driver) -> Result<GlBackend, Unavailable> {
+        if !driver.is_selected() {
+            return Err(Unavailable(format!(
+                "{} needs its own process with {}; run it through `umbra` (which starts one per driver)",
+                driver.name(),
+                driver.env_text()
+            )));
+        }
+        let renderer = Renderer::new(api)?;
+        let (vendor, renderer_name, version, egl) = renderer.strings();
+        if !driver.matches_renderer(&renderer_name) {
+            return Err(Unavailable(format!(
+                "asked for {} but the driver reports {renderer_name:?}",
+                driver.name()
+            )));
+        }
+        let exts = renderer.gl().supported_extensions();
+        let mut extensions: Vec<String> = NOTABLE
+            .iter()
+            .filter(|e| exts.contains(**e))
+            .map(|e| e.to_string())
+            .collect();
+        extensions.push(format!("EGL {egl}"));
+        let info = DriverInfo {
+            vendor,
+            renderer: renderer_name,
+            version,
+            extensions,
+        };
+        Ok(GlBackend {
+            renderer,
+            id: BackendId(format!("{}/{}", api.name(), driver.name())),
+            info,
+        })
+    }
+
+    fn has(&self, ext: &str) -> bool {
+        self.renderer.gl().supported_extensions().contains(ext)
+    }
+}
+
+impl Backend for GlBackend {
+    fn id(&self) -> BackendId {
+        self.id.clone()
+    }
+
+    fn info(&self) -> DriverInfo {
+        self.info.clone()
+    }
+
+    fn supports(&self, needs: &Needs) -> Support {
+        let api = self.renderer.api;
+        if needs.polygon_offset_clamp {
+            return Support::Unsupported("a polygon-offset clamp needs glPolygonOffsetClamp (GL 4.6), which umbra's GL layer (glow 0.18) does not expose".into());
+        }
+        if api == Api::Gles2
+            && !(self.has("GL_OES_standard_derivatives") && self.has("GL_EXT_frag_depth"))
+        {
+            return Support::Unsupported("the GLES 2 path needs OES_standard_derivatives and EXT_frag_depth to apply the polygon offset to packed depth".into());
+        }
+        match api {
+            Api::Gles2 if needs.format == DepthFormat::Depth32f => Support::Unsupported(
+                "GLES 2 has no float depth: the shadow pass packs depth into RGBA8 (about 24 bits)"
+                    .into(),
+            ),
+            Api::Gles3
+                if needs.outside == Outside::Border
+                    && needs.compare == Compare::Hardware
+                    && !needs.cube_map =>
+            {
+                if self.has("GL_EXT_texture_border_clamp")
+                    || self.has("GL_OES_texture_border_clamp")
+                {
+                    Support::Supported
+                } else {
+                    Support::Unsupported(
+                        "GLES 3.0 has no CLAMP_TO_BORDER without EXT/OES_texture_border_clamp"
+                            .into(),
+                    )
+                }
+            }
+            _ => Support::Supported,
+        }
+    }
+
+    fn render(&mut self, run: &Prepared) -> Result<Frame, BackendError> {
+        self.renderer.render(run)
+    }
+}

@@ -1,0 +1,133 @@
+//! EGL on Mesa's surfaceless platform: no window system, no display server, one context per
+//! process (../shared/PLATFORM.md, "EGL facts").
+//!
+//! libEGL is loaded at run time (khronos-egl's `dynamic` feature), so a machine without Mesa
+//! builds and tests umbra and reports the GL backends as unsupported, naming the package to
+//! install, instead of failing to link. The config asks for `PBUFFER_BIT` (a surfaceless
+//! display has no window configs) and the context is made current with no surface; all
+//! rendering goes to framebuffer objects.
+
+use khronos_egl as egl;
+
+use crate::api::Api;
+
+/// `EGL_PLATFORM_SURFACELESS_MESA`.
+const PLATFORM_SURFACELESS_MESA: egl::Enum = 0x31DD;
+
+/// Why a context could not be made: always a reason a person can act on.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Unavailable(pub String);
+
+/// A current GL context and the EGL objects that keep it alive.
+pub struct GlContext {
+    /// The GL function table.
+    pub gl: glow::Context,
+    egl: egl::DynamicInstance<egl::EGL1_5>,
+    display: egl::Display,
+    context: egl::Context,
+    /// EGL's vendor and version strings.
+    pub egl_info: String,
+}
+
+impl GlContext {
+    /// Creates and makes current a context for `api` on the surfaceless platform.
+    pub fn new(api: Api) -> Result<GlContext, Unavailable> {
+        // SAFETY: loading libEGL runs its initialisers; it is the system's EGL library.
+        let egl = unsafe { egl::DynamicInstance::<egl::EGL1_5>::load_required() }.map_err(|e| {
+            Unavailable(format!(
+                "cannot load libEGL 1.5 ({e}); install the Debian packages libegl1 and libegl-mesa0"
+            ))
+        })?;
+        // SAFETY: the surfaceless platform takes the default (null) native display.
+        let display = unsafe { egl.get_platform_display(PLATFORM_SURFACELESS_MESA, egl::DEFAULT_DISPLAY, &[egl::ATTRIB_NONE]) }
+            .map_err(|e| Unavailable(format!("no surfaceless EGL display ({e}); install libegl-mesa0 (Mesa's EGL) and libgl1-mesa-dri")))?;
+        egl.initialize(display).map_err(|e| {
+            Unavailable(format!(
+                "eglInitialize failed ({e}); install libgl1-mesa-dri (Mesa's drivers)"
+            ))
+        })?;
+        let egl_info = format!(
+            "{} {}",
+            egl.query_string(Some(display), egl::VENDOR)
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            egl.query_string(Some(display), egl::VERSION)
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        );
+        let (bind, renderable) = match api {
+            Api::Gl33 => (egl::OPENGL_API, egl::OPENGL_BIT),
+            Api::Gles3 => (egl::OPENGL_ES_API, egl::OPENGL_ES3_BIT),
+            Api::Gles2 => (egl::OPENGL_ES_API, egl::OPENGL_ES2_BIT),
+        };
+        egl.bind_api(bind)
+            .map_err(|e| Unavailable(format!("eglBindAPI({}) failed: {e}", api.name())))?;
+        let config_attribs = [
+            egl::SURFACE_TYPE,
+            egl::PBUFFER_BIT,
+            egl::RENDERABLE_TYPE,
+            renderable,
+            egl::NONE,
+        ];
+        let config = egl
+            .choose_first_config(display, &config_attribs)
+            .map_err(|e| Unavailable(format!("eglChooseConfig failed: {e}")))?
+            .ok_or_else(|| {
+                Unavailable(format!(
+                    "no EGL config renders {} to a pbuffer on this driver",
+                    api.name()
+                ))
+            })?;
+        let (major, minor) = api.version();
+        let mut ctx_attribs = vec![
+            egl::CONTEXT_MAJOR_VERSION,
+            major,
+            egl::CONTEXT_MINOR_VERSION,
+            minor,
+        ];
+        if api == Api::Gl33 {
+            ctx_attribs.extend([
+                egl::CONTEXT_OPENGL_PROFILE_MASK,
+                egl::CONTEXT_OPENGL_CORE_PROFILE_BIT,
+            ]);
+        }
+        // A debug context where EGL 1.5 offers one (KHR_debug then reports every error the
+        // driver sees); EGL 1.4 displays (softpipe's) reject the attribute, so retry without.
+        let mut debug_attribs = ctx_attribs.clone();
+        debug_attribs.extend([egl::CONTEXT_OPENGL_DEBUG, egl::TRUE as egl::Int, egl::NONE]);
+        ctx_attribs.push(egl::NONE);
+        let context = egl
+            .create_context(display, config, None, &debug_attribs)
+            .or_else(|_| egl.create_context(display, config, None, &ctx_attribs))
+            .map_err(|e| {
+                Unavailable(format!(
+                    "this driver offers no {} context ({e})",
+                    api.name()
+                ))
+            })?;
+        egl.make_current(display, None, None, Some(context))
+            .map_err(|e| Unavailable(format!("eglMakeCurrent without a surface failed ({e})")))?;
+        // SAFETY: the context is current on this thread; the loader returns EGL's pointers.
+        let gl = unsafe {
+            glow::Context::from_loader_function(|name| {
+                egl.get_proc_address(name)
+                    .map_or(std::ptr::null(), |f| f as *const _)
+            })
+        };
+        Ok(GlContext {
+            gl,
+            egl,
+            display,
+            context,
+            egl_info,
+        })
+    }
+}
+
+impl Drop for GlContext {
+    fn drop(&mut self) {
+        let _ = self.egl.make_current(self.display, None, None, None);
+        let _ = self.egl.destroy_context(self.display, self.context);
+        let _ = self.egl.terminate(self.display);
+    }
+}

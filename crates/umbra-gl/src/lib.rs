@@ -1,0 +1,42 @@
+//! umbra's OpenGL backend: GL 3.3 core, GLES 3.0 and GLES 2.0 through EGL on Mesa's
+//! surfaceless platform, on the drivers llvmpipe, softpipe and zink.
+//!
+//! - [`context`]: EGL loaded at run time; a missing library or driver is
+//!   [`context::Unavailable`] with the package to install, never a panic.
+//! - [`driver`]: one Mesa driver per process, selected by environment before EGL loads.
+//! - [`shaders`]: GLSL per API and technique, mirroring the reference's lookup.
+//! - [`render`]: both passes, checks after every stage, readback with the one row flip.
+//! - [`backend`]: the `Backend` trait, with what each API supports.
+//!
+//! Conventions come from `umbra_case::conventions` (GL clip range, the case's depth order);
+//! no projection is built here.
+#![allow(unsafe_code)] // FFI: EGL and GL calls are unsafe by nature; each block says why it holds.
+
+pub mod api;
+pub mod backend;
+pub mod context;
+pub mod driver;
+pub mod render;
+pub mod shaders;
+
+pub use api::Api;
+pub use backend::GlBackend;
+pub use driver::Driver;
+
+/// Parses a backend id such as `gles3/softpipe`.
+pub fn parse_id(id: &str) -> Option<(Api, Driver)> {
+    let (api, driver) = id.split_once('/')?;
+    Some((Api::parse(api)?, Driver::parse(driver)?))
+}
+
+/// Every GL backend id, in report order.
+pub fn ids() -> Vec<String> {
+    Driver::ALL
+        .iter()
+        .flat_map(|d| {
+            Api::ALL
+                .iter()
+                .map(move |a| format!("{}/{}", a.name(), d.name()))
+        })
+        .collect()
+}

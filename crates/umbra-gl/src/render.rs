@@ -1,0 +1,933 @@
+//! One run on a GL context: the shadow pass into a framebuffer object, the lit pass into a
+//! colour and a visibility target, readback. Every GL object is created and deleted inside
+//! [`Renderer::render`]; only compiled programs are cached across runs.
+//!
+//! - **Shadow pass.** A depth texture of the case's format (2D, or a cube map for a point
+//!   light), `glDrawBuffers(NONE)` and `glReadBuffer(NONE)` and colour writes off for
+//!   `depth_only`; a dummy RGBA8 colour texture beside depth for `with_color`. GLES 2 renders
+//!   packed depth into an RGBA8 texture with a depth renderbuffer for the depth test.
+//!   Completeness is checked and a failure names the status.
+//! - **Lit pass.** Colour (RGBA8) and visibility + face id (RGBA8: R = visibility, GBA = face
+//!   id + 1) as two render targets; GLES 2 has one target, so it draws the pass twice, once
+//!   per output (the "honest way": same geometry, same lookup, a uniform selects the output).
+//!   Visibility is therefore quantised to 8 bits (1/255), which moves a PCF average by at most
+//!   half a step: the judge's PCF tolerance accounts for the result bits.
+//! - **Errors.** `glGetError` after every stage and, where KHR_debug exists, the driver's
+//!   error messages; either fails the run with the stage's name.
+//! - **Timings.** `GL_TIME_ELAPSED` queries on GL 3.3; CPU wall time around `glFinish`
+//!   elsewhere.
+//! - **Readback.** GL rows are bottom first: every image is flipped once, in [`flip_rows`].
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use glow::HasContext;
+use umbra_case::format::{Attachments, Compare, Cull, DepthFormat, DepthOrder, Filter, Outside};
+use umbra_case::{
+    BackendError, Clock, Convention, DepthMap, Frame, LightKind, LookupMatrices, Prepared, Timings,
+};
+
+use crate::api::Api;
+use crate::context::{GlContext, Unavailable};
+use crate::shaders::{self, Key};
+
+/// Floats per vertex: position, normal, albedo, face id.
+const STRIDE: usize = 10;
+
+/// A GL context ready to render runs.
+pub struct Renderer {
+    ctx: GlContext,
+    /// The API flavour.
+    pub api: Api,
+    programs: HashMap<(String, String), glow::Program>,
+    debug: Arc<Mutex<Vec<String>>>,
+    /// Whether GL_TIME_ELAPSED queries work.
+    pub timer_queries: bool,
+}
+
+fn gl_err(stage: &str, message: impl Into<String>) -> BackendError {
+    BackendError::Api {
+        stage: stage.into(),
+        message: message.into(),
+    }
+}
+
+/// Reverses the row order of an image (GL reads bottom row first; frames are top first).
+pub fn flip_rows<T: Clone>(data: &[T], row_len: usize) -> Vec<T> {
+    data.chunks(row_len).rev().flatten().cloned().collect()
+}
+
+impl Renderer {
+    /// Creates a context for `api` in this process's driver.
+    pub fn new(api: Api) -> Result<Renderer, Unavailable> {
+        let mut ctx = GlContext::new(api)?;
+        let debug = Arc::new(Mutex::new(Vec::new()));
+        let exts = ctx.gl.supported_extensions().clone();
+        if exts.contains("GL_KHR_debug") {
+            let sink = Arc::clone(&debug);
+            // SAFETY: the context is current; the callback only copies the message.
+            unsafe {
+                ctx.gl.enable(glow::DEBUG_OUTPUT);
+                ctx.gl.enable(glow::DEBUG_OUTPUT_SYNCHRONOUS);
+                ctx.gl
+                    .debug_message_callback(move |_source, ty, _id, severity, msg| {
+                        if ty == glow::DEBUG_TYPE_ERROR || severity == glow::DEBUG_SEVERITY_HIGH {
+                            if let Ok(mut v) = sink.lock() {
+                                v.push(msg.to_string());
+                            }
+                        }
+                    });
+            }
+        }
+        let timer_queries = api == Api::Gl33;
+        Ok(Renderer {
+            ctx,
+            api,
+            programs: HashMap::new(),
+            debug,
+            timer_queries,
+        })
+    }
+
+    /// The GL function table.
+    pub fn gl(&self) -> &glow::Context {
+        &self.ctx.gl
+    }
+
+    /// GL_VENDOR, GL_RENDERER, GL_VERSION and the EGL strings.
+    pub fn strings(&self) -> (String, String, String, String) {
+        let gl = self.gl();
+        // SAFETY: plain queries on the current context.
+        unsafe {
+            (
+                gl.get_parameter_string(glow::VENDOR),
+                gl.get_parameter_string(glow::RENDERER),
+                gl.get_parameter_string(glow::VERSION),
+                self.ctx.egl_info.clone(),
+            )
+        }
+    }
+
+    /// Fails with every pending GL error and debug message of `stage`.
+    fn check(&self, stage: &str) -> Result<(), BackendError> {
+        let gl = self.gl();
+        let mut errors = Vec::new();
+        // SAFETY: glGetError on the current context.
+        unsafe {
+            loop {
+                let e = gl.get_error();
+                if e == glow::NO_ERROR || errors.len() > 16 {
+                    break;
+                }
+                errors.push(error_name(e).to_string());
+            }
+        }
+        if let Ok(mut d) = self.debug.lock() {
+            errors.extend(d.drain(..));
+        }
+        if errors.is_empty() {
+            Ok(())
+        } else {
+            Err(gl_err(stage, errors.join("; ")))
+        }
+    }
+
+    fn program(&mut self, vs: String, fs: String) -> Result<glow::Program, BackendError> {
+        if let Some(p) = self.programs.get(&(vs.clone(), fs.clone())) {
+            return Ok(*p);
+        }
+        let gl = &self.ctx.gl;
+        // SAFETY: shader objects of the current context, checked after each step.
+        let program = unsafe {
+            let program = gl.create_program().map_err(|e| gl_err("compile", e))?;
+            let mut shaders = Vec::new();
+            for (ty, src, what) in [
+                (glow::VERTEX_SHADER, &vs, "vertex"),
+                (glow::FRAGMENT_SHADER, &fs, "fragment"),
+            ] {
+                let s = gl.create_shader(ty).map_err(|e| gl_err("compile", e))?;
+                gl.shader_source(s, src);
+                gl.compile_shader(s);
+                if !gl.get_shader_compile_status(s) {
+                    let log = gl.get_shader_info_log(s);
+                    return Err(gl_err(
+                        "compile",
+                        format!("{what} shader does not compile: {log}\n--- source ---\n{src}"),
+                    ));
+                }
+                gl.attach_shader(program, s);
+                shaders.push(s);
+            }
+            for (i, name) in ["a_pos", "a_normal", "a_albedo", "a_face"]
+                .iter()
+                .enumerate()
+            {
+                gl.bind_attrib_location(program, i as u32, name);
+            }
+            gl.link_program(program);
+            for s in shaders {
+                gl.detach_shader(program, s);
+                gl.delete_shader(s);
+            }
+            if !gl.get_program_link_status(program) {
+                return Err(gl_err("link", gl.get_program_info_log(program)));
+            }
+            program
+        };
+        self.check("compile")?;
+        self.programs.insert((vs, fs), program);
+        Ok(program)
+    }
+
+    /// Renders one run.
+    pub fn render(&mut self, run: &Prepared) -> Result<Frame, BackendError> {
+        let start = Instant::now();
+        let mut res = Resources::default();
+        let out = self.render_with(run, &mut res, start);
+        res.delete(self.gl());
+        // A failed run must not leave errors behind for the next one.
+        let _ = self.check("cleanup");
+        out
+    }
+
+    fn render_with(
+        &mut self,
+        run: &Prepared,
+        res: &mut Resources,
+        start: Instant,
+    ) -> Result<Frame, BackendError> {
+        let case = run.case();
+        let s = &case.shadow;
+        let api = self.api;
+        let conv = Convention::GL.with_order(s.depth_order);
+        let cube = matches!(run.light.kind, LightKind::Point { .. });
+        let es2 = api == Api::Gles2;
+        self.check("before the run")?;
+
+        // Geometry: one vertex per triangle corner.
+        let geo = &run.geometry;
+        let mut verts = Vec::with_capacity(geo.triangles.len() * 3 * STRIDE);
+        for (t, tri) in geo.triangles.iter().enumerate() {
+            let albedo = geo.albedo[geo.object[t] as usize];
+            for &i in tri {
+                let (p, n) = (geo.positions[i as usize], geo.normals[i as usize]);
+                verts.extend_from_slice(&[
+                    p.x,
+                    p.y,
+                    p.z,
+                    n.x,
+                    n.y,
+                    n.z,
+                    albedo.x,
+                    albedo.y,
+                    albedo.z,
+                    geo.face[t] as f32,
+                ]);
+            }
+        }
+        let count = (verts.len() / STRIDE) as i32;
+        let gl = &self.ctx.gl;
+        // SAFETY: buffers and vertex arrays of the current context.
+        unsafe {
+            let vbo = gl.create_buffer().map_err(|e| gl_err("upload", e))?;
+            res.buffers.push(vbo);
+            if api != Api::Gles2 {
+                let vao = gl.create_vertex_array().map_err(|e| gl_err("upload", e))?;
+                res.vaos.push(vao);
+                gl.bind_vertex_array(Some(vao));
+            }
+            gl.bind_buffer(glow::ARRAY_BUFFER, Some(vbo));
+            gl.buffer_data_u8_slice(glow::ARRAY_BUFFER, f32_bytes(&verts), glow::STATIC_DRAW);
+            for (i, (size, offset)) in [(3, 0), (3, 3), (3, 6), (1, 9)].iter().enumerate() {
+                gl.enable_vertex_attrib_array(i as u32);
+                gl.vertex_attrib_pointer_f32(
+                    i as u32,
+                    *size,
+                    glow::FLOAT,
+                    false,
+                    (STRIDE * 4) as i32,
+                    offset * 4,
+                );
+            }
+        }
+        self.check("upload")?;
+
+        // Shadow pass.
+        let [mw, mh] = s.size;
+        let faces = run.light.views.len();
+        let target = if cube {
+            glow::TEXTURE_CUBE_MAP
+        } else {
+            glow::TEXTURE_2D
+        };
+        let shadow_program = self.program(
+            shaders::shadow_vertex(api),
+            shaders::shadow_fragment(api, s.attachments == Attachments::WithColor),
+        )?;
+        let gl = &self.ctx.gl;
+        let timer = if self.timer_queries {
+            Some(Timer::new(gl)?)
+        } else {
+            None
+        };
+        let shadow_start = Instant::now();
+        if let Some(t) = &timer {
+            t.begin(gl, 0);
+        }
+        // SAFETY: objects of the current context; completeness is checked before drawing.
+        let map = unsafe {
+            let map = gl.create_texture().map_err(|e| gl_err("shadow map", e))?;
+            res.textures.push(map);
+            gl.bind_texture(target, Some(map));
+            let face_targets: Vec<u32> = if cube {
+                (0..6)
+                    .map(|k| glow::TEXTURE_CUBE_MAP_POSITIVE_X + k)
+                    .collect()
+            } else {
+                vec![glow::TEXTURE_2D]
+            };
+            let (internal, format, ty) = if es2 {
+                (glow::RGBA as i32, glow::RGBA, glow::UNSIGNED_BYTE)
+            } else {
+                depth_format(s.format)
+            };
+            for &ft in &face_targets {
+                gl.tex_image_2d(
+                    ft,
+                    0,
+                    internal,
+                    mw as i32,
+                    mh as i32,
+                    0,
+                    format,
+                    ty,
+                    glow::PixelUnpackData::Slice(None),
+                );
+            }
+            for (p, v) in [
+                (glow::TEXTURE_MIN_FILTER, glow::NEAREST),
+                (glow::TEXTURE_MAG_FILTER, glow::NEAREST),
+                (glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE),
+                (glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE),
+            ] {
+                gl.tex_parameter_i32(target, p, v as i32);
+            }
+            self.check("shadow map storage")?;
+            let fbo = gl
+                .create_framebuffer()
+                .map_err(|e| gl_err("shadow pass", e))?;
+            res.framebuffers.push(fbo);
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+            let mut depth_rb = None;
+            if es2 {
+                let rb = gl
+                    .create_renderbuffer()
+                    .map_err(|e| gl_err("shadow pass", e))?;
+                res.renderbuffers.push(rb);
+                gl.bind_renderbuffer(glow::RENDERBUFFER, Some(rb));
+                gl.renderbuffer_storage(
+                    glow::RENDERBUFFER,
+                    es2_depth(s.format),
+                    mw as i32,
+                    mh as i32,
+                );
+                depth_rb = Some(rb);
+            }
+            let mut dummy = None;
+            if s.attachments == Attachments::WithColor && !es2 {
+                let c = gl.create_texture().map_err(|e| gl_err("shadow pass", e))?;
+                res.textures.push(c);
+                gl.bind_texture(glow::TEXTURE_2D, Some(c));
+                gl.tex_image_2d(
+                    glow::TEXTURE_2D,
+                    0,
+                    glow::RGBA8 as i32,
+                    mw as i32,
+                    mh as i32,
+                    0,
+                    glow::RGBA,
+                    glow::UNSIGNED_BYTE,
+                    glow::PixelUnpackData::Slice(None),
+                );
+                dummy = Some(c);
+            }
+            gl.use_program(Some(shadow_program));
+            let vp_loc = gl.get_uniform_location(shadow_program, "u_view_proj");
+            gl.viewport(0, 0, mw as i32, mh as i32);
+            gl.enable(glow::DEPTH_TEST);
+            gl.depth_func(if s.depth_order == DepthOrder::Forward {
+                glow::LESS
+            } else {
+                glow::GREATER
+            });
+            gl.depth_mask(true);
+            gl.front_face(glow::CCW);
+            match s.cull {
+                Cull::None => gl.disable(glow::CULL_FACE),
+                Cull::Back => {
+                    gl.enable(glow::CULL_FACE);
+                    gl.cull_face(glow::BACK);
+                }
+                Cull::Front => {
+                    gl.enable(glow::CULL_FACE);
+                    gl.cull_face(glow::FRONT);
+                }
+            }
+            let [factor, units] = s.bias.polygon_offset;
+            if es2 {
+                // Applied in the shader (see shaders::shadow_fragment).
+                let sign = conv.toward_far();
+                let r = s.format.offset_unit(0.0);
+                gl.uniform_2_f32(
+                    gl.get_uniform_location(shadow_program, "u_offset").as_ref(),
+                    sign * factor,
+                    sign * r * units,
+                );
+                gl.disable(glow::POLYGON_OFFSET_FILL);
+            } else if factor != 0.0 || units != 0.0 {
+                let sign = conv.toward_far();
+                gl.enable(glow::POLYGON_OFFSET_FILL);
+                gl.polygon_offset(sign * factor, sign * units);
+            } else {
+                gl.disable(glow::POLYGON_OFFSET_FILL);
+            }
+            for (k, ft) in face_targets.iter().enumerate() {
+                if es2 {
+                    gl.framebuffer_texture_2d(
+                        glow::FRAMEBUFFER,
+                        glow::COLOR_ATTACHMENT0,
+                        *ft,
+                        Some(map),
+                        0,
+                    );
+                    gl.framebuffer_renderbuffer(
+                        glow::FRAMEBUFFER,
+                        glow::DEPTH_ATTACHMENT,
+                        glow::RENDERBUFFER,
+                        depth_rb,
+                    );
+                } else {
+                    gl.framebuffer_texture_2d(
+                        glow::FRAMEBUFFER,
+                        glow::DEPTH_ATTACHMENT,
+                        *ft,
+                        Some(map),
+                        0,
+                    );
+                    if let Some(c) = dummy {
+                        gl.framebuffer_texture_2d(
+                            glow::FRAMEBUFFER,
+                            glow::COLOR_ATTACHMENT0,
+                            glow::TEXTURE_2D,
+                            Some(c),
+                            0,
+                        );
+                        gl.draw_buffers(&[glow::COLOR_ATTACHMENT0]);
+                        gl.color_mask(true, true, true, true);
+                    } else {
+                        gl.draw_buffers(&[glow::NONE]);
+                        gl.read_buffer(glow::NONE);
+                        gl.color_mask(false, false, false, false);
+                    }
+                }
+                let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
+                if status != glow::FRAMEBUFFER_COMPLETE {
+                    return Err(gl_err(
+                        "shadow pass",
+                        format!(
+                            "framebuffer incomplete: {} (format {}, {:?})",
+                            status_name(status),
+                            s.format.name(),
+                            s.attachments
+                        ),
+                    ));
+                }
+                let clear = conv.clear_depth();
+                gl.clear_depth_f32(clear);
+                gl.clear_color(clear, clear, clear, clear); // GLES 2: packed far plane (1.0 unpacks past 1)
+                gl.clear(
+                    glow::DEPTH_BUFFER_BIT
+                        | if es2 || dummy.is_some() {
+                            glow::COLOR_BUFFER_BIT
+                        } else {
+                            0
+                        },
+                );
+                let m = run.light.views[k].view_proj(conv);
+                gl.uniform_matrix_4_f32_slice(vp_loc.as_ref(), false, &m.to_cols_array());
+                gl.draw_arrays(glow::TRIANGLES, 0, count);
+                self.check(&format!("shadow pass (face {k})"))?;
+            }
+            gl.disable(glow::POLYGON_OFFSET_FILL);
+            gl.disable(glow::CULL_FACE);
+            gl.color_mask(true, true, true, true);
+            map
+        };
+        if let Some(t) = &timer {
+            t.end(gl);
+        }
+        // SAFETY: waiting for the pass to finish, for the CPU clock.
+        unsafe { gl.finish() };
+        let shadow_wall = shadow_start.elapsed();
+
+        // Depth map readback (GL only: GLES cannot read depth with glReadPixels).
+        let shadow_map = if api == Api::Gl33 {
+            let mut values = Vec::with_capacity((mw * mh) as usize * faces);
+            // SAFETY: reading DEPTH_COMPONENT as FLOAT from the complete shadow framebuffer.
+            unsafe {
+                for k in 0..faces {
+                    let ft = if cube {
+                        glow::TEXTURE_CUBE_MAP_POSITIVE_X + k as u32
+                    } else {
+                        glow::TEXTURE_2D
+                    };
+                    gl.framebuffer_texture_2d(
+                        glow::FRAMEBUFFER,
+                        glow::DEPTH_ATTACHMENT,
+                        ft,
+                        Some(map),
+                        0,
+                    );
+                    let mut bytes = vec![0u8; (mw * mh * 4) as usize];
+                    gl.read_pixels(
+                        0,
+                        0,
+                        mw as i32,
+                        mh as i32,
+                        glow::DEPTH_COMPONENT,
+                        glow::FLOAT,
+                        glow::PixelPackData::Slice(Some(&mut bytes)),
+                    );
+                    let layer: Vec<f32> = bytes
+                        .chunks_exact(4)
+                        .map(|b| f32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
+                        .collect();
+                    values.extend(flip_rows(&layer, mw as usize));
+                }
+            }
+            self.check("shadow map readback")?;
+            Some(DepthMap {
+                width: mw,
+                height: mh,
+                layers: faces as u32,
+                format: s.format,
+                values,
+            })
+        } else {
+            None
+        };
+
+        // Lit pass.
+        let key = Key {
+            api,
+            cube,
+            directional: matches!(run.light.kind, LightKind::Directional { .. }),
+            filter: s.filter,
+            compare: if es2 { Compare::Manual } else { s.compare },
+            clamp_reference: s.compare == Compare::Hardware && s.format.is_fixed(),
+            outside: s.outside,
+            guard: s.guard_behind_light,
+            bias_matrix: s.bias_matrix,
+            order: s.depth_order,
+            slope: s.bias.slope.is_some(),
+            model: case.shading.model,
+        };
+        let lit_program = self.program(
+            shaders::lit_vertex(api),
+            shaders::lit_fragment(&key, &case.shading),
+        )?;
+        let gl = &self.ctx.gl;
+        let [w, h] = run.camera.size;
+        let lit_start = Instant::now();
+        if let Some(t) = &timer {
+            t.begin(gl, 1);
+        }
+        let manual = es2 || s.compare == Compare::Manual;
+        // SAFETY: as above.
+        let (color, vis) = unsafe {
+            gl.bind_texture(target, Some(map));
+            let filter = if s.filter == Filter::Linear && !manual {
+                glow::LINEAR
+            } else {
+                glow::NEAREST
+            };
+            gl.tex_parameter_i32(target, glow::TEXTURE_MIN_FILTER, filter as i32);
+            gl.tex_parameter_i32(target, glow::TEXTURE_MAG_FILTER, filter as i32);
+            if !es2 {
+                if manual {
+                    gl.tex_parameter_i32(target, glow::TEXTURE_COMPARE_MODE, glow::NONE as i32);
+                } else {
+                    gl.tex_parameter_i32(
+                        target,
+                        glow::TEXTURE_COMPARE_MODE,
+                        glow::COMPARE_REF_TO_TEXTURE as i32,
+                    );
+                    let func = if s.depth_order == DepthOrder::Forward {
+                        glow::LEQUAL
+                    } else {
+                        glow::GEQUAL
+                    };
+                    gl.tex_parameter_i32(target, glow::TEXTURE_COMPARE_FUNC, func as i32);
+                }
+            }
+            if !cube && !manual {
+                let wrap = match s.outside {
+                    Outside::Lit | Outside::ClampToEdge => glow::CLAMP_TO_EDGE,
+                    Outside::Repeat => glow::REPEAT,
+                    Outside::Border => {
+                        let c = conv.clear_depth();
+                        gl.tex_parameter_f32_slice(
+                            target,
+                            glow::TEXTURE_BORDER_COLOR,
+                            &[c, c, c, c],
+                        );
+                        glow::CLAMP_TO_BORDER
+                    }
+                };
+                gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_S, wrap as i32);
+                gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_T, wrap as i32);
+            }
+            self.check("shadow sampler")?;
+
+            gl.use_program(Some(lit_program));
+            let loc = |name: &str| gl.get_uniform_location(lit_program, name);
+            let cam = run.camera.view_proj(conv);
+            gl.uniform_matrix_4_f32_slice(loc("u_view_proj").as_ref(), false, &cam.to_cols_array());
+            let mut light = Vec::with_capacity(16 * faces);
+            let mut tex = Vec::with_capacity(16 * faces);
+            for v in &run.light.views {
+                let m = LookupMatrices::new(conv, v.view_proj(conv));
+                light.extend_from_slice(&m.light.to_cols_array());
+                tex.extend_from_slice(&m.texture.to_cols_array());
+            }
+            gl.uniform_matrix_4_f32_slice(
+                loc("u_light[0]").or_else(|| loc("u_light")).as_ref(),
+                false,
+                &light,
+            );
+            gl.uniform_matrix_4_f32_slice(
+                loc("u_tex[0]").or_else(|| loc("u_tex")).as_ref(),
+                false,
+                &tex,
+            );
+            let (pos, towards) = match run.light.kind {
+                LightKind::Directional { towards } => (glam::Vec3::ZERO, towards),
+                LightKind::Spot { position } | LightKind::Point { position } => {
+                    (position, glam::Vec3::ZERO)
+                }
+            };
+            gl.uniform_3_f32(loc("u_light_pos").as_ref(), pos.x, pos.y, pos.z);
+            gl.uniform_3_f32(loc("u_towards").as_ref(), towards.x, towards.y, towards.z);
+            let eye = run.camera.eye;
+            gl.uniform_3_f32(loc("u_eye").as_ref(), eye.x, eye.y, eye.z);
+            gl.uniform_2_f32(loc("u_size").as_ref(), mw as f32, mh as f32);
+            gl.uniform_1_f32(loc("u_constant").as_ref(), s.bias.constant);
+            let (scale, max) = s.bias.slope.map_or((0.0, 0.0), |sl| (sl.scale, sl.max));
+            gl.uniform_1_f32(loc("u_slope_scale").as_ref(), scale);
+            gl.uniform_1_f32(loc("u_slope_max").as_ref(), max);
+            gl.uniform_1_f32(loc("u_normal_offset").as_ref(), s.bias.normal_offset);
+            gl.uniform_1_i32(loc("u_map").as_ref(), 0);
+            gl.active_texture(glow::TEXTURE0);
+            gl.bind_texture(target, Some(map));
+            self.check("lit pass uniforms")?;
+
+            let targets = if es2 { 2 } else { 1 };
+            let mut images = Vec::new();
+            for pass in 0..targets {
+                let fbo = gl.create_framebuffer().map_err(|e| gl_err("lit pass", e))?;
+                res.framebuffers.push(fbo);
+                gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+                let outputs = if es2 { 1 } else { 2 };
+                let mut color_textures = Vec::new();
+                for a in 0..outputs {
+                    let t = gl.create_texture().map_err(|e| gl_err("lit pass", e))?;
+                    res.textures.push(t);
+                    gl.bind_texture(glow::TEXTURE_2D, Some(t));
+                    let internal = if es2 { glow::RGBA } else { glow::RGBA8 };
+                    gl.tex_image_2d(
+                        glow::TEXTURE_2D,
+                        0,
+                        internal as i32,
+                        w as i32,
+                        h as i32,
+                        0,
+                        glow::RGBA,
+                        glow::UNSIGNED_BYTE,
+                        glow::PixelUnpackData::Slice(None),
+                    );
+                    gl.tex_parameter_i32(
+                        glow::TEXTURE_2D,
+                        glow::TEXTURE_MIN_FILTER,
+                        glow::NEAREST as i32,
+                    );
+                    gl.framebuffer_texture_2d(
+                        glow::FRAMEBUFFER,
+                        glow::COLOR_ATTACHMENT0 + a,
+                        glow::TEXTURE_2D,
+                        Some(t),
+                        0,
+                    );
+                    color_textures.push(t);
+                }
+                gl.active_texture(glow::TEXTURE0);
+                gl.bind_texture(target, Some(map));
+                let rb = gl
+                    .create_renderbuffer()
+                    .map_err(|e| gl_err("lit pass", e))?;
+                res.renderbuffers.push(rb);
+                gl.bind_renderbuffer(glow::RENDERBUFFER, Some(rb));
+                let camera_depth = if es2 {
+                    es2_depth(DepthFormat::Depth24)
+                } else {
+                    glow::DEPTH_COMPONENT32F
+                };
+                gl.renderbuffer_storage(glow::RENDERBUFFER, camera_depth, w as i32, h as i32);
+                gl.framebuffer_renderbuffer(
+                    glow::FRAMEBUFFER,
+                    glow::DEPTH_ATTACHMENT,
+                    glow::RENDERBUFFER,
+                    Some(rb),
+                );
+                if !es2 {
+                    gl.draw_buffers(&[glow::COLOR_ATTACHMENT0, glow::COLOR_ATTACHMENT1]);
+                }
+                let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
+                if status != glow::FRAMEBUFFER_COMPLETE {
+                    return Err(gl_err(
+                        "lit pass",
+                        format!("framebuffer incomplete: {}", status_name(status)),
+                    ));
+                }
+                gl.viewport(0, 0, w as i32, h as i32);
+                gl.enable(glow::DEPTH_TEST);
+                gl.depth_func(glow::LESS);
+                gl.depth_mask(true);
+                gl.clear_depth_f32(1.0);
+                if es2 {
+                    let bg = if pass == 0 {
+                        [0.0, 0.0, 0.0, 1.0]
+                    } else {
+                        [0.0; 4]
+                    };
+                    gl.clear_color(bg[0], bg[1], bg[2], bg[3]);
+                    gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
+                    gl.uniform_1_f32(loc("u_output").as_ref(), pass as f32);
+                } else {
+                    gl.clear_buffer_f32_slice(glow::COLOR, 0, &[0.0, 0.0, 0.0, 1.0]);
+                    gl.clear_buffer_f32_slice(glow::COLOR, 1, &[0.0, 0.0, 0.0, 0.0]);
+                    gl.clear(glow::DEPTH_BUFFER_BIT);
+                }
+                gl.draw_arrays(glow::TRIANGLES, 0, count);
+                self.check("lit pass")?;
+                for a in 0..outputs {
+                    if !es2 {
+                        gl.read_buffer(glow::COLOR_ATTACHMENT0 + a);
+                    }
+                    let mut bytes = vec![0u8; (w * h * 4) as usize];
+                    gl.read_pixels(
+                        0,
+                        0,
+                        w as i32,
+                        h as i32,
+                        glow::RGBA,
+                        glow::UNSIGNED_BYTE,
+                        glow::PixelPackData::Slice(Some(&mut bytes)),
+                    );
+                    images.push(flip_rows(&bytes, (w * 4) as usize));
+                }
+                self.check("readback")?;
+            }
+            let vis = images.pop().unwrap_or_default();
+            let color = images.pop().unwrap_or_default();
+            (color, vis)
+        };
+        if let Some(t) = &timer {
+            t.end(gl);
+        }
+        // SAFETY: as above.
+        unsafe { gl.finish() };
+        let lit_wall = lit_start.elapsed();
+        let mut visibility = Vec::with_capacity((w * h) as usize);
+        let mut surface = Vec::with_capacity((w * h) as usize);
+        for px in vis.chunks_exact(4) {
+            let id = u32::from(px[1]) + 256 * u32::from(px[2]) + 65536 * u32::from(px[3]);
+            surface.push(id);
+            visibility.push(if id == 0 {
+                f32::NAN
+            } else {
+                f32::from(px[0]) / 255.0
+            });
+        }
+        // A GPU interval cannot exceed the wall time we waited for it (llvmpipe's first query
+        // of a context can return garbage): fall back to the CPU clock rather than report it.
+        let (shadow_pass, lit_pass, clock) = match timer.as_ref().map(|t| t.read(gl)) {
+            Some((a, b)) if a <= shadow_wall && b <= lit_wall => (a, b, Clock::Gpu),
+            _ => (shadow_wall, lit_wall, Clock::CpuWall),
+        };
+        if let Some(t) = timer {
+            t.delete(gl);
+        }
+        self.check("timer queries")?;
+        let total = start.elapsed();
+        Ok(Frame {
+            width: w,
+            height: h,
+            color,
+            visibility,
+            surface: Some(surface),
+            shadow_map,
+            timings: Timings {
+                shadow_pass,
+                lit_pass,
+                readback: Duration::ZERO,
+                total,
+                clock: Some(clock),
+            },
+        })
+    }
+}
+
+/// GL objects of one run, deleted at its end whatever happened.
+#[derive(Default)]
+struct Resources {
+    buffers: Vec<glow::Buffer>,
+    vaos: Vec<glow::VertexArray>,
+    textures: Vec<glow::Texture>,
+    framebuffers: Vec<glow::Framebuffer>,
+    renderbuffers: Vec<glow::Renderbuffer>,
+}
+
+impl Resources {
+    fn delete(self, gl: &glow::Context) {
+        // SAFETY: deleting objects this run created on the current context.
+        unsafe {
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+            for f in self.framebuffers {
+                gl.delete_framebuffer(f);
+            }
+            for r in self.renderbuffers {
+                gl.delete_renderbuffer(r);
+            }
+            for t in self.textures {
+                gl.delete_texture(t);
+            }
+            for v in self.vaos {
+                gl.delete_vertex_array(v);
+            }
+            for b in self.buffers {
+                gl.delete_buffer(b);
+            }
+        }
+    }
+}
+
+/// Two GL_TIME_ELAPSED queries (shadow pass, lit pass).
+struct Timer {
+    queries: [glow::Query; 2],
+}
+
+impl Timer {
+    fn new(gl: &glow::Context) -> Result<Timer, BackendError> {
+        // SAFETY: query objects of the current context.
+        unsafe {
+            Ok(Timer {
+                queries: [
+                    gl.create_query().map_err(|e| gl_err("timer", e))?,
+                    gl.create_query().map_err(|e| gl_err("timer", e))?,
+                ],
+            })
+        }
+    }
+    fn begin(&self, gl: &glow::Context, i: usize) {
+        // SAFETY: one query active at a time.
+        unsafe { gl.begin_query(glow::TIME_ELAPSED, self.queries[i]) }
+    }
+    fn end(&self, gl: &glow::Context) {
+        // SAFETY: ends the active query.
+        unsafe { gl.end_query(glow::TIME_ELAPSED) }
+    }
+    fn read(&self, gl: &glow::Context) -> (Duration, Duration) {
+        // SAFETY: the queries have ended; the result waits for them.
+        let ns = |q| unsafe { gl.get_query_parameter_u64(q, glow::QUERY_RESULT) };
+        (
+            Duration::from_nanos(ns(self.queries[0])),
+            Duration::from_nanos(ns(self.queries[1])),
+        )
+    }
+    fn delete(self, gl: &glow::Context) {
+        // SAFETY: deleting this timer's queries.
+        unsafe {
+            for q in self.queries {
+                gl.delete_query(q);
+            }
+        }
+    }
+}
+
+/// (internal format, format, type) of a depth texture.
+fn depth_format(f: DepthFormat) -> (i32, u32, u32) {
+    match f {
+        DepthFormat::Unsized => (
+            glow::DEPTH_COMPONENT as i32,
+            glow::DEPTH_COMPONENT,
+            glow::UNSIGNED_INT,
+        ),
+        DepthFormat::Depth16 => (
+            glow::DEPTH_COMPONENT16 as i32,
+            glow::DEPTH_COMPONENT,
+            glow::UNSIGNED_SHORT,
+        ),
+        DepthFormat::Depth24 => (
+            glow::DEPTH_COMPONENT24 as i32,
+            glow::DEPTH_COMPONENT,
+            glow::UNSIGNED_INT,
+        ),
+        DepthFormat::Depth32f => (
+            glow::DEPTH_COMPONENT32F as i32,
+            glow::DEPTH_COMPONENT,
+            glow::FLOAT,
+        ),
+    }
+}
+
+/// GLES 2 depth renderbuffer: 16 bits, or 24 with OES_depth24 (Mesa has it).
+fn es2_depth(f: DepthFormat) -> u32 {
+    match f {
+        DepthFormat::Depth16 => glow::DEPTH_COMPONENT16,
+        _ => glow::DEPTH_COMPONENT24,
+    }
+}
+
+fn f32_bytes(v: &[f32]) -> &[u8] {
+    // SAFETY: f32 has no padding and any byte pattern is a valid u8.
+    unsafe { std::slice::from_raw_parts(v.as_ptr().cast::<u8>(), std::mem::size_of_val(v)) }
+}
+
+/// The name of a GL error code.
+pub fn error_name(e: u32) -> &'static str {
+    match e {
+        glow::INVALID_ENUM => "GL_INVALID_ENUM",
+        glow::INVALID_VALUE => "GL_INVALID_VALUE",
+        glow::INVALID_OPERATION => "GL_INVALID_OPERATION",
+        glow::INVALID_FRAMEBUFFER_OPERATION => "GL_INVALID_FRAMEBUFFER_OPERATION",
+        glow::OUT_OF_MEMORY => "GL_OUT_OF_MEMORY",
+        glow::STACK_OVERFLOW => "GL_STACK_OVERFLOW",
+        glow::STACK_UNDERFLOW => "GL_STACK_UNDERFLOW",
+        _ => "unknown GL error",
+    }
+}
+
+fn status_name(s: u32) -> &'static str {
+    match s {
+        glow::FRAMEBUFFER_INCOMPLETE_ATTACHMENT => "GL_FRAMEBUFFER_INCOMPLETE_ATTACHMENT",
+        glow::FRAMEBUFFER_INCOMPLETE_MISSING_ATTACHMENT => {
+            "GL_FRAMEBUFFER_INCOMPLETE_MISSING_ATTACHMENT"
+        }
+        glow::FRAMEBUFFER_INCOMPLETE_DRAW_BUFFER => "GL_FRAMEBUFFER_INCOMPLETE_DRAW_BUFFER",
+        glow::FRAMEBUFFER_INCOMPLETE_READ_BUFFER => "GL_FRAMEBUFFER_INCOMPLETE_READ_BUFFER",
+        glow::FRAMEBUFFER_UNSUPPORTED => "GL_FRAMEBUFFER_UNSUPPORTED",
+        glow::FRAMEBUFFER_INCOMPLETE_MULTISAMPLE => "GL_FRAMEBUFFER_INCOMPLETE_MULTISAMPLE",
+        _ => "unknown framebuffer status",
+    }
+}

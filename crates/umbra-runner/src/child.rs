@@ -1,0 +1,33 @@
+//! Re-running this binary with a driver's environment. Mesa picks its driver when EGL loads,
+//! so `umbra render --backend gles3/softpipe` and every per-driver group of a conformance run
+//! execute in a child process with `GALLIUM_DRIVER` (and friends) set. A driver that crashes
+//! or hangs takes its child down, not the run.
+
+use std::process::Command;
+
+/// Runs this executable with `args` and the environment `env`; returns its exit code (125 if
+/// it could not start or died from a signal).
+pub fn rerun(args: &[String], env: &[(&str, &str)]) -> i32 {
+    let exe = match std::env::current_exe() {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: cannot find this executable to start a driver process: {e}");
+            return 125;
+        }
+    };
+    let mut cmd = Command::new(exe);
+    cmd.args(args);
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    match cmd.status() {
+        Ok(s) => s.code().unwrap_or_else(|| {
+            eprintln!("error: the driver process died: {s}");
+            125
+        }),
+        Err(e) => {
+            eprintln!("error: cannot start a driver process: {e}");
+            125
+        }
+    }
+}
