@@ -110,7 +110,7 @@ impl Renderer {
     }
 
     /// Fails with every pending GL error and debug message of `stage`.
-    fn check(&self, stage: &str) -> Result<(), BackendError> {
+    pub fn check(&self, stage: &str) -> Result<(), BackendError> {
         let gl = self.gl();
         let mut errors = Vec::new();
         // SAFETY: glGetError on the current context.

@@ -59,6 +59,7 @@ pub fn main(argv: &[String]) -> i32 {
     );
     let mut failures = Vec::new();
     let started = Instant::now();
+    let mut drivers = String::new();
     for backend_id in &ids {
         if !crate::registry::hostable_here(backend_id) {
             // Another Mesa driver: run this backend in a child process with its environment.
@@ -84,7 +85,12 @@ pub fn main(argv: &[String]) -> i32 {
             }
             let env = crate::registry::driver_env(backend_id).unwrap_or_default();
             let code = crate::child::rerun(&child_args, &env);
-            match merge_part(&part.join("latest"), &mut rows, &mut errors_csv) {
+            match merge_part(
+                &part.join("latest"),
+                &mut rows,
+                &mut errors_csv,
+                &mut drivers,
+            ) {
                 Ok(()) if code == 0 || code == 1 => {}
                 Ok(()) | Err(_) => {
                     let why = format!(
@@ -111,6 +117,25 @@ pub fn main(argv: &[String]) -> i32 {
             }
             Err(crate::registry::CreateError::Unavailable(why)) => (None, Some(why)),
         };
+        let line = match (&backend, &unavailable_reason) {
+            (Some(b), _) => {
+                let i = b.info();
+                format!(
+                    "{backend_id}: {} | {} | {} | {}",
+                    i.vendor,
+                    i.renderer,
+                    i.version,
+                    i.extensions.join(" ")
+                )
+            }
+            (None, why) => format!(
+                "{backend_id}: unavailable: {}",
+                why.clone().unwrap_or_default()
+            ),
+        };
+        println!("{line}");
+        drivers.push_str(&line);
+        drivers.push('\n');
         for file in &files {
             let points = match umbra_case::load_file(file) {
                 Ok(p) => p,
@@ -210,7 +235,7 @@ pub fn main(argv: &[String]) -> i32 {
     for (test, status, secs) in &rows {
         let _ = writeln!(results, "{test},{status},{secs:.3}");
     }
-    if let Err(e) = write_reports(&out, &results, &errors_csv) {
+    if let Err(e) = write_reports(&out, &results, &errors_csv, &drivers) {
         eprintln!("error: cannot write reports under {}: {e}", out.display());
         return 125;
     }
@@ -235,6 +260,7 @@ fn merge_part(
     dir: &Path,
     rows: &mut Vec<(String, &'static str, f64)>,
     errors_csv: &mut String,
+    drivers: &mut String,
 ) -> std::io::Result<()> {
     let results = std::fs::read_to_string(dir.join("results.csv"))?;
     for line in results.lines() {
@@ -252,6 +278,9 @@ fn merge_part(
         };
         rows.push((test.to_string(), status, secs.parse().unwrap_or(0.0)));
     }
+    if let Ok(d) = std::fs::read_to_string(dir.join("drivers.txt")) {
+        drivers.push_str(&d);
+    }
     let errors = std::fs::read_to_string(dir.join("errors.csv"))?;
     for line in errors.lines().skip(1) {
         errors_csv.push_str(line);
@@ -260,7 +289,7 @@ fn merge_part(
     Ok(())
 }
 
-fn write_reports(out: &Path, results: &str, errors: &str) -> std::io::Result<()> {
+fn write_reports(out: &Path, results: &str, errors: &str, drivers: &str) -> std::io::Result<()> {
     let stamp = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_secs())
@@ -269,6 +298,7 @@ fn write_reports(out: &Path, results: &str, errors: &str) -> std::io::Result<()>
         std::fs::create_dir_all(&dir)?;
         std::fs::write(dir.join("results.csv"), results)?;
         std::fs::write(dir.join("errors.csv"), errors)?;
+        std::fs::write(dir.join("drivers.txt"), drivers)?;
     }
     Ok(())
 }

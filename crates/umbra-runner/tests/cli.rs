@@ -1,0 +1,128 @@
+//! The `umbra` binary as a user meets it: driver processes, exit codes, reports, errors.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn umbra(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_umbra"))
+        .args(args)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
+        .env_remove("GALLIUM_DRIVER")
+        .env_remove("LIBGL_ALWAYS_SOFTWARE")
+        .output()
+        .expect("run umbra")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("umbra-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+#[test]
+fn a_driver_other_than_this_process_runs_in_its_own_process_and_reports_back() {
+    let out = scratch("softpipe");
+    let o = umbra(&[
+        "conformance",
+        "--backend",
+        "gles3/softpipe",
+        "--backend",
+        "ref",
+        "--filter",
+        "spot*",
+        "--out",
+        out.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let results = std::fs::read_to_string(out.join("latest/results.csv")).expect("results.csv");
+    assert!(
+        results.contains("gles3/softpipe/spot-20deg,Pass,"),
+        "{results}"
+    );
+    assert!(results.contains("ref/spot-20deg,Pass,"), "{results}");
+    assert!(
+        text(&o).contains("conformance: 2 passed, 0 failed, 0 skipped"),
+        "{}",
+        text(&o)
+    );
+}
+
+#[test]
+fn render_on_zink_writes_the_pictures() {
+    let out = scratch("zink");
+    let o = umbra(&[
+        "render",
+        "cases/basics/square-occluder.json",
+        "--backend",
+        "gl33/zink",
+        "-o",
+        out.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(
+        text(&o).contains("square-occluder on gl33/zink"),
+        "{}",
+        text(&o)
+    );
+    assert!(text(&o).contains("vs reference: 0 of"), "{}", text(&o));
+    for f in [
+        "color.png",
+        "visibility.png",
+        "truth.png",
+        "error.png",
+        "shadow_map.png",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+}
+
+#[test]
+fn an_unknown_backend_cannot_run() {
+    let o = umbra(&["conformance", "--backend", "vulkan/nvidia"]);
+    assert_eq!(o.status.code(), Some(125), "{}", text(&o));
+    assert!(
+        text(&o).contains(r#"unknown backend "vulkan/nvidia""#) && text(&o).contains("gles2/zink"),
+        "{}",
+        text(&o)
+    );
+}
+
+#[test]
+fn a_malformed_case_fails_the_run_with_its_file_path_and_fix() {
+    let dir = scratch("cases");
+    std::fs::write(dir.join("bad.json"), r#"{ "name": "bad", "about": "x", "scene": { "objects": [] },
+        "camera": { "eye": [0, 1, 2], "target": [0, 0, 0] },
+        "light": { "spot": { "position": [0, 5, 0], "target": [0, 0, 0], "fov_y_deg": 30, "up": [0, 0, 1] } } }"#)
+        .expect("write");
+    let o = umbra(&[
+        "conformance",
+        "--backend",
+        "ref",
+        "--cases",
+        dir.to_str().unwrap_or_default(),
+        "--out",
+        dir.join("out").to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    let t = text(&o);
+    assert!(
+        t.contains("bad.json: scene.objects: the scene is empty; fix: add at least one object"),
+        "{t}"
+    );
+}
+
+#[test]
+fn no_cases_cannot_run() {
+    let dir = scratch("empty");
+    let o = umbra(&["conformance", "--cases", dir.to_str().unwrap_or_default()]);
+    assert_eq!(o.status.code(), Some(125), "{}", text(&o));
+}
