@@ -246,12 +246,22 @@ pub fn main(argv: &[String]) -> i32 {
         started.elapsed().as_secs_f64(),
         out.join("latest").display()
     );
-    println!(
-        "conformance: {} passed, {} failed, {} skipped",
-        count("Pass"),
-        count("Fail"),
-        count("Skip")
-    );
+    if args.has("child") {
+        // The parent prints the run's closing line; a driver process only reports its part.
+        println!(
+            "driver process done: {} pass, {} fail, {} skip",
+            count("Pass"),
+            count("Fail"),
+            count("Skip")
+        );
+    } else {
+        println!(
+            "conformance: {} passed, {} failed, {} skipped",
+            count("Pass"),
+            count("Fail"),
+            count("Skip")
+        );
+    }
     if failures.is_empty() { 0 } else { 1 }
 }
 
