@@ -232,8 +232,9 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
                return dot(k, vec4(1.0 / 255.0, 1.0 / 65025.0, 1.0 / 16581375.0, 1.0 / 4228250625.0));\n}\n",
         );
     }
-    // Texel fetch with the wrap policy, returning the stored depth (shader-addressed paths).
-    if manual || matches!(k.filter, Filter::Pcf(_)) {
+    // Texel fetch with the wrap policy, returning the stored depth (manual compare only: the
+    // hardware path's taps go through the sampler, whose wrap mode is the policy).
+    if manual {
         let outside = if k.cube {
             Outside::ClampToEdge
         } else {

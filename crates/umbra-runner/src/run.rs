@@ -13,8 +13,12 @@
 //! - the truth marks it an edge pixel: within the light's texel resolution of a true shadow
 //!   boundary, where coverage snapping (sub-pixel precision ≥ 4 bits) and the rasterization
 //!   tie rule (none prescribed) of the *shadow pass* are the implementation's; or
-//! - the truth does not judge it (faces away from the light, outside the light's frustum,
-//!   silhouette), where the shadow term is invisible or the surface itself differs.
+//! - the pixel shows no receiver both frames share a lookup for: a silhouette (the surface
+//!   itself differs) or a surface facing away from the light (its shadow term is multiplied by
+//!   a zero diffuse term, and it compares against its own back side).
+//!
+//! Pixels outside the light's frustum are *not* exempt: the case's outside policy defines
+//! their answer, so they are held to the reference like any other.
 //!
 //! Any other disagreement is illegal and fails the run.
 
@@ -23,7 +27,7 @@ use std::time::{Duration, Instant};
 use umbra_case::format::InteriorError;
 use umbra_case::{Backend, CasePoint, ClipDepth, Frame, Needs, Prepared, Support};
 use umbra_compare::{Agreement, TruthError};
-use umbra_ref::truth::{Truth, ground_truth};
+use umbra_ref::truth::{Class, Truth, ground_truth};
 
 /// Agreement with the reference, with each disagreement classified.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
@@ -38,7 +42,7 @@ pub struct RefAgreement {
     pub legal_texel: u64,
     /// Of those, on a truth edge (texel and raster freedom).
     pub legal_edge: u64,
-    /// Of those, not judged by the truth.
+    /// Of those, on a silhouette or a surface facing away from the light.
     pub legal_unjudged: u64,
     /// Of those, neither: illegal.
     pub illegal: u64,
@@ -96,10 +100,12 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
     let mut problems = Vec::new();
     let agreement = (backend.id().0 != "ref").then(|| {
         let (reference, ambiguity) = umbra_ref::render_judged(&prepared, ClipDepth::MinusOneToOne);
+        let surface = reference.surface.clone().unwrap_or_default();
         classify(
             &umbra_compare::agreement(&reference, &frame, 0),
             &truth,
             &ambiguity,
+            &surface,
         )
     });
     if let Some(a) = &agreement {
@@ -138,7 +144,16 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
     }))
 }
 
-fn classify(g: &Agreement, truth: &Truth, ambiguity: &[u8]) -> RefAgreement {
+fn silhouette(truth: &Truth, reference_surface: &[u32], i: usize) -> bool {
+    reference_surface[i] != truth.face[i]
+}
+
+fn classify(
+    g: &Agreement,
+    truth: &Truth,
+    ambiguity: &[u8],
+    reference_surface: &[u32],
+) -> RefAgreement {
     use umbra_ref::lookup::ambiguity::{DEPTH_TIE, FILTER, TEXEL_BOUNDARY};
     let mut r = RefAgreement {
         compared: g.compared,
@@ -149,7 +164,9 @@ fn classify(g: &Agreement, truth: &Truth, ambiguity: &[u8]) -> RefAgreement {
             continue;
         }
         r.differ += 1;
-        if !truth.judged(i) {
+        let exempt =
+            matches!(truth.class[i], Class::Background | Class::FacesAway) || truth.face[i] == 0;
+        if exempt || silhouette(truth, reference_surface, i) {
             r.legal_unjudged += 1;
         } else if ambiguity[i] & DEPTH_TIE != 0 {
             r.legal_tie += 1;

@@ -126,3 +126,38 @@ fn no_cases_cannot_run() {
     let o = umbra(&["conformance", "--cases", dir.to_str().unwrap_or_default()]);
     assert_eq!(o.status.code(), Some(125), "{}", text(&o));
 }
+
+#[test]
+fn without_a_loadable_libegl_gl_runs_are_skips_that_name_the_package() {
+    // A libEGL that cannot be loaded stands in for a machine without Mesa.
+    let lib = scratch("noegl");
+    for name in ["libEGL.so.1", "libEGL.so"] {
+        std::fs::write(lib.join(name), b"not a shared object").expect("fake lib");
+    }
+    let o = Command::new(env!("CARGO_BIN_EXE_umbra"))
+        .args([
+            "conformance",
+            "--backend",
+            "gles3/llvmpipe",
+            "--filter",
+            "square*",
+            "--out",
+            lib.join("out").to_str().unwrap_or_default(),
+        ])
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
+        .env("LD_LIBRARY_PATH", &lib)
+        .env_remove("GALLIUM_DRIVER")
+        .output()
+        .expect("run umbra");
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "a skip is not a failure: {t}");
+    assert!(
+        t.contains("Skip gles3/llvmpipe/square-occluder: cannot load libEGL"),
+        "{t}"
+    );
+    assert!(t.contains("libegl1 and libegl-mesa0"), "{t}");
+    assert!(
+        t.contains("conformance: 0 passed, 0 failed, 1 skipped"),
+        "{t}"
+    );
+}
