@@ -198,6 +198,19 @@ impl Convention {
         (x, y)
     }
 
+    /// What to put in front of a cube face's projection when *rendering* the face so that
+    /// its texel rows match cube-map sampling (the GL/Vulkan face table, t = 0 in row 0).
+    /// GL's window rows run up with NDC y, which already matches: identity. Zero-to-one
+    /// windows run down, so the face is rendered with y flipped (which also reverses the
+    /// winding: the pass's front face becomes clockwise). Lookups keep the unflipped face
+    /// matrix and read row t = 1 − v of the face.
+    pub fn cube_face_render_flip(self) -> Mat4 {
+        match self.clip {
+            ClipDepth::MinusOneToOne => Mat4::IDENTITY,
+            ClipDepth::ZeroToOne => Mat4::from_scale(Vec3::new(1.0, -1.0, 1.0)),
+        }
+    }
+
     /// Smallest clip z inside the volume, as a multiple of w (−1 or 0).
     pub fn clip_z_min_over_w(self) -> f32 {
         match self.clip {

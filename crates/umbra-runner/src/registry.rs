@@ -1,5 +1,5 @@
-//! Backend ids and how to make them: `ref`, and `API/DRIVER` for GL (`gl33/llvmpipe`,
-//! `gles2/zink`, ...).
+//! Backend ids and how to make them: `ref`, `API/DRIVER` for GL (`gl33/llvmpipe`,
+//! `gles2/zink`, ...), and `wgpu-vk/lavapipe`, `wgpu-gl/llvmpipe`.
 //!
 //! A Mesa driver is chosen by environment before EGL loads, so a process hosts one driver.
 //! [`driver_env`] says which environment an id needs; the commands run ids whose driver this
@@ -11,19 +11,30 @@ use umbra_case::Backend;
 pub fn known() -> Vec<String> {
     let mut ids = vec!["ref".to_string()];
     ids.extend(umbra_gl::ids());
+    ids.extend(umbra_wgpu::Kind::ALL.iter().map(|k| k.id().to_string()));
     ids
 }
 
-/// The environment the id's driver needs, if any.
+/// The environment the id's driver needs, if any (wgpu's GL backend loads Mesa's EGL, so it
+/// needs llvmpipe's).
 pub fn driver_env(id: &str) -> Option<Vec<(&'static str, &'static str)>> {
-    umbra_gl::parse_id(id).map(|(_, d)| d.env())
+    match umbra_wgpu::Kind::parse(id) {
+        Some(umbra_wgpu::Kind::GlLlvmpipe) => Some(umbra_gl::Driver::Llvmpipe.env()),
+        // The Vulkan device-select layer only complains about DISPLAY and XDG_RUNTIME_DIR.
+        Some(umbra_wgpu::Kind::VulkanLavapipe) => Some(vec![("NODEVICE_SELECT", "1")]),
+        None => umbra_gl::parse_id(id).map(|(_, d)| d.env()),
+    }
 }
 
 /// Whether this process can host the id (its driver environment is in place).
 pub fn hostable_here(id: &str) -> bool {
-    match umbra_gl::parse_id(id) {
-        Some((_, d)) => d.is_selected(),
-        None => true,
+    match (umbra_wgpu::Kind::parse(id), umbra_gl::parse_id(id)) {
+        (Some(umbra_wgpu::Kind::GlLlvmpipe), _) => umbra_gl::Driver::Llvmpipe.is_selected(),
+        (Some(umbra_wgpu::Kind::VulkanLavapipe), _) => {
+            std::env::var("NODEVICE_SELECT").is_ok_and(|v| v == "1")
+        }
+        (None, Some((_, d))) => d.is_selected(),
+        (None, None) => true,
     }
 }
 
@@ -32,6 +43,11 @@ pub fn hostable_here(id: &str) -> bool {
 pub fn create(id: &str) -> Result<Box<dyn Backend>, CreateError> {
     if id == "ref" {
         return Ok(Box::new(umbra_ref::RefBackend));
+    }
+    if let Some(kind) = umbra_wgpu::Kind::parse(id) {
+        return umbra_wgpu::WgpuBackend::new(kind)
+            .map(|b| Box::new(b) as Box<dyn Backend>)
+            .map_err(|e| CreateError::Unavailable(e.0));
     }
     match umbra_gl::parse_id(id) {
         Some((api, driver)) => umbra_gl::GlBackend::new(api, driver)

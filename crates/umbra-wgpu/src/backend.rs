@@ -1,0 +1,81 @@
+//! [`WgpuBackend`]: the [`Backend`] trait over a wgpu device.
+
+use umbra_case::format::{Compare, Outside};
+use umbra_case::{Backend, BackendError, BackendId, DriverInfo, Frame, Needs, Prepared, Support};
+
+use crate::device::{Kind, Unavailable, open};
+use crate::render::Gpu;
+
+/// A wgpu backend.
+pub struct WgpuBackend {
+    gpu: Gpu,
+    kind: Kind,
+}
+
+impl WgpuBackend {
+    /// Opens the device for `kind`.
+    pub fn new(kind: Kind) -> Result<WgpuBackend, Unavailable> {
+        Ok(WgpuBackend {
+            gpu: open(kind)?,
+            kind,
+        })
+    }
+}
+
+impl Backend for WgpuBackend {
+    fn id(&self) -> BackendId {
+        BackendId(self.kind.id().into())
+    }
+
+    fn info(&self) -> DriverInfo {
+        let i = &self.gpu.info;
+        let mut extensions = vec![
+            format!("backend {:?}", i.backend),
+            format!("driver_info {}", i.driver_info),
+        ];
+        for (f, name) in [
+            (wgpu::Features::TIMESTAMP_QUERY, "TIMESTAMP_QUERY"),
+            (
+                wgpu::Features::ADDRESS_MODE_CLAMP_TO_BORDER,
+                "ADDRESS_MODE_CLAMP_TO_BORDER",
+            ),
+        ] {
+            if self.gpu.features.contains(f) {
+                extensions.push(name.into());
+            }
+        }
+        DriverInfo {
+            vendor: format!("{:#06x}", i.vendor),
+            renderer: i.name.clone(),
+            version: i.driver.clone(),
+            extensions,
+        }
+    }
+
+    fn supports(&self, needs: &Needs) -> Support {
+        if needs.compare == Compare::Manual && self.kind == Kind::GlLlvmpipe {
+            return Support::Unsupported("manual compare needs textureLoad from a depth texture, which naga's GLSL output (wgpu's GL backend) does not support".into());
+        }
+        if needs.outside == Outside::Border
+            && needs.compare == Compare::Hardware
+            && !needs.cube_map
+            && !self
+                .gpu
+                .features
+                .contains(wgpu::Features::ADDRESS_MODE_CLAMP_TO_BORDER)
+        {
+            return Support::Unsupported("clamp-to-border needs wgpu's ADDRESS_MODE_CLAMP_TO_BORDER feature, which this adapter lacks".into());
+        }
+        Support::Supported
+    }
+
+    fn render(&mut self, run: &Prepared) -> Result<Frame, BackendError> {
+        let units = run.case().shadow.bias.polygon_offset[1];
+        if units.fract() != 0.0 {
+            return Err(BackendError::Unsupported(format!(
+                "wgpu's depth bias constant is an integer; polygon_offset units {units} is not"
+            )));
+        }
+        self.gpu.render(run)
+    }
+}
