@@ -11,6 +11,7 @@
 //! - [`heatmap`]: images of both, colour-coded (legend in [`heatmap`]).
 
 pub mod heatmap;
+pub mod reference;
 
 use serde::Serialize;
 use umbra_case::Frame;

@@ -124,6 +124,16 @@ impl GlContext {
     }
 }
 
+impl GlContext {
+    /// Makes this context current on the calling thread again: another library in the same
+    /// process (wgpu's GL backend uses EGL too) may have made its own current meanwhile.
+    pub fn make_current(&self) -> Result<(), Unavailable> {
+        self.egl
+            .make_current(self.display, None, None, Some(self.context))
+            .map_err(|e| Unavailable(format!("eglMakeCurrent failed ({e})")))
+    }
+}
+
 impl Drop for GlContext {
     fn drop(&mut self) {
         let _ = self.egl.make_current(self.display, None, None, None);

@@ -183,6 +183,9 @@ impl Renderer {
     /// Renders one run.
     pub fn render(&mut self, run: &Prepared) -> Result<Frame, BackendError> {
         let start = Instant::now();
+        self.ctx
+            .make_current()
+            .map_err(|e| gl_err("make current", e.0))?;
         let mut res = Resources::default();
         let out = self.render_with(run, &mut res, start);
         res.delete(self.gl());

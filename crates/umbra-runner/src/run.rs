@@ -1,52 +1,15 @@
 //! Rendering and judging one case point on one backend: the frame, the truth, the error, and
 //! for every backend but the reference, agreement with the reference.
 //!
-//! Agreement rule (first cut of the tolerance model; the conformance-runner issue refines it):
-//! a pixel whose lit/shadowed answer differs from the reference's is *legal* when
-//! - the reference's own lookup there was within the specs' freedom
-//!   ([`umbra_ref::lookup::ambiguity`]): a depth tie (the compared texel within the stored
-//!   depth's freedom: polygon-offset slope form and unit r, ±1 storage step, f32 rounding),
-//!   a texel boundary (within 1/16 texel, the minimum sub-texel precision, of a texel that
-//!   decides differently), or filter freedom (LINEAR taps disagree: weights are
-//!   implementation-defined and NEAREST is allowed; a PCF average within one 8-bit step of
-//!   0.5);
-//! - the truth marks it an edge pixel: within the light's texel resolution of a true shadow
-//!   boundary, where coverage snapping (sub-pixel precision ≥ 4 bits) and the rasterization
-//!   tie rule (none prescribed) of the *shadow pass* are the implementation's; or
-//! - the pixel shows no receiver both frames share a lookup for: a silhouette (the surface
-//!   itself differs) or a surface facing away from the light (its shadow term is multiplied by
-//!   a zero diffuse term, and it compares against its own back side).
-//!
-//! Pixels outside the light's frustum are *not* exempt: the case's outside policy defines
-//! their answer, so they are held to the reference like any other.
-//!
-//! Any other disagreement is illegal and fails the run.
+//! The agreement rule itself lives in `umbra_compare::reference` (one place in code).
 
 use std::time::{Duration, Instant};
 
 use umbra_case::format::InteriorError;
 use umbra_case::{Backend, CasePoint, ClipDepth, Frame, Needs, Prepared, Support};
-use umbra_compare::{Agreement, TruthError};
-use umbra_ref::truth::{Class, Truth, ground_truth};
-
-/// Agreement with the reference, with each disagreement classified.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
-pub struct RefAgreement {
-    /// Pixels covered in both.
-    pub compared: u64,
-    /// Pixels whose answer differs.
-    pub differ: u64,
-    /// Of those, a depth tie in the reference's lookup.
-    pub legal_tie: u64,
-    /// Of those, a texel boundary or filter freedom in the reference's lookup.
-    pub legal_texel: u64,
-    /// Of those, on a truth edge (texel and raster freedom).
-    pub legal_edge: u64,
-    /// Of those, on a silhouette or a surface facing away from the light.
-    pub legal_unjudged: u64,
-    /// Of those, neither: illegal.
-    pub illegal: u64,
-}
+use umbra_compare::TruthError;
+use umbra_compare::reference::RefAgreement;
+use umbra_ref::truth::{Truth, ground_truth};
 
 /// One judged run.
 pub struct Judged {
@@ -100,13 +63,7 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
     let mut problems = Vec::new();
     let agreement = (backend.id().0 != "ref").then(|| {
         let (reference, ambiguity) = umbra_ref::render_judged(&prepared, ClipDepth::MinusOneToOne);
-        let surface = reference.surface.clone().unwrap_or_default();
-        classify(
-            &umbra_compare::agreement(&reference, &frame, 0),
-            &truth,
-            &ambiguity,
-            &surface,
-        )
+        umbra_compare::reference::judge(&reference, &ambiguity, &frame, &truth)
     });
     if let Some(a) = &agreement {
         if a.illegal > 0 && prepared.case().expect.backends_agree {
@@ -142,43 +99,6 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
         judge_time,
         problems,
     }))
-}
-
-fn silhouette(truth: &Truth, reference_surface: &[u32], i: usize) -> bool {
-    reference_surface[i] != truth.face[i]
-}
-
-fn classify(
-    g: &Agreement,
-    truth: &Truth,
-    ambiguity: &[u8],
-    reference_surface: &[u32],
-) -> RefAgreement {
-    use umbra_ref::lookup::ambiguity::{DEPTH_TIE, FILTER, TEXEL_BOUNDARY};
-    let mut r = RefAgreement {
-        compared: g.compared,
-        ..Default::default()
-    };
-    for (i, differs) in g.disagrees.iter().enumerate() {
-        if !differs {
-            continue;
-        }
-        r.differ += 1;
-        let exempt =
-            matches!(truth.class[i], Class::Background | Class::FacesAway) || truth.face[i] == 0;
-        if exempt || silhouette(truth, reference_surface, i) {
-            r.legal_unjudged += 1;
-        } else if ambiguity[i] & DEPTH_TIE != 0 {
-            r.legal_tie += 1;
-        } else if ambiguity[i] & (TEXEL_BOUNDARY | FILTER) != 0 {
-            r.legal_texel += 1;
-        } else if truth.edge[i] {
-            r.legal_edge += 1;
-        } else {
-            r.illegal += 1;
-        }
-    }
-    r
 }
 
 /// A short multi-line summary of a judged run.

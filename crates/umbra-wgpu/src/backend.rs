@@ -10,14 +10,18 @@ use crate::render::Gpu;
 pub struct WgpuBackend {
     gpu: Gpu,
     kind: Kind,
+    depth24plus: String,
 }
 
 impl WgpuBackend {
     /// Opens the device for `kind`.
     pub fn new(kind: Kind) -> Result<WgpuBackend, Unavailable> {
+        let gpu = open(kind)?;
+        let depth24plus = crate::probe::depth24plus(&gpu);
         Ok(WgpuBackend {
-            gpu: open(kind)?,
+            gpu,
             kind,
+            depth24plus,
         })
     }
 }
@@ -32,6 +36,7 @@ impl Backend for WgpuBackend {
         let mut extensions = vec![
             format!("backend {:?}", i.backend),
             format!("driver_info {}", i.driver_info),
+            self.depth24plus.clone(),
         ];
         for (f, name) in [
             (wgpu::Features::TIMESTAMP_QUERY, "TIMESTAMP_QUERY"),

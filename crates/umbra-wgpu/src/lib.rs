@@ -12,6 +12,7 @@
 
 pub mod backend;
 pub mod device;
+pub mod probe;
 pub mod render;
 pub mod shaders;
 

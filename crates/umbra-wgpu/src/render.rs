@@ -796,7 +796,7 @@ fn f32_bytes(v: &[f32]) -> Vec<u8> {
 }
 
 /// Reads a whole single-layer texture, removing the 256-byte row padding.
-fn read_texture(
+pub fn read_texture(
     gpu: &Gpu,
     t: &wgpu::Texture,
     bpp: u32,
