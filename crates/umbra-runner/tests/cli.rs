@@ -161,3 +161,31 @@ fn without_a_loadable_libegl_gl_runs_are_skips_that_name_the_package() {
         "{t}"
     );
 }
+
+#[test]
+fn without_a_vulkan_driver_wgpu_vk_runs_are_skips_that_name_the_package() {
+    // No ICD for the Vulkan loader stands in for a machine without mesa-vulkan-drivers.
+    let out = scratch("novk");
+    let o = Command::new(env!("CARGO_BIN_EXE_umbra"))
+        .args([
+            "conformance",
+            "--backend",
+            "wgpu-vk/lavapipe",
+            "--filter",
+            "square*",
+            "--out",
+            out.to_str().unwrap_or_default(),
+        ])
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
+        .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
+        .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
+        .output()
+        .expect("run umbra");
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "a skip is not a failure: {t}");
+    assert!(
+        t.contains("Skip wgpu-vk/lavapipe/square-occluder: no CPU adapter"),
+        "{t}"
+    );
+    assert!(t.contains("mesa-vulkan-drivers"), "{t}");
+}
