@@ -43,6 +43,36 @@ impl Geometry {
         self.triangles[t].map(|i| self.positions[i as usize])
     }
 
+    /// Floats per vertex of [`Geometry::interleaved`].
+    pub const VERTEX_FLOATS: usize = 10;
+
+    /// The vertex stream every GPU backend draws: one vertex per triangle corner (so per-
+    /// triangle data needs no flat-shading provoking-vertex rules), each
+    /// `[position xyz, normal xyz, albedo rgb, face id]` as f32 (face ids are exact below
+    /// 2^24).
+    pub fn interleaved(&self) -> Vec<f32> {
+        let mut v = Vec::with_capacity(self.triangles.len() * 3 * Self::VERTEX_FLOATS);
+        for (t, tri) in self.triangles.iter().enumerate() {
+            let a = self.albedo[self.object[t] as usize];
+            for &i in tri {
+                let (p, n) = (self.positions[i as usize], self.normals[i as usize]);
+                v.extend_from_slice(&[
+                    p.x,
+                    p.y,
+                    p.z,
+                    n.x,
+                    n.y,
+                    n.z,
+                    a.x,
+                    a.y,
+                    a.z,
+                    self.face[t] as f32,
+                ]);
+            }
+        }
+        v
+    }
+
     /// Number of planar faces.
     pub fn face_count(&self) -> u32 {
         self.face.iter().max().map_or(0, |f| f + 1)

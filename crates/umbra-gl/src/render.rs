@@ -32,8 +32,8 @@ use crate::api::Api;
 use crate::context::{GlContext, Unavailable};
 use crate::shaders::{self, Key};
 
-/// Floats per vertex: position, normal, albedo, face id.
-const STRIDE: usize = 10;
+/// Floats per vertex of `Geometry::interleaved`.
+const STRIDE: usize = umbra_case::Geometry::VERTEX_FLOATS;
 
 /// A GL context ready to render runs.
 pub struct Renderer {
@@ -208,27 +208,7 @@ impl Renderer {
         let es2 = api == Api::Gles2;
         self.check("before the run")?;
 
-        // Geometry: one vertex per triangle corner.
-        let geo = &run.geometry;
-        let mut verts = Vec::with_capacity(geo.triangles.len() * 3 * STRIDE);
-        for (t, tri) in geo.triangles.iter().enumerate() {
-            let albedo = geo.albedo[geo.object[t] as usize];
-            for &i in tri {
-                let (p, n) = (geo.positions[i as usize], geo.normals[i as usize]);
-                verts.extend_from_slice(&[
-                    p.x,
-                    p.y,
-                    p.z,
-                    n.x,
-                    n.y,
-                    n.z,
-                    albedo.x,
-                    albedo.y,
-                    albedo.z,
-                    geo.face[t] as f32,
-                ]);
-            }
-        }
+        let verts = run.geometry.interleaved();
         let count = (verts.len() / STRIDE) as i32;
         let gl = &self.ctx.gl;
         // SAFETY: buffers and vertex arrays of the current context.

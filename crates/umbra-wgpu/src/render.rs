@@ -15,8 +15,8 @@ use umbra_case::{
 
 use crate::shaders::{self, Key, UNIFORM_SIZE};
 
-/// Floats per vertex: position, normal, albedo, face id.
-const STRIDE: u64 = 40;
+/// Bytes per vertex of `Geometry::interleaved`.
+const STRIDE: u64 = 4 * umbra_case::Geometry::VERTEX_FLOATS as u64;
 
 /// A device and what we learned about its adapter.
 pub struct Gpu {
@@ -96,27 +96,8 @@ impl Gpu {
         let conv = Convention::ZERO_TO_ONE.with_order(s.depth_order);
         let cube = matches!(run.light.kind, LightKind::Point { .. });
         let d = &self.device;
-        let geo = &run.geometry;
-        let mut verts: Vec<f32> = Vec::with_capacity(geo.triangles.len() * 30);
-        for (t, tri) in geo.triangles.iter().enumerate() {
-            let albedo = geo.albedo[geo.object[t] as usize];
-            for &i in tri {
-                let (p, n) = (geo.positions[i as usize], geo.normals[i as usize]);
-                verts.extend_from_slice(&[
-                    p.x,
-                    p.y,
-                    p.z,
-                    n.x,
-                    n.y,
-                    n.z,
-                    albedo.x,
-                    albedo.y,
-                    albedo.z,
-                    geo.face[t] as f32,
-                ]);
-            }
-        }
-        let count = (verts.len() / 10) as u32;
+        let verts = run.geometry.interleaved();
+        let count = (verts.len() / umbra_case::Geometry::VERTEX_FLOATS) as u32;
         let vbo = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("vertices"),
             size: (verts.len() * 4) as u64,
