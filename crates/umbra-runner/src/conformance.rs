@@ -1,47 +1,146 @@
-//! `umbra conformance`: every case point on every selected backend, judged, with results in
-//! `OUT/latest/` (and a copy per run under `OUT/runs/<unix time>/`):
-//! - `results.csv`: `test,status,duration` as Mesa's deqp-runner writes it;
-//! - `errors.csv`: per run, the error figures against the truth and the pass timings.
+//! `umbra conformance`: every case point on every selected backend, each backend in worker
+//! processes of its own ([`crate::pool`]), judged, with expectations applied, and reported.
 //!
-//! Exit codes: 0 all as expected, 1 a failure, 125 nothing could run (no case, no backend),
-//! so `git bisect run` can drive it. This is the reference-only first cut; isolation,
-//! expectations, goldens and the HTML report arrive with the conformance runner issue.
+//! - Plan: case points (`cases/**/*.json`, `--filter GLOB` on the point id or the full run
+//!   name `backend/id`) × backends (`--backend ID`, default every known one), in a fixed
+//!   order; `--shard I/N` keeps every N-th run starting at I (0-based), as deqp-runner's
+//!   fractions do, so N CI jobs split a run deterministically.
+//! - Execution: backend groups run in parallel up to `--jobs` (default: the core count). A
+//!   worker that dies costs its run (Crash), one that exceeds `--timeout` seconds costs its run
+//!   (Timeout); a fresh worker takes the rest. Every failure is rerun once; a changed result
+//!   is a Flake.
+//! - Statuses and expectations: [`crate::status`]. A case file that cannot be loaded fails the
+//!   run under its own name.
+//! - Reports in `OUT/latest/` and `OUT/runs/<unix time>/`: `results.csv` and `failures.csv`
+//!   (deqp-runner's formats), `junit.xml`, `report.json`, `errors.csv`, `drivers.txt`, and the
+//!   pictures of each failure under `failures/`.
+//! - Exit codes: 0 all as expected, 1 a regression (Fail, Crash, Timeout, UnexpectedPass),
+//!   125 nothing could run (no case, no available backend, bad arguments or expectations), so
+//!   `git bisect run cargo xtask conformance --filter X` works.
 
+use std::collections::{BTreeMap, VecDeque};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use serde::Serialize;
 
 use crate::args::Args;
-use crate::run::{Outcome, describe, run_point};
+use crate::pool::{Reply, Worker};
+use crate::status::{Expectations, Status};
+use crate::worker::{Metrics, Request, RunReport};
 
 /// Usage line.
-pub const USAGE: &str =
-    "umbra conformance [--cases DIR] [--filter GLOB] [--backend ID]... [--out DIR] [--verbose]";
+pub const USAGE: &str = "umbra conformance [--cases DIR] [--filter GLOB] [--backend ID]... [--shard I/N] [--jobs N] [--timeout SECS] [--expectations DIR] [--out DIR] [--verbose]";
+
+/// One planned run.
+#[derive(Clone, Debug)]
+struct Planned {
+    backend: String,
+    file: PathBuf,
+    index: usize,
+    id: String,
+}
+
+impl Planned {
+    fn name(&self) -> String {
+        format!("{}/{}", self.backend, self.id)
+    }
+}
+
+/// One finished run, as reported.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunResult {
+    /// `backend/case@sweep`.
+    pub name: String,
+    /// The backend id.
+    pub backend: String,
+    /// The case point id.
+    pub case: String,
+    /// Final status.
+    pub status: Status,
+    /// Why (failure problems, skip reason, crash status, expectation reason).
+    pub reason: String,
+    /// Figures of the judged run, when it was judged.
+    pub metrics: Option<Metrics>,
+    /// Wall time of the run including retries, seconds.
+    pub time_s: f64,
+    /// The command that reproduces this run alone.
+    pub reproduce: String,
+    #[serde(skip)]
+    details: String,
+}
+
+struct Settings {
+    timeout: Duration,
+    failures: PathBuf,
+    expectations: Expectations,
+    verbose: bool,
+}
 
 /// Runs the command; returns the process exit code.
 pub fn main(argv: &[String]) -> i32 {
     let args = match Args::parse(
         argv,
-        &["cases", "filter", "backend", "out"],
-        &["verbose", "child"],
+        &[
+            "cases",
+            "filter",
+            "backend",
+            "out",
+            "shard",
+            "jobs",
+            "timeout",
+            "expectations",
+        ],
+        &["verbose"],
     ) {
         Ok(a) => a,
-        Err(e) => {
-            eprintln!("error: {e}\nusage: {USAGE}");
-            return 2;
-        }
+        Err(e) => return usage(&e),
     };
     let cases_dir = PathBuf::from(args.value("cases").unwrap_or("cases"));
     let out = PathBuf::from(args.value("out").unwrap_or("target/umbra"));
-    let filter = args.value("filter").unwrap_or("*");
-    let mut ids: Vec<String> = args
+    let filter = args.value("filter").unwrap_or("*").to_string();
+    let mut backends: Vec<String> = args
         .values("backend")
         .iter()
         .map(|s| s.to_string())
         .collect();
-    if ids.is_empty() {
-        ids = crate::registry::known();
+    if backends.is_empty() {
+        backends = crate::registry::known();
     }
+    for b in &backends {
+        if !crate::registry::is_known(b) {
+            eprintln!(
+                "error: unknown backend {b:?}; this build has: {}",
+                crate::registry::known().join(", ")
+            );
+            return 125;
+        }
+    }
+    let shard = match args.value("shard").map(parse_shard).transpose() {
+        Ok(s) => s.unwrap_or((0, 1)),
+        Err(e) => return usage(&e),
+    };
+    let jobs = match args.value("jobs").map(str::parse::<usize>).transpose() {
+        Ok(j) => j
+            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+            .max(1),
+        Err(_) => return usage("--jobs takes a positive number"),
+    };
+    let timeout = match args.value("timeout").map(str::parse::<u64>).transpose() {
+        Ok(t) => Duration::from_secs(t.unwrap_or(300)),
+        Err(_) => return usage("--timeout takes whole seconds"),
+    };
+    let expectations = match Expectations::load(Path::new(
+        args.value("expectations").unwrap_or("expectations"),
+    )) {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 125;
+        }
+    };
     let files = match umbra_case::case_files(&cases_dir) {
         Ok(f) if !f.is_empty() => f,
         Ok(_) => {
@@ -53,262 +152,446 @@ pub fn main(argv: &[String]) -> i32 {
             return 125;
         }
     };
-    let mut rows: Vec<(String, &'static str, f64)> = Vec::new();
-    let mut errors_csv = String::from(
-        "test,status,judged,false_shadow,false_light,interior_judged,interior_false_shadow,interior_false_light,edge_px,silhouette,faces_away,outside,shadow_ms,lit_ms,total_ms,clock\n",
-    );
-    let mut failures = Vec::new();
-    let started = Instant::now();
-    let mut drivers = String::new();
-    for backend_id in &ids {
-        if !crate::registry::hostable_here(backend_id) {
-            // Another Mesa driver: run this backend in a child process with its environment.
-            let part = out
-                .join("parts")
-                .join(crate::render_cmd::file_name(backend_id));
-            let mut child_args = vec![
-                "conformance".to_string(),
-                "--child".into(),
-                "--backend".into(),
-                backend_id.clone(),
-            ];
-            child_args.extend([
-                "--cases".into(),
-                cases_dir.display().to_string(),
-                "--filter".into(),
-                filter.to_string(),
-                "--out".into(),
-                part.display().to_string(),
-            ]);
-            if args.has("verbose") {
-                child_args.push("--verbose".into());
-            }
-            let env = crate::registry::driver_env(backend_id).unwrap_or_default();
-            let code = crate::child::rerun(&child_args, &env);
-            match merge_part(
-                &part.join("latest"),
-                &mut rows,
-                &mut errors_csv,
-                &mut drivers,
-            ) {
-                Ok(()) if code == 0 || code == 1 => {}
-                Ok(()) | Err(_) => {
-                    let why = format!(
-                        "{backend_id}: its driver process ended with code {code} before reporting every run"
-                    );
-                    println!("Crash {why}");
-                    failures.push(why);
-                    rows.push((format!("{backend_id}/*"), "Crash", 0.0));
-                }
-            }
-            failures.extend(
-                rows.iter()
-                    .filter(|r| r.0.starts_with(&format!("{backend_id}/")) && r.1 == "Fail")
-                    .map(|r| r.0.clone()),
-            );
-            continue;
+
+    // Plan.
+    let mut results: Vec<RunResult> = Vec::new();
+    let mut points: Vec<(PathBuf, Vec<String>)> = Vec::new();
+    for f in &files {
+        match umbra_case::load_file(f) {
+            Ok(p) => points.push((f.clone(), p.iter().map(|p| p.id()).collect())),
+            Err(e) => results.push(RunResult {
+                name: format!("cases/{}", f.display()),
+                backend: String::new(),
+                case: f.display().to_string(),
+                status: Status::Fail,
+                reason: e.to_string(),
+                metrics: None,
+                time_s: 0.0,
+                reproduce: format!("cargo run --bin umbra -- render {}", f.display()),
+                details: String::new(),
+            }),
         }
-        // An unavailable backend (no libEGL, no driver) turns every run into a skip with the reason.
-        let (mut backend, unavailable_reason) = match crate::registry::create(backend_id) {
-            Ok(b) => (Some(b), None),
-            Err(crate::registry::CreateError::Unknown(e)) => {
-                eprintln!("error: {e}");
-                return 125;
-            }
-            Err(crate::registry::CreateError::Unavailable(why)) => (None, Some(why)),
-        };
-        let line = match (&backend, &unavailable_reason) {
-            (Some(b), _) => {
-                let i = b.info();
-                format!(
-                    "{backend_id}: {} | {} | {} | {}",
-                    i.vendor,
-                    i.renderer,
-                    i.version,
-                    i.extensions.join(" ")
-                )
-            }
-            (None, why) => format!(
-                "{backend_id}: unavailable: {}",
-                why.clone().unwrap_or_default()
-            ),
-        };
-        println!("{line}");
-        drivers.push_str(&line);
-        drivers.push('\n');
-        for file in &files {
-            let points = match umbra_case::load_file(file) {
-                Ok(p) => p,
-                Err(e) => {
-                    let name = format!("{}/{}", backend_id, file.display());
-                    println!("Fail {name}: {e}");
-                    failures.push(format!("{name}: {e}"));
-                    rows.push((name, "Fail", 0.0));
-                    continue;
-                }
-            };
-            for point in points {
-                let test = format!("{backend_id}/{}", point.id());
-                if !crate::glob::matches(filter, &point.id())
-                    && !crate::glob::matches(filter, &test)
-                {
-                    continue;
-                }
-                let t0 = Instant::now();
-                let outcome = match (&mut backend, &unavailable_reason) {
-                    (Some(b), _) => run_point(b.as_mut(), point),
-                    (None, why) => Outcome::Skip(why.clone().unwrap_or_default()),
+    }
+    let mut plan = Vec::new();
+    for b in &backends {
+        for (file, ids) in &points {
+            for (index, id) in ids.iter().enumerate() {
+                let p = Planned {
+                    backend: b.clone(),
+                    file: file.clone(),
+                    index,
+                    id: id.clone(),
                 };
-                let secs = t0.elapsed().as_secs_f64();
-                let status = match &outcome {
-                    Outcome::Skip(why) => {
-                        println!("Skip {test}: {why}");
-                        "Skip"
-                    }
-                    Outcome::Error(e) => {
-                        println!("Fail {test}: {e}");
-                        failures.push(format!("{test}: {e}"));
-                        "Fail"
-                    }
-                    Outcome::Done(j) => {
-                        let status = if j.problems.is_empty() {
-                            "Pass"
-                        } else {
-                            "Fail"
-                        };
-                        println!("{status} {test} ({:.0} ms)", secs * 1e3);
-                        if args.has("verbose") || status == "Fail" {
-                            println!("{}", describe(j));
-                        }
-                        for p in &j.problems {
-                            println!("  problem: {p}");
-                            failures.push(format!("{test}: {p}"));
-                        }
-                        if status == "Fail" {
-                            let dir = out
-                                .join("latest")
-                                .join("failures")
-                                .join(crate::render_cmd::file_name(&test));
-                            if let Err(e) = crate::render_cmd::write_images(&dir, j) {
-                                eprintln!(
-                                    "warning: cannot write failure images to {}: {e}",
-                                    dir.display()
-                                );
-                            }
-                        }
-                        let e = &j.error;
-                        let t = &j.frame.timings;
-                        let _ = writeln!(
-                            errors_csv,
-                            "{test},{status},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{}",
-                            e.all.judged,
-                            e.all.false_shadow,
-                            e.all.false_light,
-                            e.away_from_edges.judged,
-                            e.away_from_edges.false_shadow,
-                            e.away_from_edges.false_light,
-                            e.edge_pixels,
-                            e.silhouette,
-                            e.faces_away,
-                            e.outside,
-                            t.shadow_pass.as_secs_f64() * 1e3,
-                            t.lit_pass.as_secs_f64() * 1e3,
-                            t.total.as_secs_f64() * 1e3,
-                            if t.clock == Some(umbra_case::Clock::Gpu) {
-                                "gpu"
-                            } else {
-                                "cpu-wall"
-                            },
-                        );
-                        status
-                    }
-                };
-                rows.push((test, status, secs));
+                if crate::glob::matches(&filter, id) || crate::glob::matches(&filter, &p.name()) {
+                    plan.push(p);
+                }
             }
         }
     }
-    if rows.is_empty() {
-        eprintln!("error: --filter {filter:?} selects no run");
+    let plan: Vec<Planned> = plan
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| i % shard.1 == shard.0)
+        .map(|(_, p)| p)
+        .collect();
+    if plan.is_empty() && results.is_empty() {
+        eprintln!(
+            "error: --filter {filter:?} (shard {}/{}) selects no run",
+            shard.0, shard.1
+        );
         return 125;
     }
-    let mut results = String::new();
-    for (test, status, secs) in &rows {
-        let _ = writeln!(results, "{test},{status},{secs:.3}");
+
+    // Execute.
+    let started = Instant::now();
+    let settings = Settings {
+        timeout,
+        failures: out.join("latest").join("failures"),
+        expectations,
+        verbose: args.has("verbose"),
+    };
+    let _ = std::fs::remove_dir_all(&settings.failures);
+    let mut groups: BTreeMap<String, Vec<Planned>> = BTreeMap::new();
+    for p in plan {
+        groups.entry(p.backend.clone()).or_default().push(p);
     }
-    if let Err(e) = write_reports(&out, &results, &errors_csv, &drivers) {
+    let total = groups.values().map(Vec::len).sum::<usize>();
+    let queue = Mutex::new(groups.into_iter().collect::<VecDeque<_>>());
+    let done = Mutex::new((results, String::new(), 0usize, 0usize));
+    std::thread::scope(|s| {
+        for _ in 0..jobs {
+            s.spawn(|| {
+                // Take the next group in a function of its own, so the queue's lock is released
+                // before the group runs (a `while let` on the lock would hold it throughout).
+                let next = || queue.lock().ok().and_then(|mut q| q.pop_front());
+                while let Some((backend, runs)) = next() {
+                    run_group(&backend, runs, &settings, &done, total);
+                }
+            });
+        }
+    });
+    let (mut results, drivers, unavailable_runs, _) = match done.into_inner() {
+        Ok(d) => d,
+        Err(_) => {
+            eprintln!("error: a worker thread panicked");
+            return 125;
+        }
+    };
+    results.sort_by(|a, b| a.name.cmp(&b.name));
+
+    // Report.
+    if let Err(e) = write_reports(&out, &results, &drivers, started.elapsed()) {
         eprintln!("error: cannot write reports under {}: {e}", out.display());
         return 125;
     }
-    let count = |s: &str| rows.iter().filter(|r| r.1 == s).count();
+    let count = |name: &str| results.iter().filter(|r| r.status.name() == name).count();
+    let regressions: Vec<&RunResult> = results
+        .iter()
+        .filter(|r| r.status.is_regression())
+        .collect();
     println!(
         "\n{} runs in {:.1} s; reports in {}",
-        rows.len(),
+        results.len(),
         started.elapsed().as_secs_f64(),
         out.join("latest").display()
     );
-    if args.has("child") {
-        // The parent prints the run's closing line; a driver process only reports its part.
+    for r in &regressions {
         println!(
-            "driver process done: {} pass, {} fail, {} skip",
-            count("Pass"),
-            count("Fail"),
-            count("Skip")
+            "  regression: {} {}: {}",
+            r.status,
+            r.name,
+            first_line(&r.reason)
         );
+    }
+    let passed = count("Pass") + count("ExpectedFail") + count("Flake");
+    println!(
+        "statuses: pass {}, expected fail {}, flake {}, skip {}; fail {}, crash {}, timeout {}, unexpected pass {}",
+        count("Pass"),
+        count("ExpectedFail"),
+        count("Flake"),
+        count("Skip"),
+        count("Fail"),
+        count("Crash"),
+        count("Timeout"),
+        count("UnexpectedPass"),
+    );
+    // The closing line, alone, in the form CI tools read.
+    println!(
+        "conformance: {passed} passed, {} failed, {} skipped",
+        regressions.len(),
+        count("Skip")
+    );
+    if !regressions.is_empty() {
+        1
+    } else if unavailable_runs == results.len() && !results.is_empty() {
+        eprintln!("error: no selected backend is available here, nothing ran");
+        125
     } else {
-        println!(
-            "conformance: {} passed, {} failed, {} skipped",
-            count("Pass"),
-            count("Fail"),
-            count("Skip")
-        );
+        0
     }
-    if failures.is_empty() { 0 } else { 1 }
 }
 
-/// Appends a child's `results.csv` and `errors.csv` rows to this run's.
-fn merge_part(
-    dir: &Path,
-    rows: &mut Vec<(String, &'static str, f64)>,
-    errors_csv: &mut String,
-    drivers: &mut String,
-) -> std::io::Result<()> {
-    let results = std::fs::read_to_string(dir.join("results.csv"))?;
-    for line in results.lines() {
-        let mut f = line.rsplitn(3, ',');
-        let (secs, status, test) = (
-            f.next().unwrap_or("0"),
-            f.next().unwrap_or(""),
-            f.next().unwrap_or(""),
-        );
-        let status: &'static str = match status {
-            "Pass" => "Pass",
-            "Skip" => "Skip",
-            "Crash" => "Crash",
-            _ => "Fail",
+fn usage(msg: &str) -> i32 {
+    eprintln!("error: {msg}\nusage: {USAGE}");
+    125
+}
+
+fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let bad = || format!("--shard takes I/N with 0 ≤ I < N, got {s:?}");
+    let (i, n) = s.split_once('/').ok_or_else(bad)?;
+    let (i, n): (usize, usize) = (i.parse().map_err(|_| bad())?, n.parse().map_err(|_| bad())?);
+    if n == 0 || i >= n {
+        return Err(bad());
+    }
+    Ok((i, n))
+}
+
+fn first_line(s: &str) -> &str {
+    s.lines().next().unwrap_or("")
+}
+
+type Done = Mutex<(Vec<RunResult>, String, usize, usize)>;
+
+/// Runs one backend's runs in its workers.
+fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done, total: usize) {
+    let env = crate::registry::driver_env(backend).unwrap_or_default();
+    let mut env: Vec<(&str, &str)> = env;
+    if crate::fake::enabled() {
+        env.push(("UMBRA_FAKE_BACKENDS", "1"));
+    }
+    let start_worker = || Worker::start(backend, &env, settings.timeout);
+    let mut worker = start_worker();
+    let hello = match &worker {
+        Ok(w) => w.hello.clone(),
+        Err(e) => serde_json::json!({ "unavailable": e }),
+    };
+    let driver_line = match (hello.get("ready"), hello.get("unavailable")) {
+        (Some(r), _) => format!(
+            "{backend}: {} | {} | {} | {}\n",
+            r["vendor"].as_str().unwrap_or(""),
+            r["renderer"].as_str().unwrap_or(""),
+            r["version"].as_str().unwrap_or(""),
+            r["extensions"]
+                .as_array()
+                .map(|v| v
+                    .iter()
+                    .filter_map(|x| x.as_str())
+                    .collect::<Vec<_>>()
+                    .join(" "))
+                .unwrap_or_default()
+        ),
+        (_, Some(u)) => format!("{backend}: unavailable: {}\n", u.as_str().unwrap_or("")),
+        _ => format!("{backend}: said {hello}\n"),
+    };
+    let unavailable = hello
+        .get("unavailable")
+        .and_then(|u| u.as_str())
+        .map(str::to_string);
+    if let Ok(mut d) = done.lock() {
+        d.1.push_str(&driver_line);
+    }
+    for p in runs {
+        let name = p.name();
+        let t0 = Instant::now();
+        let (raw, reason, metrics, details) = match &unavailable {
+            Some(why) => (Status::Skip(why.clone()), why.clone(), None, String::new()),
+            None => {
+                let req = Request {
+                    file: p.file.clone(),
+                    index: p.index,
+                    failures: Some(settings.failures.clone()),
+                };
+                let first = attempt(&mut worker, &start_worker, &req, settings.timeout);
+                if first.0.is_failure() {
+                    // Rerun once: a different answer is a flake.
+                    let second = attempt(&mut worker, &start_worker, &req, settings.timeout);
+                    if second.0 == Status::Pass {
+                        let why =
+                            format!("failed first ({}: {}), passed on rerun", first.0, first.1);
+                        (Status::Flake, why, second.2, second.3)
+                    } else {
+                        first
+                    }
+                } else {
+                    first
+                }
+            }
         };
-        rows.push((test.to_string(), status, secs.parse().unwrap_or(0.0)));
+        let (status, expected) = settings.expectations.apply(&name, raw);
+        let reason = match (&status, expected) {
+            (Status::ExpectedFail | Status::UnexpectedPass, Some(why)) => {
+                format!("expected: {why}; got: {reason}")
+            }
+            (_, Some(why)) => format!("{reason} (expectation: {why})"),
+            (_, None) => reason,
+        };
+        let result = RunResult {
+            name: name.clone(),
+            backend: p.backend.clone(),
+            case: p.id.clone(),
+            status,
+            reason,
+            metrics,
+            time_s: t0.elapsed().as_secs_f64(),
+            reproduce: format!(
+                "cargo run --bin umbra -- render {} --backend {} --point '{}'",
+                p.file.display(),
+                p.backend,
+                p.id
+            ),
+            details,
+        };
+        if let Ok(mut d) = done.lock() {
+            d.3 += 1;
+            let r = &result;
+            let mut line = format!(
+                "[{}/{total}] {} {} ({:.0} ms)",
+                d.3,
+                r.status,
+                r.name,
+                r.time_s * 1e3
+            );
+            if !matches!(r.status, Status::Pass) && !r.reason.is_empty() {
+                let _ = write!(line, ": {}", first_line(&r.reason));
+            }
+            println!("{line}");
+            if settings.verbose && !r.details.is_empty() {
+                println!("{}", r.details);
+            }
+            if unavailable.is_some() {
+                d.2 += 1;
+            }
+            d.0.push(result);
+        }
     }
-    if let Ok(d) = std::fs::read_to_string(dir.join("drivers.txt")) {
-        drivers.push_str(&d);
-    }
-    let errors = std::fs::read_to_string(dir.join("errors.csv"))?;
-    for line in errors.lines().skip(1) {
-        errors_csv.push_str(line);
-        errors_csv.push('\n');
-    }
-    Ok(())
 }
 
-fn write_reports(out: &Path, results: &str, errors: &str, drivers: &str) -> std::io::Result<()> {
+/// One attempt at a run, restarting the worker first if the last one died.
+fn attempt(
+    worker: &mut Result<Worker, String>,
+    start: &dyn Fn() -> Result<Worker, String>,
+    req: &Request,
+    limit: Duration,
+) -> (Status, String, Option<Metrics>, String) {
+    if worker.is_err() {
+        *worker = start();
+    }
+    let w = match worker {
+        Ok(w) => w,
+        Err(e) => {
+            return (
+                Status::Crash,
+                format!("no worker: {e}"),
+                None,
+                String::new(),
+            );
+        }
+    };
+    match w.run(req, limit) {
+        Reply::Report(r) => from_report(*r),
+        Reply::Crashed(how) => {
+            *worker = Err(how.clone());
+            (
+                Status::Crash,
+                format!("the worker died: {how}"),
+                None,
+                String::new(),
+            )
+        }
+        Reply::TimedOut => {
+            *worker = Err("timed out".into());
+            (
+                Status::Timeout,
+                format!(
+                    "no answer within {} s; the worker was killed",
+                    limit.as_secs()
+                ),
+                None,
+                String::new(),
+            )
+        }
+    }
+}
+
+fn from_report(r: RunReport) -> (Status, String, Option<Metrics>, String) {
+    let status = match r.outcome.as_str() {
+        "pass" => Status::Pass,
+        "skip" => Status::Skip(r.reason.clone()),
+        _ => Status::Fail,
+    };
+    (status, r.reason, r.metrics, r.details)
+}
+
+fn write_reports(
+    out: &Path,
+    results: &[RunResult],
+    drivers: &str,
+    wall: Duration,
+) -> std::io::Result<()> {
+    let mut csv = String::new();
+    let mut failures = String::new();
+    let mut errors = String::from(
+        "test,status,judged,false_shadow,false_light,interior_judged,interior_false_shadow,interior_false_light,edge_px,silhouette,faces_away,outside,agreement,illegal,shadow_ms,lit_ms,total_ms,clock\n",
+    );
+    for r in results {
+        let _ = writeln!(csv, "{},{},{:.3}", r.name, r.status, r.time_s);
+        if r.status.is_regression() {
+            let _ = writeln!(failures, "{},{}", r.name, r.status);
+        }
+        if let Some(m) = &r.metrics {
+            let _ = writeln!(
+                errors,
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{}",
+                r.name,
+                r.status,
+                m.judged,
+                m.false_shadow,
+                m.false_light,
+                m.interior_judged,
+                m.interior_false_shadow,
+                m.interior_false_light,
+                m.edge_px,
+                m.silhouette,
+                m.faces_away,
+                m.outside,
+                m.agreement.map(|a| format!("{a:.6}")).unwrap_or_default(),
+                m.illegal.map(|a| a.to_string()).unwrap_or_default(),
+                m.shadow_ms,
+                m.lit_ms,
+                m.total_ms,
+                m.clock
+            );
+        }
+    }
+    let report = serde_json::json!({
+        "schema": 1,
+        "wall_s": wall.as_secs_f64(),
+        "command": std::env::args().collect::<Vec<_>>().join(" "),
+        "runs": results,
+    });
+    let junit = junit(results);
     let stamp = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_secs())
         .unwrap_or(0);
     for dir in [out.join("latest"), out.join("runs").join(stamp.to_string())] {
         std::fs::create_dir_all(&dir)?;
-        std::fs::write(dir.join("results.csv"), results)?;
-        std::fs::write(dir.join("errors.csv"), errors)?;
+        std::fs::write(dir.join("results.csv"), &csv)?;
+        std::fs::write(dir.join("failures.csv"), &failures)?;
+        std::fs::write(dir.join("errors.csv"), &errors)?;
         std::fs::write(dir.join("drivers.txt"), drivers)?;
+        std::fs::write(
+            dir.join("report.json"),
+            serde_json::to_string_pretty(&report).unwrap_or_default(),
+        )?;
+        std::fs::write(dir.join("junit.xml"), &junit)?;
     }
     Ok(())
+}
+
+fn xml(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+fn junit(results: &[RunResult]) -> String {
+    let failures = results.iter().filter(|r| r.status.is_regression()).count();
+    let skipped = results
+        .iter()
+        .filter(|r| matches!(r.status, Status::Skip(_)))
+        .count();
+    let time: f64 = results.iter().map(|r| r.time_s).sum();
+    let mut s = format!(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites>\n<testsuite name=\"umbra conformance\" tests=\"{}\" failures=\"{failures}\" skipped=\"{skipped}\" time=\"{time:.3}\">\n",
+        results.len()
+    );
+    for r in results {
+        let _ = write!(
+            s,
+            "  <testcase classname=\"{}\" name=\"{}\" time=\"{:.3}\">",
+            xml(&r.backend),
+            xml(&r.case),
+            r.time_s
+        );
+        match &r.status {
+            st if st.is_regression() => {
+                let _ = write!(
+                    s,
+                    "<failure type=\"{}\" message=\"{}\">{}</failure>",
+                    st,
+                    xml(first_line(&r.reason)),
+                    xml(&r.reproduce)
+                );
+            }
+            Status::Skip(why) => {
+                let _ = write!(s, "<skipped message=\"{}\"/>", xml(why));
+            }
+            _ => {}
+        }
+        s.push_str("</testcase>\n");
+    }
+    s.push_str("</testsuite>\n</testsuites>\n");
+    s
 }

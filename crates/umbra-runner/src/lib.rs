@@ -8,7 +8,11 @@
 pub mod args;
 pub mod child;
 pub mod conformance;
+pub mod fake;
 pub mod glob;
+pub mod pool;
 pub mod registry;
 pub mod render_cmd;
 pub mod run;
+pub mod status;
+pub mod worker;

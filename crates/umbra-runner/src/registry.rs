@@ -7,6 +7,12 @@
 
 use umbra_case::Backend;
 
+/// Whether `id` names a backend of this build (fake ones only where enabled).
+pub fn is_known(id: &str) -> bool {
+    known().iter().any(|k| k == id)
+        || (crate::fake::enabled() && crate::fake::Fake::new(id).is_some())
+}
+
 /// Every backend id this build knows, in report order.
 pub fn known() -> Vec<String> {
     let mut ids = vec!["ref".to_string()];
@@ -43,6 +49,11 @@ pub fn hostable_here(id: &str) -> bool {
 pub fn create(id: &str) -> Result<Box<dyn Backend>, CreateError> {
     if id == "ref" {
         return Ok(Box::new(umbra_ref::RefBackend));
+    }
+    if crate::fake::enabled() {
+        if let Some(f) = crate::fake::Fake::new(id) {
+            return Ok(Box::new(f));
+        }
     }
     if let Some(kind) = umbra_wgpu::Kind::parse(id) {
         return umbra_wgpu::WgpuBackend::new(kind)

@@ -1,0 +1,122 @@
+//! The parent's side of the workers: one worker process per backend (with the driver's
+//! environment), fed one run at a time; a per-run timeout; a dead or hung worker costs its
+//! run (Crash or Timeout) and a fresh worker takes the rest.
+
+use std::io::{BufRead, BufReader, Write};
+use std::process::{Child, ChildStdin, Command, Stdio};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
+use std::time::Duration;
+
+use crate::worker::{Request, RunReport};
+
+/// What a worker answered for one run.
+pub enum Reply {
+    /// A report.
+    Report(Box<RunReport>),
+    /// The worker died (the reason names the exit status).
+    Crashed(String),
+    /// No answer within the limit.
+    TimedOut,
+}
+
+/// A live worker.
+pub struct Worker {
+    child: Child,
+    stdin: ChildStdin,
+    lines: Receiver<String>,
+    /// What the worker said when it started: driver info, or why it cannot run.
+    pub hello: serde_json::Value,
+}
+
+impl Worker {
+    /// Starts `umbra worker --backend id` with `env`; waits up to `limit` for its hello.
+    pub fn start(id: &str, env: &[(&str, &str)], limit: Duration) -> Result<Worker, String> {
+        let exe =
+            std::env::current_exe().map_err(|e| format!("cannot find this executable: {e}"))?;
+        let mut cmd = Command::new(exe);
+        cmd.args(["worker", "--backend", id])
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit());
+        for (k, v) in env {
+            cmd.env(k, v);
+        }
+        let mut child = cmd
+            .spawn()
+            .map_err(|e| format!("cannot start a worker: {e}"))?;
+        let stdin = child.stdin.take().ok_or("worker has no stdin")?;
+        let stdout = child.stdout.take().ok_or("worker has no stdout")?;
+        let (tx, rx) = channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines() {
+                let Ok(line) = line else { break };
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        let mut w = Worker {
+            child,
+            stdin,
+            lines: rx,
+            hello: serde_json::Value::Null,
+        };
+        match w.lines.recv_timeout(limit) {
+            Ok(line) => {
+                w.hello = serde_json::from_str(&line)
+                    .map_err(|e| format!("worker said {line:?}: {e}"))?;
+                Ok(w)
+            }
+            Err(_) => {
+                let status = w.stop();
+                Err(format!("the worker for {id} did not start ({status})"))
+            }
+        }
+    }
+
+    /// Runs one request.
+    pub fn run(&mut self, req: &Request, limit: Duration) -> Reply {
+        let line = serde_json::to_string(req).unwrap_or_default();
+        if writeln!(self.stdin, "{line}")
+            .and_then(|_| self.stdin.flush())
+            .is_err()
+        {
+            return Reply::Crashed(self.stop());
+        }
+        match self.lines.recv_timeout(limit) {
+            Ok(line) => match serde_json::from_str(&line) {
+                Ok(r) => Reply::Report(Box::new(r)),
+                Err(e) => Reply::Crashed(format!("unreadable answer {line:?}: {e}")),
+            },
+            Err(RecvTimeoutError::Timeout) => {
+                self.stop();
+                Reply::TimedOut
+            }
+            Err(RecvTimeoutError::Disconnected) => Reply::Crashed(self.stop()),
+        }
+    }
+
+    /// Kills the worker (if alive) and says how it ended.
+    pub fn stop(&mut self) -> String {
+        if let Ok(Some(status)) = self.child.try_wait() {
+            return status.to_string();
+        }
+        // Give a dying worker a moment to be reaped, then kill it.
+        std::thread::sleep(Duration::from_millis(50));
+        if let Ok(Some(status)) = self.child.try_wait() {
+            return status.to_string();
+        }
+        let _ = self.child.kill();
+        self.child
+            .wait()
+            .map(|s| s.to_string())
+            .unwrap_or_else(|e| e.to_string())
+    }
+}
+
+impl Drop for Worker {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}

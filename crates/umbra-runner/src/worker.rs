@@ -1,0 +1,210 @@
+//! `umbra worker --backend ID`: one backend in one process, fed runs on stdin.
+//!
+//! Protocol, one JSON object per line:
+//! - worker → parent, once: `{"ready": DriverInfo}` or `{"unavailable": "reason"}`;
+//! - parent → worker: `{"file": "cases/x.json", "index": 3, "failures": "target/umbra/..."}`;
+//! - worker → parent: a [`RunReport`].
+//!
+//! The context or device is created once and reused. The parent owns timeouts and crashes: a
+//! worker that stops answering is killed, one that dies is noticed at end of input, and a
+//! fresh worker takes the remaining runs.
+
+use std::io::{BufRead, Write};
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+
+use crate::run::{Outcome, describe, run_point};
+
+/// A request for one run.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Request {
+    /// The case file.
+    pub file: PathBuf,
+    /// The sweep point's index in the file's expansion.
+    pub index: usize,
+    /// Where to write the pictures of a failing run (none: do not write).
+    pub failures: Option<PathBuf>,
+}
+
+/// What one run produced (the raw outcome; expectations are the parent's business).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct RunReport {
+    /// `pass`, `fail`, `skip`.
+    pub outcome: String,
+    /// Why, for fail and skip.
+    pub reason: String,
+    /// The multi-line description of a judged run.
+    pub details: String,
+    /// Error figures and timings of a judged run.
+    pub metrics: Option<Metrics>,
+}
+
+/// The figures of one judged run.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Metrics {
+    /// Judged pixels.
+    pub judged: u64,
+    /// False shadow, all judged pixels.
+    pub false_shadow: u64,
+    /// False light, all judged pixels.
+    pub false_light: u64,
+    /// Judged pixels away from edges.
+    pub interior_judged: u64,
+    /// False shadow away from edges.
+    pub interior_false_shadow: u64,
+    /// False light away from edges.
+    pub interior_false_light: u64,
+    /// Edge pixels.
+    pub edge_px: u64,
+    /// Silhouette pixels.
+    pub silhouette: u64,
+    /// Pixels facing away from the light.
+    pub faces_away: u64,
+    /// Pixels outside the light's frustum.
+    pub outside: u64,
+    /// Agreement with the reference: share of compared pixels with the same answer.
+    pub agreement: Option<f64>,
+    /// Illegal disagreements with the reference.
+    pub illegal: Option<u64>,
+    /// Shadow pass, ms.
+    pub shadow_ms: f64,
+    /// Lit pass, ms.
+    pub lit_ms: f64,
+    /// Whole render, ms.
+    pub total_ms: f64,
+    /// `gpu` or `cpu-wall`.
+    pub clock: String,
+}
+
+/// Runs the worker loop; returns the exit code.
+pub fn main(argv: &[String]) -> i32 {
+    let args = match crate::args::Args::parse(argv, &["backend"], &[]) {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
+    let Some(id) = args.value("backend") else {
+        eprintln!("error: umbra worker needs --backend ID");
+        return 2;
+    };
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    let mut backend = match crate::registry::create(id) {
+        Ok(b) => {
+            let i = b.info();
+            let hello = serde_json::json!({ "ready": { "vendor": i.vendor, "renderer": i.renderer, "version": i.version, "extensions": i.extensions } });
+            let _ = writeln!(out, "{hello}");
+            let _ = out.flush();
+            b
+        }
+        Err(e) => {
+            let _ = writeln!(
+                out,
+                "{}",
+                serde_json::json!({ "unavailable": e.to_string() })
+            );
+            return 0;
+        }
+    };
+    for line in std::io::stdin().lock().lines() {
+        let Ok(line) = line else { break };
+        let report = match serde_json::from_str::<Request>(&line) {
+            Ok(req) => handle(backend.as_mut(), &req),
+            Err(e) => RunReport {
+                outcome: "fail".into(),
+                reason: format!("bad request: {e}"),
+                ..Default::default()
+            },
+        };
+        let _ = writeln!(
+            out,
+            "{}",
+            serde_json::to_string(&report).unwrap_or_default()
+        );
+        let _ = out.flush();
+    }
+    0
+}
+
+fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
+    let points = match umbra_case::load_file(&req.file) {
+        Ok(p) => p,
+        Err(e) => {
+            return RunReport {
+                outcome: "fail".into(),
+                reason: e.to_string(),
+                ..Default::default()
+            };
+        }
+    };
+    let Some(point) = points.into_iter().nth(req.index) else {
+        return RunReport {
+            outcome: "fail".into(),
+            reason: format!("{} has no sweep point {}", req.file.display(), req.index),
+            ..Default::default()
+        };
+    };
+    let name = format!("{}/{}", backend.id(), point.id());
+    match run_point(backend, point) {
+        Outcome::Skip(why) => RunReport {
+            outcome: "skip".into(),
+            reason: why,
+            ..Default::default()
+        },
+        Outcome::Error(e) => RunReport {
+            outcome: "fail".into(),
+            reason: e,
+            ..Default::default()
+        },
+        Outcome::Done(j) => {
+            let e = &j.error;
+            let t = &j.frame.timings;
+            let metrics = Metrics {
+                judged: e.all.judged,
+                false_shadow: e.all.false_shadow,
+                false_light: e.all.false_light,
+                interior_judged: e.away_from_edges.judged,
+                interior_false_shadow: e.away_from_edges.false_shadow,
+                interior_false_light: e.away_from_edges.false_light,
+                edge_px: e.edge_pixels,
+                silhouette: e.silhouette,
+                faces_away: e.faces_away,
+                outside: e.outside,
+                agreement: j.agreement.as_ref().map(|a| {
+                    if a.compared == 0 {
+                        1.0
+                    } else {
+                        1.0 - a.differ as f64 / a.compared as f64
+                    }
+                }),
+                illegal: j.agreement.as_ref().map(|a| a.illegal),
+                shadow_ms: t.shadow_pass.as_secs_f64() * 1e3,
+                lit_ms: t.lit_pass.as_secs_f64() * 1e3,
+                total_ms: t.total.as_secs_f64() * 1e3,
+                clock: if t.clock == Some(umbra_case::Clock::Gpu) {
+                    "gpu".into()
+                } else {
+                    "cpu-wall".into()
+                },
+            };
+            let failed = !j.problems.is_empty();
+            if failed {
+                if let Some(dir) = &req.failures {
+                    let _ = crate::render_cmd::write_images(
+                        &dir.join(crate::render_cmd::file_name(&name)),
+                        &j,
+                    );
+                }
+            }
+            RunReport {
+                outcome: if failed { "fail".into() } else { "pass".into() },
+                reason: j.problems.join("; "),
+                details: describe(&j),
+                metrics: Some(metrics),
+            }
+        }
+    }
+}

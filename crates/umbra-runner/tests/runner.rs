@@ -1,0 +1,203 @@
+//! The conformance runner against backends that misbehave on purpose (crash, hang, flake,
+//! render wrong; `UMBRA_FAKE_BACKENDS=1` enables them): each gets the right status, the run
+//! completes and reports, expectations turn known failures into ExpectedFail and a pass of a
+//! known failure into UnexpectedPass, and shards split a run exactly.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn umbra(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_umbra"))
+        .args(args)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
+        .env("UMBRA_FAKE_BACKENDS", "1")
+        .output()
+        .expect("run umbra")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("umbra-runner-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    dir
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+#[test]
+fn crash_hang_flake_and_wrong_each_get_their_status_and_the_run_completes() {
+    let out = scratch("fakes");
+    let no_expectations = scratch("fakes-exp");
+    let o = umbra(&[
+        "conformance",
+        "--backend",
+        "fake/crash",
+        "--backend",
+        "fake/hang",
+        "--backend",
+        "fake/flaky",
+        "--backend",
+        "fake/wrong",
+        "--backend",
+        "ref",
+        "--filter",
+        "square*",
+        "--timeout",
+        "3",
+        "--out",
+        out.to_str().unwrap_or_default(),
+        "--expectations",
+        no_expectations.to_str().unwrap_or_default(),
+    ]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    let results = std::fs::read_to_string(out.join("latest/results.csv")).expect("results.csv");
+    for (name, status) in [
+        ("fake/crash/square-occluder", "Crash"),
+        ("fake/hang/square-occluder", "Timeout"),
+        ("fake/flaky/square-occluder", "Flake"),
+        ("fake/wrong/square-occluder", "Fail"),
+        ("ref/square-occluder", "Pass"),
+    ] {
+        assert!(
+            results.contains(&format!("{name},{status},")),
+            "{name} should be {status}:\n{results}"
+        );
+    }
+    let failures = std::fs::read_to_string(out.join("latest/failures.csv")).expect("failures.csv");
+    assert_eq!(
+        failures.lines().count(),
+        3,
+        "crash, timeout and fail are regressions; a flake is not:\n{failures}"
+    );
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("latest/report.json")).expect("report.json"),
+    )
+    .expect("json");
+    let runs = report["runs"].as_array().expect("runs");
+    assert_eq!(runs.len(), 5);
+    let wrong = runs
+        .iter()
+        .find(|r| r["name"] == "fake/wrong/square-occluder")
+        .expect("wrong run");
+    assert!(
+        wrong["metrics"]["illegal"].as_u64().unwrap_or(0) > 10_000,
+        "{wrong}"
+    );
+    assert!(
+        wrong["reproduce"]
+            .as_str()
+            .unwrap_or("")
+            .contains("--backend fake/wrong"),
+        "{wrong}"
+    );
+    let junit = std::fs::read_to_string(out.join("latest/junit.xml")).expect("junit.xml");
+    assert!(junit.contains("tests=\"5\" failures=\"3\""), "{junit}");
+    assert!(
+        out.join("latest/failures/fake_wrong_square-occluder/error.png")
+            .is_file(),
+        "failure pictures"
+    );
+    assert!(
+        t.contains("conformance: 2 passed, 3 failed, 0 skipped"),
+        "{t}"
+    );
+}
+
+#[test]
+fn expectations_make_known_failures_expected_and_their_passes_unexpected() {
+    let exp = scratch("exp");
+    std::fs::write(
+        exp.join("fake.txt"),
+        "# known bad\nfake/wrong/*,Fail,inverts every shadow on purpose\n",
+    )
+    .expect("write");
+    let out = scratch("exp-out");
+    let o = umbra(&[
+        "conformance",
+        "--backend",
+        "fake/wrong",
+        "--filter",
+        "square*",
+        "--expectations",
+        exp.to_str().unwrap_or_default(),
+        "--out",
+        out.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(
+        text(&o).contains("ExpectedFail fake/wrong/square-occluder"),
+        "{}",
+        text(&o)
+    );
+
+    std::fs::write(
+        exp.join("fake.txt"),
+        "ref/square*,Fail,pretend the reference is broken\n",
+    )
+    .expect("write");
+    let o = umbra(&[
+        "conformance",
+        "--backend",
+        "ref",
+        "--filter",
+        "square*",
+        "--expectations",
+        exp.to_str().unwrap_or_default(),
+        "--out",
+        out.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "an unexpected pass fails until the baseline is updated: {}",
+        text(&o)
+    );
+    assert!(
+        text(&o).contains("UnexpectedPass ref/square-occluder"),
+        "{}",
+        text(&o)
+    );
+}
+
+#[test]
+fn shards_split_a_run_exactly() {
+    let mut all = Vec::new();
+    for shard in ["0/3", "1/3", "2/3"] {
+        let out = scratch(&format!("shard{}", &shard[..1]));
+        let o = umbra(&[
+            "conformance",
+            "--backend",
+            "ref",
+            "--filter",
+            "packed*",
+            "--shard",
+            shard,
+            "--out",
+            out.to_str().unwrap_or_default(),
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+        let results = std::fs::read_to_string(out.join("latest/results.csv")).expect("results.csv");
+        all.extend(
+            results
+                .lines()
+                .map(|l| l.split(',').next().unwrap_or("").to_string()),
+        );
+    }
+    let n = all.len();
+    all.sort();
+    all.dedup();
+    assert_eq!(
+        (n, all.len()),
+        (16, 16),
+        "three shards cover the 16 points once each"
+    );
+    let o = umbra(&["conformance", "--shard", "3/3"]);
+    assert_eq!(o.status.code(), Some(125), "{}", text(&o));
+}
