@@ -12,8 +12,8 @@
 //! - Statuses and expectations: [`crate::status`]. A case file that cannot be loaded fails the
 //!   run under its own name.
 //! - Reports in `OUT/latest/` and `OUT/runs/<unix time>/`: `results.csv` and `failures.csv`
-//!   (deqp-runner's formats), `junit.xml`, `report.json`, `errors.csv`, `drivers.txt`, and the
-//!   pictures of each failure under `failures/`.
+//!   (deqp-runner's formats), `junit.xml`, `report.json`, `report.html` (self-contained),
+//!   `errors.csv`, `drivers.txt`, and the pictures of each failure under `failures/`.
 //! - Exit codes: 0 all as expected, 1 a regression (Fail, Crash, Timeout, UnexpectedPass),
 //!   125 nothing could run (no case, no available backend, bad arguments or expectations), so
 //!   `git bisect run cargo xtask conformance --filter X` works.
@@ -530,6 +530,14 @@ fn write_reports(
         "runs": results,
     });
     let junit = junit(results);
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let html = crate::html::report(
+        results,
+        drivers,
+        &out.join("latest").join("failures"),
+        &command,
+        wall.as_secs_f64(),
+    );
     let stamp = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_secs())
@@ -545,6 +553,7 @@ fn write_reports(
             serde_json::to_string_pretty(&report).unwrap_or_default(),
         )?;
         std::fs::write(dir.join("junit.xml"), &junit)?;
+        std::fs::write(dir.join("report.html"), &html)?;
     }
     Ok(())
 }

@@ -134,6 +134,15 @@ pub fn write_images(dir: &Path, j: &crate::run::Judged) -> Result<(), Box<dyn st
         .save_png(&dir.join("visibility.png"))?;
     heatmap::truth_map(&j.truth).save_png(&dir.join("truth.png"))?;
     heatmap::truth_error_map(&j.error, &j.truth).save_png(&dir.join("error.png"))?;
+    if let Some(r) = &j.reference {
+        image::save_buffer(
+            dir.join("reference.png"),
+            &r.color,
+            r.width,
+            r.height,
+            image::ColorType::Rgba8,
+        )?;
+    }
     if let Some(m) = &f.shadow_map {
         // Layers stacked top to bottom (cube faces +x, −x, +y, −y, +z, −z).
         heatmap::depth_map(&m.values, m.width, m.height * m.layers)

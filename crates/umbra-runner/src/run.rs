@@ -23,6 +23,10 @@ pub struct Judged {
     pub error: TruthError,
     /// Agreement with the reference (None for the reference itself).
     pub agreement: Option<RefAgreement>,
+    /// SSIM of the colour against the reference's (None for the reference itself).
+    pub ssim: Option<f64>,
+    /// The reference frame it was judged against (None for the reference itself).
+    pub reference: Option<Frame>,
     /// Time spent judging (truth, reference, error).
     pub judge_time: Duration,
     /// Problems with the result (empty = as expected).
@@ -61,10 +65,15 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
     let truth = ground_truth(&prepared);
     let error = umbra_compare::truth_error(&frame, &truth);
     let mut problems = Vec::new();
-    let agreement = (backend.id().0 != "ref").then(|| {
-        let (reference, ambiguity) = umbra_ref::render_judged(&prepared, ClipDepth::MinusOneToOne);
-        umbra_compare::reference::judge(&reference, &ambiguity, &frame, &truth)
+    let judged_reference = (backend.id().0 != "ref")
+        .then(|| umbra_ref::render_judged(&prepared, ClipDepth::MinusOneToOne));
+    let agreement = judged_reference.as_ref().map(|(reference, ambiguity)| {
+        umbra_compare::reference::judge(reference, ambiguity, &frame, &truth)
     });
+    let ssim = judged_reference
+        .as_ref()
+        .and_then(|(reference, _)| umbra_compare::ssim(reference, &frame));
+    let reference = judged_reference.map(|(r, _)| r);
     if let Some(a) = &agreement {
         if a.illegal > 0 && prepared.case().expect.backends_agree {
             problems.push(format!(
@@ -96,6 +105,8 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
         truth,
         error,
         agreement,
+        ssim,
+        reference,
         judge_time,
         problems,
     }))
@@ -137,8 +148,8 @@ pub fn describe(j: &Judged) -> String {
     );
     if let Some(a) = &j.agreement {
         s.push_str(&format!(
-            "  vs reference: {} of {} px differ (legal: {} ties, {} texel/filter, {} edges, {} unjudged; {} illegal)\n",
-            a.differ, a.compared, a.legal_tie, a.legal_texel, a.legal_edge, a.legal_unjudged, a.illegal
+            "  vs reference: {} of {} px differ (legal: {} ties, {} texel/filter, {} edges, {} unjudged; {} illegal); colour SSIM {:.5}\n",
+            a.differ, a.compared, a.legal_tie, a.legal_texel, a.legal_edge, a.legal_unjudged, a.illegal, j.ssim.unwrap_or(f64::NAN)
         ));
     }
     s.push_str(&format!(

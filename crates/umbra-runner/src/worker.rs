@@ -67,6 +67,8 @@ pub struct Metrics {
     pub agreement: Option<f64>,
     /// Illegal disagreements with the reference.
     pub illegal: Option<u64>,
+    /// SSIM of the colour against the reference's.
+    pub ssim: Option<f64>,
     /// Shadow pass, ms.
     pub shadow_ms: f64,
     /// Lit pass, ms.
@@ -181,6 +183,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                     }
                 }),
                 illegal: j.agreement.as_ref().map(|a| a.illegal),
+                ssim: j.ssim,
                 shadow_ms: t.shadow_pass.as_secs_f64() * 1e3,
                 lit_ms: t.lit_pass.as_secs_f64() * 1e3,
                 total_ms: t.total.as_secs_f64() * 1e3,

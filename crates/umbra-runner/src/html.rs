@@ -1,0 +1,181 @@
+//! `report.html`: one self-contained page (images inlined as data URIs) for a person at a
+//! desk or a CI artifact viewer: the summary, the drivers, every failure with its reference |
+//! backend | truth | heat-map pictures side by side and the command that reproduces it, and a
+//! table of every run with its error, agreement, SSIM and time.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::conformance::RunResult;
+use crate::status::Status;
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// Standard base64 (RFC 4648) of `bytes`.
+pub fn base64(bytes: &[u8]) -> String {
+    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for c in bytes.chunks(3) {
+        let n = (u32::from(c[0]) << 16)
+            | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
+            | u32::from(*c.get(2).unwrap_or(&0));
+        for k in 0..4 {
+            if k <= c.len() {
+                out.push(T[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+fn img(dir: &Path, file: &str, caption: &str) -> String {
+    match std::fs::read(dir.join(file)) {
+        Ok(bytes) => format!(
+            "<figure><img src=\"data:image/png;base64,{}\" alt=\"{caption}\"><figcaption>{caption}</figcaption></figure>",
+            base64(&bytes)
+        ),
+        Err(_) => format!(
+            "<figure class=\"missing\"><figcaption>{caption}: not written</figcaption></figure>"
+        ),
+    }
+}
+
+/// The page.
+pub fn report(
+    results: &[RunResult],
+    drivers: &str,
+    failures_dir: &Path,
+    command: &str,
+    wall_s: f64,
+) -> String {
+    let count = |n: &str| results.iter().filter(|r| r.status.name() == n).count();
+    let mut s = String::from(
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>umbra conformance</title><style>\
+         body{font:14px system-ui,sans-serif;margin:24px;color:#222}h1{margin:0 0 8px}code{background:#f3f3f3;padding:1px 4px}\
+         table{border-collapse:collapse}td,th{border:1px solid #ddd;padding:3px 6px;text-align:right}td:first-child{text-align:left}\
+         .Pass,.ExpectedFail{color:#176b1c}.Fail,.Crash,.Timeout,.UnexpectedPass{color:#b00020;font-weight:bold}.Skip{color:#777}.Flake{color:#b26a00}\
+         figure{display:inline-block;margin:4px}figure img{image-rendering:pixelated;max-width:320px;border:1px solid #ccc}\
+         .failure{border:1px solid #e0b4b4;background:#fff6f6;padding:8px;margin:12px 0}</style></head><body>",
+    );
+    let _ = write!(
+        s,
+        "<h1>umbra conformance</h1><p>{} runs in {wall_s:.1} s: {} pass, {} expected fail, {} flake, {} skip; \
+         <b>{} fail, {} crash, {} timeout, {} unexpected pass</b></p><p>command: <code>{}</code></p>",
+        results.len(),
+        count("Pass"),
+        count("ExpectedFail"),
+        count("Flake"),
+        count("Skip"),
+        count("Fail"),
+        count("Crash"),
+        count("Timeout"),
+        count("UnexpectedPass"),
+        esc(command)
+    );
+    s.push_str("<h2>Drivers</h2><table><tr><th>backend</th><th>vendor | renderer | version | extensions</th></tr>");
+    for line in drivers.lines() {
+        let (b, rest) = line.split_once(": ").unwrap_or((line, ""));
+        let _ = write!(
+            s,
+            "<tr><td>{}</td><td style=\"text-align:left\">{}</td></tr>",
+            esc(b),
+            esc(rest)
+        );
+    }
+    s.push_str("</table><h2>Failures</h2>");
+    let failing: Vec<&RunResult> = results
+        .iter()
+        .filter(|r| r.status.is_regression() || r.status == Status::Flake)
+        .collect();
+    if failing.is_empty() {
+        s.push_str("<p>None.</p>");
+    }
+    for r in failing {
+        let dir = failures_dir.join(crate::render_cmd::file_name(&r.name));
+        let _ = write!(
+            s,
+            "<div class=\"failure\"><h3><span class=\"{}\">{}</span> {}</h3><p>{}</p><p>reproduce: <code>{}</code></p>{}{}{}{}{}</div>",
+            r.status.name(),
+            r.status,
+            esc(&r.name),
+            esc(&r.reason),
+            esc(&r.reproduce),
+            img(&dir, "reference.png", "reference"),
+            img(&dir, "color.png", "backend"),
+            img(&dir, "visibility.png", "backend visibility"),
+            img(
+                &dir,
+                "truth.png",
+                "truth (white lit, grey shadowed, blue tint: edge)"
+            ),
+            img(
+                &dir,
+                "error.png",
+                "heat map (red acne, blue leak, orange/light blue on edges)"
+            ),
+        );
+    }
+    s.push_str(
+        "<h2>All runs</h2><table><tr><th>run</th><th>status</th><th>false shadow</th><th>false light</th>\
+         <th>interior fs/fl</th><th>agreement</th><th>illegal</th><th>SSIM</th><th>render ms</th><th>clock</th></tr>",
+    );
+    for r in results {
+        let m = r.metrics.as_ref();
+        let pct = |n: u64, d: u64| {
+            if d == 0 {
+                "0".to_string()
+            } else {
+                format!("{:.3}%", 100.0 * n as f64 / d as f64)
+            }
+        };
+        let _ = write!(
+            s,
+            "<tr><td>{}</td><td class=\"{}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            esc(&r.name),
+            r.status.name(),
+            r.status,
+            m.map(|m| pct(m.false_shadow, m.judged)).unwrap_or_default(),
+            m.map(|m| pct(m.false_light, m.judged)).unwrap_or_default(),
+            m.map(|m| format!("{}/{}", m.interior_false_shadow, m.interior_false_light))
+                .unwrap_or_default(),
+            m.and_then(|m| m.agreement)
+                .map(|a| format!("{a:.5}"))
+                .unwrap_or_default(),
+            m.and_then(|m| m.illegal)
+                .map(|a| a.to_string())
+                .unwrap_or_default(),
+            m.and_then(|m| m.ssim)
+                .map(|a| format!("{a:.5}"))
+                .unwrap_or_default(),
+            m.map(|m| format!("{:.1}", m.total_ms)).unwrap_or_default(),
+            m.map(|m| m.clock.clone()).unwrap_or_default(),
+        );
+    }
+    s.push_str("</table></body></html>\n");
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn base64_matches_rfc_4648_vectors() {
+        for (i, o) in [
+            ("", ""),
+            ("f", "Zg=="),
+            ("fo", "Zm8="),
+            ("foo", "Zm9v"),
+            ("foob", "Zm9vYg=="),
+            ("fooba", "Zm9vYmE="),
+            ("foobar", "Zm9vYmFy"),
+        ] {
+            assert_eq!(super::base64(i.as_bytes()), o);
+        }
+    }
+}
