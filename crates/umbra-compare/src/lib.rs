@@ -269,6 +269,27 @@ pub fn agreement(a: &Frame, b: &Frame, radius: u32) -> Agreement {
     g
 }
 
+/// SSIM of two frames' shaded colour (image-compare's MSSIMSimple on luma, 8x8 windows):
+/// 1.0 means identical. NUMERICS.md: a 3-pixel shift of a shadowed scene scores about 0.96,
+/// so only values very close to 1 mean "the same picture". Reported, not thresholded here.
+pub fn ssim(a: &Frame, b: &Frame) -> Option<f64> {
+    let luma = |f: &Frame| {
+        let data = f
+            .color
+            .chunks_exact(4)
+            .map(|p| {
+                (0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2]))
+                    .round() as u8
+            })
+            .collect();
+        image::GrayImage::from_raw(f.width, f.height, data)
+    };
+    let (la, lb) = (luma(a)?, luma(b)?);
+    image_compare::gray_similarity_structure(&image_compare::Algorithm::MSSIMSimple, &la, &lb)
+        .ok()
+        .map(|s| s.score)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -321,25 +342,4 @@ mod tests {
         assert_eq!((shifted.within_radius, shifted.only_a_shadowed), (1, 1));
         assert!(shifted.disagrees[17] && !shifted.disagrees[1]);
     }
-}
-
-/// SSIM of two frames' shaded colour (image-compare's MSSIMSimple on luma, 8x8 windows):
-/// 1.0 means identical. NUMERICS.md: a 3-pixel shift of a shadowed scene scores about 0.96,
-/// so only values very close to 1 mean "the same picture". Reported, not thresholded here.
-pub fn ssim(a: &Frame, b: &Frame) -> Option<f64> {
-    let luma = |f: &Frame| {
-        let data = f
-            .color
-            .chunks_exact(4)
-            .map(|p| {
-                (0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2]))
-                    .round() as u8
-            })
-            .collect();
-        image::GrayImage::from_raw(f.width, f.height, data)
-    };
-    let (la, lb) = (luma(a)?, luma(b)?);
-    image_compare::gray_similarity_structure(&image_compare::Algorithm::MSSIMSimple, &la, &lb)
-        .ok()
-        .map(|s| s.score)
 }
