@@ -4,6 +4,9 @@
 //!   then runs `umbra conformance ARGS` and passes its exit code through (0 as expected,
 //!   1 regressions, 125 could not run), so `git bisect run cargo xtask conformance` works.
 //! - `cargo xtask test`: the same set-up, then the whole test suite and a conformance run.
+//! - `cargo xtask bless [ARGS]`: a conformance run that accepts every changed or new golden
+//!   (insta's `INSTA_UPDATE=always`), then lists what changed under `golden/` for review in
+//!   `git diff` before committing. Refused under `CI=true`: CI never writes a golden.
 
 mod mesa;
 
@@ -17,10 +20,12 @@ fn main() -> ExitCode {
             umbra(&["conformance"], &args[1..])
         }
         Some("test") => test(&args[1..]),
+        Some("bless") => bless(&args[1..]),
         _ => {
             eprintln!(
                 "usage:\n  cargo xtask conformance [--filter GLOB] [--backend ID]... [--verbose]\n  \
-                 cargo xtask test [-- CARGO TEST ARGS]"
+                 cargo xtask test [-- CARGO TEST ARGS]\n  \
+                 cargo xtask bless [--filter GLOB] [--backend ID]..."
             );
             2
         }
@@ -39,6 +44,39 @@ fn test(extra: &[String]) -> i32 {
     }
     // The main job on every case, as CI will run it.
     umbra(&["conformance"], &[])
+}
+
+fn bless(args: &[String]) -> i32 {
+    if std::env::var("CI").is_ok_and(|v| v == "true" || v == "1") {
+        eprintln!("error: CI=true: goldens change only through review, never in CI");
+        return 2;
+    }
+    mesa::ensure();
+    let mut cmd = cargo();
+    cmd.args([
+        "run",
+        "--quiet",
+        "--package",
+        "umbra-runner",
+        "--bin",
+        "umbra",
+        "--",
+        "conformance",
+    ]);
+    cmd.args(args).env("INSTA_UPDATE", "always");
+    let code = status(cmd);
+    let mut git = Command::new("git");
+    git.current_dir(workspace_root())
+        .args(["status", "--short", "--", "golden/"]);
+    match git.output() {
+        Ok(o) if o.stdout.is_empty() => println!("bless: no golden changed"),
+        Ok(o) => println!(
+            "bless: goldens changed (review with `git diff --stat golden/` before committing):\n{}",
+            String::from_utf8_lossy(&o.stdout)
+        ),
+        Err(e) => eprintln!("note: cannot list changes with git: {e}"),
+    }
+    code
 }
 
 /// Runs the `umbra` binary through cargo, so it is built with the workspace's profile.

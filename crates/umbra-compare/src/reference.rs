@@ -55,6 +55,21 @@ pub fn judge(reference: &Frame, ambiguity: &[u8], frame: &Frame, truth: &Truth) 
     classify(&agreement(reference, frame, 0), truth, ambiguity, &surface)
 }
 
+/// Per pixel: whether a shadow answer may legally differ from the reference's there (the
+/// legal classes of [`judge`]).
+pub fn legal_pixels(reference: &Frame, ambiguity: &[u8], truth: &Truth) -> Vec<bool> {
+    let surface = reference.surface.clone().unwrap_or_default();
+    (0..truth.class.len())
+        .map(|i| {
+            matches!(truth.class[i], Class::Background | Class::FacesAway)
+                || truth.face[i] == 0
+                || silhouette(truth, &surface, i)
+                || ambiguity[i] != 0
+                || truth.edge[i]
+        })
+        .collect()
+}
+
 /// Judges the disagreements of two backend frames `a` and `b` with the same rule: where both
 /// are within the specs' freedom of the reference, they may differ from each other only there.
 pub fn judge_pair(

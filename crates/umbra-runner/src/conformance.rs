@@ -32,7 +32,7 @@ use crate::status::{Expectations, Status};
 use crate::worker::{Metrics, Request, RunReport};
 
 /// Usage line.
-pub const USAGE: &str = "umbra conformance [--cases DIR] [--filter GLOB] [--backend ID]... [--shard I/N] [--jobs N] [--timeout SECS] [--expectations DIR] [--out DIR] [--verbose]";
+pub const USAGE: &str = "umbra conformance [--cases DIR] [--filter GLOB] [--backend ID]... [--shard I/N] [--jobs N] [--timeout SECS] [--expectations DIR] [--golden DIR|none] [--out DIR] [--verbose]";
 
 /// One planned run.
 #[derive(Clone, Debug)]
@@ -74,6 +74,7 @@ pub struct RunResult {
 
 struct Settings {
     timeout: Duration,
+    golden: Option<PathBuf>,
     failures: PathBuf,
     expectations: Expectations,
     verbose: bool,
@@ -92,6 +93,7 @@ pub fn main(argv: &[String]) -> i32 {
             "jobs",
             "timeout",
             "expectations",
+            "golden",
         ],
         &["verbose"],
     ) {
@@ -204,8 +206,16 @@ pub fn main(argv: &[String]) -> i32 {
 
     // Execute.
     let started = Instant::now();
+    let golden = match args.value("golden") {
+        Some("none") => None,
+        Some(dir) => Some(PathBuf::from(dir)),
+        None => Some(PathBuf::from("golden")),
+    };
+    // Absolute, because workers may run with another working directory one day.
+    let golden = golden.map(|g| std::fs::canonicalize(&g).unwrap_or(g));
     let settings = Settings {
         timeout,
+        golden,
         failures: out.join("latest").join("failures"),
         expectations,
         verbose: args.has("verbose"),
@@ -360,6 +370,7 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
                     file: p.file.clone(),
                     index: p.index,
                     failures: Some(settings.failures.clone()),
+                    golden: settings.golden.clone(),
                 };
                 let first = attempt(&mut worker, &start_worker, &req, settings.timeout);
                 if first.0.is_failure() {

@@ -10,6 +10,7 @@ pub mod child;
 pub mod conformance;
 pub mod fake;
 pub mod glob;
+pub mod golden;
 pub mod html;
 pub mod pool;
 pub mod registry;

@@ -50,6 +50,11 @@ impl Worker {
         std::thread::spawn(move || {
             for line in BufReader::new(stdout).lines() {
                 let Ok(line) = line else { break };
+                // Only protocol lines are JSON objects; anything a library prints goes to stderr.
+                if !line.starts_with('{') {
+                    eprintln!("{line}");
+                    continue;
+                }
                 if tx.send(line).is_err() {
                     break;
                 }

@@ -27,6 +27,9 @@ pub struct Judged {
     pub ssim: Option<f64>,
     /// The reference frame it was judged against (None for the reference itself).
     pub reference: Option<Frame>,
+    /// Per pixel: whether a shadow difference from the reference is legal there (empty for
+    /// the reference itself, whose goldens are held exactly).
+    pub legal: Vec<bool>,
     /// Time spent judging (truth, reference, error).
     pub judge_time: Duration,
     /// Problems with the result (empty = as expected).
@@ -73,6 +76,12 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
     let ssim = judged_reference
         .as_ref()
         .and_then(|(reference, _)| umbra_compare::ssim(reference, &frame));
+    let legal = judged_reference
+        .as_ref()
+        .map(|(reference, ambiguity)| {
+            umbra_compare::reference::legal_pixels(reference, ambiguity, &truth)
+        })
+        .unwrap_or_default();
     let reference = judged_reference.map(|(r, _)| r);
     if let Some(a) = &agreement {
         if a.illegal > 0 && prepared.case().expect.backends_agree {
@@ -107,6 +116,7 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
         agreement,
         ssim,
         reference,
+        legal,
         judge_time,
         problems,
     }))

@@ -25,6 +25,8 @@ pub struct Request {
     pub index: usize,
     /// Where to write the pictures of a failing run (none: do not write).
     pub failures: Option<PathBuf>,
+    /// The golden directory (none: no golden check).
+    pub golden: Option<PathBuf>,
 }
 
 /// What one run produced (the raw outcome; expectations are the parent's business).
@@ -38,6 +40,8 @@ pub struct RunReport {
     pub details: String,
     /// Error figures and timings of a judged run.
     pub metrics: Option<Metrics>,
+    /// `unchanged`, `written` or `changed` when a golden was checked.
+    pub golden: Option<String>,
 }
 
 /// The figures of one judged run.
@@ -193,7 +197,15 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                     "cpu-wall".into()
                 },
             };
-            let failed = !j.problems.is_empty();
+            let mut problems = j.problems.clone();
+            let golden = req.golden.as_ref().map(|dir| {
+                let (g, msg) = crate::golden::check(dir, &name, &j.frame, &j.legal);
+                if g == crate::golden::Golden::Changed {
+                    problems.push(msg);
+                }
+                format!("{g:?}").to_lowercase()
+            });
+            let failed = !problems.is_empty();
             if failed {
                 if let Some(dir) = &req.failures {
                     let _ = crate::render_cmd::write_images(
@@ -204,9 +216,10 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             }
             RunReport {
                 outcome: if failed { "fail".into() } else { "pass".into() },
-                reason: j.problems.join("; "),
+                reason: problems.join("; "),
                 details: describe(&j),
                 metrics: Some(metrics),
+                golden,
             }
         }
     }

@@ -1,0 +1,118 @@
+//! Golden images through insta: `golden/` is insta's snapshot directory, one binary PNG
+//! snapshot per case point and backend (`golden/<stem>.snap` + `.snap.png`, see [`stem`]).
+//!
+//! A result within tolerance of its golden hands the golden's own bytes to insta, so an
+//! unchanged picture never churns the file. A result outside it hands its new bytes to insta,
+//! which records a pending snapshot for `cargo insta review` and fails the run; under
+//! `CI=true` insta writes nothing and the run fails. A missing golden is a change too.
+//! `cargo xtask bless` runs with `INSTA_UPDATE=always` and lists what it wrote.
+//!
+//! Tolerance (the same backend on another day): each 8-bit colour channel may differ by one
+//! step (the output's rounding), except on pixels where the judge already allows the shadow
+//! answer itself to differ (the reference agreement's legal pixels: ties, texel boundaries,
+//! filter freedom, edges, silhouettes, faces away). Anything else is a change to review.
+
+use std::path::Path;
+
+use umbra_case::Frame;
+
+/// What happened to a run's golden.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Golden {
+    /// Within tolerance of the golden.
+    Unchanged,
+    /// Different (or new) and written by insta (`INSTA_UPDATE=always`, i.e. blessing).
+    Written,
+    /// Different (or new) and left for review (or refused under CI): a failure.
+    Changed,
+}
+
+/// Encodes a frame's colour as PNG.
+pub fn png(frame: &Frame) -> Vec<u8> {
+    let mut out = Vec::new();
+    let enc = image::codecs::png::PngEncoder::new(&mut out);
+    let _ = image::ImageEncoder::write_image(
+        enc,
+        &frame.color,
+        frame.width,
+        frame.height,
+        image::ExtendedColorType::Rgba8,
+    );
+    out
+}
+
+/// The golden's file stem for run `name`: letters, digits, `-` and `_` only (insta reads the
+/// first `.` as the start of the extension), then a 32-bit FNV-1a hash of the full name so
+/// that ids differing only in punctuation stay apart.
+pub fn stem(name: &str) -> String {
+    let plain: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    let hash = name.bytes().fold(0x811c_9dc5u32, |h, b| {
+        (h ^ u32::from(b)).wrapping_mul(0x0100_0193)
+    });
+    format!("{plain}-{hash:08x}")
+}
+
+/// Checks `frame` against golden `name` in `dir`; `legal[i]` marks pixels where a shadow
+/// difference is legal (empty: none).
+pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> (Golden, String) {
+    let stem = stem(name);
+    let existing = std::fs::read(dir.join(format!("{stem}.snap.png"))).ok();
+    let within = existing
+        .as_deref()
+        .and_then(|bytes| image::load_from_memory(bytes).ok())
+        .is_some_and(|img| {
+            let img = img.to_rgba8();
+            img.dimensions() == (frame.width, frame.height)
+                && img
+                    .as_raw()
+                    .chunks_exact(4)
+                    .zip(frame.color.chunks_exact(4))
+                    .enumerate()
+                    .all(|(i, (g, f))| {
+                        legal.get(i).copied().unwrap_or(false)
+                            || g.iter().zip(f).all(|(a, b)| a.abs_diff(*b) <= 1)
+                    })
+        });
+    let bytes = match (&existing, within) {
+        (Some(b), true) => b.clone(),
+        _ => png(frame),
+    };
+    let mut settings = insta::Settings::clone_current();
+    settings.set_snapshot_path(dir);
+    settings.set_prepend_module_to_snapshot(false);
+    settings.set_omit_expression(true);
+    settings.set_description(format!("umbra golden: colour of {name}"));
+    let name_ext = format!("{stem}.png");
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        settings.bind(|| insta::assert_binary_snapshot!(name_ext.as_str(), bytes.clone()));
+    }));
+    match (outcome, within) {
+        (Ok(()), true) => (Golden::Unchanged, String::new()),
+        (Ok(()), false) => (Golden::Written, format!("golden {stem} written")),
+        (Err(_), _) => {
+            let what = if existing.is_some() {
+                "differs from its golden"
+            } else {
+                "has no golden yet"
+            };
+            let how = if std::env::var("CI").is_ok_and(|v| v == "true" || v == "1") {
+                "CI=true: nothing written; run `cargo xtask bless` or `cargo insta review` locally and commit the result".to_string()
+            } else {
+                format!(
+                    "review it with `cargo insta review` (pending {}/{stem}.snap.new) or accept all with `cargo xtask bless`",
+                    dir.display()
+                )
+            };
+            (Golden::Changed, format!("the colour image {what}; {how}"))
+        }
+    }
+}

@@ -1,0 +1,117 @@
+//! Goldens through insta, end to end, in a scratch golden directory:
+//! missing golden under CI → fail, nothing written; bless (`INSTA_UPDATE=always`) → written;
+//! unchanged → pass without rewriting; a deliberately changed golden → fail under CI with
+//! nothing written, and outside CI a pending `.snap.new` for `cargo insta review`.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn umbra(golden: &Path, out: &Path, env: &[(&str, &str)]) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_umbra"));
+    cmd.args([
+        "conformance",
+        "--backend",
+        "ref",
+        "--filter",
+        "square*",
+        "--golden",
+        golden.to_str().unwrap_or_default(),
+        "--out",
+        out.to_str().unwrap_or_default(),
+    ])
+    .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
+    .env_remove("CI")
+    .env_remove("INSTA_UPDATE");
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    cmd.output().expect("run umbra")
+}
+
+fn files(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .map(|rd| {
+            rd.filter_map(|e| e.ok())
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .collect()
+        })
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+#[test]
+fn goldens_fail_on_change_and_are_only_written_by_blessing() {
+    let root: PathBuf = std::env::temp_dir().join(format!("umbra-golden-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let (golden, out) = (root.join("golden"), root.join("out"));
+    std::fs::create_dir_all(&golden).expect("dir");
+
+    let o = umbra(&golden, &out, &[("CI", "true")]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(
+        text(&o).contains("has no golden yet; CI=true: nothing written"),
+        "{}",
+        text(&o)
+    );
+    assert!(files(&golden).is_empty(), "CI wrote {:?}", files(&golden));
+
+    let o = umbra(&golden, &out, &[("INSTA_UPDATE", "always")]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let written = files(&golden);
+    assert_eq!(written.len(), 2, "{written:?}");
+    let png = golden.join(
+        written
+            .iter()
+            .find(|f| f.ends_with(".snap.png"))
+            .expect("png"),
+    );
+    let before = std::fs::read(&png).expect("golden png");
+
+    let o = umbra(&golden, &out, &[("CI", "true")]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "unchanged must pass: {}",
+        text(&o)
+    );
+    assert_eq!(
+        std::fs::read(&png).expect("png"),
+        before,
+        "an unchanged golden is not rewritten"
+    );
+
+    // Deliberately change the golden: paint a 12x12 block red.
+    let mut img = image::load_from_memory(&before).expect("decode").to_rgba8();
+    for y in 100..112 {
+        for x in 100..112 {
+            img.put_pixel(x, y, image::Rgba([255, 0, 0, 255]));
+        }
+    }
+    img.save(&png).expect("save");
+    let o = umbra(&golden, &out, &[("CI", "true")]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(text(&o).contains("differs from its golden"), "{}", text(&o));
+    assert_eq!(
+        files(&golden).len(),
+        2,
+        "CI must not write a pending snapshot"
+    );
+
+    let o = umbra(&golden, &out, &[("INSTA_UPDATE", "new")]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(
+        files(&golden).iter().any(|f| f.ends_with(".snap.new")),
+        "pending snapshot for review: {:?}",
+        files(&golden)
+    );
+    let _ = std::fs::remove_dir_all(&root);
+}
