@@ -62,26 +62,41 @@ pub fn stem(name: &str) -> String {
 }
 
 /// Checks `frame` against golden `name` in `dir`; `legal[i]` marks pixels where a shadow
-/// difference is legal (empty: none).
-pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> (Golden, String) {
+/// difference is legal (empty: none). Returns what happened, a message for a change, and the
+/// SSIM of the colour against the golden where one exists.
+pub fn check(
+    dir: &Path,
+    name: &str,
+    frame: &Frame,
+    legal: &[bool],
+) -> (Golden, String, Option<f64>) {
     let stem = stem(name);
     let existing = std::fs::read(dir.join(format!("{stem}.snap.png"))).ok();
-    let within = existing
+    let decoded = existing
         .as_deref()
         .and_then(|bytes| image::load_from_memory(bytes).ok())
-        .is_some_and(|img| {
-            let img = img.to_rgba8();
-            img.dimensions() == (frame.width, frame.height)
-                && img
-                    .as_raw()
-                    .chunks_exact(4)
-                    .zip(frame.color.chunks_exact(4))
-                    .enumerate()
-                    .all(|(i, (g, f))| {
-                        legal.get(i).copied().unwrap_or(false)
-                            || g.iter().zip(f).all(|(a, b)| a.abs_diff(*b) <= 1)
-                    })
-        });
+        .map(|i| i.to_rgba8());
+    let ssim = decoded.as_ref().and_then(|img| {
+        let golden = Frame {
+            width: img.width(),
+            height: img.height(),
+            color: img.as_raw().clone(),
+            ..frame.clone()
+        };
+        umbra_compare::ssim(&golden, frame)
+    });
+    let within = decoded.is_some_and(|img| {
+        img.dimensions() == (frame.width, frame.height)
+            && img
+                .as_raw()
+                .chunks_exact(4)
+                .zip(frame.color.chunks_exact(4))
+                .enumerate()
+                .all(|(i, (g, f))| {
+                    legal.get(i).copied().unwrap_or(false)
+                        || g.iter().zip(f).all(|(a, b)| a.abs_diff(*b) <= 1)
+                })
+    });
     let bytes = match (&existing, within) {
         (Some(b), true) => b.clone(),
         _ => png(frame),
@@ -96,8 +111,8 @@ pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> (Golden, 
         settings.bind(|| insta::assert_binary_snapshot!(name_ext.as_str(), bytes.clone()));
     }));
     match (outcome, within) {
-        (Ok(()), true) => (Golden::Unchanged, String::new()),
-        (Ok(()), false) => (Golden::Written, format!("golden {stem} written")),
+        (Ok(()), true) => (Golden::Unchanged, String::new(), ssim),
+        (Ok(()), false) => (Golden::Written, format!("golden {stem} written"), ssim),
         (Err(_), _) => {
             let what = if existing.is_some() {
                 "differs from its golden"
@@ -112,7 +127,11 @@ pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> (Golden, 
                     dir.display()
                 )
             };
-            (Golden::Changed, format!("the colour image {what}; {how}"))
+            (
+                Golden::Changed,
+                format!("the colour image {what}; {how}"),
+                ssim,
+            )
         }
     }
 }

@@ -124,7 +124,7 @@ pub fn report(
     }
     s.push_str(
         "<h2>All runs</h2><table><tr><th>run</th><th>status</th><th>false shadow</th><th>false light</th>\
-         <th>interior fs/fl</th><th>agreement</th><th>illegal</th><th>SSIM</th><th>render ms</th><th>clock</th></tr>",
+         <th>interior fs/fl</th><th>agreement</th><th>illegal</th><th>SSIM ref</th><th>SSIM golden</th><th>render ms</th><th>clock</th></tr>",
     );
     for r in results {
         let m = r.metrics.as_ref();
@@ -135,28 +135,32 @@ pub fn report(
                 format!("{:.3}%", 100.0 * n as f64 / d as f64)
             }
         };
-        let _ = write!(
-            s,
-            "<tr><td>{}</td><td class=\"{}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-            esc(&r.name),
-            r.status.name(),
-            r.status,
+        let opt5 = |v: Option<f64>| v.map(|a| format!("{a:.5}")).unwrap_or_default();
+        let cells = [
             m.map(|m| pct(m.false_shadow, m.judged)).unwrap_or_default(),
             m.map(|m| pct(m.false_light, m.judged)).unwrap_or_default(),
             m.map(|m| format!("{}/{}", m.interior_false_shadow, m.interior_false_light))
                 .unwrap_or_default(),
-            m.and_then(|m| m.agreement)
-                .map(|a| format!("{a:.5}"))
-                .unwrap_or_default(),
+            opt5(m.and_then(|m| m.agreement)),
             m.and_then(|m| m.illegal)
                 .map(|a| a.to_string())
                 .unwrap_or_default(),
-            m.and_then(|m| m.ssim)
-                .map(|a| format!("{a:.5}"))
-                .unwrap_or_default(),
+            opt5(m.and_then(|m| m.ssim)),
+            opt5(m.and_then(|m| m.ssim_golden)),
             m.map(|m| format!("{:.1}", m.total_ms)).unwrap_or_default(),
             m.map(|m| m.clock.clone()).unwrap_or_default(),
+        ];
+        let _ = write!(
+            s,
+            "<tr><td>{}</td><td class=\"{}\">{}</td>",
+            esc(&r.name),
+            r.status.name(),
+            r.status
         );
+        for c in cells {
+            let _ = write!(s, "<td>{}</td>", esc(&c));
+        }
+        s.push_str("</tr>");
     }
     s.push_str("</table></body></html>\n");
     s

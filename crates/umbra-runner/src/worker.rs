@@ -73,6 +73,8 @@ pub struct Metrics {
     pub illegal: Option<u64>,
     /// SSIM of the colour against the reference's.
     pub ssim: Option<f64>,
+    /// SSIM of the colour against its golden, where one exists.
+    pub ssim_golden: Option<f64>,
     /// Shadow pass, ms.
     pub shadow_ms: f64,
     /// Lit pass, ms.
@@ -188,6 +190,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 }),
                 illegal: j.agreement.as_ref().map(|a| a.illegal),
                 ssim: j.ssim,
+                ssim_golden: None,
                 shadow_ms: t.shadow_pass.as_secs_f64() * 1e3,
                 lit_ms: t.lit_pass.as_secs_f64() * 1e3,
                 total_ms: t.total.as_secs_f64() * 1e3,
@@ -198,8 +201,10 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 },
             };
             let mut problems = j.problems.clone();
+            let mut metrics = metrics;
             let golden = req.golden.as_ref().map(|dir| {
-                let (g, msg) = crate::golden::check(dir, &name, &j.frame, &j.legal);
+                let (g, msg, ssim) = crate::golden::check(dir, &name, &j.frame, &j.legal);
+                metrics.ssim_golden = ssim;
                 if g == crate::golden::Golden::Changed {
                     problems.push(msg);
                 }
