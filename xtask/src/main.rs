@@ -52,18 +52,8 @@ fn bless(args: &[String]) -> i32 {
         return 2;
     }
     mesa::ensure();
-    let mut cmd = cargo();
-    cmd.args([
-        "run",
-        "--quiet",
-        "--package",
-        "umbra-runner",
-        "--bin",
-        "umbra",
-        "--",
-        "conformance",
-    ]);
-    cmd.args(args).env("INSTA_UPDATE", "always");
+    let mut cmd = umbra_command(&["conformance"], args);
+    cmd.env("INSTA_UPDATE", "always");
     let code = status(cmd);
     let mut git = Command::new("git");
     git.current_dir(workspace_root())
@@ -81,6 +71,11 @@ fn bless(args: &[String]) -> i32 {
 
 /// Runs the `umbra` binary through cargo, so it is built with the workspace's profile.
 fn umbra(command: &[&str], args: &[String]) -> i32 {
+    status(umbra_command(command, args))
+}
+
+/// The command that runs `umbra COMMAND ARGS` through cargo.
+fn umbra_command(command: &[&str], args: &[String]) -> Command {
     let mut cmd = cargo();
     cmd.args([
         "run",
@@ -92,7 +87,7 @@ fn umbra(command: &[&str], args: &[String]) -> i32 {
         "--",
     ]);
     cmd.args(command).args(args);
-    status(cmd)
+    cmd
 }
 
 fn cargo() -> Command {
