@@ -4,6 +4,8 @@
 //!   then runs `umbra conformance ARGS` and passes its exit code through (0 as expected,
 //!   1 regressions, 125 could not run), so `git bisect run cargo xtask conformance` works.
 //! - `cargo xtask test`: the same set-up, then the whole test suite and a conformance run.
+//! - `cargo xtask selftest`: every injected fault on every backend it applies to; a fault the
+//!   judge does not catch fails it. Part of `cargo xtask test`.
 //! - `cargo xtask bless [ARGS]`: a conformance run that accepts every changed or new golden
 //!   (insta's `INSTA_UPDATE=always`), then lists what changed under `golden/` for review in
 //!   `git diff` before committing. Refused under `CI=true`: CI never writes a golden.
@@ -21,6 +23,10 @@ fn main() -> ExitCode {
         }
         Some("test") => test(&args[1..]),
         Some("bless") => bless(&args[1..]),
+        Some("selftest") => {
+            mesa::ensure();
+            umbra(&["selftest"], &args[1..])
+        }
         _ => {
             eprintln!(
                 "usage:\n  cargo xtask conformance [--filter GLOB] [--backend ID]... [--verbose]\n  \
@@ -42,8 +48,14 @@ fn test(extra: &[String]) -> i32 {
     if code != 0 {
         return code;
     }
-    // The main job on every case, as CI will run it.
-    umbra(&["conformance"], &[])
+    // The main job on every case, as CI will run it, then the harness's own sensitivity.
+    let conformance = umbra(&["conformance"], &[]);
+    let selftest = umbra(&["selftest"], &[]);
+    if conformance != 0 {
+        conformance
+    } else {
+        selftest
+    }
 }
 
 fn bless(args: &[String]) -> i32 {

@@ -19,6 +19,7 @@ pub mod backend;
 pub mod conventions;
 pub mod depth;
 pub mod error;
+pub mod fault;
 pub mod format;
 pub mod frame;
 pub mod light;

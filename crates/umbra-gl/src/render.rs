@@ -206,6 +206,9 @@ impl Renderer {
         let conv = Convention::GL.with_order(s.depth_order);
         let cube = matches!(run.light.kind, LightKind::Point { .. });
         let es2 = api == Api::Gles2;
+        // A deliberate mistake, only under `cargo xtask selftest`.
+        let fault = umbra_case::fault::Fault::active();
+        let is = |f: umbra_case::fault::Fault| fault == Some(f);
         self.check("before the run")?;
 
         let verts = run.geometry.interleaved();
@@ -337,7 +340,12 @@ impl Renderer {
             }
             gl.use_program(Some(shadow_program));
             let vp_loc = gl.get_uniform_location(shadow_program, "u_view_proj");
-            gl.viewport(0, 0, mw as i32, mh as i32);
+            if is(umbra_case::fault::Fault::ShadowViewport) {
+                let [cw, ch] = run.camera.size;
+                gl.viewport(0, 0, cw as i32, ch as i32);
+            } else {
+                gl.viewport(0, 0, mw as i32, mh as i32);
+            }
             gl.enable(glow::DEPTH_TEST);
             gl.depth_func(if s.depth_order == DepthOrder::Forward {
                 glow::LESS
@@ -515,6 +523,7 @@ impl Renderer {
             order: s.depth_order,
             slope: s.bias.slope.is_some(),
             model: case.shading.model,
+            fault,
         };
         let lit_program = self.program(
             shaders::lit_vertex(api),
@@ -546,16 +555,25 @@ impl Renderer {
                         glow::TEXTURE_COMPARE_MODE,
                         glow::COMPARE_REF_TO_TEXTURE as i32,
                     );
-                    let func = if s.depth_order == DepthOrder::Forward {
-                        glow::LEQUAL
-                    } else {
-                        glow::GEQUAL
+                    let func = match (
+                        s.depth_order == DepthOrder::Forward,
+                        is(umbra_case::fault::Fault::CompareFlipped),
+                    ) {
+                        (true, false) => glow::LEQUAL,
+                        (false, false) => glow::GEQUAL,
+                        (true, true) => glow::GREATER,
+                        (false, true) => glow::LESS,
                     };
                     gl.tex_parameter_i32(target, glow::TEXTURE_COMPARE_FUNC, func as i32);
                 }
             }
             if !cube && !manual {
-                let wrap = match s.outside {
+                let outside = if is(umbra_case::fault::Fault::Repeat) {
+                    Outside::Repeat
+                } else {
+                    s.outside
+                };
+                let wrap = match outside {
                     Outside::Lit | Outside::ClampToEdge => glow::CLAMP_TO_EDGE,
                     Outside::Repeat => glow::REPEAT,
                     Outside::Border => {
@@ -653,7 +671,14 @@ impl Renderer {
                     );
                     color_textures.push(t);
                 }
-                gl.active_texture(glow::TEXTURE0);
+                if is(umbra_case::fault::Fault::WrongTextureUnit) {
+                    // glActiveTexture(GL_TEXTURE0 + 1) while the sampler uniform says 0.
+                    gl.active_texture(glow::TEXTURE0);
+                    gl.bind_texture(target, None);
+                    gl.active_texture(glow::TEXTURE1);
+                } else {
+                    gl.active_texture(glow::TEXTURE0);
+                }
                 gl.bind_texture(target, Some(map));
                 let rb = gl
                     .create_renderbuffer()
@@ -717,7 +742,11 @@ impl Renderer {
                         glow::UNSIGNED_BYTE,
                         glow::PixelPackData::Slice(Some(&mut bytes)),
                     );
-                    images.push(flip_rows(&bytes, (w * 4) as usize));
+                    images.push(if is(umbra_case::fault::Fault::NoYFlip) {
+                        bytes
+                    } else {
+                        flip_rows(&bytes, (w * 4) as usize)
+                    });
                 }
                 self.check("readback")?;
             }

@@ -19,6 +19,7 @@
 
 use std::fmt::Write as _;
 
+use umbra_case::fault::Fault;
 use umbra_case::format::{BiasMatrix, Compare, DepthOrder, Filter, Outside, Shading, ShadingModel};
 
 use crate::api::Api;
@@ -50,6 +51,8 @@ pub struct Key {
     pub slope: bool,
     /// Shading model.
     pub model: ShadingModel,
+    /// An injected fault (self-test only).
+    pub fault: Option<Fault>,
 }
 
 fn header(api: Api, fragment: bool) -> String {
@@ -187,10 +190,14 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
     } else {
         "0.0"
     };
-    let cmp = if k.order == DepthOrder::Forward {
-        "<="
-    } else {
-        ">="
+    let cmp = match (
+        k.order == DepthOrder::Forward,
+        k.fault == Some(Fault::CompareFlipped),
+    ) {
+        (true, false) => "<=",
+        (false, false) => ">=",
+        (true, true) => ">",
+        (false, true) => "<",
     };
     let _ = writeln!(
         s,
@@ -235,7 +242,9 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
     // Texel fetch with the wrap policy, returning the stored depth (manual compare only: the
     // hardware path's taps go through the sampler, whose wrap mode is the policy).
     if manual {
-        let outside = if k.cube {
+        let outside = if k.fault == Some(Fault::Repeat) {
+            Outside::Repeat
+        } else if k.cube {
             Outside::ClampToEdge
         } else {
             k.outside
@@ -250,11 +259,18 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
                 "  i = clamp(i, 0.0, u_size.x - 1.0);\n  j = clamp(j, 0.0, u_size.y - 1.0);\n",
             ),
         }
-        let read = match (k.cube, es2) {
-            (false, false) => "texelFetch(u_map, ivec2(int(i), int(j)), 0).r",
-            (false, true) => "unpack_depth(texture2D(u_map, (vec2(i, j) + 0.5) / u_size))",
-            (true, false) => "texture(u_map, texel_dir(f, i, j)).r",
-            (true, true) => "unpack_depth(textureCube(u_map, texel_dir(f, i, j)))",
+        let wrong = k.fault == Some(Fault::WrongComponent);
+        let read = match (k.cube, es2, wrong) {
+            (false, false, false) => "texelFetch(u_map, ivec2(int(i), int(j)), 0).r",
+            (false, false, true) => "texelFetch(u_map, ivec2(int(i), int(j)), 0).g",
+            (false, true, false) => "unpack_depth(texture2D(u_map, (vec2(i, j) + 0.5) / u_size))",
+            (false, true, true) => {
+                "unpack_depth(texture2D(u_map, (vec2(i, j) + 0.5) / u_size).gbar)"
+            }
+            (true, false, false) => "texture(u_map, texel_dir(f, i, j)).r",
+            (true, false, true) => "texture(u_map, texel_dir(f, i, j)).g",
+            (true, true, false) => "unpack_depth(textureCube(u_map, texel_dir(f, i, j)))",
+            (true, true, true) => "unpack_depth(textureCube(u_map, texel_dir(f, i, j)).gbar)",
         };
         let _ = writeln!(s, "  return {read};\n}}");
     }
@@ -276,14 +292,22 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
     } else {
         s.push_str("  int f = 0;\n");
     }
-    match k.bias_matrix {
-        BiasMatrix::BeforeDivide => s.push_str("  vec4 t = tex_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(t.xyz / t.w, t.w);\n"),
-        BiasMatrix::AfterDivide => s.push_str(
+    let f = k.fault;
+    match (k.bias_matrix, f) {
+        (BiasMatrix::BeforeDivide, Some(Fault::NoDivide)) => s.push_str("  vec4 t = tex_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(t.xyz, t.w);\n"),
+        (BiasMatrix::BeforeDivide, Some(Fault::NoBias)) => s.push_str("  vec4 t = light_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(t.xyz / t.w, t.w);\n"),
+        (BiasMatrix::BeforeDivide, _) => s.push_str("  vec4 t = tex_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(t.xyz / t.w, t.w);\n"),
+        (BiasMatrix::AfterDivide, Some(Fault::NoDivide)) => s.push_str("  vec4 l = light_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(0.5 * l.xyz + 0.5, l.w);\n"),
+        (BiasMatrix::AfterDivide, Some(Fault::NoBias)) => s.push_str("  vec4 l = light_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(l.xyz / l.w, l.w);\n"),
+        (BiasMatrix::AfterDivide, _) => s.push_str(
             "  vec4 l = light_m(f) * vec4(p, 1.0);\n  vec3 ndc = vec3(l.x / l.w, l.y / l.w, l.z / l.w);\n\
                vec4 c = vec4(0.5 * ndc + 0.5, l.w);\n",
         ),
     }
-    if k.guard {
+    if f == Some(Fault::BiasTwice) {
+        s.push_str("  c.xyz = 0.5 * c.xyz + 0.5;\n");
+    }
+    if k.guard && f != Some(Fault::NoGuard) {
         s.push_str("  if (c.w <= 0.0) return 1.0;\n");
     }
     if !k.cube && k.outside == Outside::Lit {
@@ -300,7 +324,7 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
     let hw_direct = !manual && !matches!(k.filter, Filter::Pcf(_));
     match k.filter {
         _ if hw_direct && k.cube => s.push_str("  return texture(u_map, vec4(p - u_light_pos, r));\n"),
-        _ if hw_direct && k.bias_matrix == BiasMatrix::BeforeDivide => {
+        _ if hw_direct && k.bias_matrix == BiasMatrix::BeforeDivide && f.is_none() => {
             s.push_str("  return textureProj(u_map, vec4(t.xy, t.w * r, t.w));\n")
         }
         _ if hw_direct => s.push_str("  return texture(u_map, vec3(c.xy, r));\n"),

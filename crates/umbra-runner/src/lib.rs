@@ -16,5 +16,6 @@ pub mod pool;
 pub mod registry;
 pub mod render_cmd;
 pub mod run;
+pub mod selftest;
 pub mod status;
 pub mod worker;

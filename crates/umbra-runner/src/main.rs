@@ -10,6 +10,7 @@ fn main() -> ExitCode {
         Some("render") => render_cmd::main(&argv[1..]),
         Some("conformance") => conformance::main(&argv[1..]),
         Some("worker") => umbra_runner::worker::main(&argv[1..]),
+        Some("selftest") => umbra_runner::selftest::main(&argv[1..]),
         Some("-h" | "--help" | "help") => {
             println!("usage:\n  {}\n  {}", render_cmd::USAGE, conformance::USAGE);
             0

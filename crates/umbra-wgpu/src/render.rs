@@ -93,7 +93,16 @@ impl Gpu {
         let start = Instant::now();
         let case = run.case();
         let s = &case.shadow;
-        let conv = Convention::ZERO_TO_ONE.with_order(s.depth_order);
+        // A deliberate mistake, only under `cargo xtask selftest`.
+        let fault = umbra_case::fault::Fault::active();
+        let is = |f: umbra_case::fault::Fault| fault == Some(f);
+        // The GL-depth-range fault builds every matrix with the [-1,1] convention.
+        let conv = if is(umbra_case::fault::Fault::GlDepthRange) {
+            Convention::GL
+        } else {
+            Convention::ZERO_TO_ONE
+        }
+        .with_order(s.depth_order);
         let cube = matches!(run.light.kind, LightKind::Point { .. });
         let d = &self.device;
         let verts = run.geometry.interleaved();
@@ -307,6 +316,11 @@ impl Gpu {
                 multiview_mask: None,
             });
             pass.set_pipeline(&shadow_pipeline);
+            if is(umbra_case::fault::Fault::ShadowViewport) {
+                // The camera's viewport left in place (clipped to the map).
+                let [cw, ch] = run.camera.size;
+                pass.set_viewport(0.0, 0.0, cw.min(mw) as f32, ch.min(mh) as f32, 0.0, 1.0);
+            }
             pass.set_bind_group(0, &bg, &[]);
             pass.set_vertex_buffer(0, vbo.slice(..));
             pass.draw(0..count, 0..1);
@@ -330,6 +344,7 @@ impl Gpu {
             order: s.depth_order,
             slope: s.bias.slope.is_some(),
             model: case.shading.model,
+            fault,
         };
         let lit_module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lit"),
@@ -465,7 +480,29 @@ impl Gpu {
             dimension: Some(view_dimension),
             ..Default::default()
         });
-        let sampler = (!manual).then(|| self.sampler(s.filter, s.outside, s.depth_order, cube));
+        let outside = if is(umbra_case::fault::Fault::Repeat) {
+            Outside::Repeat
+        } else {
+            s.outside
+        };
+        let order = if is(umbra_case::fault::Fault::CompareFlipped) {
+            // The sampler's compare runs the other way (GREATER for LEQUAL and back).
+            match s.depth_order {
+                DepthOrder::Forward => DepthOrder::Reversed,
+                DepthOrder::Reversed => DepthOrder::Forward,
+            }
+        } else {
+            s.depth_order
+        };
+        let sampler = (!manual).then(|| {
+            self.sampler(
+                s.filter,
+                outside,
+                order,
+                cube,
+                is(umbra_case::fault::Fault::CompareFlipped),
+            )
+        });
         let mut group_entries = vec![
             wgpu::BindGroupEntry {
                 binding: 0,
@@ -569,9 +606,22 @@ impl Gpu {
         self.queue.submit([encoder.finish()]);
         self.wait()?;
         let lit_wall = lit_start.elapsed();
-        let color = read_texture(self, &color_tex, 4, w, h, wgpu::TextureAspect::All)?;
-        let vis = read_texture(self, &vis_tex, 4, w, h, wgpu::TextureAspect::All)?;
-        let face = read_texture(self, &face_tex, 4, w, h, wgpu::TextureAspect::All)?;
+        let read = |t: &wgpu::Texture| -> Result<Vec<u8>, BackendError> {
+            let rows = read_texture(self, t, 4, w, h, wgpu::TextureAspect::All)?;
+            // The flip a GL-minded port adds by mistake.
+            Ok(if is(umbra_case::fault::Fault::NoYFlip) {
+                rows.chunks((w * 4) as usize)
+                    .rev()
+                    .flatten()
+                    .copied()
+                    .collect()
+            } else {
+                rows
+            })
+        };
+        let color = read(&color_tex)?;
+        let vis = read(&vis_tex)?;
+        let face = read(&face_tex)?;
         let mut visibility = Vec::with_capacity((w * h) as usize);
         let mut surface = Vec::with_capacity((w * h) as usize);
         for (v, f) in vis.chunks_exact(4).zip(face.chunks_exact(4)) {
@@ -682,6 +732,7 @@ impl Gpu {
         outside: Outside,
         order: DepthOrder,
         cube: bool,
+        strict: bool,
     ) -> wgpu::Sampler {
         let (address, border) = match (cube, outside) {
             (true, _) | (false, Outside::Lit | Outside::ClampToEdge) => {
@@ -709,10 +760,11 @@ impl Gpu {
             address_mode_w: address,
             mag_filter: f,
             min_filter: f,
-            compare: Some(if order == DepthOrder::Forward {
-                wgpu::CompareFunction::LessEqual
-            } else {
-                wgpu::CompareFunction::GreaterEqual
+            compare: Some(match (order == DepthOrder::Forward, strict) {
+                (true, false) => wgpu::CompareFunction::LessEqual,
+                (false, false) => wgpu::CompareFunction::GreaterEqual,
+                (true, true) => wgpu::CompareFunction::Less,
+                (false, true) => wgpu::CompareFunction::Greater,
             }),
             border_color: border,
             ..Default::default()

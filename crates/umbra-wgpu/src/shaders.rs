@@ -15,6 +15,7 @@
 
 use std::fmt::Write as _;
 
+use umbra_case::fault::Fault;
 use umbra_case::format::{BiasMatrix, Compare, DepthOrder, Filter, Outside, Shading, ShadingModel};
 
 /// Everything that changes the generated source.
@@ -41,6 +42,8 @@ pub struct Key {
     pub slope: bool,
     /// Shading model.
     pub model: ShadingModel,
+    /// An injected fault (self-test only).
+    pub fault: Option<Fault>,
 }
 
 /// The uniform block shared by both passes (std140-compatible layout, 16-byte vectors).
@@ -88,10 +91,14 @@ pub fn lit(k: &Key, shading: &Shading) -> String {
     } else {
         "0.0"
     };
-    let cmp = if k.order == DepthOrder::Forward {
-        "<="
-    } else {
-        ">="
+    let cmp = match (
+        k.order == DepthOrder::Forward,
+        k.fault == Some(Fault::CompareFlipped),
+    ) {
+        (true, false) => "<=",
+        (false, false) => ">=",
+        (true, true) => ">",
+        (false, true) => "<",
     };
     let _ = writeln!(
         s,
@@ -117,7 +124,9 @@ pub fn lit(k: &Key, shading: &Shading) -> String {
         );
     }
     if manual {
-        let outside = if k.cube {
+        let outside = if k.fault == Some(Fault::Repeat) {
+            Outside::Repeat
+        } else if k.cube {
             Outside::ClampToEdge
         } else {
             k.outside
@@ -152,16 +161,23 @@ pub fn lit(k: &Key, shading: &Shading) -> String {
     } else {
         s.push_str("  let f = 0;\n");
     }
-    match k.bias_matrix {
-        BiasMatrix::BeforeDivide => s.push_str(
-            "  let t = u.tex[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(t.xyz / t.w, t.w);\n",
+    match (k.bias_matrix, k.fault) {
+        (BiasMatrix::BeforeDivide, Some(Fault::NoDivide)) => s.push_str("  let t = u.tex[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(t.xyz, t.w);\n"),
+        (BiasMatrix::BeforeDivide, Some(Fault::NoBias)) => s.push_str("  let t = u.light[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(t.xyz / t.w, t.w);\n"),
+        (BiasMatrix::BeforeDivide, _) => s.push_str("  let t = u.tex[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(t.xyz / t.w, t.w);\n"),
+        (BiasMatrix::AfterDivide, Some(Fault::NoDivide)) => s.push_str(
+            "  let l = u.light[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(0.5 * l.x + 0.5, 0.5 - 0.5 * l.y, l.z, l.w);\n",
         ),
-        BiasMatrix::AfterDivide => s.push_str(
+        (BiasMatrix::AfterDivide, Some(Fault::NoBias)) => s.push_str("  let l = u.light[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(l.xyz / l.w, l.w);\n"),
+        (BiasMatrix::AfterDivide, _) => s.push_str(
             "  let l = u.light[f] * vec4<f32>(p, 1.0);\n  let ndc = l.xyz / l.w;\n\
                var c = vec4<f32>(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y, ndc.z, l.w);\n",
         ),
     }
-    if k.guard {
+    if k.fault == Some(Fault::BiasTwice) {
+        s.push_str("  c = vec4<f32>(0.5 * c.x + 0.5, 0.5 - 0.5 * c.y, c.z, c.w);\n");
+    }
+    if k.guard && k.fault != Some(Fault::NoGuard) {
         s.push_str("  if (c.w <= 0.0) { return 1.0; }\n");
     }
     if !k.cube && k.outside == Outside::Lit {
