@@ -29,8 +29,8 @@ pub struct Key {
     pub filter: Filter,
     /// Compare mechanism.
     pub compare: Compare,
-    /// Clamp the reference to [0,1] (never needed by hardware, which clamps itself: kept for
-    /// the manual path's symmetry with GLES 2; always false here).
+    /// What a lookup outside [0,1]² returns (the sampler's address mode for hardware
+    /// compare; the shader's wrap for manual compare).
     pub outside: Outside,
     /// w > 0 guard.
     pub guard: bool,
