@@ -274,17 +274,7 @@ pub fn main(argv: &[String]) -> i32 {
         );
     }
     let passed = count("Pass") + count("ExpectedFail") + count("Flake");
-    println!(
-        "statuses: pass {}, expected fail {}, flake {}, skip {}; fail {}, crash {}, timeout {}, unexpected pass {}",
-        count("Pass"),
-        count("ExpectedFail"),
-        count("Flake"),
-        count("Skip"),
-        count("Fail"),
-        count("Crash"),
-        count("Timeout"),
-        count("UnexpectedPass"),
-    );
+    println!("statuses: {}", breakdown(&results));
     // The closing line, alone, in the form CI tools read.
     println!(
         "conformance: {passed} passed, {} failed, {} skipped",
@@ -299,6 +289,22 @@ pub fn main(argv: &[String]) -> i32 {
     } else {
         0
     }
+}
+
+/// How many runs ended in each status, in one line (the terminal summary and report.html).
+pub fn breakdown(results: &[RunResult]) -> String {
+    let count = |n: &str| results.iter().filter(|r| r.status.name() == n).count();
+    format!(
+        "pass {}, expected fail {}, flake {}, skip {}; fail {}, crash {}, timeout {}, unexpected pass {}",
+        count("Pass"),
+        count("ExpectedFail"),
+        count("Flake"),
+        count("Skip"),
+        count("Fail"),
+        count("Crash"),
+        count("Timeout"),
+        count("UnexpectedPass"),
+    )
 }
 
 fn usage(msg: &str) -> i32 {

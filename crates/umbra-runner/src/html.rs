@@ -55,7 +55,6 @@ pub fn report(
     command: &str,
     wall_s: f64,
 ) -> String {
-    let count = |n: &str| results.iter().filter(|r| r.status.name() == n).count();
     let mut s = String::from(
         "<!doctype html><html><head><meta charset=\"utf-8\"><title>umbra conformance</title><style>\
          body{font:14px system-ui,sans-serif;margin:24px;color:#222}h1{margin:0 0 8px}code{background:#f3f3f3;padding:1px 4px}\
@@ -66,17 +65,9 @@ pub fn report(
     );
     let _ = write!(
         s,
-        "<h1>umbra conformance</h1><p>{} runs in {wall_s:.1} s: {} pass, {} expected fail, {} flake, {} skip; \
-         <b>{} fail, {} crash, {} timeout, {} unexpected pass</b></p><p>command: <code>{}</code></p>",
+        "<h1>umbra conformance</h1><p>{} runs in {wall_s:.1} s: <b>{}</b></p><p>command: <code>{}</code></p>",
         results.len(),
-        count("Pass"),
-        count("ExpectedFail"),
-        count("Flake"),
-        count("Skip"),
-        count("Fail"),
-        count("Crash"),
-        count("Timeout"),
-        count("UnexpectedPass"),
+        crate::conformance::breakdown(results),
         esc(command)
     );
     s.push_str("<h2>Drivers</h2><table><tr><th>backend</th><th>vendor | renderer | version | extensions</th></tr>");

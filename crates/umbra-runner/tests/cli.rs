@@ -1,6 +1,10 @@
 //! The `umbra` binary as a user meets it: driver processes, exit codes, reports, errors.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::{scratch, text};
+
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn umbra(args: &[&str]) -> Output {
@@ -11,21 +15,6 @@ fn umbra(args: &[&str]) -> Output {
         .env_remove("LIBGL_ALWAYS_SOFTWARE")
         .output()
         .expect("run umbra")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("umbra-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 #[test]

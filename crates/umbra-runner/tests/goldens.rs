@@ -3,6 +3,10 @@
 //! unchanged → pass without rewriting; a deliberately changed golden → fail under CI with
 //! nothing written, and outside CI a pending `.snap.new` for `cargo insta review`.
 
+mod common;
+
+use common::text;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -38,14 +42,6 @@ fn files(dir: &Path) -> Vec<String> {
         .unwrap_or_default();
     v.sort();
     v
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 #[test]

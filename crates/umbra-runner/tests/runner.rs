@@ -3,7 +3,11 @@
 //! completes and reports, expectations turn known failures into ExpectedFail and a pass of a
 //! known failure into UnexpectedPass, and shards split a run exactly.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::{scratch, text};
+
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn umbra(args: &[&str]) -> Output {
@@ -15,21 +19,6 @@ fn umbra(args: &[&str]) -> Output {
         .args(["--golden", "none"])
         .output()
         .expect("run umbra")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("umbra-runner-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 #[test]
