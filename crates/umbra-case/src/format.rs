@@ -48,6 +48,16 @@ pub struct Case {
 pub struct Scene {
     /// At least one object.
     pub objects: Vec<Object>,
+    /// Moves the whole case (every object, the camera and the light) by this vector, as an
+    /// application whose world sits far from the origin would: coordinates are offset in f64
+    /// and rounded once to f32, so f32 spacing at the offset is what the renderers see.
+    /// Default `[0, 0, 0]`.
+    #[serde(default, skip_serializing_if = "is_zero3")]
+    pub offset: V3,
+}
+
+fn is_zero3(v: &V3) -> bool {
+    *v == [0.0; 3]
 }
 
 /// One primitive, written as `{ "box": { ... } }`.
@@ -568,6 +578,16 @@ pub struct Expect {
     /// Default `reported`.
     #[serde(default)]
     pub interior_error: InteriorError,
+    /// Metamorphic twins: variants of the case that every backend renders beside it and
+    /// compares with it (see [`Twin`]). The `bias-order` twin (the other bias-matrix order,
+    /// `legal`) is always added. Default: none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub twins: Vec<Twin>,
+    /// A swept path along which the error against the truth (false shadow + false light, all
+    /// judged pixels) must not rise, on every backend, in the order the sweep lists its
+    /// values (other axes held fixed), e.g. `shadow.size` for growing maps. Default: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error_falls_along: Option<String>,
 }
 
 impl Default for Expect {
@@ -575,8 +595,41 @@ impl Default for Expect {
         Expect {
             backends_agree: true,
             interior_error: InteriorError::Reported,
+            twins: Vec::new(),
+            error_falls_along: None,
         }
     }
+}
+
+/// A metamorphic twin: the case with `set` applied (dotted paths, as in sweeps), rendered on
+/// the same backend in the same run and compared with the case's own frame.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Twin {
+    /// Identifier shown in reports: lower-case letters, digits, `-`, `_`. Required.
+    pub name: String,
+    /// Dotted JSON path to the value it takes in the twin. Required, at least one.
+    pub set: BTreeMap<String, serde_json::Value>,
+    /// How the twin must relate to the case. Default `legal`.
+    #[serde(default)]
+    pub agree: TwinAgree,
+}
+
+/// How a twin's frame must relate to its case's frame on the same backend.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TwinAgree {
+    /// The same lit/shadowed answer at every pixel (a change the specs say cannot matter).
+    Identical,
+    /// Differences only where the reference's lookup allows them (ties, texel boundaries,
+    /// filter freedom, truth edges, silhouettes): the same judge as backend vs reference.
+    #[default]
+    Legal,
+    /// The twin's error against its own truth away from edges (false shadow + false light)
+    /// is no larger than the case's: a change meant to improve accuracy.
+    NoWorse,
+    /// Differences and both errors are reported, never judged.
+    Reported,
 }
 
 /// Claim on the error against the truth away from shadow edges.

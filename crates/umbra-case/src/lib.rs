@@ -24,8 +24,10 @@ pub mod format;
 pub mod frame;
 pub mod light;
 pub mod load;
+pub mod offset;
 pub mod prepare;
 pub mod scene;
+pub mod twin;
 pub mod validate;
 
 pub use backend::{Backend, BackendError, BackendId, DriverInfo, Needs, Support};

@@ -77,18 +77,26 @@ pub fn load_str(text: &str, file: &Path) -> Result<Vec<CasePoint>, CaseErrors> {
     })?;
     let case = parse_value(&value, file, "")?;
     validate(&case, file)?;
-    if case.sweep.is_empty() {
-        return Ok(vec![CasePoint {
+    let points = if case.sweep.is_empty() {
+        vec![CasePoint {
             file: file.to_path_buf(),
             case,
             values: Vec::new(),
-        }]);
+        }]
+    } else {
+        expand(&value, &case, file)?
+    };
+    // A twin that cannot be built is a case error now, not a failed run later.
+    for point in &points {
+        for twin in crate::twin::twins_of(point) {
+            twin.point?;
+        }
     }
-    expand(&value, &case, file)
+    Ok(points)
 }
 
 /// Deserialises a case from JSON, naming the path of the first type error.
-fn parse_value(value: &Value, file: &Path, context: &str) -> Result<Case, CaseError> {
+pub(crate) fn parse_value(value: &Value, file: &Path, context: &str) -> Result<Case, CaseError> {
     serde_path_to_error::deserialize::<_, Case>(value).map_err(|e| {
         let path = e.path().to_string();
         let path = if path == "." { String::new() } else { path };
@@ -269,7 +277,7 @@ fn number(x: f64) -> Value {
 }
 
 /// The slot at a dotted path (`a.b[2].c`), creating objects along the way.
-fn set_path<'v>(doc: &'v mut Value, path: &str) -> Result<&'v mut Value, String> {
+pub(crate) fn set_path<'v>(doc: &'v mut Value, path: &str) -> Result<&'v mut Value, String> {
     let mut cur = doc;
     if path.is_empty() {
         return Err("the path is empty".into());

@@ -54,14 +54,16 @@ pub struct Prepared {
 }
 
 impl Prepared {
-    /// Tessellates and sets up a validated case point.
-    pub fn new(point: CasePoint) -> Self {
+    /// Tessellates and sets up a validated case point. A `scene.offset` is applied here
+    /// (`crate::offset`), so every consumer sees the moved, f32-rounded case.
+    pub fn new(mut point: CasePoint) -> Self {
+        point.case = crate::offset::apply_offset(&point.case);
         let geometry = Arc::new(tessellate(&point.case.scene));
         Self::with_geometry(point, geometry)
     }
 
-    /// Sets up a point whose scene was already tessellated (sweep points share it).
-    pub fn with_geometry(point: CasePoint, geometry: Arc<Geometry>) -> Self {
+    /// Sets up a point whose (offset-free) scene was already tessellated.
+    fn with_geometry(point: CasePoint, geometry: Arc<Geometry>) -> Self {
         let c = &point.case.camera;
         let camera = CameraSetup {
             eye: Vec3::from(c.eye),

@@ -277,7 +277,10 @@ mod tests {
     use crate::format::{BoxShape, Extent, Plane, Rotation, Scale, Sphere};
 
     fn scene(objects: Vec<Object>) -> Scene {
-        Scene { objects }
+        Scene {
+            objects,
+            offset: [0.0; 3],
+        }
     }
 
     fn boxed(size: [f32; 3], transform: Option<Transform>) -> Object {

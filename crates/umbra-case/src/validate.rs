@@ -36,6 +36,14 @@ pub fn validate(case: &Case, file: &Path) -> Result<(), CaseErrors> {
     }
 }
 
+/// Names of cases and twins: lower-case letters, digits, `-` and `_` (they name files).
+fn identifier(name: &str) -> bool {
+    !name.is_empty()
+        && name
+            .chars()
+            .all(|ch| ch.is_ascii_lowercase() || ch.is_ascii_digit() || ch == '-' || ch == '_')
+}
+
 struct Validator<'a> {
     file: &'a Path,
     errors: Vec<CaseError>,
@@ -168,11 +176,7 @@ impl Validator<'_> {
     }
 
     fn case(&mut self, c: &Case) {
-        let name_ok = !c.name.is_empty()
-            && c.name
-                .chars()
-                .all(|ch| ch.is_ascii_lowercase() || ch.is_ascii_digit() || ch == '-' || ch == '_');
-        if !name_ok {
+        if !identifier(&c.name) {
             self.err(
                 "name",
                 format!("{:?} is not a valid case name", c.name),
@@ -191,9 +195,51 @@ impl Validator<'_> {
         self.light(&c.light, &c.shadow);
         self.shadow(&c.shadow);
         self.shading(&c.shading);
+        self.twins(&c.expect.twins);
+        if let Some(path) = &c.expect.error_falls_along {
+            // Sweep points have their sweep removed, so only the file itself is checked.
+            if !c.sweep.is_empty() && !c.sweep.contains_key(path) {
+                self.err(
+                    "expect.error_falls_along",
+                    format!("{path:?} is not a swept path of this case"),
+                    format!(
+                        "name one of the sweep's paths: {}",
+                        c.sweep.keys().cloned().collect::<Vec<_>>().join(", ")
+                    ),
+                );
+            }
+        }
+    }
+
+    fn twins(&mut self, twins: &[crate::format::Twin]) {
+        let mut seen = std::collections::BTreeSet::from([crate::twin::BIAS_ORDER]);
+        for (i, t) in twins.iter().enumerate() {
+            let p = format!("expect.twins[{i}]");
+            if !identifier(&t.name) {
+                self.err(
+                    format!("{p}.name"),
+                    format!("{:?} is not a valid twin name", t.name),
+                    "use lower-case letters, digits, '-' and '_'",
+                );
+            } else if !seen.insert(&t.name) {
+                self.err(
+                    format!("{p}.name"),
+                    format!("the name {:?} is taken (bias-order is built in)", t.name),
+                    "give each twin its own name",
+                );
+            }
+            if t.set.is_empty() {
+                self.err(
+                    format!("{p}.set"),
+                    "sets nothing, so the twin is the case itself",
+                    "set at least one dotted path, such as \"shadow.attachments\": \"with_color\"",
+                );
+            }
+        }
     }
 
     fn scene(&mut self, s: &Scene) {
+        self.finite3("scene.offset", s.offset);
         if s.objects.is_empty() {
             self.err(
                 "scene.objects",

@@ -506,3 +506,67 @@ fn log_sweeps_are_evenly_spaced_in_decades() {
         .collect();
     assert_eq!(nears, vec![0.001, 0.01, 0.1, 1.0]);
 }
+
+#[test]
+fn twin_with_a_bad_value_names_the_twin() {
+    let doc = set(
+        base(),
+        "/expect",
+        json!({ "twins": [ { "name": "t", "set": { "shadow.format": "depth48" } } ] }),
+    );
+    let e = errors(&doc);
+    assert!(
+        e.0.iter()
+            .any(|x| x.message.contains("expect.twins[0]") && x.message.contains("depth48")),
+        "{e}"
+    );
+}
+
+#[test]
+fn twin_that_sets_nothing_is_an_error() {
+    assert_error(
+        set(
+            base(),
+            "/expect",
+            json!({ "twins": [ { "name": "t", "set": {} } ] }),
+        ),
+        "expect.twins[0].set",
+        "sets nothing",
+    );
+}
+
+#[test]
+fn twin_may_not_take_the_built_in_name() {
+    assert_error(
+        set(
+            base(),
+            "/expect",
+            json!({ "twins": [ { "name": "bias-order", "set": { "shadow.cull": "front" } } ] }),
+        ),
+        "expect.twins[0].name",
+        "is taken",
+    );
+}
+
+#[test]
+fn error_falls_along_must_name_a_swept_path() {
+    let doc = set(
+        set(
+            base(),
+            "/sweep",
+            json!({ "shadow.size": { "values": [[128, 128], [256, 256]] } }),
+        ),
+        "/expect",
+        json!({ "error_falls_along": "shadow.format" }),
+    );
+    assert_error(doc, "expect.error_falls_along", "not a swept path");
+}
+
+#[test]
+fn scene_offset_must_be_finite() {
+    assert_error(
+        set(base(), "/scene/offset", json!([1e39, 0, 0])),
+        "scene.offset[0]",
+        "not a finite f32",
+    );
+}

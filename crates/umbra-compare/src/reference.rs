@@ -10,7 +10,8 @@
 //!   a texel boundary (within 1/16 texel, the minimum sub-texel precision, of a texel that
 //!   decides differently), or filter freedom (LINEAR taps disagree: weights are
 //!   implementation-defined and NEAREST is allowed; a PCF average within one 8-bit step of
-//!   0.5);
+//!   0.5), or the position freedom (moving the lookup point by the unspecified accuracy of
+//!   varying interpolation, [`umbra_ref::lookup::position_freedom`], changes the answer);
 //! - the truth marks it an edge pixel: within the light's texel resolution of a true shadow
 //!   boundary, where coverage snapping (sub-pixel precision ≥ 4 bits) and the rasterization
 //!   tie rule (none prescribed) of the *shadow pass* are the implementation's; or
@@ -38,7 +39,8 @@ pub struct RefAgreement {
     pub differ: u64,
     /// Of those, a depth tie in the reference's lookup.
     pub legal_tie: u64,
-    /// Of those, a texel boundary or filter freedom in the reference's lookup.
+    /// Of those, a texel boundary, filter freedom or position freedom in the reference's
+    /// lookup.
     pub legal_texel: u64,
     /// Of those, on a truth edge (texel and raster freedom).
     pub legal_edge: u64,
@@ -93,7 +95,7 @@ fn classify(
     ambiguity: &[u8],
     reference_surface: &[u32],
 ) -> RefAgreement {
-    use umbra_ref::lookup::ambiguity::{DEPTH_TIE, FILTER, TEXEL_BOUNDARY};
+    use umbra_ref::lookup::ambiguity::{DEPTH_TIE, FILTER, POSITION, TEXEL_BOUNDARY};
     let mut r = RefAgreement {
         compared: g.compared,
         ..Default::default()
@@ -109,7 +111,7 @@ fn classify(
             r.legal_unjudged += 1;
         } else if ambiguity[i] & DEPTH_TIE != 0 {
             r.legal_tie += 1;
-        } else if ambiguity[i] & (TEXEL_BOUNDARY | FILTER) != 0 {
+        } else if ambiguity[i] & (TEXEL_BOUNDARY | FILTER | POSITION) != 0 {
             r.legal_texel += 1;
         } else if truth.edge[i] {
             r.legal_edge += 1;

@@ -73,6 +73,19 @@ fn render_inner(run: &Prepared, clip: ClipDepth, judge: bool) -> (Frame, Vec<u8>
             .map(|v| LookupMatrices::new(conv, v.view_proj(conv)))
             .collect(),
         layers: &layers,
+        reach: {
+            let (lo, hi) = run.geometry.bounds();
+            let eyes = run.light.views.iter().map(|v| {
+                // The view's translation column is −R·eye: its length is the eye's distance.
+                v.view.w_axis.truncate().length()
+            });
+            eyes.fold(
+                (hi - lo)
+                    .max_element()
+                    .max(run.camera.eye.abs().max_element()),
+                f32::max,
+            )
+        },
     };
     let lit = lit_pass::render(run, conv, &lookup, judge);
     let lit_done = Instant::now();

@@ -35,6 +35,9 @@ pub struct Lookup<'a> {
     pub matrices: Vec<LookupMatrices>,
     /// One layer per face.
     pub layers: &'a [DepthLayer],
+    /// The case's reach, for the position freedom: the largest of the scene's extent and the
+    /// camera's and the light's distances from the origin (per axis).
+    pub reach: f32,
 }
 
 /// Why a lookup's answer is one that a conformant implementation could give differently.
@@ -44,9 +47,34 @@ pub mod ambiguity {
     /// The coordinate is within 1/16 texel (the minimum sub-texel precision) of a texel
     /// whose compare differs.
     pub const TEXEL_BOUNDARY: u8 = 2;
-    /// LINEAR taps disagree (weights are implementation-defined, NEAREST is allowed), or a
-    /// PCF average lies within one 8-bit result step of the 0.5 threshold.
+    /// LINEAR taps disagree (weights are implementation-defined, NEAREST is allowed), a
+    /// LINEAR lookup lies within a texel of a cube face's edge (seamless or per-face
+    /// filtering), or a PCF average lies within one 8-bit result step of the 0.5 threshold.
     pub const FILTER: u8 = 4;
+    /// Moving the lookup point by the interpolation freedom of its position (see
+    /// [`super::position_freedom`]) along any axis changes the answer.
+    pub const POSITION: u8 = 8;
+}
+
+/// How far the point a backend looks up for a pixel may lie from the reference's, per world
+/// axis, from f32 arithmetic the specs leave to the implementation:
+/// - varying interpolation ("implementation-dependent" accuracy): barycentrics carry a few
+///   ulps of relative error, and Σ bᵢ·aᵢ inherits it scaled by the vertex values (|p| plus
+///   the triangle's spread, at most the reach), about 8u·(|p|∞ + reach);
+/// - the camera and light transforms: V·p cancels |R·p| against the translation |t| ≈ the
+///   eye's distance, so the fragment's position and its shadow coordinate each move by up to
+///   γ₄·(|p|∞ + reach) in world units.
+///
+/// Together 16u·(|p|∞ + reach), u = 2⁻²⁴: about 0.1 mm for a 50 m scene at the origin, and
+/// 10 cm at 1e5 m from it, which is why scenes far from the origin lose shadow detail on every
+/// backend (numerics/far-from-origin shows how fast).
+pub fn position_freedom(p: Vec3, reach: f32) -> f32 {
+    16.0 * (f32::EPSILON * 0.5) * (p.abs().max_element() + reach)
+}
+
+/// The lit/shadowed answer of a visibility (the judge's threshold).
+fn shadowed(v: f32) -> bool {
+    v < 0.5
 }
 
 /// Sub-texel precision the specs guarantee (4 bits).
@@ -64,6 +92,23 @@ impl Lookup<'_> {
     }
 
     fn lookup(&self, p: Vec3, n: Vec3, judge: bool) -> (f32, u8) {
+        let (vis, mut flags) = self.lookup_at(p, n, judge);
+        if judge {
+            let d = position_freedom(p, self.reach);
+            let moved = [Vec3::X, Vec3::Y, Vec3::Z]
+                .into_iter()
+                .flat_map(|e| [p + e * d, p - e * d]);
+            if moved
+                .map(|q| self.lookup_at(q, n, false).0)
+                .any(|v| shadowed(v) != shadowed(vis))
+            {
+                flags |= ambiguity::POSITION;
+            }
+        }
+        (vis, flags)
+    }
+
+    fn lookup_at(&self, p: Vec3, n: Vec3, judge: bool) -> (f32, u8) {
         let s = self.shadow;
         let p = p + n * s.bias.normal_offset;
         let face = self.light.face_for(p);
@@ -157,6 +202,12 @@ impl Lookup<'_> {
                     tap(i0 + 1, j0 + 1),
                 ];
                 let v = |t: (bool, bool)| if t.0 { 1.0 } else { 0.0 };
+                // Within a texel of a cube face's edge, GL (seamless off unless enabled)
+                // clamps to the face while GLES 3 and Vulkan filter across faces: both legal.
+                let at_seam = cube && (x < 0.5 || y < 0.5 || x > fw - 1.5 || y > fh - 1.5);
+                if judge && at_seam && taps.iter().any(|t| t.0) {
+                    flags |= ambiguity::FILTER;
+                }
                 if judge {
                     if taps.iter().any(|t| t.1) {
                         flags |= ambiguity::DEPTH_TIE;

@@ -28,14 +28,20 @@ pub struct DepthLayer {
 /// (NUMERICS.md): the polygon-offset slope may be m = sqrt(dx² + dy²) instead of our
 /// max(|dx|, |dy|), which adds up to (sqrt − max)·|factor|; the unit r is an implementation
 /// constant (Vulkan allows up to 2 steps), so r·|units| either way; and storage may round
-/// either way (±1 step). f32 rounding of the interpolation adds a few ulps of z.
+/// either way (±1 step). f32 rounding of the interpolation adds a few ulps of z. And vertex
+/// snapping: GL and Vulkan require only 4 sub-pixel bits, so another implementation's vertex
+/// window coordinates may lie up to 1/32 pixel from the exact ones (ours: 1/512, 8 bits);
+/// the triangle's depth plane at a texel centre then moves by up to (|dx| + |dy|) times that.
+/// It matters on faces steep to the light, where depth changes fast across a texel.
 fn slack(t: &Tri, format: DepthFormat, factor: f32, units: f32) -> f32 {
     let (dx, dy) = t.depth_slopes();
     let m_freedom = (dx.hypot(dy) - dx.abs().max(dy.abs())) * f64::from(factor.abs());
+    let snap = (dx.abs() + dy.abs()) * (1.0 / 32.0 + 1.0 / 512.0);
     let z = t.max_abs_z();
     let r = f64::from(format.offset_unit(z));
     let step = format.step(z);
     (m_freedom
+        + snap
         + r * f64::from(units.abs())
         + step
         + 4.0 * f64::from(umbra_case::depth::f32_spacing(z))) as f32

@@ -34,6 +34,9 @@ use crate::worker::{Metrics, Request, RunReport};
 /// Usage line.
 pub const USAGE: &str = "umbra conformance [--cases DIR] [--filter GLOB] [--backend ID]... [--shard I/N] [--jobs N] [--timeout SECS] [--expectations DIR] [--golden DIR|none] [--out DIR] [--verbose]";
 
+/// A point's swept values, `(path, value)` in axis order.
+type SweepValues = Vec<(String, serde_json::Value)>;
+
 /// One planned run.
 #[derive(Clone, Debug)]
 struct Planned {
@@ -41,6 +44,7 @@ struct Planned {
     file: PathBuf,
     index: usize,
     id: String,
+    values: SweepValues,
 }
 
 impl Planned {
@@ -58,6 +62,8 @@ pub struct RunResult {
     pub backend: String,
     /// The case point id.
     pub case: String,
+    /// The point's swept values, `(path, value)` in axis order.
+    pub values: Vec<(String, serde_json::Value)>,
     /// Final status.
     pub status: Status,
     /// Why (failure problems, skip reason, crash status, expectation reason).
@@ -157,14 +163,22 @@ pub fn main(argv: &[String]) -> i32 {
 
     // Plan.
     let mut results: Vec<RunResult> = Vec::new();
-    let mut points: Vec<(PathBuf, Vec<String>)> = Vec::new();
+    let mut points: Vec<(PathBuf, Vec<(String, SweepValues)>)> = Vec::new();
+    let mut monotone: Vec<Monotone> = Vec::new();
     for f in &files {
         match umbra_case::load_file(f) {
-            Ok(p) => points.push((f.clone(), p.iter().map(|p| p.id()).collect())),
+            Ok(p) => {
+                monotone.extend(Monotone::of(&p));
+                points.push((
+                    f.clone(),
+                    p.iter().map(|p| (p.id(), p.values.clone())).collect(),
+                ));
+            }
             Err(e) => results.push(RunResult {
                 name: format!("cases/{}", f.display()),
                 backend: String::new(),
                 case: f.display().to_string(),
+                values: Vec::new(),
                 status: Status::Fail,
                 reason: e.to_string(),
                 metrics: None,
@@ -177,12 +191,13 @@ pub fn main(argv: &[String]) -> i32 {
     let mut plan = Vec::new();
     for b in &backends {
         for (file, ids) in &points {
-            for (index, id) in ids.iter().enumerate() {
+            for (index, (id, values)) in ids.iter().enumerate() {
                 let p = Planned {
                     backend: b.clone(),
                     file: file.clone(),
                     index,
                     id: id.clone(),
+                    values: values.clone(),
                 };
                 if crate::glob::matches(&filter, id) || crate::glob::matches(&filter, &p.name()) {
                     plan.push(p);
@@ -248,6 +263,9 @@ pub fn main(argv: &[String]) -> i32 {
         }
     };
     results.sort_by(|a, b| a.name.cmp(&b.name));
+    for m in &monotone {
+        m.judge(&mut results);
+    }
 
     // Report.
     if let Err(e) = write_reports(&out, &results, &drivers, started.elapsed()) {
@@ -288,6 +306,68 @@ pub fn main(argv: &[String]) -> i32 {
         125
     } else {
         0
+    }
+}
+
+/// A case's `expect.error_falls_along`: runs of one backend that differ only in that axis,
+/// in sweep order, whose error against the truth must not rise.
+struct Monotone {
+    path: String,
+    /// Per series (the other axes' values): the point ids in the axis's order.
+    series: Vec<Vec<String>>,
+}
+
+impl Monotone {
+    fn of(points: &[umbra_case::CasePoint]) -> Option<Monotone> {
+        let path = points.first()?.case.expect.error_falls_along.clone()?;
+        let mut series: BTreeMap<String, Vec<String>> = BTreeMap::new();
+        for p in points {
+            let others: Vec<String> = p
+                .values
+                .iter()
+                .filter(|(k, _)| *k != path)
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect();
+            series.entry(others.join(",")).or_default().push(p.id());
+        }
+        Some(Monotone {
+            path,
+            series: series.into_values().collect(),
+        })
+    }
+
+    /// Fails every judged run whose error exceeds its predecessor's on the same backend.
+    fn judge(&self, results: &mut [RunResult]) {
+        let error = |m: &Metrics| m.false_shadow + m.false_light;
+        let mut backends: Vec<String> = results.iter().map(|r| r.backend.clone()).collect();
+        backends.sort();
+        backends.dedup();
+        for backend in &backends {
+            for ids in &self.series {
+                let mut previous: Option<(String, u64)> = None;
+                for id in ids {
+                    let Some(r) = results
+                        .iter_mut()
+                        .find(|r| &r.backend == backend && &r.case == id)
+                    else {
+                        continue;
+                    };
+                    let Some(e) = r.metrics.as_ref().map(error) else {
+                        continue;
+                    };
+                    if let Some((prev_id, prev)) = &previous {
+                        if e > *prev && !r.status.is_regression() {
+                            r.status = Status::Fail;
+                            r.reason = format!(
+                                "expect.error_falls_along {}: the error against the truth rose to {e} px from {prev} px at {prev_id}",
+                                self.path
+                            );
+                        }
+                    }
+                    previous = Some((id.clone(), e));
+                }
+            }
+        }
     }
 }
 
@@ -337,9 +417,12 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
     }
     let start_worker = || Worker::start(backend, &env, settings.timeout);
     let mut worker = start_worker();
-    let hello = match &worker {
-        Ok(w) => w.hello.clone(),
-        Err(e) => serde_json::json!({ "unavailable": e }),
+    // A worker that cannot even be started (our own binary missing or replaced mid-run) is
+    // the harness's failure, not the backend's: its runs crash rather than skip, so that it
+    // can never read as a clean run.
+    let (hello, start_error) = match &worker {
+        Ok(w) => (w.hello.clone(), None),
+        Err(e) => (serde_json::json!({ "unavailable": e }), Some(e.clone())),
     };
     let driver_line = match (hello.get("ready"), hello.get("unavailable")) {
         (Some(r), _) => format!(
@@ -369,9 +452,15 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
     for p in runs {
         let name = p.name();
         let t0 = Instant::now();
-        let (raw, reason, metrics, details) = match &unavailable {
-            Some(why) => (Status::Skip(why.clone()), why.clone(), None, String::new()),
-            None => {
+        let (raw, reason, metrics, details) = match (&start_error, &unavailable) {
+            (Some(e), _) => (
+                Status::Crash,
+                format!("the harness could not start its worker process: {e}"),
+                None,
+                String::new(),
+            ),
+            (None, Some(why)) => (Status::Skip(why.clone()), why.clone(), None, String::new()),
+            (None, None) => {
                 let req = Request {
                     file: p.file.clone(),
                     index: p.index,
@@ -406,6 +495,7 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
             name: name.clone(),
             backend: p.backend.clone(),
             case: p.id.clone(),
+            values: p.values.clone(),
             status,
             reason,
             metrics,
@@ -435,7 +525,7 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
             if settings.verbose && !r.details.is_empty() {
                 println!("{}", r.details);
             }
-            if unavailable.is_some() {
+            if unavailable.is_some() && start_error.is_none() {
                 d.2 += 1;
             }
             d.0.push(result);
@@ -510,16 +600,43 @@ fn write_reports(
     let mut errors = String::from(
         "test,status,judged,false_shadow,false_light,interior_judged,interior_false_shadow,interior_false_light,edge_px,silhouette,faces_away,outside,agreement,illegal,shadow_ms,lit_ms,total_ms,clock\n",
     );
+    let mut twins = String::from(
+        "test,twin,agree,skipped,differ,legal_tie,legal_texel,legal_edge,legal_unjudged,illegal,interior_error,twin_interior_error,render_ms,ok\n",
+    );
     for r in results {
-        let _ = writeln!(csv, "{},{},{:.3}", r.name, r.status, r.time_s);
+        for t in r.metrics.iter().flat_map(|m| &m.twins) {
+            let _ = writeln!(
+                twins,
+                "{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{}",
+                csv_field(&r.name),
+                t.name,
+                t.agree,
+                t.skipped.is_some(),
+                t.differ,
+                t.legal_tie,
+                t.legal_texel,
+                t.legal_edge,
+                t.legal_unjudged,
+                t.illegal,
+                t.interior_error,
+                t.twin_interior_error
+                    .map(|e| e.to_string())
+                    .unwrap_or_default(),
+                t.render_ms,
+                t.ok
+            );
+        }
+    }
+    for r in results {
+        let _ = writeln!(csv, "{},{},{:.3}", csv_field(&r.name), r.status, r.time_s);
         if r.status.is_regression() {
-            let _ = writeln!(failures, "{},{}", r.name, r.status);
+            let _ = writeln!(failures, "{},{}", csv_field(&r.name), r.status);
         }
         if let Some(m) = &r.metrics {
             let _ = writeln!(
                 errors,
                 "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{}",
-                r.name,
+                csv_field(&r.name),
                 r.status,
                 m.judged,
                 m.false_shadow,
@@ -595,6 +712,7 @@ fn write_reports(
         std::fs::write(dir.join("results.csv"), &csv)?;
         std::fs::write(dir.join("failures.csv"), &failures)?;
         std::fs::write(dir.join("errors.csv"), &errors)?;
+        std::fs::write(dir.join("twins.csv"), &twins)?;
         std::fs::write(dir.join("drivers.txt"), drivers)?;
         std::fs::write(
             dir.join("report.json"),
@@ -604,6 +722,16 @@ fn write_reports(
         std::fs::write(dir.join("report.html"), &html)?;
     }
     Ok(())
+}
+
+/// A CSV field, quoted (RFC 4180) when it holds a comma, a quote or a line break: point ids
+/// of multi-axis sweeps hold commas.
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
 }
 
 fn xml(s: &str) -> String {

@@ -113,6 +113,8 @@ pub fn report(
             ),
         );
     }
+    s.push_str(&twins_section(results));
+    s.push_str(&crate::error_curves::section(results));
     s.push_str(
         "<h2>All runs</h2><table><tr><th>run</th><th>status</th><th>false shadow</th><th>false light</th>\
          <th>interior fs/fl</th><th>agreement</th><th>illegal</th><th>SSIM ref</th><th>SSIM golden</th><th>render ms</th><th>clock</th></tr>",
@@ -154,6 +156,88 @@ pub fn report(
         s.push_str("</tr>");
     }
     s.push_str("</table></body></html>\n");
+    s
+}
+
+/// Per twin and backend: how many runs compared, how many pixels differed and why.
+fn twins_section(results: &[RunResult]) -> String {
+    use std::collections::BTreeMap;
+    #[derive(Default)]
+    struct Row {
+        runs: u64,
+        skipped: u64,
+        failed: u64,
+        differ: u64,
+        tie: u64,
+        texel: u64,
+        edge: u64,
+        unjudged: u64,
+        illegal: u64,
+        ms: f64,
+        case_ms: f64,
+        worst: String,
+    }
+    let mut rows: BTreeMap<(String, String, String), Row> = BTreeMap::new();
+    for r in results {
+        let Some(m) = &r.metrics else { continue };
+        for t in &m.twins {
+            let row = rows
+                .entry((t.name.clone(), t.agree.clone(), r.backend.clone()))
+                .or_default();
+            if t.skipped.is_some() && t.ok {
+                row.skipped += 1;
+                continue;
+            }
+            row.runs += 1;
+            row.failed += u64::from(!t.ok);
+            row.differ += t.differ;
+            row.tie += t.legal_tie;
+            row.texel += t.legal_texel;
+            row.edge += t.legal_edge;
+            row.unjudged += t.legal_unjudged;
+            row.illegal += t.illegal;
+            row.ms += t.render_ms;
+            row.case_ms += m.total_ms;
+            if !t.ok && row.worst.is_empty() {
+                row.worst = r.name.clone();
+            }
+        }
+    }
+    let mut s = String::from(
+        "<h2>Metamorphic twins</h2><p>Each run also renders its twins on the same backend and compares them with its own frame \
+         (<code>bias-order</code>, the other bias-matrix order, is built into every case; the others are each case's \
+         <code>expect.twins</code>). <i>identical</i>: bit-identical visibility; <i>legal</i>: differences only where the \
+         reference's lookup allows them; <i>no_worse</i>: the twin's interior error is not larger. Pixel counts are summed \
+         over runs.</p><table><tr><th>twin</th><th>agree</th><th>backend</th><th>runs</th><th>not run</th><th>failed</th>\
+         <th>px differ</th><th>ties</th><th>texel/filter</th><th>edges</th><th>unjudged</th><th>illegal</th>\
+         <th>twin ms / case ms</th><th>first failing run</th></tr>",
+    );
+    for ((name, agree, backend), r) in &rows {
+        let class = if r.failed > 0 { "Fail" } else { "Pass" };
+        let ratio = if r.case_ms > 0.0 {
+            r.ms / r.case_ms
+        } else {
+            0.0
+        };
+        let _ = write!(
+            s,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"{class}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{ratio:.2}</td><td>{}</td></tr>",
+            esc(name),
+            esc(agree),
+            esc(backend),
+            r.runs,
+            r.skipped,
+            r.failed,
+            r.differ,
+            r.tie,
+            r.texel,
+            r.edge,
+            r.unjudged,
+            r.illegal,
+            esc(&r.worst)
+        );
+    }
+    s.push_str("</table>");
     s
 }
 

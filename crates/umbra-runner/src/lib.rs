@@ -8,6 +8,7 @@
 pub mod args;
 pub mod child;
 pub mod conformance;
+pub mod error_curves;
 pub mod fake;
 pub mod glob;
 pub mod golden;

@@ -5,7 +5,8 @@
 
 use std::time::{Duration, Instant};
 
-use umbra_case::format::InteriorError;
+use serde::{Deserialize, Serialize};
+use umbra_case::format::{InteriorError, TwinAgree};
 use umbra_case::{Backend, CasePoint, ClipDepth, Frame, Needs, Prepared, Support};
 use umbra_compare::TruthError;
 use umbra_compare::reference::RefAgreement;
@@ -32,8 +33,42 @@ pub struct Judged {
     pub legal: Vec<bool>,
     /// Time spent judging (truth, reference, error).
     pub judge_time: Duration,
+    /// The metamorphic twins, each rendered on the same backend and compared.
+    pub twins: Vec<TwinMetric>,
     /// Problems with the result (empty = as expected).
     pub problems: Vec<String>,
+}
+
+/// How one metamorphic twin ([`umbra_case::twin`]) compared with its case on one backend.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct TwinMetric {
+    /// The twin's name.
+    pub name: String,
+    /// `identical`, `legal`, `no_worse` or `reported`.
+    pub agree: String,
+    /// Why the backend could not render the twin (the twin is then not judged).
+    #[serde(default)]
+    pub skipped: Option<String>,
+    /// Pixels whose answer differs (for `identical`: whose visibility value differs at all).
+    pub differ: u64,
+    /// Of those, legal as a depth tie of the reference's lookup.
+    pub legal_tie: u64,
+    /// Of those, legal as a texel boundary or filter freedom.
+    pub legal_texel: u64,
+    /// Of those, legal on a truth edge.
+    pub legal_edge: u64,
+    /// Of those, legal as a silhouette or a surface facing away.
+    pub legal_unjudged: u64,
+    /// Of those, illegal.
+    pub illegal: u64,
+    /// The case's false shadow + false light away from edges.
+    pub interior_error: u64,
+    /// The twin's, against its own truth (for `no_worse` and `reported`).
+    pub twin_interior_error: Option<u64>,
+    /// The twin's render time, ms (same clock as the case's).
+    pub render_ms: f64,
+    /// Whether the relation held.
+    pub ok: bool,
 }
 
 /// The outcome of trying to run a point on a backend.
@@ -68,8 +103,10 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
     let truth = ground_truth(&prepared);
     let error = umbra_compare::truth_error(&frame, &truth);
     let mut problems = Vec::new();
-    let judged_reference = (backend.id().0 != "ref")
-        .then(|| umbra_ref::render_judged(&prepared, ClipDepth::MinusOneToOne));
+    let is_ref = backend.id().0 == "ref";
+    // The reference's lookup ambiguity also judges the twins, so even the reference needs it.
+    let judged = umbra_ref::render_judged(&prepared, ClipDepth::MinusOneToOne);
+    let judged_reference = (!is_ref).then_some(&judged);
     let agreement = judged_reference.as_ref().map(|(reference, ambiguity)| {
         umbra_compare::reference::judge(reference, ambiguity, &frame, &truth)
     });
@@ -82,7 +119,25 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
             umbra_compare::reference::legal_pixels(reference, ambiguity, &truth)
         })
         .unwrap_or_default();
-    let reference = judged_reference.map(|(r, _)| r);
+    let twins = run_twins(backend, &prepared, &frame, &error, &judged, &truth);
+    for t in &twins {
+        if !t.ok {
+            problems.push(format!(
+                "twin {} ({}): {} px differ, {} of them illegal (legal: {} ties, {} texel/filter, {} edges, {} unjudged); interior error {} vs the twin's {}",
+                t.name,
+                t.agree,
+                t.differ,
+                t.illegal,
+                t.legal_tie,
+                t.legal_texel,
+                t.legal_edge,
+                t.legal_unjudged,
+                t.interior_error,
+                t.twin_interior_error.map(|e| e.to_string()).unwrap_or("-".into())
+            ));
+        }
+    }
+    let reference = judged_reference.map(|(r, _)| r.clone());
     if let Some(a) = &agreement {
         if a.illegal > 0 && prepared.case().expect.backends_agree {
             problems.push(format!(
@@ -118,8 +173,99 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
         reference,
         legal,
         judge_time,
+        twins,
         problems,
     }))
+}
+
+/// Renders every twin of the run on the same backend and compares it with `frame`.
+fn run_twins(
+    backend: &mut dyn Backend,
+    prepared: &Prepared,
+    frame: &Frame,
+    error: &TruthError,
+    (reference, ambiguity): &(Frame, Vec<u8>),
+    truth: &umbra_ref::truth::Truth,
+) -> Vec<TwinMetric> {
+    let interior = |e: &TruthError| e.away_from_edges.false_shadow + e.away_from_edges.false_light;
+    umbra_case::twin::twins_of(&prepared.point)
+        .into_iter()
+        .map(|plan| {
+            let mut m = TwinMetric {
+                name: plan.name.clone(),
+                agree: serde_json::to_value(plan.agree)
+                    .ok()
+                    .and_then(|v| v.as_str().map(String::from))
+                    .unwrap_or_default(),
+                interior_error: interior(error),
+                ok: true,
+                ..Default::default()
+            };
+            let point = match plan.point {
+                Ok(p) => p,
+                Err(e) => {
+                    m.ok = false;
+                    m.skipped = Some(format!("cannot build the twin: {e}"));
+                    return m;
+                }
+            };
+            if let Support::Unsupported(why) = backend.supports(&Needs::of(&point.case)) {
+                m.skipped = Some(why);
+                return m;
+            }
+            let twin_prepared = Prepared::new(point);
+            let twin = match backend.render(&twin_prepared) {
+                Ok(f) => f,
+                Err(e) => {
+                    m.ok = false;
+                    m.skipped = Some(format!("the twin failed to render: {e}"));
+                    return m;
+                }
+            };
+            m.render_ms = twin.timings.total.as_secs_f64() * 1e3;
+            if (twin.width, twin.height) != (frame.width, frame.height) {
+                m.ok = false;
+                m.skipped = Some("the twin's frame has another size".into());
+                return m;
+            }
+            if matches!(plan.agree, TwinAgree::NoWorse | TwinAgree::Reported) {
+                let twin_truth = ground_truth(&twin_prepared);
+                m.twin_interior_error =
+                    Some(interior(&umbra_compare::truth_error(&twin, &twin_truth)));
+            }
+            let pair =
+                umbra_compare::reference::judge_pair(frame, &twin, reference, ambiguity, truth);
+            m.differ = pair.differ;
+            m.legal_tie = pair.legal_tie;
+            m.legal_texel = pair.legal_texel;
+            m.legal_edge = pair.legal_edge;
+            m.legal_unjudged = pair.legal_unjudged;
+            m.illegal = pair.illegal;
+            match plan.agree {
+                TwinAgree::Identical => {
+                    // Bit-identical visibility wherever either frame covers a surface.
+                    let differ = (0..frame.visibility.len())
+                        .filter(|&i| {
+                            (frame.covered(i) || twin.covered(i))
+                                && frame.visibility[i].to_bits() != twin.visibility[i].to_bits()
+                        })
+                        .count() as u64;
+                    m.differ = differ;
+                    m.illegal = differ;
+                    (m.legal_tie, m.legal_texel, m.legal_edge, m.legal_unjudged) = (0, 0, 0, 0);
+                    m.ok = differ == 0;
+                }
+                // A case that disowns the reference's tolerance model (backends_agree false)
+                // cannot hold its twins to it either: they are reported.
+                TwinAgree::Legal => {
+                    m.ok = m.illegal == 0 || !prepared.case().expect.backends_agree;
+                }
+                TwinAgree::NoWorse => m.ok = m.twin_interior_error <= Some(m.interior_error),
+                TwinAgree::Reported => {}
+            }
+            m
+        })
+        .collect()
 }
 
 /// A short multi-line summary of a judged run.
@@ -161,6 +307,26 @@ pub fn describe(j: &Judged) -> String {
             "  vs reference: {} of {} px differ (legal: {} ties, {} texel/filter, {} edges, {} unjudged; {} illegal); colour SSIM {:.5}\n",
             a.differ, a.compared, a.legal_tie, a.legal_texel, a.legal_edge, a.legal_unjudged, a.illegal, j.ssim.unwrap_or(f64::NAN)
         ));
+    }
+    for t in &j.twins {
+        match &t.skipped {
+            Some(why) => s.push_str(&format!("  twin {} ({}): not run: {why}\n", t.name, t.agree)),
+            None => s.push_str(&format!(
+                "  twin {} ({}): {} px differ (legal: {} ties, {} texel/filter, {} edges, {} unjudged; {} illegal); interior error {} vs {}; {:.2} ms; {}\n",
+                t.name,
+                t.agree,
+                t.differ,
+                t.legal_tie,
+                t.legal_texel,
+                t.legal_edge,
+                t.legal_unjudged,
+                t.illegal,
+                t.interior_error,
+                t.twin_interior_error.map(|e| e.to_string()).unwrap_or("-".into()),
+                t.render_ms,
+                if t.ok { "ok" } else { "FAILED" }
+            )),
+        }
     }
     s.push_str(&format!(
         "  time: shadow pass {:.2} ms, lit pass {:.2} ms, readback {:.2} ms, total {:.2} ms ({clock}); judging {:.1} ms",

@@ -83,6 +83,9 @@ pub struct Metrics {
     pub total_ms: f64,
     /// `gpu` or `cpu-wall`.
     pub clock: String,
+    /// The metamorphic twins (the built-in bias-order twin first).
+    #[serde(default)]
+    pub twins: Vec<crate::run::TwinMetric>,
 }
 
 /// Runs the worker loop; returns the exit code.
@@ -199,6 +202,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 } else {
                     "cpu-wall".into()
                 },
+                twins: j.twins.clone(),
             };
             let mut problems = j.problems.clone();
             let mut metrics = metrics;

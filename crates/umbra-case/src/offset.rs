@@ -1,0 +1,92 @@
+//! `scene.offset`: moving a whole case away from the origin.
+//!
+//! Real programs keep world coordinates in f32, so a scene 1e5 m from the origin has
+//! positions whose spacing is about 8 mm. umbra models exactly that: each coordinate is offset
+//! in f64 and rounded once to f32, and everything downstream (tessellation, the truth, every
+//! backend) sees the rounded case. Directions (normals, up vectors, angles) do not move.
+
+use crate::format::{Case, Light, Object, Transform, V3};
+
+/// The case with its `scene.offset` applied to every position, and the offset reset to zero.
+pub fn apply_offset(case: &Case) -> Case {
+    let o = case.scene.offset;
+    let mut c = case.clone();
+    if o == [0.0; 3] {
+        return c;
+    }
+    c.scene.offset = [0.0; 3];
+    let mv = |p: &mut V3| {
+        for k in 0..3 {
+            p[k] = (f64::from(p[k]) + f64::from(o[k])) as f32;
+        }
+    };
+    for object in &mut c.scene.objects {
+        // A transformed primitive moves through its translation (the transform applies last);
+        // a plain one moves its own coordinates.
+        let (transform, own): (&mut Option<Transform>, Vec<&mut V3>) = match object {
+            Object::Plane(p) => (&mut p.transform, vec![&mut p.point]),
+            Object::Box(b) => (&mut b.transform, vec![&mut b.center]),
+            Object::Sphere(s) => (&mut s.transform, vec![&mut s.center]),
+            Object::Mesh(m) => (&mut m.transform, m.positions.iter_mut().collect()),
+        };
+        match transform {
+            Some(t) => mv(&mut t.translate),
+            None => own.into_iter().for_each(mv),
+        }
+    }
+    mv(&mut c.camera.eye);
+    mv(&mut c.camera.target);
+    match &mut c.light {
+        Light::Directional(d) => {
+            if let Some(p) = &mut d.position {
+                mv(p);
+            }
+            mv(&mut d.target);
+        }
+        Light::Spot(s) => {
+            mv(&mut s.position);
+            mv(&mut s.target);
+        }
+        Light::Point(p) => mv(&mut p.position),
+    }
+    c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn offset_moves_positions_and_rounds_to_f32() {
+        let text = r#"{ "name": "t", "about": "t",
+            "scene": { "offset": [100000.3, 0, 0], "objects": [
+                { "plane": { "point": [0, 0, 0], "half_extent": 5 } },
+                { "box": { "center": [0, 1, 0], "size": [1, 1, 1], "transform": { "translate": [1, 0, 0] } } } ] },
+            "camera": { "eye": [0, 5, 5], "target": [0, 0, 0] },
+            "light": { "spot": { "position": [0, 9, 1], "target": [0, 0, 0], "fov_y_deg": 60 } } }"#;
+        let case = crate::load_str(text, std::path::Path::new("t.json")).expect("valid")[0]
+            .case
+            .clone();
+        let c = apply_offset(&case);
+        let x = (100000.3f64) as f32;
+        assert_eq!(c.scene.offset, [0.0; 3]);
+        let Object::Plane(p) = &c.scene.objects[0] else {
+            panic!()
+        };
+        assert_eq!(p.point, [x, 0.0, 0.0]);
+        let Object::Box(b) = &c.scene.objects[1] else {
+            panic!()
+        };
+        // The box moves through its transform, not its centre.
+        assert_eq!(b.center, [0.0, 1.0, 0.0]);
+        assert_eq!(
+            b.transform.as_ref().expect("transform").translate,
+            [(100001.3f64) as f32, 0.0, 0.0]
+        );
+        assert_eq!(c.camera.eye, [x, 5.0, 5.0]);
+        let Light::Spot(s) = &c.light else { panic!() };
+        assert_eq!(s.position, [x, 9.0, 1.0]);
+        // f32 spacing at 1e5 is 1/128: the offset is rounded, as an application's would be.
+        assert_eq!(f64::from(x), 100_000.296_875);
+    }
+}
