@@ -43,7 +43,8 @@ impl CameraSetup {
 /// One run's inputs.
 #[derive(Clone, Debug)]
 pub struct Prepared {
-    /// The case point.
+    /// The case point, resolved: its `scene.offset` already applied to every position (and
+    /// reset to zero). Build variants from the point as written, not from this.
     pub point: CasePoint,
     /// Its triangles.
     pub geometry: Arc<Geometry>,

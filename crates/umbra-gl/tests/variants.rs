@@ -8,6 +8,9 @@
 //!   (hardware texel selection need only be 4 sub-texel bits exact; the shader computes
 //!   floor(u·size) in f32). Both are counted and printed.
 //!
+//! - GLES 2's packed RGBA8 depth vs GLES 3's D24 (EDGE_CASES.md 4): within the packing's
+//!   precision (see `packed_vs_d24`).
+//!
 //! Mesa picks its driver when EGL loads, so `variants_on_every_driver` runs this test binary
 //! once per driver with the driver's environment, selecting the ignored `variants_worker`.
 
@@ -158,11 +161,61 @@ fn variants_worker() {
             );
         }
     }
+    packed_vs_d24(driver, &cases, &variants);
     // The unbiased variants must have produced ties, or the tie classification was not tested.
     assert!(
         tie_pixels_seen > 10_000,
         "only {tie_pixels_seen} reference lookups were depth ties"
     );
+}
+
+/// EDGE_CASES 4 on one driver: GLES 2's depth packed into RGBA8 (compared by hand) against
+/// GLES 3's D24 depth texture (hardware compare), NEAREST, same case, same driver.
+///
+/// Precision of the packing (crates/umbra-gl/src/shaders.rs, `pack_depth`): four base-255
+/// digits, each stored as (k + ¼)/255 and recovered exactly, truncating the rest; the first
+/// multiply d·255 rounds in f32, later digits only add u/255, u/255², … So
+/// |unpack(pack(d)) − d| ≤ u·d·(1 + 1/254) + 255⁻⁴ ≈ 1.004 f32 ulps of d, at most about one D24
+/// step (2⁻²⁴) below 1: inside the ±1 storage step the reference's depth tie allows. The two
+/// may therefore differ only where the reference's lookup is ambiguous (the same judge as
+/// backend vs reference), and the test counts those pixels.
+fn packed_vs_d24(driver: Driver, cases: &[&str], variants: &[Variant]) {
+    let open = |api: Api| {
+        GlBackend::new(api, driver)
+            .unwrap_or_else(|e| panic!("{}/{}: {}", api.name(), driver.name(), e.0))
+    };
+    let (mut gles2, mut gles3) = (open(Api::Gles2), open(Api::Gles3));
+    for rel in cases {
+        for (tag, vary) in variants {
+            let mut p = case(rel);
+            vary(&mut p.case);
+            p.case.shadow.format = umbra_case::format::DepthFormat::Depth24;
+            p.case.shadow.filter = Filter::Nearest;
+            p.case.shadow.compare = Compare::Hardware;
+            let id = format!("{}/{}{tag}", driver.name(), p.id());
+            let run = Prepared::new(p);
+            let packed = gles2.render(&run).unwrap_or_else(|e| panic!("{id}: {e}"));
+            let d24 = gles3.render(&run).unwrap_or_else(|e| panic!("{id}: {e}"));
+            let (reference, ambiguity) = umbra_ref::render_judged(&run, ClipDepth::MinusOneToOne);
+            let truth = umbra_ref::truth::ground_truth(&run);
+            let r =
+                umbra_compare::reference::judge_pair(&packed, &d24, &reference, &ambiguity, &truth);
+            println!(
+                "{id}: GLES 2 packed RGBA8 vs GLES 3 D24: {} of {} px differ (legal: {} ties, {} texel/filter/position, {} edges, {} unjudged; {} illegal)",
+                r.differ,
+                r.compared,
+                r.legal_tie,
+                r.legal_texel,
+                r.legal_edge,
+                r.legal_unjudged,
+                r.illegal
+            );
+            assert_eq!(
+                r.illegal, 0,
+                "{id}: packed depth and D24 differ beyond the packing's precision"
+            );
+        }
+    }
 }
 
 #[test]

@@ -14,11 +14,14 @@ use serde_json::Value;
 
 use crate::conformance::RunResult;
 
+/// One run on a curve: (x, error %, frame ms, point id, false shadow %, false light %).
+type Point = (f64, f64, f64, String, f64, f64);
+
 /// One curve family: a case, its numeric axis, and the other axes' values.
 #[derive(Default)]
 struct Family {
-    /// Per backend: (x, error %, frame ms, point id).
-    series: BTreeMap<String, Vec<(f64, f64, f64, String)>>,
+    /// Per backend: (x, error %, frame ms, point id, false shadow %, false light %).
+    series: BTreeMap<String, Vec<Point>>,
 }
 
 fn numeric(v: &Value) -> Option<f64> {
@@ -59,18 +62,28 @@ pub fn section(results: &[RunResult]) -> String {
             })
             .collect();
         let case = r.case.split('@').next().unwrap_or(&r.case).to_string();
-        let err = if m.judged == 0 {
-            0.0
-        } else {
-            100.0 * (m.false_shadow + m.false_light) as f64 / m.judged as f64
+        let pct = |n: u64| {
+            if m.judged == 0 {
+                0.0
+            } else {
+                100.0 * n as f64 / m.judged as f64
+            }
         };
+        let err = pct(m.false_shadow + m.false_light);
         families
             .entry((case, axis, others.join(", ")))
             .or_default()
             .series
             .entry(r.backend.clone())
             .or_default()
-            .push((x, err, m.total_ms, r.case.clone()));
+            .push((
+                x,
+                err,
+                m.total_ms,
+                r.case.clone(),
+                pct(m.false_shadow),
+                pct(m.false_light),
+            ));
     }
     if families.is_empty() {
         return String::new();
@@ -78,7 +91,8 @@ pub fn section(results: &[RunResult]) -> String {
     let mut s = String::from(
         "<h2>Error against swept parameters</h2><p>Error against the exact truth (false shadow + \
          false light, % of judged pixels) along each case's numeric sweep axis, per backend; \
-         one plot per value of the other axes. Cells: error % and frame time (ms).</p>",
+         one plot per value of the other axes. Cells: false shadow % (acne) / false light % \
+         (leaks, peter-panning) · frame time (ms).</p>",
     );
     for ((case, axis, others), fam) in &families {
         let mut xs: Vec<f64> = fam.series.values().flatten().map(|p| p.0).collect();
@@ -108,9 +122,10 @@ pub fn section(results: &[RunResult]) -> String {
                     Some(p) => {
                         let _ = write!(
                             s,
-                            "<td title=\"{}\">{:.3}% · {:.1}</td>",
+                            "<td title=\"{}\">{:.3}% / {:.3}% · {:.1}</td>",
                             esc(&p.3),
-                            p.1,
+                            p.4,
+                            p.5,
                             p.2
                         );
                     }

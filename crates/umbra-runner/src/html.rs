@@ -175,6 +175,8 @@ fn twins_section(results: &[RunResult]) -> String {
         illegal: u64,
         ms: f64,
         case_ms: f64,
+        case_error: u64,
+        twin_error: Option<u64>,
         worst: String,
     }
     let mut rows: BTreeMap<(String, String, String), Row> = BTreeMap::new();
@@ -198,6 +200,10 @@ fn twins_section(results: &[RunResult]) -> String {
             row.illegal += t.illegal;
             row.ms += t.render_ms;
             row.case_ms += m.total_ms;
+            row.case_error += t.interior_error;
+            if let Some(e) = t.twin_interior_error {
+                row.twin_error = Some(row.twin_error.unwrap_or(0) + e);
+            }
             if !t.ok && row.worst.is_empty() {
                 row.worst = r.name.clone();
             }
@@ -210,7 +216,7 @@ fn twins_section(results: &[RunResult]) -> String {
          reference's lookup allows them; <i>no_worse</i>: the twin's interior error is not larger. Pixel counts are summed \
          over runs.</p><table><tr><th>twin</th><th>agree</th><th>backend</th><th>runs</th><th>not run</th><th>failed</th>\
          <th>px differ</th><th>ties</th><th>texel/filter</th><th>edges</th><th>unjudged</th><th>illegal</th>\
-         <th>twin ms / case ms</th><th>first failing run</th></tr>",
+         <th>interior error: case → twin</th><th>twin ms / case ms</th><th>first failing run</th></tr>",
     );
     for ((name, agree, backend), r) in &rows {
         let class = if r.failed > 0 { "Fail" } else { "Pass" };
@@ -221,7 +227,7 @@ fn twins_section(results: &[RunResult]) -> String {
         };
         let _ = write!(
             s,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"{class}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{ratio:.2}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"{class}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} → {}</td><td>{ratio:.2}</td><td>{}</td></tr>",
             esc(name),
             esc(agree),
             esc(backend),
@@ -234,6 +240,8 @@ fn twins_section(results: &[RunResult]) -> String {
             r.edge,
             r.unjudged,
             r.illegal,
+            r.case_error,
+            r.twin_error.map(|e| e.to_string()).unwrap_or("–".into()),
             esc(&r.worst)
         );
     }

@@ -86,6 +86,9 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
     if let Support::Unsupported(why) = backend.supports(&Needs::of(&point.case)) {
         return Outcome::Skip(why);
     }
+    // Twins are built from the point as written: Prepared applies `scene.offset`, after
+    // which a twin that sets the offset would no longer move anything.
+    let as_written = point.clone();
     let prepared = Prepared::new(point);
     let frame = match backend.render(&prepared) {
         Ok(f) => f,
@@ -119,7 +122,15 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
             umbra_compare::reference::legal_pixels(reference, ambiguity, &truth)
         })
         .unwrap_or_default();
-    let twins = run_twins(backend, &prepared, &frame, &error, &judged, &truth);
+    let twins = run_twins(
+        backend,
+        &as_written,
+        &prepared,
+        &frame,
+        &error,
+        &judged,
+        &truth,
+    );
     for t in &twins {
         if !t.ok {
             problems.push(format!(
@@ -181,6 +192,7 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
 /// Renders every twin of the run on the same backend and compares it with `frame`.
 fn run_twins(
     backend: &mut dyn Backend,
+    as_written: &CasePoint,
     prepared: &Prepared,
     frame: &Frame,
     error: &TruthError,
@@ -188,7 +200,7 @@ fn run_twins(
     truth: &umbra_ref::truth::Truth,
 ) -> Vec<TwinMetric> {
     let interior = |e: &TruthError| e.away_from_edges.false_shadow + e.away_from_edges.false_light;
-    umbra_case::twin::twins_of(&prepared.point)
+    umbra_case::twin::twins_of(as_written)
         .into_iter()
         .map(|plan| {
             let mut m = TwinMetric {
