@@ -6,6 +6,9 @@
 //! - `cargo xtask test`: the same set-up, then the whole test suite and a conformance run.
 //! - `cargo xtask selftest`: every injected fault on every backend it applies to; a fault the
 //!   judge does not catch fails it. Part of `cargo xtask test`.
+//! - `cargo xtask sweep [--scene CASE] [--backend ID]...`: speed against error, a technique
+//!   matrix measured per backend (`umbra sweep`): CSV, Pareto plot (PNG, SVG) and an HTML
+//!   section under target/umbra/sweep/.
 //! - `cargo xtask bless [ARGS]`: a conformance run that accepts every changed or new golden
 //!   (insta's `INSTA_UPDATE=always`), then lists what changed under `golden/` for review in
 //!   `git diff` before committing. Refused under `CI=true`: CI never writes a golden.
@@ -27,10 +30,15 @@ fn main() -> ExitCode {
             mesa::ensure();
             umbra(&["selftest"], &args[1..])
         }
+        Some("sweep") => {
+            mesa::ensure();
+            umbra(&["sweep"], &args[1..])
+        }
         _ => {
             eprintln!(
                 "usage:\n  cargo xtask conformance [--filter GLOB] [--backend ID]... [--verbose]\n  \
                  cargo xtask test [-- CARGO TEST ARGS]\n  \
+                 cargo xtask sweep [--scene CASE.json] [--point ID] [--backend ID|all]... [--repeat N]\n  \
                  cargo xtask bless [--filter GLOB] [--backend ID]..."
             );
             2

@@ -10,6 +10,7 @@
 //! - [`agreement`]: mask agreement of two frames, with an optional shift radius in pixels.
 //! - [`heatmap`]: images of both, colour-coded (legend in [`heatmap`]).
 
+pub mod edges;
 pub mod heatmap;
 pub mod reference;
 

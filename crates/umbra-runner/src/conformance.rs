@@ -22,6 +22,7 @@ use std::collections::{BTreeMap, VecDeque};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use serde::Serialize;
@@ -36,6 +37,92 @@ pub const USAGE: &str = "umbra conformance [--cases DIR] [--filter GLOB] [--back
 
 /// A point's swept values, `(path, value)` in axis order.
 type SweepValues = Vec<(String, serde_json::Value)>;
+
+/// Worker start-up (spawn to hello) and, within it, context or device creation, summed over
+/// every worker of the run, in µs: part of the harness overhead the summary reports.
+static WORKER_START_US: AtomicU64 = AtomicU64::new(0);
+static CONTEXT_US: AtomicU64 = AtomicU64::new(0);
+
+/// Where a conformance run's time went, summed over its runs (worker time, not wall).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct TimeBudget {
+    /// Wall time of the whole run, s.
+    pub wall_s: f64,
+    /// Σ per-run time measured by the parent (request to answer, retries included), s.
+    pub runs_s: f64,
+    /// Σ the backends' own frame time (both passes and readback), s.
+    pub render_s: f64,
+    /// Σ the metamorphic twins (their renders and comparisons), s.
+    pub twins_s: f64,
+    /// Σ judging: truth, reference with its ambiguity, error, agreement, s.
+    pub judge_s: f64,
+    /// Σ golden checks: PNG encoding and comparison, s.
+    pub golden_s: f64,
+    /// Σ worker start-up (spawn to hello), context creation included, s.
+    pub worker_start_s: f64,
+    /// Of that, context or device creation, s.
+    pub context_s: f64,
+    /// The rest of the per-run time: case loading, tessellation, protocol, retries, s.
+    pub other_s: f64,
+}
+
+impl TimeBudget {
+    /// Sums the budget of `results`.
+    pub fn of(results: &[RunResult], wall: Duration) -> TimeBudget {
+        let mut b = TimeBudget {
+            wall_s: wall.as_secs_f64(),
+            worker_start_s: WORKER_START_US.load(Ordering::Relaxed) as f64 / 1e6,
+            context_s: CONTEXT_US.load(Ordering::Relaxed) as f64 / 1e6,
+            ..Default::default()
+        };
+        for r in results {
+            b.runs_s += r.time_s;
+            if let Some(m) = &r.metrics {
+                b.render_s += m.total_ms / 1e3;
+                b.twins_s += m.twins_ms / 1e3;
+                b.judge_s += m.judge_ms / 1e3;
+                b.golden_s += m.golden_ms / 1e3;
+            }
+        }
+        b.other_s = (b.runs_s - b.render_s - b.twins_s - b.judge_s - b.golden_s).max(0.0);
+        b
+    }
+
+    /// Worker start, context creation, judging and PNG encoding, as a share of all worker time.
+    pub fn overhead_share(&self) -> f64 {
+        let total = self.runs_s + self.worker_start_s;
+        if total == 0.0 {
+            0.0
+        } else {
+            (self.worker_start_s + self.judge_s + self.golden_s) / total
+        }
+    }
+
+    /// One line for the terminal and the report.
+    pub fn line(&self) -> String {
+        let total = (self.runs_s + self.worker_start_s).max(1e-9);
+        let pct = |x: f64| 100.0 * x / total;
+        format!(
+            "time: {:.1} s of worker time in {:.1} s wall: rendering {:.1} s ({:.0}%), twins {:.1} s ({:.0}%), judging {:.1} s ({:.0}%), goldens/PNG {:.1} s ({:.0}%), worker start {:.1} s ({:.0}%, context creation {:.1} s), other {:.1} s ({:.0}%); harness overhead (start, context, judging, PNG) {:.0}%",
+            total,
+            self.wall_s,
+            self.render_s,
+            pct(self.render_s),
+            self.twins_s,
+            pct(self.twins_s),
+            self.judge_s,
+            pct(self.judge_s),
+            self.golden_s,
+            pct(self.golden_s),
+            self.worker_start_s,
+            pct(self.worker_start_s),
+            self.context_s,
+            self.other_s,
+            pct(self.other_s),
+            100.0 * self.overhead_share()
+        )
+    }
+}
 
 /// One planned run.
 #[derive(Clone, Debug)]
@@ -79,6 +166,8 @@ pub struct RunResult {
 }
 
 struct Settings {
+    /// Directory of the shared judging basis ([`crate::judge_cache`]).
+    judge_cache: String,
     timeout: Duration,
     golden: Option<PathBuf>,
     failures: PathBuf,
@@ -228,7 +317,16 @@ pub fn main(argv: &[String]) -> i32 {
     };
     // Absolute, because workers may run with another working directory one day.
     let golden = golden.map(|g| std::fs::canonicalize(&g).unwrap_or(g));
+    // The judging basis (truth and reference) of each point, shared by every backend's worker
+    // through the cache; emptied so that nothing from an older build is read.
+    let judge_cache = std::fs::canonicalize(&out)
+        .unwrap_or(out.clone())
+        .join("cache")
+        .join("judge");
+    let _ = std::fs::remove_dir_all(&judge_cache);
+    let judge_cache = judge_cache.to_string_lossy().into_owned();
     let settings = Settings {
+        judge_cache,
         timeout,
         golden,
         failures: out.join("latest").join("failures"),
@@ -268,7 +366,8 @@ pub fn main(argv: &[String]) -> i32 {
     }
 
     // Report.
-    if let Err(e) = write_reports(&out, &results, &drivers, started.elapsed()) {
+    let budget = TimeBudget::of(&results, started.elapsed());
+    if let Err(e) = write_reports(&out, &results, &drivers, &budget) {
         eprintln!("error: cannot write reports under {}: {e}", out.display());
         return 125;
     }
@@ -292,6 +391,7 @@ pub fn main(argv: &[String]) -> i32 {
         );
     }
     let passed = count("Pass") + count("ExpectedFail") + count("Flake");
+    println!("{}", budget.line());
     println!("statuses: {}", breakdown(&results));
     // The closing line, alone, in the form CI tools read.
     println!(
@@ -415,7 +515,20 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
     if crate::fake::enabled() {
         env.push(("UMBRA_FAKE_BACKENDS", "1"));
     }
-    let start_worker = || Worker::start(backend, &env, settings.timeout);
+    env.push((crate::judge_cache::ENV, &settings.judge_cache));
+    let start_worker = || {
+        let t = Instant::now();
+        let w = Worker::start(backend, &env, settings.timeout);
+        WORKER_START_US.fetch_add(t.elapsed().as_micros() as u64, Ordering::Relaxed);
+        if let Some(ms) = w
+            .as_ref()
+            .ok()
+            .and_then(|w| w.hello["ready"]["create_ms"].as_f64())
+        {
+            CONTEXT_US.fetch_add((ms * 1e3) as u64, Ordering::Relaxed);
+        }
+        w
+    };
     let mut worker = start_worker();
     // A worker that cannot even be started (our own binary missing or replaced mid-run) is
     // the harness's failure, not the backend's: its runs crash rather than skip, so that it
@@ -466,6 +579,7 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
                     index: p.index,
                     failures: Some(settings.failures.clone()),
                     golden: settings.golden.clone(),
+                    repeat: None,
                 };
                 let first = attempt(&mut worker, &start_worker, &req, settings.timeout);
                 if first.0.is_failure() {
@@ -593,8 +707,9 @@ fn write_reports(
     out: &Path,
     results: &[RunResult],
     drivers: &str,
-    wall: Duration,
+    budget: &TimeBudget,
 ) -> std::io::Result<()> {
+    let wall = Duration::from_secs_f64(budget.wall_s);
     let mut csv = String::new();
     let mut failures = String::new();
     let mut errors = String::from(
@@ -691,6 +806,8 @@ fn write_reports(
     let report = serde_json::json!({
         "schema": 1,
         "wall_s": wall.as_secs_f64(),
+        "time_budget": budget,
+        "harness_overhead_share": budget.overhead_share(),
         "command": std::env::args().collect::<Vec<_>>().join(" "),
         "runs": runs,
     });
@@ -702,6 +819,7 @@ fn write_reports(
         &out.join("latest").join("failures"),
         &command,
         wall.as_secs_f64(),
+        &budget.line(),
     );
     let stamp = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)

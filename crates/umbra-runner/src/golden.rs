@@ -55,10 +55,14 @@ pub fn stem(name: &str) -> String {
             }
         })
         .collect();
-    let hash = name.bytes().fold(0x811c_9dc5u32, |h, b| {
+    format!("{plain}-{:08x}", fnv1a(name))
+}
+
+/// 32-bit FNV-1a of a name: a stable short tag for file names.
+pub fn fnv1a(name: &str) -> u32 {
+    name.bytes().fold(0x811c_9dc5u32, |h, b| {
         (h ^ u32::from(b)).wrapping_mul(0x0100_0193)
-    });
-    format!("{plain}-{hash:08x}")
+    })
 }
 
 /// Checks `frame` against golden `name` in `dir`; `legal[i]` marks pixels where a shadow

@@ -54,6 +54,7 @@ pub fn report(
     failures_dir: &Path,
     command: &str,
     wall_s: f64,
+    timing: &str,
 ) -> String {
     let mut s = String::from(
         "<!doctype html><html><head><meta charset=\"utf-8\"><title>umbra conformance</title><style>\
@@ -65,10 +66,11 @@ pub fn report(
     );
     let _ = write!(
         s,
-        "<h1>umbra conformance</h1><p>{} runs in {wall_s:.1} s: <b>{}</b></p><p>command: <code>{}</code></p>",
+        "<h1>umbra conformance</h1><p>{} runs in {wall_s:.1} s: <b>{}</b></p><p>command: <code>{}</code></p><p>{}</p>",
         results.len(),
         crate::conformance::breakdown(results),
-        esc(command)
+        esc(command),
+        esc(timing)
     );
     s.push_str("<h2>Drivers</h2><table><tr><th>backend</th><th>vendor | renderer | version | extensions</th></tr>");
     for line in drivers.lines() {
@@ -115,6 +117,13 @@ pub fn report(
     }
     s.push_str(&twins_section(results));
     s.push_str(&crate::error_curves::section(results));
+    // The latest `umbra sweep` (speed against error), when one has run in this target dir.
+    if let Ok(sweep) =
+        std::fs::read_to_string(std::path::Path::new("target/umbra/sweep/section.html"))
+    {
+        s.push_str("<p><i>From the latest <code>cargo xtask sweep</code> (target/umbra/sweep/), not from this conformance run:</i></p>");
+        s.push_str(&sweep);
+    }
     s.push_str(
         "<h2>All runs</h2><table><tr><th>run</th><th>status</th><th>false shadow</th><th>false light</th>\
          <th>interior fs/fl</th><th>agreement</th><th>illegal</th><th>SSIM ref</th><th>SSIM golden</th><th>render ms</th><th>clock</th></tr>",

@@ -11,8 +11,14 @@ fn main() -> ExitCode {
         Some("conformance") => conformance::main(&argv[1..]),
         Some("worker") => umbra_runner::worker::main(&argv[1..]),
         Some("selftest") => umbra_runner::selftest::main(&argv[1..]),
+        Some("sweep") => umbra_runner::sweep::main(&argv[1..]),
         Some("-h" | "--help" | "help") => {
-            println!("usage:\n  {}\n  {}", render_cmd::USAGE, conformance::USAGE);
+            println!(
+                "usage:\n  {}\n  {}\n  {}",
+                render_cmd::USAGE,
+                conformance::USAGE,
+                umbra_runner::sweep::USAGE
+            );
             0
         }
         other => {

@@ -33,6 +33,17 @@ impl Worker {
     pub fn start(id: &str, env: &[(&str, &str)], limit: Duration) -> Result<Worker, String> {
         let exe =
             std::env::current_exe().map_err(|e| format!("cannot find this executable: {e}"))?;
+        Worker::start_exe(&exe, id, env, limit)
+    }
+
+    /// Like [`Worker::start`], with the `umbra` executable given (benchmarks and tests, whose
+    /// own executable is not `umbra`).
+    pub fn start_exe(
+        exe: &std::path::Path,
+        id: &str,
+        env: &[(&str, &str)],
+        limit: Duration,
+    ) -> Result<Worker, String> {
         let mut cmd = Command::new(exe);
         cmd.args(["worker", "--backend", id])
             .stdin(Stdio::piped())

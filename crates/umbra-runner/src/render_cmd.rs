@@ -108,7 +108,8 @@ fn usage_error(msg: &str) -> i32 {
 
 /// A run id as a file name (`/` and other awkward characters replaced).
 pub fn file_name(id: &str) -> String {
-    id.chars()
+    let plain: String = id
+        .chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || "-_.=@,".contains(c) {
                 c
@@ -116,7 +117,13 @@ pub fn file_name(id: &str) -> String {
                 '_'
             }
         })
-        .collect()
+        .collect();
+    // File systems stop at 255 bytes; long sweep ids (JSON values) keep a prefix and a hash.
+    if plain.len() <= 120 {
+        plain
+    } else {
+        format!("{}-{:08x}", &plain[..100], crate::golden::fnv1a(id))
+    }
 }
 
 /// Writes the images of a judged run into `dir`.

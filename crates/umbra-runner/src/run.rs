@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
 use umbra_case::format::{InteriorError, TwinAgree};
-use umbra_case::{Backend, CasePoint, ClipDepth, Frame, Needs, Prepared, Support};
+use umbra_case::{Backend, CasePoint, Frame, Needs, Prepared, Support};
 use umbra_compare::TruthError;
 use umbra_compare::reference::RefAgreement;
 use umbra_ref::truth::{Truth, ground_truth};
@@ -31,8 +31,10 @@ pub struct Judged {
     /// Per pixel: whether a shadow difference from the reference is legal there (empty for
     /// the reference itself, whose goldens are held exactly).
     pub legal: Vec<bool>,
-    /// Time spent judging (truth, reference, error).
+    /// Time spent judging (truth, reference, error, agreement), twins excluded.
     pub judge_time: Duration,
+    /// Time spent rendering and judging the twins.
+    pub twins_time: Duration,
     /// The metamorphic twins, each rendered on the same backend and compared.
     pub twins: Vec<TwinMetric>,
     /// Problems with the result (empty = as expected).
@@ -103,12 +105,12 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
         ));
     }
     let start = Instant::now();
-    let truth = ground_truth(&prepared);
+    // The truth, and the reference's lookup ambiguity (which also judges the twins, so even
+    // the reference needs it): computed once per point in a conformance run.
+    let crate::judge_cache::Basis { truth, judged } = crate::judge_cache::basis(&prepared);
     let error = umbra_compare::truth_error(&frame, &truth);
     let mut problems = Vec::new();
     let is_ref = backend.id().0 == "ref";
-    // The reference's lookup ambiguity also judges the twins, so even the reference needs it.
-    let judged = umbra_ref::render_judged(&prepared, ClipDepth::MinusOneToOne);
     let judged_reference = (!is_ref).then_some(&judged);
     let agreement = judged_reference.as_ref().map(|(reference, ambiguity)| {
         umbra_compare::reference::judge(reference, ambiguity, &frame, &truth)
@@ -122,6 +124,7 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
             umbra_compare::reference::legal_pixels(reference, ambiguity, &truth)
         })
         .unwrap_or_default();
+    let twins_start = Instant::now();
     let twins = run_twins(
         backend,
         &as_written,
@@ -131,6 +134,7 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
         &judged,
         &truth,
     );
+    let twins_time = twins_start.elapsed();
     for t in &twins {
         if !t.ok {
             problems.push(format!(
@@ -157,7 +161,7 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
             ));
         }
     }
-    let judge_time = start.elapsed();
+    let judge_time = start.elapsed().saturating_sub(twins_time);
     let a = error.away_from_edges;
     let (shadow_bad, light_bad) = match prepared.case().expect.interior_error {
         InteriorError::Reported => (false, false),
@@ -184,6 +188,7 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
         reference,
         legal,
         judge_time,
+        twins_time,
         twins,
         problems,
     }))

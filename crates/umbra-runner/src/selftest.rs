@@ -165,6 +165,7 @@ fn hunt(
             index: *index,
             failures: None,
             golden: None,
+            repeat: None,
         };
         match worker.run(&req, timeout) {
             Reply::Report(r) if r.outcome == "fail" => {

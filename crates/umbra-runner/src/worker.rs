@@ -27,6 +27,10 @@ pub struct Request {
     pub failures: Option<PathBuf>,
     /// The golden directory (none: no golden check).
     pub golden: Option<PathBuf>,
+    /// For `umbra sweep`: render 1 + N times and report timings and error only (no
+    /// reference, twins or goldens).
+    #[serde(default)]
+    pub repeat: Option<u32>,
 }
 
 /// What one run produced (the raw outcome; expectations are the parent's business).
@@ -42,6 +46,9 @@ pub struct RunReport {
     pub metrics: Option<Metrics>,
     /// `unchanged`, `written` or `changed` when a golden was checked.
     pub golden: Option<String>,
+    /// A sweep measurement (requests with `repeat`).
+    #[serde(default)]
+    pub measured: Option<crate::measure::Measured>,
 }
 
 /// The figures of one judged run.
@@ -86,6 +93,16 @@ pub struct Metrics {
     /// The metamorphic twins (the built-in bias-order twin first).
     #[serde(default)]
     pub twins: Vec<crate::run::TwinMetric>,
+    /// Harness time of the run, ms: judging (truth, reference, agreement), the twins (their
+    /// renders and judging), and the golden check (PNG encoding and comparison).
+    #[serde(default)]
+    pub judge_ms: f64,
+    /// See `judge_ms`.
+    #[serde(default)]
+    pub twins_ms: f64,
+    /// See `judge_ms`.
+    #[serde(default)]
+    pub golden_ms: f64,
 }
 
 /// Runs the worker loop; returns the exit code.
@@ -103,10 +120,12 @@ pub fn main(argv: &[String]) -> i32 {
     };
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
+    let created = std::time::Instant::now();
     let mut backend = match crate::registry::create(id) {
         Ok(b) => {
             let i = b.info();
-            let hello = serde_json::json!({ "ready": { "vendor": i.vendor, "renderer": i.renderer, "version": i.version, "extensions": i.extensions } });
+            let create_ms = created.elapsed().as_secs_f64() * 1e3;
+            let hello = serde_json::json!({ "ready": { "vendor": i.vendor, "renderer": i.renderer, "version": i.version, "extensions": i.extensions, "create_ms": create_ms } });
             let _ = writeln!(out, "{hello}");
             let _ = out.flush();
             b
@@ -159,6 +178,26 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
         };
     };
     let name = format!("{}/{}", backend.id(), point.id());
+    if let Some(n) = req.repeat {
+        use crate::measure::{Measurement, measure};
+        return match measure(backend, point, n) {
+            Measurement::Done(m) => RunReport {
+                outcome: "pass".into(),
+                measured: Some(m),
+                ..Default::default()
+            },
+            Measurement::Skip(why) => RunReport {
+                outcome: "skip".into(),
+                reason: why,
+                ..Default::default()
+            },
+            Measurement::Error(e) => RunReport {
+                outcome: "fail".into(),
+                reason: e,
+                ..Default::default()
+            },
+        };
+    }
     match run_point(backend, point) {
         Outcome::Skip(why) => RunReport {
             outcome: "skip".into(),
@@ -203,9 +242,13 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                     "cpu-wall".into()
                 },
                 twins: j.twins.clone(),
+                judge_ms: j.judge_time.as_secs_f64() * 1e3,
+                twins_ms: j.twins_time.as_secs_f64() * 1e3,
+                golden_ms: 0.0,
             };
             let mut problems = j.problems.clone();
             let mut metrics = metrics;
+            let golden_start = std::time::Instant::now();
             let golden = req.golden.as_ref().map(|dir| {
                 let (g, msg, ssim) = crate::golden::check(dir, &name, &j.frame, &j.legal);
                 metrics.ssim_golden = ssim;
@@ -214,6 +257,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 }
                 format!("{g:?}").to_lowercase()
             });
+            metrics.golden_ms = golden_start.elapsed().as_secs_f64() * 1e3;
             let failed = !problems.is_empty();
             if failed {
                 if let Some(dir) = &req.failures {
@@ -229,6 +273,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 details: describe(&j),
                 metrics: Some(metrics),
                 golden,
+                measured: None,
             }
         }
     }

@@ -1,0 +1,84 @@
+//! Each backend's frame for the standard scene (the packed cubes with the light behind them,
+//! as written: 1024² D24 map, NEAREST, polygon offset 2/4, 384² view), median of 9 renders
+//! after a warm-up, every backend in its own worker process and one after the other in this
+//! one run, so the ratios between them are measured side by side. The clock column says
+//! whether a time comes from GPU timer queries or CPU wall.
+//!
+//! Then the harness overhead of the latest conformance run in this target directory
+//! (target/umbra/latest/report.json), when there is one: `cargo xtask conformance` measures
+//! it on every run (worker start, context creation, judging, PNG encoding).
+//!
+//! `cargo bench -p umbra-runner --bench frames`
+
+use std::path::Path;
+use std::time::Duration;
+
+use umbra_runner::sweep::{DEFAULT_SCENE, measure_backends};
+
+fn main() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let exe = Path::new(env!("CARGO_BIN_EXE_umbra"));
+    let file = root.join(DEFAULT_SCENE.0);
+    let points = umbra_case::load_file(&file).unwrap_or_else(|e| panic!("{e}"));
+    let index = points
+        .iter()
+        .position(|p| p.id() == DEFAULT_SCENE.1)
+        .expect("the standard point");
+    // Every backend, each in a worker with its driver's environment (a backend whose driver is
+    // missing says so in its row).
+    let backends: Vec<String> = umbra_runner::registry::known();
+    println!(
+        "{} on every backend, median of 9 after a warm-up:",
+        DEFAULT_SCENE.1
+    );
+    let results = measure_backends(exe, &file, index, &backends, 9, Duration::from_secs(600));
+    let total = |b: &str| {
+        results
+            .iter()
+            .find(|(id, _)| id == b)
+            .and_then(|(_, r)| r.as_ref().ok())
+            .map(|m| m.total_ms)
+    };
+    let (reference, llvmpipe) = (total("ref"), total("gl33/llvmpipe"));
+    println!(
+        "{:<18} {:>10} {:>10} {:>10} {:>9} {:>11} {:>15}",
+        "backend", "shadow ms", "lit ms", "frame ms", "clock", "vs ref", "vs gl33/llvmpipe"
+    );
+    for (b, r) in &results {
+        match r {
+            Ok(m) => println!(
+                "{b:<18} {:>10.2} {:>10.2} {:>10.2} {:>9} {:>10.2}x {:>14.2}x",
+                m.shadow_ms,
+                m.lit_ms,
+                m.total_ms,
+                m.clock,
+                reference.map_or(f64::NAN, |x| m.total_ms / x),
+                llvmpipe.map_or(f64::NAN, |x| m.total_ms / x),
+            ),
+            Err(e) => println!("{b:<18} not measured: {e}"),
+        }
+    }
+    if let (Some(r), Some(l)) = (reference, llvmpipe) {
+        println!(
+            "reference / gl33/llvmpipe frame time, same frame, same run: {:.2}",
+            r / l
+        );
+    }
+    match std::fs::read_to_string(root.join("target/umbra/latest/report.json")) {
+        Ok(text) => {
+            let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
+            match v.get("harness_overhead_share").and_then(|x| x.as_f64()) {
+                Some(share) => println!(
+                    "harness overhead of the latest conformance run ({}): {:.1}% ({})",
+                    v["command"].as_str().unwrap_or(""),
+                    100.0 * share,
+                    v["time_budget"]
+                ),
+                None => println!("the latest conformance report predates the time budget"),
+            }
+        }
+        Err(_) => {
+            println!("no conformance report yet: run `cargo xtask conformance` for the overhead")
+        }
+    }
+}

@@ -1,0 +1,105 @@
+//! One technique point measured for `umbra sweep`: frame time as the median of N renders after
+//! one warm-up render (GPU timer queries where the backend has them, else CPU wall; the clock
+//! is recorded), and the error of one of those frames against the exact truth.
+
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+use umbra_case::{Backend, CasePoint, Clock, Needs, Prepared, Support};
+
+/// What a measured point reports.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Measured {
+    /// `gpu` (timer queries) or `cpu-wall`; `mixed` if the renders disagreed.
+    pub clock: String,
+    /// Timed renders after the warm-up.
+    pub samples: u32,
+    /// Median shadow pass, ms.
+    pub shadow_ms: f64,
+    /// Median lit pass, ms.
+    pub lit_ms: f64,
+    /// Median whole frame (both passes and readback), ms.
+    pub total_ms: f64,
+    /// Judged pixels.
+    pub judged: u64,
+    /// False shadow (acne), pixels.
+    pub false_shadow: u64,
+    /// False light (leaks, peter-panning), pixels.
+    pub false_light: u64,
+    /// Edge displacement against the truth: mean, px.
+    pub edge_mean_px: Option<f64>,
+    /// Edge displacement against the truth: max, px.
+    pub edge_max_px: Option<f64>,
+}
+
+/// Outcome of measuring one point.
+pub enum Measurement {
+    /// Measured.
+    Done(Measured),
+    /// The backend cannot run the technique, and why.
+    Skip(String),
+    /// A render failed.
+    Error(String),
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        0.0
+    } else if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Renders `point` 1 + `repeat` times on `backend` and judges the last frame.
+pub fn measure(backend: &mut dyn Backend, point: CasePoint, repeat: u32) -> Measurement {
+    if let Support::Unsupported(why) = backend.supports(&Needs::of(&point.case)) {
+        return Measurement::Skip(why);
+    }
+    let prepared = Prepared::new(point);
+    let mut frames = Vec::new();
+    for _ in 0..=repeat.max(1) {
+        match backend.render(&prepared) {
+            Ok(f) => frames.push(f),
+            Err(e) => return Measurement::Error(e.to_string()),
+        }
+    }
+    let timed = &frames[1..];
+    let ms = |d: Duration| d.as_secs_f64() * 1e3;
+    let clocks: Vec<Option<Clock>> = timed.iter().map(|f| f.timings.clock).collect();
+    let clock = if clocks.iter().all(|c| *c == Some(Clock::Gpu)) {
+        "gpu"
+    } else if clocks.iter().all(|c| *c != Some(Clock::Gpu)) {
+        "cpu-wall"
+    } else {
+        "mixed"
+    };
+    let frame = &timed[timed.len() - 1];
+    let truth = umbra_ref::truth::ground_truth(&prepared);
+    let error = umbra_compare::truth_error(frame, &truth);
+    let edges = umbra_compare::edges::edge_displacement(frame, &truth);
+    Measurement::Done(Measured {
+        clock: clock.into(),
+        samples: timed.len() as u32,
+        shadow_ms: median(timed.iter().map(|f| ms(f.timings.shadow_pass)).collect()),
+        lit_ms: median(timed.iter().map(|f| ms(f.timings.lit_pass)).collect()),
+        total_ms: median(timed.iter().map(|f| ms(f.timings.total)).collect()),
+        judged: error.all.judged,
+        false_shadow: error.all.false_shadow,
+        false_light: error.all.false_light,
+        edge_mean_px: edges.mean_px,
+        edge_max_px: edges.max_px,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn median_of_odd_and_even() {
+        assert_eq!(super::median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(super::median(vec![4.0, 1.0, 2.0, 3.0]), 2.5);
+    }
+}
