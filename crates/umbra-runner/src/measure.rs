@@ -1,6 +1,8 @@
 //! One technique point measured for `umbra sweep`: frame time as the median of N renders after
-//! one warm-up render (GPU timer queries where the backend has them, else CPU wall; the clock
-//! is recorded), and the error of one of those frames against the exact truth.
+//! one warm-up render, and the error of one of those frames against the exact truth. The frame
+//! time is the shadow pass plus the lit pass, timed by GPU timer queries where the backend has
+//! them, else CPU wall (the clock is recorded); the CPU wall of the whole render call, set-up
+//! and readback included, is kept beside it.
 
 use std::time::Duration;
 
@@ -18,7 +20,9 @@ pub struct Measured {
     pub shadow_ms: f64,
     /// Median lit pass, ms.
     pub lit_ms: f64,
-    /// Median whole frame (both passes and readback), ms.
+    /// Median frame time: shadow pass + lit pass, on `clock`, ms. The sweep's time axis.
+    pub frame_ms: f64,
+    /// Median CPU wall of the whole `render` call (set-up, both passes, readback), ms.
     pub total_ms: f64,
     /// Judged pixels.
     pub judged: u64,
@@ -86,6 +90,12 @@ pub fn measure(backend: &mut dyn Backend, point: CasePoint, repeat: u32) -> Meas
         samples: timed.len() as u32,
         shadow_ms: median(timed.iter().map(|f| ms(f.timings.shadow_pass)).collect()),
         lit_ms: median(timed.iter().map(|f| ms(f.timings.lit_pass)).collect()),
+        frame_ms: median(
+            timed
+                .iter()
+                .map(|f| ms(f.timings.shadow_pass + f.timings.lit_pass))
+                .collect(),
+        ),
         total_ms: median(timed.iter().map(|f| ms(f.timings.total)).collect()),
         judged: error.all.judged,
         false_shadow: error.all.false_shadow,

@@ -75,7 +75,7 @@ where
         .enumerate()
         .filter_map(|(i, r)| {
             let m = r.result.as_ref().ok()?;
-            Some((i, m.total_ms.max(1e-3), r.error_pct()?))
+            Some((i, m.frame_ms.max(1e-3), r.error_pct()?))
         })
         .collect();
     let (mut tmin, mut tmax) = (f64::INFINITY, 0.0f64);
@@ -109,7 +109,7 @@ where
         .map_err(err)?;
     chart
         .configure_mesh()
-        .x_desc("frame time, ms (median of N after warm-up; log scale)")
+        .x_desc("frame time (shadow + lit pass), ms: median of N after warm-up; log")
         .y_desc(format!(
             "error vs truth, % of judged px (log; 0 drawn at {floor:.2e})"
         ))

@@ -384,7 +384,7 @@ pub fn main(argv: &[String]) -> i32 {
             let line = match &result {
                 Ok(m) => format!(
                     "{:.2} ms ({}), error {:.3}%",
-                    m.total_ms,
+                    m.frame_ms,
                     m.clock,
                     100.0 * (m.false_shadow + m.false_light) as f64 / m.judged.max(1) as f64
                 ),
@@ -468,7 +468,7 @@ pub fn pareto(rows: &[Row]) -> Vec<bool> {
         r.result
             .as_ref()
             .ok()
-            .map(|m| (m.total_ms, r.error_pct().unwrap_or(f64::INFINITY)))
+            .map(|m| (m.frame_ms, r.error_pct().unwrap_or(f64::INFINITY)))
     };
     rows.iter()
         .map(|r| {
@@ -490,7 +490,7 @@ fn write_outputs(
 ) -> std::io::Result<()> {
     let front = pareto(rows);
     let mut csv = String::from(
-        "backend,size,format,filter,bias,frustum,status,clock,samples,shadow_ms,lit_ms,total_ms,judged,false_shadow,false_light,error_pct,edge_mean_px,edge_max_px,pareto,reason\n",
+        "backend,size,format,filter,bias,frustum,status,clock,samples,shadow_ms,lit_ms,frame_ms,wall_ms,judged,false_shadow,false_light,error_pct,edge_mean_px,edge_max_px,pareto,reason\n",
     );
     for (r, on_front) in rows.iter().zip(&front) {
         let t = &r.technique;
@@ -499,7 +499,7 @@ fn write_outputs(
             Ok(m) => {
                 let _ = writeln!(
                     csv,
-                    "{},{},{},{},{},{},ok,{},{},{:.3},{:.3},{:.3},{},{},{},{:.4},{},{},{on_front},",
+                    "{},{},{},{},{},{},ok,{},{},{:.3},{:.3},{:.3},{:.3},{},{},{},{:.4},{},{},{on_front},",
                     r.backend,
                     t.size,
                     t.format,
@@ -510,6 +510,7 @@ fn write_outputs(
                     m.samples,
                     m.shadow_ms,
                     m.lit_ms,
+                    m.frame_ms,
                     m.total_ms,
                     m.judged,
                     m.false_shadow,
@@ -522,7 +523,7 @@ fn write_outputs(
             Err(e) => {
                 let _ = writeln!(
                     csv,
-                    "{},{},{},{},{},{},{},,,,,,,,,,,,false,\"{}\"",
+                    "{},{},{},{},{},{},{},,,,,,,,,,,,,false,\"{}\"",
                     r.backend,
                     t.size,
                     t.format,
@@ -579,9 +580,10 @@ fn section(
 ) -> String {
     let svg = std::fs::read_to_string(out.join("pareto.svg")).unwrap_or_default();
     let mut s = format!(
-        "<h2>Speed against error: {}</h2><p>command: <code>{}</code>, {:.1} s. Frame time: median \
-         of N renders after a warm-up (clock per point in sweep.csv: <i>gpu</i> timer queries or \
-         <i>cpu-wall</i>). Error: false shadow + false light against the exact truth, % of \
+        "<h2>Speed against error: {}</h2><p>command: <code>{}</code>, {:.1} s. Frame time: shadow \
+         pass + lit pass, median of N renders after a warm-up, on the clock sweep.csv names per \
+         point (<i>gpu</i>: timer queries; <i>cpu-wall</i>); <code>wall_ms</code> there adds set-up \
+         and readback. Error: false shadow + false light against the exact truth, % of \
          judged pixels. The front (bold) holds the points no other point of the same backend \
          beats on both.</p>{svg}",
         esc(scene),
@@ -596,7 +598,7 @@ fn section(
     for (backend, list) in &by_backend {
         let mut on: Vec<&(usize, &Row)> = list.iter().filter(|(i, _)| front[*i]).collect();
         on.sort_by(|a, b| {
-            let t = |r: &Row| r.result.as_ref().map(|m| m.total_ms).unwrap_or(0.0);
+            let t = |r: &Row| r.result.as_ref().map(|m| m.frame_ms).unwrap_or(0.0);
             t(a.1).total_cmp(&t(b.1))
         });
         for (_, r) in on {
@@ -606,7 +608,7 @@ fn section(
                     "<tr class=\"front\"><td>{}</td><td>{}</td><td>{:.2}</td><td>{}</td><td>{:.3}</td><td>{}</td><td>{}</td><td>{} / {}</td></tr>",
                     esc(backend),
                     esc(&r.technique.label()),
-                    m.total_ms,
+                    m.frame_ms,
                     m.clock,
                     r.error_pct().unwrap_or_default(),
                     m.false_shadow,
@@ -643,8 +645,8 @@ fn section(
                 esc(&r.technique.bias),
                 r.error_pct().unwrap_or_default(),
                 f.error_pct().unwrap_or_default(),
-                a.total_ms,
-                b.total_ms
+                a.frame_ms,
+                b.frame_ms
             );
         }
     }
@@ -658,7 +660,7 @@ fn section(
     }
     // Frame time relative to the reference, same technique, same run.
     if rows.iter().any(|r| r.backend == "ref") {
-        s.push_str("<h3>Frame time relative to the reference</h3><p>Median over the techniques both ran, of this backend's frame time over the reference's (same frame, same run).</p><table><tr><th>backend</th><th>techniques</th><th>median ratio backend / ref</th></tr>");
+        s.push_str("<h3>Frame time relative to the reference</h3><p>Median over the techniques both ran, of this backend's frame time (passes) over the reference's (same frame, same run).</p><table><tr><th>backend</th><th>techniques</th><th>median ratio backend / ref</th></tr>");
         for backend in by_backend.keys().filter(|b| **b != "ref") {
             let mut ratios: Vec<f64> = rows
                 .iter()
@@ -668,7 +670,7 @@ fn section(
                         .iter()
                         .find(|o| o.backend == "ref" && o.technique == r.technique)?;
                     let (a, b) = (r.result.as_ref().ok()?, reference.result.as_ref().ok()?);
-                    (b.total_ms > 0.0).then(|| a.total_ms / b.total_ms)
+                    (b.frame_ms > 0.0).then(|| a.frame_ms / b.frame_ms)
                 })
                 .collect();
             ratios.sort_by(f64::total_cmp);
@@ -703,7 +705,7 @@ mod tests {
                 light: Value::Null,
             },
             result: Ok(Measured {
-                total_ms: ms,
+                frame_ms: ms,
                 judged: 100,
                 false_shadow: fs,
                 ..Default::default()
