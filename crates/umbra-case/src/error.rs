@@ -58,6 +58,19 @@ impl std::error::Error for CaseError {}
 pub struct CaseErrors(pub Vec<CaseError>);
 
 impl CaseErrors {
+    /// The same errors with `context` (such as "at sweep point x=1: ") before each message.
+    pub fn in_context(self, context: &str) -> CaseErrors {
+        CaseErrors(
+            self.0
+                .into_iter()
+                .map(|mut e| {
+                    e.message = format!("{context}{}", e.message);
+                    e
+                })
+                .collect(),
+        )
+    }
+
     /// The first error (there is always one).
     pub fn first(&self) -> &CaseError {
         &self.0[0]

@@ -182,16 +182,7 @@ fn expand(base: &Value, case: &Case, file: &Path) -> Result<Vec<CasePoint>, Case
             );
             e
         })?;
-        validate(&point, file).map_err(|CaseErrors(es)| {
-            CaseErrors(
-                es.into_iter()
-                    .map(|mut e| {
-                        e.message = format!("{context}{}", e.message);
-                        e
-                    })
-                    .collect(),
-            )
-        })?;
+        validate(&point, file).map_err(|e| e.in_context(&context))?;
         points.push(CasePoint {
             file: file.to_path_buf(),
             case: point,

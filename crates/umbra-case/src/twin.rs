@@ -89,16 +89,7 @@ fn with_values(
         e.fix = format!("{} (the value comes from {what}.set)", e.fix);
         CaseErrors(vec![e])
     })?;
-    validate(&case, file).map_err(|CaseErrors(es)| {
-        CaseErrors(
-            es.into_iter()
-                .map(|mut e| {
-                    e.message = format!("{context}{}", e.message);
-                    e
-                })
-                .collect(),
-        )
-    })?;
+    validate(&case, file).map_err(|e| e.in_context(&context))?;
     let mut values = point.values.clone();
     values.extend(set.iter().map(|(p, v)| (p.clone(), v.clone())));
     Ok(CasePoint {

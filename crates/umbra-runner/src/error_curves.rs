@@ -12,6 +12,8 @@ use std::fmt::Write as _;
 
 use serde_json::Value;
 
+use crate::html::esc;
+
 use crate::conformance::RunResult;
 
 /// One run on a curve: (x, error %, frame ms, point id, false shadow %, false light %).
@@ -30,13 +32,6 @@ fn numeric(v: &Value) -> Option<f64> {
         Value::Array(a) => a.first().and_then(Value::as_f64),
         _ => None,
     }
-}
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }
 
 /// The report section (empty when no case has a numeric axis).

@@ -9,7 +9,8 @@ use std::path::Path;
 use crate::conformance::RunResult;
 use crate::status::Status;
 
-fn esc(s: &str) -> String {
+/// Escapes text for HTML (element content and quoted attributes).
+pub fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")

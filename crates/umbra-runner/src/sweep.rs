@@ -22,6 +22,7 @@ use std::time::{Duration, Instant};
 use serde_json::{Value, json};
 
 use crate::args::Args;
+use crate::html::esc;
 use crate::measure::Measured;
 use crate::pool::{Reply, Worker};
 use crate::worker::Request;
@@ -559,13 +560,6 @@ fn write_outputs(
         ),
     )?;
     Ok(())
-}
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }
 
 /// The HTML section: the plot, the front per backend, fitted vs fixed at equal cost, and the
