@@ -24,14 +24,14 @@
 //!
 //! Any other disagreement is illegal and fails the run.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use umbra_case::Frame;
 use umbra_ref::truth::{Class, Truth};
 
 use crate::{Agreement, agreement};
 
 /// Agreement with the reference, with each disagreement classified.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct RefAgreement {
     /// Pixels covered in both.
     pub compared: u64,
@@ -48,6 +48,17 @@ pub struct RefAgreement {
     pub legal_unjudged: u64,
     /// Of those, neither: illegal.
     pub illegal: u64,
+}
+
+impl RefAgreement {
+    /// The legal classes, as every message states them:
+    /// `legal: T ties, X texel/filter, E edges, U unjudged`.
+    pub fn legal_summary(&self) -> String {
+        format!(
+            "legal: {} ties, {} texel/filter, {} edges, {} unjudged",
+            self.legal_tie, self.legal_texel, self.legal_edge, self.legal_unjudged
+        )
+    }
 }
 
 /// Judges `frame` against the `reference` frame (rendered with

@@ -198,23 +198,14 @@ pub fn main(argv: &[String]) -> i32 {
     let cases_dir = PathBuf::from(args.value("cases").unwrap_or("cases"));
     let out = PathBuf::from(args.value("out").unwrap_or("target/umbra"));
     let filter = args.value("filter").unwrap_or("*").to_string();
-    let mut backends: Vec<String> = args
-        .values("backend")
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-    if backends.is_empty() {
-        backends = crate::registry::known();
-    }
-    for b in &backends {
-        if !crate::registry::is_known(b) {
-            eprintln!(
-                "error: unknown backend {b:?}; this build has: {}",
-                crate::registry::known().join(", ")
-            );
-            return 125;
-        }
-    }
+    let backends =
+        match crate::registry::selected(&args.values("backend"), crate::registry::known()) {
+            Ok(b) => b,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return 125;
+            }
+        };
     let shard = match args.value("shard").map(parse_shard).transpose() {
         Ok(s) => s.unwrap_or((0, 1)),
         Err(e) => return usage(&e),
@@ -727,12 +718,12 @@ fn write_reports(
                 t.name,
                 t.agree,
                 t.skipped.is_some(),
-                t.differ,
-                t.legal_tie,
-                t.legal_texel,
-                t.legal_edge,
-                t.legal_unjudged,
-                t.illegal,
+                t.pair.differ,
+                t.pair.legal_tie,
+                t.pair.legal_texel,
+                t.pair.legal_edge,
+                t.pair.legal_unjudged,
+                t.pair.illegal,
                 t.interior_error,
                 t.twin_interior_error
                     .map(|e| e.to_string())

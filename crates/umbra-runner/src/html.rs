@@ -202,12 +202,12 @@ fn twins_section(results: &[RunResult]) -> String {
             }
             row.runs += 1;
             row.failed += u64::from(!t.ok);
-            row.differ += t.differ;
-            row.tie += t.legal_tie;
-            row.texel += t.legal_texel;
-            row.edge += t.legal_edge;
-            row.unjudged += t.legal_unjudged;
-            row.illegal += t.illegal;
+            row.differ += t.pair.differ;
+            row.tie += t.pair.legal_tie;
+            row.texel += t.pair.legal_texel;
+            row.edge += t.pair.legal_edge;
+            row.unjudged += t.pair.legal_unjudged;
+            row.illegal += t.pair.illegal;
             row.ms += t.render_ms;
             row.case_ms += m.total_ms;
             row.case_error += t.interior_error;

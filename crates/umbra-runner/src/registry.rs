@@ -13,6 +13,26 @@ pub fn is_known(id: &str) -> bool {
         || (crate::fake::enabled() && crate::fake::Fake::new(id).is_some())
 }
 
+/// The backends a command was asked for: the `--backend` values, `default` when there are
+/// none; `all` anywhere means every known backend. An unknown id is an error naming the
+/// known ones.
+pub fn selected(named: &[&str], default: Vec<String>) -> Result<Vec<String>, String> {
+    let ids: Vec<String> = if named.is_empty() {
+        default
+    } else if named.contains(&"all") {
+        known()
+    } else {
+        named.iter().map(|s| s.to_string()).collect()
+    };
+    match ids.iter().find(|b| !is_known(b)) {
+        Some(bad) => Err(format!(
+            "unknown backend {bad:?}; this build has: {}",
+            known().join(", ")
+        )),
+        None => Ok(ids),
+    }
+}
+
 /// Every backend id this build knows, in report order.
 pub fn known() -> Vec<String> {
     let mut ids = vec!["ref".to_string()];

@@ -51,18 +51,10 @@ pub struct TwinMetric {
     /// Why the backend could not render the twin (the twin is then not judged).
     #[serde(default)]
     pub skipped: Option<String>,
-    /// Pixels whose answer differs (for `identical`: whose visibility value differs at all).
-    pub differ: u64,
-    /// Of those, legal as a depth tie of the reference's lookup.
-    pub legal_tie: u64,
-    /// Of those, legal as a texel boundary or filter freedom.
-    pub legal_texel: u64,
-    /// Of those, legal on a truth edge.
-    pub legal_edge: u64,
-    /// Of those, legal as a silhouette or a surface facing away.
-    pub legal_unjudged: u64,
-    /// Of those, illegal.
-    pub illegal: u64,
+    /// The comparison with the case's frame, by the reference judge's classes (for
+    /// `identical`: every pixel whose visibility value differs at all counts as illegal).
+    #[serde(flatten)]
+    pub pair: RefAgreement,
     /// The case's false shadow + false light away from edges.
     pub interior_error: u64,
     /// The twin's, against its own truth (for `no_worse` and `reported`).
@@ -138,15 +130,12 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
     for t in &twins {
         if !t.ok {
             problems.push(format!(
-                "twin {} ({}): {} px differ, {} of them illegal (legal: {} ties, {} texel/filter, {} edges, {} unjudged); interior error {} vs the twin's {}",
+                "twin {} ({}): {} px differ, {} of them illegal ({}); interior error {} vs the twin's {}",
                 t.name,
                 t.agree,
-                t.differ,
-                t.illegal,
-                t.legal_tie,
-                t.legal_texel,
-                t.legal_edge,
-                t.legal_unjudged,
+                t.pair.differ,
+                t.pair.illegal,
+                t.pair.legal_summary(),
                 t.interior_error,
                 t.twin_interior_error.map(|e| e.to_string()).unwrap_or("-".into())
             ));
@@ -156,8 +145,10 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
     if let Some(a) = &agreement {
         if a.illegal > 0 && prepared.case().expect.backends_agree {
             problems.push(format!(
-                "{} px disagree with the reference where no spec freedom explains it (of {} compared; legal: {} ties, {} texel/filter, {} edges, {} unjudged)",
-                a.illegal, a.compared, a.legal_tie, a.legal_texel, a.legal_edge, a.legal_unjudged
+                "{} px disagree with the reference where no spec freedom explains it (of {} compared; {})",
+                a.illegal,
+                a.compared,
+                a.legal_summary()
             ));
         }
     }
@@ -250,14 +241,8 @@ fn run_twins(
                 m.twin_interior_error =
                     Some(interior(&umbra_compare::truth_error(&twin, &twin_truth)));
             }
-            let pair =
+            m.pair =
                 umbra_compare::reference::judge_pair(frame, &twin, reference, ambiguity, truth);
-            m.differ = pair.differ;
-            m.legal_tie = pair.legal_tie;
-            m.legal_texel = pair.legal_texel;
-            m.legal_edge = pair.legal_edge;
-            m.legal_unjudged = pair.legal_unjudged;
-            m.illegal = pair.illegal;
             match plan.agree {
                 TwinAgree::Identical => {
                     // Bit-identical visibility wherever either frame covers a surface.
@@ -267,15 +252,18 @@ fn run_twins(
                                 && frame.visibility[i].to_bits() != twin.visibility[i].to_bits()
                         })
                         .count() as u64;
-                    m.differ = differ;
-                    m.illegal = differ;
-                    (m.legal_tie, m.legal_texel, m.legal_edge, m.legal_unjudged) = (0, 0, 0, 0);
+                    m.pair = RefAgreement {
+                        compared: m.pair.compared,
+                        differ,
+                        illegal: differ,
+                        ..Default::default()
+                    };
                     m.ok = differ == 0;
                 }
                 // A case that disowns the reference's tolerance model (backends_agree false)
                 // cannot hold its twins to it either: they are reported.
                 TwinAgree::Legal => {
-                    m.ok = m.illegal == 0 || !prepared.case().expect.backends_agree;
+                    m.ok = m.pair.illegal == 0 || !prepared.case().expect.backends_agree;
                 }
                 TwinAgree::NoWorse => m.ok = m.twin_interior_error <= Some(m.interior_error),
                 TwinAgree::Reported => {}
@@ -321,23 +309,24 @@ pub fn describe(j: &Judged) -> String {
     );
     if let Some(a) = &j.agreement {
         s.push_str(&format!(
-            "  vs reference: {} of {} px differ (legal: {} ties, {} texel/filter, {} edges, {} unjudged; {} illegal); colour SSIM {:.5}\n",
-            a.differ, a.compared, a.legal_tie, a.legal_texel, a.legal_edge, a.legal_unjudged, a.illegal, j.ssim.unwrap_or(f64::NAN)
+            "  vs reference: {} of {} px differ ({}; {} illegal); colour SSIM {:.5}\n",
+            a.differ,
+            a.compared,
+            a.legal_summary(),
+            a.illegal,
+            j.ssim.unwrap_or(f64::NAN)
         ));
     }
     for t in &j.twins {
         match &t.skipped {
             Some(why) => s.push_str(&format!("  twin {} ({}): not run: {why}\n", t.name, t.agree)),
             None => s.push_str(&format!(
-                "  twin {} ({}): {} px differ (legal: {} ties, {} texel/filter, {} edges, {} unjudged; {} illegal); interior error {} vs {}; {:.2} ms; {}\n",
+                "  twin {} ({}): {} px differ ({}; {} illegal); interior error {} vs {}; {:.2} ms; {}\n",
                 t.name,
                 t.agree,
-                t.differ,
-                t.legal_tie,
-                t.legal_texel,
-                t.legal_edge,
-                t.legal_unjudged,
-                t.illegal,
+                t.pair.differ,
+                t.pair.legal_summary(),
+                t.pair.illegal,
                 t.interior_error,
                 t.twin_interior_error.map(|e| e.to_string()).unwrap_or("-".into()),
                 t.render_ms,

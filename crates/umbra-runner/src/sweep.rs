@@ -277,23 +277,14 @@ pub fn main(argv: &[String]) -> i32 {
         }
     };
     let out = PathBuf::from(args.value("out").unwrap_or("target/umbra/sweep"));
-    let mut backends: Vec<String> = args
-        .values("backend")
-        .into_iter()
-        .map(String::from)
-        .collect();
-    if backends.is_empty() {
-        backends = DEFAULT_BACKENDS.iter().map(|s| s.to_string()).collect();
-    } else if backends.iter().any(|b| b == "all") {
-        backends = crate::registry::known();
-    }
-    if let Some(bad) = backends.iter().find(|b| !crate::registry::is_known(b)) {
-        eprintln!(
-            "error: unknown backend {bad:?}; known: {}",
-            crate::registry::known().join(", ")
-        );
-        return 2;
-    }
+    let default = DEFAULT_BACKENDS.iter().map(|s| s.to_string()).collect();
+    let backends = match crate::registry::selected(&args.values("backend"), default) {
+        Ok(b) => b,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
     let points = match umbra_case::load_file(&scene) {
         Ok(p) => p,
         Err(e) => {

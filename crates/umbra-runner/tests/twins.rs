@@ -33,9 +33,9 @@ fn a_twin_that_resets_the_offset_really_renders_at_the_origin() {
         .expect("the at-origin twin");
     assert!(t.skipped.is_none(), "{t:?}");
     assert!(
-        t.differ > 100,
+        t.pair.differ > 100,
         "only {} px differ from the origin: {t:?}",
-        t.differ
+        t.pair.differ
     );
     assert!(
         t.twin_interior_error < Some(t.interior_error),
