@@ -7,6 +7,7 @@ use std::fmt;
 use crate::format::{Case, Compare, DepthFormat, DepthOrder, Filter, Light, Outside};
 use crate::frame::Frame;
 use crate::prepare::Prepared;
+use crate::profile::Profile;
 
 /// A backend's identifier, `api/driver` (`ref`, `gl33/llvmpipe`, `wgpu-vk/lavapipe`).
 #[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -101,6 +102,9 @@ pub trait Backend {
     fn id(&self) -> BackendId;
     /// What its driver reports.
     fn info(&self) -> DriverInfo;
+    /// Which freedoms its API gives the driver: the judge computes the legal answers of this
+    /// backend's frames for this profile.
+    fn profile(&self) -> Profile;
     /// Whether it can run a case with these needs.
     fn supports(&self, needs: &Needs) -> Support;
     /// Renders one run. Per-run GPU state is created and destroyed inside.

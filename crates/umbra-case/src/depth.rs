@@ -45,8 +45,51 @@ impl DepthFormat {
         }
     }
 
-    /// The polygon-offset unit r (NUMERICS.md, "Polygon offset"): one step for fixed point;
-    /// 2^(e − 23) for float, e the exponent of the primitive's largest |z|.
+    /// The range of the polygon-offset unit r a conformant implementation may use.
+    ///
+    /// - Fixed point: r is "the smallest difference in window z guaranteed to remain distinct
+    ///   in the depth buffer", constant over the range; Vulkan 1.3 "Depth Bias" bounds it by
+    ///   r ≤ 2·2⁻ⁿ (the scaling VK_EXT_depth_bias_control's `depthBiasExact` forbids), and GL
+    ///   gives no other bound, so umbra holds GL drivers to Vulkan's. Distinctness needs
+    ///   r ≥ 2⁻ⁿ (a smaller r can map two offset depths to one code). So r ∈ [2⁻ⁿ, 2·2⁻ⁿ].
+    /// - Float: r = 2^(e − 23), e the exponent of the primitive's largest |z| (GL 4.6
+    ///   §14.6.5, Vulkan "Depth Bias"): fixed, no freedom. (Which exponent "e" means for
+    ///   z ∈ [2ᵉ, 2ᵉ⁺¹) is read as floor(log₂|z|), as GL drivers do; Dawn records that the
+    ///   WebGPU CTS reads e + 1, dawn:2076.)
+    pub fn offset_unit_range(self, max_abs_z: f32) -> (f64, f64) {
+        match self.fixed_bits() {
+            Some(n) => {
+                let r = 2f64.powi(-(n as i32));
+                (r, 2.0 * r)
+            }
+            None => {
+                let r = f64::from(self.offset_unit(max_abs_z));
+                (r, r)
+            }
+        }
+    }
+
+    /// The stored codes an implementation may write for exact depths in `[lo, hi]` (already
+    /// clamped to [0,1]), as values: fixed point may round either way (round to nearest is
+    /// preferred, not required: Vulkan "Conversion from Floating-Point to Normalized
+    /// Fixed-Point"), so [floor(lo·M)/M, ceil(hi·M)/M] with M = 2ⁿ − 1; float stores the
+    /// value itself.
+    pub fn code_range(self, lo: f64, hi: f64) -> (f64, f64) {
+        match self.fixed_bits() {
+            Some(n) => {
+                let m = f64::from((1u32 << n) - 1);
+                (
+                    (lo.clamp(0.0, 1.0) * m).floor() / m,
+                    (hi.clamp(0.0, 1.0) * m).ceil() / m,
+                )
+            }
+            None => (lo, hi),
+        }
+    }
+
+    /// The polygon-offset unit r umbra's reference uses: 1/(2ⁿ − 1) for fixed point (one
+    /// code step; the GLES 2 path's shader uses the same); 2^(e − 23) for float, e the
+    /// exponent of the primitive's largest |z|.
     pub fn offset_unit(self, max_abs_z: f32) -> f32 {
         match self.fixed_bits() {
             Some(n) => (1.0 / f64::from((1u32 << n) - 1)) as f32,
@@ -110,5 +153,22 @@ mod tests {
         );
         assert_eq!(DepthFormat::Depth32f.offset_unit(0.75), 2f32.powi(-24));
         assert_eq!(DepthFormat::Depth32f.offset_unit(0.2), 2f32.powi(-26));
+        assert_eq!(
+            DepthFormat::Depth16.offset_unit_range(0.3),
+            (2f64.powi(-16), 2f64.powi(-15))
+        );
+        let r = f64::from(DepthFormat::Depth32f.offset_unit(0.75));
+        assert_eq!(DepthFormat::Depth32f.offset_unit_range(0.75), (r, r));
+    }
+
+    #[test]
+    fn code_ranges_cover_both_roundings() {
+        let m = 65535.0;
+        let (lo, hi) = DepthFormat::Depth16.code_range(100.4 / m, 100.6 / m);
+        assert_eq!((lo * m, hi * m), (100.0, 101.0));
+        // An exact code has one legal code; the clear value too.
+        let (lo, hi) = DepthFormat::Depth16.code_range(1.0, 1.0);
+        assert_eq!((lo, hi), (1.0, 1.0));
+        assert_eq!(DepthFormat::Depth32f.code_range(0.25, 0.5), (0.25, 0.5));
     }
 }

@@ -22,14 +22,57 @@ pub struct Frame {
     pub surface: Option<Vec<u32>>,
     /// The shadow map as stored, where the backend can read it back.
     pub shadow_map: Option<DepthMap>,
+    /// How the visibility values were stored before they were read back (the judge widens
+    /// the legal values by that storage's rounding).
+    pub visibility_storage: VisibilityStorage,
     /// Where the time went.
     pub timings: Timings,
 }
 
 impl Frame {
-    /// Whether pixel `i` (row-major, top row first) shows a surface.
+    /// Whether pixel `i` (row-major, top row first) shows a surface: its surface id where the
+    /// frame has them (so that a NaN visibility on a covered pixel is seen as what it is),
+    /// else a visibility that is a number.
     pub fn covered(&self, i: usize) -> bool {
-        !self.visibility[i].is_nan()
+        match &self.surface {
+            Some(s) => s[i] != 0,
+            None => !self.visibility[i].is_nan(),
+        }
+    }
+}
+
+/// The render target a backend's visibility values went through.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum VisibilityStorage {
+    /// 32-bit float: written as computed.
+    #[default]
+    Float32,
+    /// 8-bit unsigned normalised (GL's RGBA8 visibility target, GLES 2's packed output).
+    Unorm8,
+}
+
+impl VisibilityStorage {
+    /// How far a stored value may lie from the value the shader wrote.
+    ///
+    /// - `Unorm8`: float → unorm conversion rounds to nearest by preference, but the specs
+    ///   allow either neighbour (Vulkan "Conversion from Floating-Point to Normalized
+    ///   Fixed-Point", GL 4.6 §2.3.5.2): |stored − v| < 1/255.
+    /// - `Float32`: written as computed; the filtered value's own last operation (a division
+    ///   by N² for PCF, ≤ 2.5 ULP in GLSL 4.60 §4.7.1 and SPIR-V's precision table) and the
+    ///   reference's rounding: 4 ULP of 1.
+    pub fn tolerance(self) -> f32 {
+        match self {
+            VisibilityStorage::Unorm8 => 1.0 / 255.0,
+            VisibilityStorage::Float32 => 4.0 * f32::EPSILON,
+        }
+    }
+
+    /// Name for reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            VisibilityStorage::Float32 => "f32",
+            VisibilityStorage::Unorm8 => "unorm8",
+        }
     }
 }
 

@@ -10,6 +10,7 @@
 //! - [`light`] and [`prepare`]: the light faces and camera of a run, fitted where asked.
 //! - [`depth`]: storage per depth format and the polygon-offset unit.
 //! - [`frame`] and [`backend`]: what a backend returns and the trait it implements.
+//! - [`profile`]: what an API lets an implementation do differently (the judge's input).
 //!
 //! Design decision: the `Backend` trait and `Frame` live here rather than in the runner,
 //! because every backend crate implements them and none may depend on the runner (which
@@ -26,6 +27,7 @@ pub mod light;
 pub mod load;
 pub mod offset;
 pub mod prepare;
+pub mod profile;
 pub mod scene;
 pub mod twin;
 pub mod validate;
@@ -34,8 +36,9 @@ pub use backend::{Backend, BackendError, BackendId, DriverInfo, Needs, Support};
 pub use conventions::{ClipDepth, Convention, LookupMatrices, ShadowCoord};
 pub use error::{CaseError, CaseErrors};
 pub use format::Case;
-pub use frame::{Clock, DepthMap, Frame, Timings};
+pub use frame::{Clock, DepthMap, Frame, Timings, VisibilityStorage};
 pub use light::{LightKind, LightSetup};
 pub use load::{CasePoint, case_files, load_file, load_str};
 pub use prepare::Prepared;
+pub use profile::{Profile, Spec};
 pub use scene::{Geometry, tessellate};

@@ -224,6 +224,41 @@ pub fn cube_face(d: glam::DVec3) -> usize {
     }
 }
 
+/// The direction of the centre of texel (i, j) of cube face `f` (`size` texels a side), the GL
+/// cube-map face table inverted: s_c = 2(i + ½)/size − 1, t_c likewise, and for +x the
+/// direction (1, −t_c, −s_c), −x (−1, −t_c, s_c), +y (s_c, 1, t_c), −y (s_c, −1, −t_c),
+/// +z (s_c, −t_c, 1), −z (−s_c, −t_c, −1). Indices outside the face give the direction of a
+/// virtual texel beyond its edge (which lands on the neighbouring face): the shaders reach
+/// cube texels this way, so the reference does too.
+pub fn cube_texel_dir(f: usize, i: f64, j: f64, size: f64) -> glam::DVec3 {
+    let sc = 2.0 * (i + 0.5) / size - 1.0;
+    let tc = 2.0 * (j + 0.5) / size - 1.0;
+    match f {
+        0 => glam::DVec3::new(1.0, -tc, -sc),
+        1 => glam::DVec3::new(-1.0, -tc, sc),
+        2 => glam::DVec3::new(sc, 1.0, tc),
+        3 => glam::DVec3::new(sc, -1.0, -tc),
+        4 => glam::DVec3::new(sc, -tc, 1.0),
+        _ => glam::DVec3::new(-sc, -tc, -1.0),
+    }
+}
+
+/// The cube face and the (s_c, t_c) ∈ [−1, 1]² face coordinates of direction `d`, by the
+/// same table as [`cube_texel_dir`] (major axis from [`cube_face`]).
+pub fn cube_face_coords(d: glam::DVec3) -> (usize, f64, f64) {
+    let f = cube_face(d);
+    let a = d.abs();
+    let (sc, tc) = match f {
+        0 => (-d.z / a.x, -d.y / a.x),
+        1 => (d.z / a.x, -d.y / a.x),
+        2 => (d.x / a.y, d.z / a.y),
+        3 => (d.x / a.y, -d.z / a.y),
+        4 => (d.x / a.z, -d.y / a.z),
+        _ => (-d.x / a.z, -d.y / a.z),
+    };
+    (f, sc, tc)
+}
+
 fn fit_bounds(view: Mat4, geometry: &Geometry) -> [f32; 6] {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for p in &geometry.positions {

@@ -305,6 +305,7 @@ mod tests {
             visibility: vis,
             surface: None,
             shadow_map: None,
+            visibility_storage: Default::default(),
             timings: Timings::default(),
         }
     }

@@ -1,134 +1,327 @@
-//! Agreement of a backend's frame with the reference, with every disagreement classified by
-//! the spec rule that makes it legal (or not). The conformance judge and the tests use this
-//! one function.
+//! A backend's frame against the reference's judged render ([`umbra_ref::Judged`]): every
+//! pixel's visibility *value* is held to the interval a conformant implementation of the
+//! backend's profile may return there, its colour to the shading of the visibility it wrote,
+//! and its coverage to the rasterisation freedom. The conformance judge, the twins and the
+//! tests use this one function.
 //!
-//! Rule (first cut of the tolerance model; the conformance-runner issue refines it):
-//! a pixel whose lit/shadowed answer differs from the reference's is *legal* when
-//! - the reference's own lookup there was within the specs' freedom
-//!   ([`umbra_ref::lookup::ambiguity`]): a depth tie (the compared texel within the stored
-//!   depth's freedom: polygon-offset slope form and unit r, ±1 storage step, f32 rounding),
-//!   a texel boundary (within 1/16 texel, the minimum sub-texel precision, of a texel that
-//!   decides differently), or filter freedom (LINEAR taps disagree: weights are
-//!   implementation-defined and NEAREST is allowed; a PCF average within one 8-bit step of
-//!   0.5), or the position freedom (moving the lookup point by the unspecified accuracy of
-//!   varying interpolation, [`umbra_ref::lookup::position_freedom`], changes the answer);
-//! - the truth marks it an edge pixel: within the light's texel resolution of a true shadow
-//!   boundary, where coverage snapping (sub-pixel precision ≥ 4 bits) and the rasterization
-//!   tie rule (none prescribed) of the *shadow pass* are the implementation's; or
-//! - the pixel shows no receiver both frames share a lookup for: a silhouette (the surface
-//!   itself differs) or a surface facing away from the light (its shadow term is multiplied by
-//!   a zero diffuse term, and it compares against its own back side).
+//! Per pixel covered in either frame ("compared"):
+//! - **NaN** visibility on a covered pixel: illegal, always.
+//! - **Coverage**: the backend shows another surface than the reference (or none, or one where
+//!   the reference shows none). Legal only where the reference marked the pixel
+//!   [`SURFACE`](umbra_ref::lookup::ambiguity::SURFACE) (vertex snapping, depth ties); then
+//!   the two lookups are of different points and any answer passes there (blind).
+//! - **Value**: on the same surface, the visibility must lie in [lo − ε, hi + ε] (ε the
+//!   visibility target's rounding, [`umbra_case::VisibilityStorage::tolerance`]) and, for
+//!   filters with discrete results (NEAREST: 0 or 1; PCF N: k/N²), within ε of such a value.
+//! - **Colour**: the 8-bit colour must be the shading of the visibility the backend itself
+//!   wrote (±ε), within the shading's arithmetic freedom, rounded either way: a check that
+//!   holds even where the shadow answer is free.
 //!
-//! Pixels outside the light's frustum are *not* exempt: the case's outside policy defines
-//! their answer, so they are held to the reference like any other.
-//!
-//! Any other disagreement is illegal and fails the run.
+//! Where both lit/shadowed answers differ from the reference's but are legal, the difference is
+//! classified by the freedom that allows it (ties first, then coverage, texel, filter, seam,
+//! position). *Blind* pixels are those where any answer would pass; `value_margin` is how
+//! close the closest checked value came to its bound. Pixels outside the light's frustum are
+//! not exempt: the case's outside policy defines their answer.
 
 use serde::{Deserialize, Serialize};
 use umbra_case::Frame;
-use umbra_ref::truth::{Class, Truth};
+use umbra_ref::Judged;
+use umbra_ref::lookup::ambiguity;
 
-use crate::{Agreement, agreement};
+use crate::is_shadowed;
 
-/// Agreement with the reference, with each disagreement classified.
+/// Agreement with the reference, with every check's counts.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct RefAgreement {
-    /// Pixels covered in both.
+    /// Pixels covered in either frame.
     pub compared: u64,
-    /// Pixels whose answer differs.
+    /// Of those on the same surface, how many give another lit/shadowed answer.
     pub differ: u64,
-    /// Of those, a depth tie in the reference's lookup.
+    /// Legal differences: a depth tie (offset, snapping, storage, arithmetic, the compare's
+    /// precision; GL 4.6 §14.6.5, Vulkan "Depth Bias", "Depth Compare Operation").
     pub legal_tie: u64,
-    /// Of those, a texel boundary, filter freedom or position freedom in the reference's
-    /// lookup.
+    /// Legal differences: the map's coverage may differ there (4 sub-pixel bits, GL 4.6
+    /// §14.5, Vulkan `subPixelPrecisionBits`).
+    pub legal_coverage: u64,
+    /// Legal differences: the sampler may select another texel (4 sub-texel bits).
     pub legal_texel: u64,
-    /// Of those, on a truth edge (texel and raster freedom).
-    pub legal_edge: u64,
-    /// Of those, on a silhouette or a surface facing away from the light.
-    pub legal_unjudged: u64,
-    /// Of those, neither: illegal.
+    /// Legal differences: LINEAR weights are the implementation's (GL §3.8.16; Vulkan
+    /// bilinear within 1/16).
+    pub legal_filter: u64,
+    /// Legal differences: a cube corner under seamless filtering.
+    pub legal_seam: u64,
+    /// Legal differences: the lookup point's interpolation freedom.
+    pub legal_position: u64,
+    /// Pixels where the backend shows another surface than the reference, legally (not
+    /// compared further).
+    pub legal_surface: u64,
+    /// Pixels where any answer would pass (interval ⊇ {0, 1}, or another surface legally).
+    pub blind: u64,
+    /// Pixels whose value was held to an interval that excludes 0 or 1.
+    pub value_checked: u64,
+    /// The smallest distance of a checked value from its bound (None: nothing checked).
+    pub value_margin: Option<f32>,
+    /// Pixels whose colour was checked.
+    pub colour_checked: u64,
+    /// Illegal: a visibility value outside its interval (or between a filter's results).
+    pub illegal_value: u64,
+    /// Illegal: NaN visibility on a covered pixel.
+    pub illegal_nan: u64,
+    /// Illegal: another surface, or coverage, where no rasterisation freedom explains it.
+    pub illegal_coverage: u64,
+    /// Illegal: a colour that is not the shading of the pixel's own visibility.
+    pub illegal_colour: u64,
+    /// Every illegal pixel (a pixel counts once, under the first check it fails).
     pub illegal: u64,
 }
 
 impl RefAgreement {
-    /// The legal classes, as every message states them:
-    /// `legal: T ties, X texel/filter, E edges, U unjudged`.
+    /// The legal classes, as every message states them.
     pub fn legal_summary(&self) -> String {
         format!(
-            "legal: {} ties, {} texel/filter, {} edges, {} unjudged",
-            self.legal_tie, self.legal_texel, self.legal_edge, self.legal_unjudged
+            "legal: {} ties, {} coverage, {} texel, {} filter, {} seam, {} position, {} other surface",
+            self.legal_tie,
+            self.legal_coverage,
+            self.legal_texel,
+            self.legal_filter,
+            self.legal_seam,
+            self.legal_position,
+            self.legal_surface
         )
+    }
+
+    /// The illegal counts by check, in one phrase (empty when none).
+    pub fn illegal_summary(&self) -> String {
+        let mut parts = Vec::new();
+        for (n, what) in [
+            (self.illegal_value, "visibility value"),
+            (self.illegal_nan, "NaN visibility"),
+            (self.illegal_coverage, "coverage"),
+            (self.illegal_colour, "colour"),
+        ] {
+            if n > 0 {
+                parts.push(format!("{n} px {what}"));
+            }
+        }
+        parts.join(", ")
+    }
+
+    /// Blind pixels as a share of compared ones.
+    pub fn blind_share(&self) -> f64 {
+        if self.compared == 0 {
+            0.0
+        } else {
+            self.blind as f64 / self.compared as f64
+        }
     }
 }
 
-/// Judges `frame` against the `reference` frame (rendered with
-/// `umbra_ref::render_judged`, which gives `ambiguity`) and the `truth`.
-pub fn judge(reference: &Frame, ambiguity: &[u8], frame: &Frame, truth: &Truth) -> RefAgreement {
-    let surface = reference.surface.clone().unwrap_or_default();
-    classify(&agreement(reference, frame, 0), truth, ambiguity, &surface)
+/// What the judge made of one pixel (for pictures and the golden tolerance).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PixelJudgement {
+    /// Covered in neither frame.
+    #[default]
+    NotCompared,
+    /// Checked and passed; the shadow answer is the reference's.
+    Agrees,
+    /// Checked and passed with another shadow answer (a legal difference).
+    LegalDifference,
+    /// Any answer would have passed here.
+    Blind,
+    /// Failed a check.
+    Illegal,
 }
 
-/// Per pixel: whether a shadow answer may legally differ from the reference's there (the
-/// legal classes of [`judge`]).
-pub fn legal_pixels(reference: &Frame, ambiguity: &[u8], truth: &Truth) -> Vec<bool> {
-    let surface = reference.surface.clone().unwrap_or_default();
-    (0..truth.class.len())
-        .map(|i| {
-            matches!(truth.class[i], Class::Background | Class::FacesAway)
-                || truth.face[i] == 0
-                || silhouette(truth, &surface, i)
-                || ambiguity[i] != 0
-                || truth.edge[i]
-        })
+/// Whether `v` is a value the interval allows: within ε of [lo, hi] and, for a filter with
+/// discrete results (`quantum` > 0), within ε of a multiple of the quantum in the interval.
+pub fn value_ok(v: f32, lo: f32, hi: f32, quantum: f32, eps: f32) -> bool {
+    if !(lo - eps <= v && v <= hi + eps) {
+        return false;
+    }
+    if quantum <= 0.0 {
+        return true;
+    }
+    let k = (v / quantum).round() * quantum;
+    (v - k).abs() <= eps + 4.0 * f32::EPSILON && lo - eps <= k && k <= hi + eps
+}
+
+/// Judges `frame` against the judged reference `basis` (same size, the backend's profile).
+/// Returns the counts and each pixel's judgement.
+pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement>) {
+    let reference = &basis.frame;
+    assert_eq!(
+        (reference.width, reference.height),
+        (frame.width, frame.height),
+        "frame and reference sizes differ"
+    );
+    let n = (frame.width * frame.height) as usize;
+    let eps = frame.visibility_storage.tolerance();
+    let q = basis.quantum;
+    let mut r = RefAgreement::default();
+    let mut px = vec![PixelJudgement::NotCompared; n];
+    let surface_of = |f: &Frame, i: usize| f.surface.as_ref().map(|s| s[i]);
+    // Pixels are visited by index: each reads five parallel arrays of two frames.
+    #[allow(clippy::needless_range_loop)]
+    for i in 0..n {
+        let (ref_cov, b_cov) = (reference.covered(i), frame.covered(i));
+        if !ref_cov && !b_cov {
+            continue;
+        }
+        r.compared += 1;
+        let l = basis.legal[i];
+        let v = frame.visibility[i];
+        if b_cov && v.is_nan() {
+            r.illegal_nan += 1;
+            r.illegal += 1;
+            px[i] = PixelJudgement::Illegal;
+            continue;
+        }
+        let same_surface = ref_cov
+            && b_cov
+            && match (surface_of(reference, i), surface_of(frame, i)) {
+                (Some(a), Some(b)) => a == b,
+                _ => true,
+            };
+        if !same_surface {
+            if l.flags & ambiguity::SURFACE != 0 {
+                r.legal_surface += 1;
+                r.blind += 1;
+                px[i] = PixelJudgement::Blind;
+            } else {
+                r.illegal_coverage += 1;
+                r.illegal += 1;
+                px[i] = PixelJudgement::Illegal;
+            }
+            continue;
+        }
+        let ok = value_ok(v, l.lo, l.hi, q, eps);
+        let blind = l.lo - eps <= 0.0 && l.hi + eps >= 1.0;
+        let differs = is_shadowed(v) != is_shadowed(reference.visibility[i]);
+        if differs {
+            r.differ += 1;
+        }
+        if !ok {
+            r.illegal_value += 1;
+            r.illegal += 1;
+            px[i] = PixelJudgement::Illegal;
+        } else {
+            if blind {
+                r.blind += 1;
+            } else {
+                r.value_checked += 1;
+                let margin = (v - (l.lo - eps)).min(l.hi + eps - v);
+                r.value_margin = Some(r.value_margin.map_or(margin, |m| m.min(margin)));
+            }
+            if differs {
+                let f = l.flags;
+                let class = if f & ambiguity::DEPTH_TIE != 0 {
+                    &mut r.legal_tie
+                } else if f & ambiguity::COVERAGE != 0 {
+                    &mut r.legal_coverage
+                } else if f & ambiguity::TEXEL_BOUNDARY != 0 {
+                    &mut r.legal_texel
+                } else if f & ambiguity::FILTER != 0 {
+                    &mut r.legal_filter
+                } else if f & ambiguity::SEAM != 0 {
+                    &mut r.legal_seam
+                } else {
+                    &mut r.legal_position
+                };
+                *class += 1;
+            }
+            px[i] = match (blind, differs) {
+                (true, _) => PixelJudgement::Blind,
+                (false, true) => PixelJudgement::LegalDifference,
+                (false, false) => PixelJudgement::Agrees,
+            };
+        }
+        r.colour_checked += 1;
+        if !colour_ok(&frame.color[i * 4..i * 4 + 3], v, eps, &l) {
+            r.illegal_colour += 1;
+            if ok {
+                r.illegal += 1;
+                px[i] = PixelJudgement::Illegal;
+            }
+        }
+    }
+    (r, px)
+}
+
+/// Whether an RGB8 colour is the shading of visibility `v` (± `eps`) at this pixel: each
+/// channel within the codes that the unclamped colour's range, widened by the shading's
+/// arithmetic freedom, rounds to either way.
+pub fn colour_ok(rgb: &[u8], v: f32, eps: f32, l: &umbra_ref::PixelLegal) -> bool {
+    let (v0, v1) = ((v - eps).clamp(0.0, 1.0), (v + eps).clamp(0.0, 1.0));
+    (0..3).all(|c| {
+        let at = |v: f32| l.c0[c] + (l.c1[c] - l.c0[c]) * v;
+        let (a, b) = (at(v0), at(v1));
+        let lo = (a.min(b) - l.ctol).clamp(0.0, 1.0);
+        let hi = (a.max(b) + l.ctol).clamp(0.0, 1.0);
+        let code = f32::from(rgb[c]);
+        (lo * 255.0).floor() <= code && code <= (hi * 255.0).ceil()
+    })
+}
+
+/// Per pixel: whether the shadow answer may legally differ from the reference's there (its
+/// interval straddles 0.5, or another surface may show): the golden check's tolerance.
+pub fn free_pixels(basis: &Judged) -> Vec<bool> {
+    basis
+        .legal
+        .iter()
+        .map(|l| l.flags & ambiguity::SURFACE != 0 || (l.lo < 0.5 && l.hi >= 0.5))
         .collect()
 }
 
-/// Judges the disagreements of two backend frames `a` and `b` with the same rule: where both
-/// are within the specs' freedom of the reference, they may differ from each other only there.
-pub fn judge_pair(
-    a: &Frame,
-    b: &Frame,
-    reference: &Frame,
-    ambiguity: &[u8],
-    truth: &Truth,
-) -> RefAgreement {
-    let surface = reference.surface.clone().unwrap_or_default();
-    classify(&agreement(a, b, 0), truth, ambiguity, &surface)
-}
-
-fn silhouette(truth: &Truth, reference_surface: &[u32], i: usize) -> bool {
-    reference_surface[i] != truth.face[i]
-}
-
-fn classify(
-    g: &Agreement,
-    truth: &Truth,
-    ambiguity: &[u8],
-    reference_surface: &[u32],
-) -> RefAgreement {
-    use umbra_ref::lookup::ambiguity::{DEPTH_TIE, FILTER, POSITION, TEXEL_BOUNDARY};
-    let mut r = RefAgreement {
-        compared: g.compared,
-        ..Default::default()
-    };
-    for (i, differs) in g.disagrees.iter().enumerate() {
+/// Two backend frames against each other: wherever their surfaces or lit/shadowed answers
+/// differ, the judged renders of both frames' profiles (`ja` for `a`, `jb` for `b`) must allow
+/// the answer to be free there (its interval straddles 0.5, or another surface may show).
+/// Counts as [`judge`] does; the legal classes follow `ja`'s flags.
+pub fn judge_pair(a: &Frame, ja: &Judged, b: &Frame, jb: &Judged) -> RefAgreement {
+    let n = (a.width * a.height) as usize;
+    let (fa, fb) = (free_pixels(ja), free_pixels(jb));
+    let mut r = RefAgreement::default();
+    for i in 0..n {
+        if !a.covered(i) && !b.covered(i) {
+            continue;
+        }
+        r.compared += 1;
+        let same_surface = a.covered(i)
+            && b.covered(i)
+            && match (&a.surface, &b.surface) {
+                (Some(x), Some(y)) => x[i] == y[i],
+                _ => true,
+            };
+        let differs = !same_surface || is_shadowed(a.visibility[i]) != is_shadowed(b.visibility[i]);
         if !differs {
             continue;
         }
         r.differ += 1;
-        let exempt =
-            matches!(truth.class[i], Class::Background | Class::FacesAway) || truth.face[i] == 0;
-        if exempt || silhouette(truth, reference_surface, i) {
-            r.legal_unjudged += 1;
-        } else if ambiguity[i] & DEPTH_TIE != 0 {
-            r.legal_tie += 1;
-        } else if ambiguity[i] & (TEXEL_BOUNDARY | FILTER | POSITION) != 0 {
-            r.legal_texel += 1;
-        } else if truth.edge[i] {
-            r.legal_edge += 1;
-        } else {
+        if !(fa[i] && fb[i]) {
             r.illegal += 1;
+            if same_surface {
+                r.illegal_value += 1;
+            } else {
+                r.illegal_coverage += 1;
+            }
+            continue;
         }
+        let f = ja.legal[i].flags | jb.legal[i].flags;
+        let class = if !same_surface || f & ambiguity::SURFACE != 0 {
+            &mut r.legal_surface
+        } else if f & ambiguity::DEPTH_TIE != 0 {
+            &mut r.legal_tie
+        } else if f & ambiguity::COVERAGE != 0 {
+            &mut r.legal_coverage
+        } else if f & ambiguity::TEXEL_BOUNDARY != 0 {
+            &mut r.legal_texel
+        } else if f & ambiguity::FILTER != 0 {
+            &mut r.legal_filter
+        } else if f & ambiguity::SEAM != 0 {
+            &mut r.legal_seam
+        } else {
+            &mut r.legal_position
+        };
+        *class += 1;
     }
     r
 }

@@ -3,7 +3,9 @@
 
 use glow::HasContext;
 use umbra_case::format::{Compare, DepthFormat, Outside};
-use umbra_case::{Backend, BackendError, BackendId, DriverInfo, Frame, Needs, Prepared, Support};
+use umbra_case::{
+    Backend, BackendError, BackendId, DriverInfo, Frame, Needs, Prepared, Profile, Support,
+};
 
 use crate::api::Api;
 use crate::context::Unavailable;
@@ -87,6 +89,15 @@ impl Backend for GlBackend {
 
     fn info(&self) -> DriverInfo {
         self.info.clone()
+    }
+
+    fn profile(&self) -> Profile {
+        match self.renderer.api {
+            // Seamless cube filtering is off unless enabled, and umbra leaves it off.
+            Api::Gl33 => Profile::GL,
+            Api::Gles3 => Profile::GLES3,
+            Api::Gles2 => Profile::GLES2,
+        }
     }
 
     fn supports(&self, needs: &Needs) -> Support {

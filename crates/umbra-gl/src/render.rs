@@ -26,6 +26,7 @@ use glow::HasContext;
 use umbra_case::format::{Attachments, Compare, Cull, DepthFormat, DepthOrder, Filter, Outside};
 use umbra_case::{
     BackendError, Clock, Convention, DepthMap, Frame, LightKind, LookupMatrices, Prepared, Timings,
+    VisibilityStorage,
 };
 
 use crate::api::Api;
@@ -789,6 +790,8 @@ impl Renderer {
             visibility,
             surface: Some(surface),
             shadow_map,
+            // The visibility target is RGBA8 on every GL flavour.
+            visibility_storage: VisibilityStorage::Unorm8,
             timings: Timings {
                 shadow_pass,
                 lit_pass,

@@ -315,7 +315,8 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
     }
     s.push_str("  float bias = u_constant;\n");
     if k.slope {
-        s.push_str("  float cosine = clamp(dot(n, to_light(p)), -1.0, 1.0);\n  bias += clamp(u_slope_scale * tan(acos(cosine)), 0.0, u_slope_max);\n");
+        // tan(acos(c)) in its algebraic form (umbra_ref::lookup, step 6).
+        s.push_str("  float cosine = dot(n, to_light(p));\n  if (cosine > 0.0) bias += clamp(u_slope_scale * sqrt(max(1.0 - cosine * cosine, 0.0)) / cosine, 0.0, u_slope_max);\n");
     }
     s.push_str("  float r = c.z - TOWARD_FAR * bias;\n");
     if manual && k.clamp_reference {

@@ -13,13 +13,17 @@ use crate::raster::Tri;
 pub const BAND_ROWS: usize = 8;
 
 /// Runs `f(row_range, band_slice, triangles_touching_band)` for every band of `buf` (a
-/// row-major image of `width` columns, `per_pixel` items per pixel).
+/// row-major image of `width` columns, `per_pixel` items per pixel); each triangle comes with
+/// its index in `tris`. With `near`, a triangle
+/// touches a band through its grown bounds ([`Tri::near_bbox`], for the judge's coverage
+/// freedom), else through the centres it covers.
 pub fn for_each_band<T: Send>(
     buf: &mut [T],
     width: usize,
     per_pixel: usize,
     tris: &[Tri],
-    f: impl Fn(std::ops::Range<i32>, &mut [T], &mut dyn Iterator<Item = &Tri>) + Sync,
+    near: bool,
+    f: impl Fn(std::ops::Range<i32>, &mut [T], &mut dyn Iterator<Item = (usize, &Tri)>) + Sync,
 ) {
     let band_len = width * per_pixel * BAND_ROWS;
     buf.par_chunks_mut(band_len)
@@ -27,7 +31,10 @@ pub fn for_each_band<T: Send>(
         .for_each(|(band, slice)| {
             let y0 = (band * BAND_ROWS) as i32;
             let y1 = y0 + (slice.len() / (width * per_pixel)) as i32;
-            let mut touching = tris.iter().filter(|t| t.bbox[1] < y1 && t.bbox[3] >= y0);
+            let mut touching = tris.iter().enumerate().filter(|(_, t)| {
+                let b = if near { t.near_bbox } else { t.bbox };
+                b[1] < y1 && b[3] >= y0
+            });
             f(y0..y1, slice, &mut touching);
         });
 }

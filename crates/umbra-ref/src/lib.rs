@@ -15,6 +15,7 @@
 //! The reference renders in the GL clip convention by default (the write-ups' convention, with
 //! the 0.5/0.5 bias matrix); [`render`] takes the other one too, and the two agree (tested).
 
+pub mod adjacency;
 pub mod bands;
 pub mod lit_pass;
 pub mod lookup;
@@ -28,8 +29,10 @@ use std::time::Instant;
 use umbra_case::format::Case;
 use umbra_case::{
     Backend, BackendError, BackendId, ClipDepth, Clock, Convention, DepthMap, DriverInfo, Frame,
-    LookupMatrices, Needs, Prepared, Support, Timings,
+    LookupMatrices, Needs, Prepared, Profile, Support, Timings, VisibilityStorage,
 };
+
+pub use lit_pass::PixelLegal;
 
 /// The reference's convention for a case: `clip` with the case's depth order.
 pub fn convention(case: &Case, clip: ClipDepth) -> Convention {
@@ -41,25 +44,106 @@ pub fn convention(case: &Case, clip: ClipDepth) -> Convention {
 
 /// Renders both passes of `run` in clip convention `clip`.
 pub fn render(run: &Prepared, clip: ClipDepth) -> Frame {
-    render_inner(run, clip, false).0
+    render_inner(run, clip, None, None).0
 }
 
-/// Renders like [`render`] and also returns, per pixel (top row first), the
-/// [`lookup::ambiguity`] flags: why another conformant implementation could answer
-/// differently there. The judge's agreement rule uses them.
-pub fn render_judged(run: &Prepared, clip: ClipDepth) -> (Frame, Vec<u8>) {
-    render_inner(run, clip, true)
+/// A judged reference render: the reference's frame and, per pixel (top row first), what a
+/// conformant implementation of `profile` may show there ([`PixelLegal`]): the interval of
+/// its visibility, why the interval is wide ([`lookup::ambiguity`]), and its colour as a
+/// function of the visibility it wrote. The judge in `umbra-compare` reads nothing else.
+#[derive(Clone, Debug)]
+pub struct Judged {
+    /// The reference's own frame (one legal rendering among many).
+    pub frame: Frame,
+    /// Per pixel, what is legal.
+    pub legal: Vec<PixelLegal>,
+    /// The step between the values the case's filter produces ([`lookup::quantum`]).
+    pub quantum: f32,
+    /// The profile the intervals are for.
+    pub profile: Profile,
 }
 
-fn render_inner(run: &Prepared, clip: ClipDepth, judge: bool) -> (Frame, Vec<u8>) {
+/// Renders like [`render`] and also computes what every pixel allows for `profile`.
+pub fn render_judged(run: &Prepared, clip: ClipDepth, profile: Profile) -> Judged {
+    explain(run, clip, profile, None).0
+}
+
+/// Like [`render_judged`], and with `pixel` (x, y, top row first) also the step-by-step
+/// trace of that pixel's judged lookup: the point, its moves, every tap's stored range and
+/// what the compare may answer.
+pub fn explain(
+    run: &Prepared,
+    clip: ClipDepth,
+    profile: Profile,
+    pixel: Option<(u32, u32)>,
+) -> (Judged, String) {
+    let (frame, legal, trace) = render_inner(run, clip, Some(profile), pixel);
+    (
+        Judged {
+            frame,
+            legal,
+            quantum: lookup::quantum(run.case().shadow.filter),
+            profile,
+        },
+        trace,
+    )
+}
+
+/// The judged shadow pass alone: per face, the stored values and the range of values a
+/// conformant implementation of `profile` may store in each texel (raster row order, row 0 =
+/// window y 0 of `clip`'s convention).
+pub fn judged_layers(
+    run: &Prepared,
+    clip: ClipDepth,
+    profile: Profile,
+) -> Vec<shadow_pass::DepthLayer> {
+    let case = run.case();
+    let conv = convention(case, clip);
+    let adjacency = adjacency::Adjacency::new(&run.geometry);
+    run.light
+        .views
+        .iter()
+        .map(|v| {
+            let vp = v.view_proj(conv);
+            let kinds = adjacency.edge_kinds(&run.geometry, vp, case.shadow.cull);
+            shadow_pass::render_face(
+                conv,
+                &case.shadow,
+                vp,
+                &run.geometry,
+                Some((&kinds, profile)),
+            )
+        })
+        .collect()
+}
+
+fn render_inner(
+    run: &Prepared,
+    clip: ClipDepth,
+    profile: Option<Profile>,
+    pixel: Option<(u32, u32)>,
+) -> (Frame, Vec<PixelLegal>, String) {
     let start = Instant::now();
     let case = run.case();
     let conv = convention(case, clip);
+    let adjacency = profile.map(|_| adjacency::Adjacency::new(&run.geometry));
     let layers: Vec<_> = run
         .light
         .views
         .iter()
-        .map(|v| shadow_pass::render_face(conv, &case.shadow, v.view_proj(conv), &run.geometry))
+        .map(|v| {
+            let vp = v.view_proj(conv);
+            let kinds = adjacency
+                .as_ref()
+                .map(|a| a.edge_kinds(&run.geometry, vp, case.shadow.cull));
+            shadow_pass::render_face(
+                conv,
+                &case.shadow,
+                vp,
+                &run.geometry,
+                kinds.as_deref().zip(profile),
+            )
+        })
         .collect();
     let shadow_done = Instant::now();
     let lookup = lookup::Lookup {
@@ -86,8 +170,28 @@ fn render_inner(run: &Prepared, clip: ClipDepth, judge: bool) -> (Frame, Vec<u8>
                 f32::max,
             )
         },
+        profile: profile.unwrap_or_default(),
     };
-    let lit = lit_pass::render(run, conv, &lookup, judge);
+    let camera_kinds = adjacency.as_ref().map(|a| {
+        a.edge_kinds(
+            &run.geometry,
+            run.camera.view_proj(conv),
+            umbra_case::format::Cull::None,
+        )
+    });
+    let [cw, ch] = run.camera.size;
+    // The raster row of a top-first pixel: rows run up in the GL convention.
+    let explain = pixel.map(|(x, y)| {
+        let row = if conv.window_y_down() { y } else { ch - 1 - y };
+        (row * cw + x) as usize
+    });
+    let lit = lit_pass::render(
+        run,
+        conv,
+        &lookup,
+        camera_kinds.as_deref().zip(profile),
+        explain,
+    );
     let lit_done = Instant::now();
     let [w, h] = run.camera.size;
     let flip = !conv.window_y_down();
@@ -109,9 +213,10 @@ fn render_inner(run: &Prepared, clip: ClipDepth, judge: bool) -> (Frame, Vec<u8>
             format: case.shadow.format,
             values,
         }),
+        visibility_storage: VisibilityStorage::Float32,
         timings: Timings::default(),
     };
-    let ambiguity = top_first(&lit.ambiguity, w as usize, 1, flip);
+    let legal = top_first(&lit.legal, w as usize, 1, flip);
     let end = Instant::now();
     let frame = Frame {
         timings: Timings {
@@ -123,7 +228,7 @@ fn render_inner(run: &Prepared, clip: ClipDepth, judge: bool) -> (Frame, Vec<u8>
         },
         ..frame
     };
-    (frame, ambiguity)
+    (frame, legal, lit.trace)
 }
 
 /// Rows in top-first order: reversed when the raster's row 0 is the bottom (the one Y flip).
@@ -154,6 +259,10 @@ impl Backend for RefBackend {
             version: env!("CARGO_PKG_VERSION").into(),
             extensions: Vec::new(),
         }
+    }
+
+    fn profile(&self) -> Profile {
+        Profile::GL
     }
 
     fn supports(&self, _needs: &Needs) -> Support {

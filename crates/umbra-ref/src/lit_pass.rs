@@ -3,25 +3,52 @@
 //! nothing a GPU would show (the lookup does not affect depth) and looks up each pixel once.
 //! Varyings (world position, normal) interpolate perspective-correctly and are evaluated in
 //! f32, as a GPU's would be.
+//!
+//! A judged render also marks the pixels where another conformant implementation may show
+//! another surface ([`crate::lookup::ambiguity::SURFACE`]): within the vertex snapping's
+//! reach ([`crate::shadow_pass::SNAP_PX`]) of an open edge of what covers it, of an edge it
+//! shares with another face, or of a surface that may cover it and is nearer or tied in
+//! depth within both planes' freedom (the camera's depth buffer: f32, or 24-bit on the GLES 2
+//! path). There the lookups of two frames are not of the same point and are not compared.
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use umbra_case::format::Cull;
-use umbra_case::{Convention, Geometry, Prepared};
+use umbra_case::{Convention, Geometry, Prepared, Profile};
 
 use crate::bands::for_each_band;
-use crate::lookup::Lookup;
-use crate::raster::Rasterizer;
-use crate::shading::{BACKGROUND, shade};
-use crate::shadow_pass::setup_all;
+use crate::lookup::{Legal, Lookup, ambiguity, position_freedom};
+use crate::raster::{Coverage, EdgeKind, Rasterizer, Tri};
+use crate::shading::{BACKGROUND, shade, shade_linear, shade_tolerance};
+use crate::shadow_pass::{SNAP_PX, setup_all};
 
 const NONE: u32 = u32::MAX;
 
 #[derive(Clone, Copy)]
 struct Nearest {
     depth: f32,
+    /// Index into the set-up triangles (not the source triangle).
     tri: u32,
     weights: DVec3,
+    /// |∂z/∂x| + |∂z/∂y| of the winning plane (judged renders).
+    slope: f32,
+}
+
+/// What a judged pixel allows (see [`crate::Judged`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PixelLegal {
+    /// The legal visibility interval and why it is wide ([`Legal`]).
+    pub lo: f32,
+    /// See `lo`.
+    pub hi: f32,
+    /// [`ambiguity`] flags.
+    pub flags: u8,
+    /// Unclamped colour for visibility 0 …
+    pub c0: [f32; 3],
+    /// … and for visibility 1 (affine in between).
+    pub c1: [f32; 3],
+    /// The colour's arithmetic freedom per channel ([`crate::shading::shade_tolerance`]).
+    pub ctol: f32,
 }
 
 /// Per pixel, raster row order: colour, visibility (NaN = background), face + 1.
@@ -32,13 +59,21 @@ pub struct LitImage {
     pub visibility: Vec<f32>,
     /// Face id + 1, 0 for background.
     pub surface: Vec<u32>,
-    /// [`crate::lookup::ambiguity`] flags per pixel (all 0 unless judged).
-    pub ambiguity: Vec<u8>,
+    /// What each pixel allows (judged renders; empty otherwise).
+    pub legal: Vec<PixelLegal>,
+    /// The trace of the explained pixel, if one was asked for.
+    pub trace: String,
 }
 
-/// Renders the camera view of `run`, looking shadows up with `lookup`; with `judge`, also
-/// records why each lookup's answer could legally differ.
-pub fn render(run: &Prepared, conv: Convention, lookup: &Lookup, judge: bool) -> LitImage {
+/// Renders the camera view of `run`, looking shadows up with `lookup`; with `judged` (the
+/// camera view's edge kinds and the profile), also what every pixel allows.
+pub fn render(
+    run: &Prepared,
+    conv: Convention,
+    lookup: &Lookup,
+    judged: Option<(&[[EdgeKind; 3]], Profile)>,
+    explain: Option<usize>,
+) -> LitImage {
     let [w, h] = run.camera.size;
     let geo: &Geometry = &run.geometry;
     let raster = Rasterizer {
@@ -47,12 +82,18 @@ pub fn render(run: &Prepared, conv: Convention, lookup: &Lookup, judge: bool) ->
         height: h,
         cull: Cull::None,
     };
-    let tris = setup_all(&raster, run.camera.view_proj(conv), geo);
+    let tris = setup_all(
+        &raster,
+        run.camera.view_proj(conv),
+        geo,
+        judged.map(|j| j.0),
+    );
     let mut nearest = vec![
         Nearest {
             depth: 1.0,
             tri: NONE,
-            weights: DVec3::ZERO
+            weights: DVec3::ZERO,
+            slope: 0.0,
         };
         (w * h) as usize
     ];
@@ -61,55 +102,111 @@ pub fn render(run: &Prepared, conv: Convention, lookup: &Lookup, judge: bool) ->
         w as usize,
         1,
         &tris,
+        false,
         |rows, band, touching| {
-            for t in touching {
+            for (index, t) in touching {
+                let (dx, dy) = t.depth_slopes();
+                let slope = (dx.abs() + dy.abs()) as f32;
                 t.scan(rows.clone(), |x, y, frag| {
                     let z = t.depth(frag).clamp(0.0, 1.0);
                     let i = (y - rows.start) as usize * w as usize + x as usize;
                     if z < band[i].depth {
                         band[i] = Nearest {
                             depth: z,
-                            tri: t.source,
+                            tri: index as u32,
                             weights: t.source_weights(frag),
+                            slope,
                         };
                     }
                 });
             }
         },
     );
+    let surface_free = judged.map(|(_, profile)| surface_freedom(&tris, &nearest, w, geo, profile));
     let case = run.case();
     let eye = run.camera.eye;
-    let pixels: Vec<([u8; 4], f32, u32, u8)> = nearest
-        .par_iter()
-        .map(|px| {
-            if px.tri == NONE {
-                return (BACKGROUND, f32::NAN, 0, 0);
-            }
-            let t = px.tri as usize;
-            let idx = geo.triangles[t].map(|k| k as usize);
-            let wt = px.weights.as_vec3();
-            let p = geo.positions[idx[0]] * wt.x
-                + geo.positions[idx[1]] * wt.y
-                + geo.positions[idx[2]] * wt.z;
-            let n = (geo.normals[idx[0]] * wt.x
-                + geo.normals[idx[1]] * wt.y
-                + geo.normals[idx[2]] * wt.z)
-                .normalize_or_zero();
-            let (vis, flags) = if judge {
-                lookup.visibility_judged(p, n)
-            } else {
-                (lookup.visibility(p, n), 0)
+    let shade_pixel = |i: usize, px: &Nearest| -> ([u8; 4], f32, u32, PixelLegal) {
+        if px.tri == NONE {
+            let flags = surface_free.as_ref().map_or(0, |s| s[i]);
+            let legal = PixelLegal {
+                flags,
+                ..Default::default()
             };
-            let albedo: Vec3 = geo.albedo[geo.object[t] as usize];
-            let color = shade(
-                &case.shading,
-                albedo,
-                n,
-                run.light.to_light(p),
-                (eye - p).normalize_or_zero(),
-                vis,
-            );
-            (color, vis, geo.face[t] + 1, flags)
+            return (BACKGROUND, f32::NAN, 0, legal);
+        }
+        let tri = &tris[px.tri as usize];
+        let t = tri.source as usize;
+        let idx = geo.triangles[t].map(|k| k as usize);
+        let at = |wt: Vec3| {
+            (
+                geo.positions[idx[0]] * wt.x
+                    + geo.positions[idx[1]] * wt.y
+                    + geo.positions[idx[2]] * wt.z,
+                (geo.normals[idx[0]] * wt.x
+                    + geo.normals[idx[1]] * wt.y
+                    + geo.normals[idx[2]] * wt.z)
+                    .normalize_or_zero(),
+            )
+        };
+        let (p, n) = at(px.weights.as_vec3());
+        let albedo: Vec3 = geo.albedo[geo.object[t] as usize];
+        let to_light = run.light.to_light(p);
+        let to_eye = (eye - p).normalize_or_zero();
+        let (vis, legal) = match &surface_free {
+            Some(free) => {
+                // Vertex snapping (4 sub-pixel bits) moves the triangle under the pixel
+                // centre by up to SNAP_PX along x and y: the interpolated position (and
+                // normal) are those of a point up to that far away on the surface.
+                let (x, y) = ((i % w as usize) as f64 + 0.5, (i / w as usize) as f64 + 0.5);
+                let (px_, nx) = at(tri.source_weights_at(x + 1.0, y).as_vec3());
+                let (py_, ny) = at(tri.source_weights_at(x, y + 1.0).as_vec3());
+                let snap = SNAP_PX as f32;
+                let moves = [(px_ - p) * snap, (py_ - p) * snap];
+                let normal_moves = ((nx - n).length() + (ny - n).length()) * snap;
+                let (vis, l): (f32, Legal) = lookup.judged(p, n, moves);
+                let c0 = shade_linear(&case.shading, albedo, n, to_light, to_eye, 0.0);
+                let c1 = shade_linear(&case.shading, albedo, n, to_light, to_eye, 1.0);
+                let d = position_freedom(p, lookup.reach) + moves[0].length() + moves[1].length();
+                let moved = normal_moves
+                    + d / (eye - p).length().max(1e-6)
+                    + match run.light.kind {
+                        umbra_case::LightKind::Directional { .. } => 0.0,
+                        umbra_case::LightKind::Spot { position }
+                        | umbra_case::LightKind::Point { position } => {
+                            d / (position - p).length().max(1e-6)
+                        }
+                    };
+                let ctol = shade_tolerance(&case.shading, albedo, n, to_light, to_eye, moved);
+                (
+                    vis,
+                    PixelLegal {
+                        lo: l.lo,
+                        hi: l.hi,
+                        flags: l.flags | free[i],
+                        c0: c0.to_array(),
+                        c1: c1.to_array(),
+                        ctol,
+                    },
+                )
+            }
+            None => (lookup.visibility(p, n), PixelLegal::default()),
+        };
+        let color = shade(&case.shading, albedo, n, to_light, to_eye, vis);
+        (color, vis, geo.face[t] + 1, legal)
+    };
+    let trace = std::sync::Mutex::new(String::new());
+    let pixels: Vec<([u8; 4], f32, u32, PixelLegal)> = nearest
+        .par_iter()
+        .enumerate()
+        .map(|(i, px)| {
+            if explain == Some(i) {
+                let (out, t) = crate::lookup::explaining(|| shade_pixel(i, px));
+                if let Ok(mut s) = trace.lock() {
+                    *s = t;
+                }
+                return out;
+            }
+            shade_pixel(i, px)
         })
         .collect();
     let n = pixels.len();
@@ -117,13 +214,112 @@ pub fn render(run: &Prepared, conv: Convention, lookup: &Lookup, judge: bool) ->
         color: Vec::with_capacity(n * 4),
         visibility: Vec::with_capacity(n),
         surface: Vec::with_capacity(n),
-        ambiguity: Vec::with_capacity(n),
+        legal: Vec::with_capacity(if judged.is_some() { n } else { 0 }),
+        trace: trace.into_inner().unwrap_or_default(),
     };
-    for (c, v, s, a) in pixels {
+    for (c, v, s, l) in pixels {
         out.color.extend_from_slice(&c);
         out.visibility.push(v);
         out.surface.push(s);
-        out.ambiguity.push(a);
+        if judged.is_some() {
+            out.legal.push(l);
+        }
     }
     out
+}
+
+/// Per pixel, [`ambiguity::SURFACE`] where another implementation may show another surface
+/// (or none, or one where we show none).
+fn surface_freedom(
+    tris: &[Tri],
+    nearest: &[Nearest],
+    w: u32,
+    geo: &Geometry,
+    profile: Profile,
+) -> Vec<u8> {
+    // The camera's depth buffer: f32 everywhere but the GLES 2 path's 24-bit renderbuffer.
+    let storage = if profile.packed_depth {
+        1.0 / f64::from((1u32 << 24) - 1)
+    } else {
+        0.0
+    };
+    let tol = |slope: f64, z: f64, norm: f64| {
+        slope * SNAP_PX * norm + 4.0 * f64::from(umbra_case::depth::f32_spacing(z as f32)) + storage
+    };
+    let mut free = vec![0u8; nearest.len()];
+    for_each_band(
+        &mut free,
+        w as usize,
+        1,
+        tris,
+        true,
+        |rows, band, touching| {
+            // The winner's pair visits, and every pair visit, per pixel of the band: a winner
+            // near an edge it shares is sure to be replaced by its partner only if the partner is
+            // near that edge too (not near a boundary of its own).
+            let mut winner_pairs: Vec<(usize, u32, u32)> = Vec::new();
+            let mut pair_visits: std::collections::HashSet<(usize, u32, u32)> =
+                std::collections::HashSet::new();
+            for (_, t) in touching {
+                let face = geo.face[t.source as usize];
+                let (dx, dy) = t.depth_slopes();
+                let slope = dx.abs() + dy.abs();
+                t.scan_near(rows.clone(), SNAP_PX, |x, y, e, coverage| {
+                    let certain = coverage != Coverage::Maybe;
+                    let i = (y - rows.start) as usize * w as usize + x as usize;
+                    if let Coverage::Pair(partner) = coverage {
+                        pair_visits.insert((i, t.source, partner));
+                    }
+                    let gi = y as usize * w as usize + x as usize;
+                    let win = nearest[gi];
+                    let win_source = if win.tri == NONE {
+                        NONE
+                    } else {
+                        tris[win.tri as usize].source
+                    };
+                    let flag = if win.tri == NONE {
+                        true
+                    } else if win_source == t.source {
+                        // Ours: it may not cover, or an edge it shares with another face may move.
+                        if let Coverage::Pair(partner) = coverage {
+                            winner_pairs.push((i, t.source, partner));
+                        }
+                        !certain || near_other_face(t, e, face)
+                    } else if geo.face[win_source as usize] == face {
+                        false
+                    } else {
+                        let z = t.depth_at(e);
+                        let zw = f64::from(win.depth);
+                        z - tol(slope, z, t.weight_norm(e))
+                            <= zw + tol(f64::from(win.slope), zw, 1.0)
+                    };
+                    if flag {
+                        band[i] |= ambiguity::SURFACE;
+                    }
+                });
+            }
+            for (i, me, partner) in winner_pairs {
+                if !pair_visits.contains(&(i, partner, me)) {
+                    band[i] |= ambiguity::SURFACE;
+                }
+            }
+        },
+    );
+    free
+}
+
+/// Whether the centre with edge values `e` lies within the snapping's reach of an edge that
+/// `t` shares with a triangle of another face than `face`.
+fn near_other_face(t: &Tri, e: [i64; 3], face: u32) -> bool {
+    (0..3).any(|i| match t.edges[i] {
+        EdgeKind::Shared { face: other, .. } if other != face => {
+            let (a, b) = ((i + 1) % 3, (i + 2) % 3);
+            let (dx, dy) = (t.x[b] - t.x[a], t.y[b] - t.y[a]);
+            let reach = SNAP_PX
+                * f64::from(1u32 << crate::raster::SUBPIXEL_BITS)
+                * (dx.abs() + dy.abs()) as f64;
+            (e[i] as f64).abs() <= reach
+        }
+        _ => false,
+    })
 }

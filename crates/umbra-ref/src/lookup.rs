@@ -7,21 +7,57 @@
 //! 5. Outside: `lit` reads lit when (u, v) leaves [0,1]² (cube faces never do: they clamp).
 //! 6. Reference: depth − (constant + slope bias) away from the light; clamped to [0,1] for a
 //!    hardware compare on a fixed-point format (GL 3.3 §3.8.16, Vulkan "Depth Compare"),
-//!    never for a manual compare or a float format.
+//!    never for a manual compare or a float format. The slope bias is
+//!    min(s · tan θ, max) with tan θ = sqrt(1 − c²)/c, c = N·L > 0 (0 where c ≤ 0), the
+//!    algebraic form of tan(acos(c)): the same number, without acos and tan, whose GLSL and
+//!    SPIR-V precision (4096 ULP, absolute 2⁻¹¹) would allow several D24 steps of bias.
 //! 7. Filter: NEAREST texel floor(u·size); LINEAR = 2x2 at floor(u·size − ½) with bilinear
 //!    weights of the compare results (never of depths); PCF N = N×N NEAREST compares at
 //!    offsets (k − (N−1)/2) texels, averaged.
-//! 8. Texels beyond the map: border (clear depth), clamp to edge (also for `lit` and cube
-//!    faces), or repeat.
+//! 8. Texels beyond the map: border (clear depth), clamp to edge (also for `lit`), or repeat.
+//!    Cube faces: the sampler clamps to the face; taps the shader addresses itself go through
+//!    the direction of their texel's centre, so a PCF tap beyond a face's edge reads the
+//!    neighbouring face (hardware compare) while a manual fetch clamps its indices first.
 //!
 //! Manual compare uses the same texel selection and weights as hardware compare: the shader
 //! fetches the texels and compares them itself, so the two differ only in the clamp of 6.
+//!
+//! **Judged lookups** ([`Lookup::judged`]) also return the interval of values any conformant
+//! implementation of the given [`Profile`] may return there ([`Legal`]), dEQP-style: each
+//! compare is possibly lit, possibly shadowed, or both, from the reference value's interval
+//! against the texel's stored-value interval (`crate::shadow_pass::Freedom`); the filter then
+//! combines the taps' possibilities with the weights the spec allows; and the lookup point
+//! itself may move by [`position_freedom`], over which the interval is the hull.
 
 use glam::Vec3;
-use umbra_case::format::{Compare, DepthFormat, Filter, Outside, Shadow};
-use umbra_case::{Convention, LightSetup, LookupMatrices};
+use umbra_case::format::{BiasMatrix, Compare, Filter, Outside, Shadow};
+use umbra_case::{Convention, LightKind, LightSetup, LookupMatrices, Profile, ShadowCoord, Spec};
 
 use crate::shadow_pass::DepthLayer;
+
+thread_local! {
+    /// The trace of the lookup being explained on this thread (see [`explaining`]).
+    static TRACE: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Runs `f` with this thread's lookups tracing every step, and returns its result and the
+/// trace (for `umbra render --explain`).
+pub fn explaining<T>(f: impl FnOnce() -> T) -> (T, String) {
+    TRACE.with(|t| *t.borrow_mut() = Some(String::new()));
+    let out = f();
+    let trace = TRACE.with(|t| t.borrow_mut().take()).unwrap_or_default();
+    (out, trace)
+}
+
+/// Appends a line to the trace when this thread is explaining.
+fn note(line: impl FnOnce() -> String) {
+    TRACE.with(|t| {
+        if let Some(s) = t.borrow_mut().as_mut() {
+            s.push_str(&line());
+            s.push('\n');
+        }
+    });
+}
 
 /// The rendered shadow maps of a run and what a lookup needs to read them.
 pub struct Lookup<'a> {
@@ -38,22 +74,69 @@ pub struct Lookup<'a> {
     /// The case's reach, for the position freedom: the largest of the scene's extent and the
     /// camera's and the light's distances from the origin (per axis).
     pub reach: f32,
+    /// The profile the legal intervals are computed for (judged renders).
+    pub profile: Profile,
 }
 
-/// Why a lookup's answer is one that a conformant implementation could give differently.
+/// Why a pixel's legal interval is wider than one value (bit flags, kept per pixel).
 pub mod ambiguity {
-    /// A compared texel is within the stored-depth freedom of the reference value.
+    /// A compared texel's stored value and the reference value are within their freedoms
+    /// of each other (polygon offset, snapping, storage, arithmetic, the compare's own
+    /// precision).
     pub const DEPTH_TIE: u8 = 1;
-    /// The coordinate is within 1/16 texel (the minimum sub-texel precision) of a texel
-    /// whose compare differs.
+    /// The sampler's coordinate (4 sub-texel bits) may select another texel or footprint.
     pub const TEXEL_BOUNDARY: u8 = 2;
-    /// LINEAR taps disagree (weights are implementation-defined, NEAREST is allowed), a
-    /// LINEAR lookup lies within a texel of a cube face's edge (seamless or per-face
-    /// filtering), or a PCF average lies within one 8-bit result step of the 0.5 threshold.
+    /// Hardware LINEAR: the taps disagree and the spec leaves the weights open (GL: any
+    /// weighting, NEAREST included; Vulkan: bilinear within 1/16).
     pub const FILTER: u8 = 4;
-    /// Moving the lookup point by the interpolation freedom of its position (see
-    /// [`super::position_freedom`]) along any axis changes the answer.
+    /// Moving the lookup point by [`super::position_freedom`] or by the camera's vertex
+    /// snapping changes the interval.
     pub const POSITION: u8 = 8;
+    /// A compared texel may hold another surface: a triangle covers it or not within the
+    /// vertex snapping's reach (the map's coverage freedom).
+    pub const COVERAGE: u8 = 16;
+    /// Hardware LINEAR at a cube corner, where the specs leave the result open.
+    pub const SEAM: u8 = 32;
+    /// The camera pixel itself may show another surface (set by the lit pass).
+    pub const SURFACE: u8 = 64;
+}
+
+/// The values a conformant implementation may return for one lookup, before the target
+/// stores them: any v in [lo, hi] that is a multiple of the case's quantum
+/// ([`quantum`]), within the storage's tolerance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Legal {
+    /// Smallest legal value.
+    pub lo: f32,
+    /// Largest legal value.
+    pub hi: f32,
+    /// [`ambiguity`] flags: why the interval is wider than a point.
+    pub flags: u8,
+}
+
+impl Legal {
+    const LIT: Legal = Legal {
+        lo: 1.0,
+        hi: 1.0,
+        flags: 0,
+    };
+    fn hull(self, o: Legal) -> Legal {
+        Legal {
+            lo: self.lo.min(o.lo),
+            hi: self.hi.max(o.hi),
+            flags: self.flags | o.flags,
+        }
+    }
+}
+
+/// The step between the values a filter can produce: NEAREST returns 0 or 1, PCF N sums of
+/// N² results over N², LINEAR anything (0).
+pub fn quantum(filter: Filter) -> f32 {
+    match filter {
+        Filter::Nearest => 1.0,
+        Filter::Linear => 0.0,
+        Filter::Pcf(n) => 1.0 / (n * n) as f32,
+    }
 }
 
 /// How far the point a backend looks up for a pixel may lie from the reference's, per world
@@ -72,200 +155,748 @@ pub fn position_freedom(p: Vec3, reach: f32) -> f32 {
     16.0 * (f32::EPSILON * 0.5) * (p.abs().max_element() + reach)
 }
 
-/// The lit/shadowed answer of a visibility (the judge's threshold).
-fn shadowed(v: f32) -> bool {
-    v < 0.5
+/// Sub-texel precision the specs guarantee (4 bits): a sampler may select texels and weights
+/// as if the coordinate were anywhere within 1/16 texel (Vulkan `subTexelPrecisionBits`,
+/// GL's equivalent in the texture chapter's precision note).
+const SUBTEXEL: f64 = 1.0 / 16.0;
+
+/// Beyond this many texels of coordinate freedom a lookup's legal interval is taken as
+/// [0, 1] rather than enumerated (far-from-origin scenes at 1e5 m and more).
+const MAX_SPAN: f64 = 8.0;
+
+/// u = 2⁻²⁴, the unit roundoff of f32.
+const U: f64 = 1.0 / 16_777_216.0;
+
+/// γₙ = n·u/(1 − n·u): the bound of an n-term f32 dot product's rounding, fused or not.
+fn gamma(n: f64) -> f64 {
+    n * U / (1.0 - n * U)
 }
 
-/// Sub-texel precision the specs guarantee (4 bits).
-const SUBTEXEL: f32 = 1.0 / 16.0;
+fn ulp(x: f64) -> f64 {
+    f64::from(umbra_case::depth::f32_spacing(x as f32))
+}
+
+/// Where a lookup reads, before filtering.
+#[derive(Clone, Copy)]
+struct Setup {
+    face: usize,
+    c: ShadowCoord,
+    /// The compare's reference value, as the shader computes it (clamped if the compare is).
+    reference: f32,
+}
+
+/// What one compare may answer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Possible {
+    lit: bool,
+    shadow: bool,
+    /// Both, and only through a surface that may or may not cover the texel.
+    by_coverage: bool,
+}
+
+impl Possible {
+    fn or(self, o: Possible) -> Possible {
+        Possible {
+            lit: self.lit || o.lit,
+            shadow: self.shadow || o.shadow,
+            by_coverage: self.by_coverage || o.by_coverage,
+        }
+    }
+    fn min(self) -> f64 {
+        if self.shadow { 0.0 } else { 1.0 }
+    }
+    fn max(self) -> f64 {
+        if self.lit { 1.0 } else { 0.0 }
+    }
+    fn flags(self) -> u8 {
+        match (self.lit && self.shadow, self.by_coverage) {
+            (false, _) => 0,
+            (true, false) => ambiguity::DEPTH_TIE,
+            (true, true) => ambiguity::COVERAGE,
+        }
+    }
+}
 
 impl Lookup<'_> {
+    fn cube(&self) -> bool {
+        self.layers.len() == 6
+    }
+
+    fn hardware(&self) -> bool {
+        self.shadow.compare == Compare::Hardware && !self.profile.packed_depth
+    }
+
     /// The shadow term at world point `p` with unit normal `n`: 1 lit .. 0 shadowed.
     pub fn visibility(&self, p: Vec3, n: Vec3) -> f32 {
-        self.lookup(p, n, false).0
-    }
-
-    /// The shadow term and the [`ambiguity`] flags of its decision.
-    pub fn visibility_judged(&self, p: Vec3, n: Vec3) -> (f32, u8) {
-        self.lookup(p, n, true)
-    }
-
-    fn lookup(&self, p: Vec3, n: Vec3, judge: bool) -> (f32, u8) {
-        let (vis, mut flags) = self.lookup_at(p, n, judge);
-        if judge {
-            let d = position_freedom(p, self.reach);
-            let moved = [Vec3::X, Vec3::Y, Vec3::Z]
-                .into_iter()
-                .flat_map(|e| [p + e * d, p - e * d]);
-            if moved
-                .map(|q| self.lookup_at(q, n, false).0)
-                .any(|v| shadowed(v) != shadowed(vis))
-            {
-                flags |= ambiguity::POSITION;
-            }
+        match self.setup(p, n) {
+            None => 1.0,
+            Some(st) => self.filter_value(&st),
         }
-        (vis, flags)
     }
 
-    fn lookup_at(&self, p: Vec3, n: Vec3, judge: bool) -> (f32, u8) {
+    /// The shadow term and the values a conformant implementation of the profile may return
+    /// instead: the hull over the lookup point moved by `snap`, the two world-space vectors
+    /// the point moves by when the camera's vertex snapping moves the surface under the pixel
+    /// by the snapping's reach along screen x and y (the centre and the parallelogram's four
+    /// corners: an affine map of a parallelogram crosses a texel boundary or a depth tie only
+    /// if its corners lie on both sides), each widened by the arithmetic position freedom
+    /// ([`position_freedom`], a box around the point, see [`Lookup::legal_at`]).
+    pub fn judged(&self, p: Vec3, n: Vec3, snap: [Vec3; 2]) -> (f32, Legal) {
+        let vis = self.visibility(p, n);
+        let d = position_freedom(p, self.reach)
+            + self.shadow.bias.normal_offset.abs() * 16.0 * f32::EPSILON;
+        let here = self.legal_at(p, n, d);
+        note(|| {
+            format!(
+                "lookup at p = {p}, n = {n}: value {vis}, legal {here:?}; moves: arithmetic {d} per axis, snapping {snap:?}"
+            )
+        });
+        let mut all = here;
+        let [sx, sy] = snap;
+        for q in [p + sx + sy, p + sx - sy, p - sx + sy, p - sx - sy] {
+            let l = self.legal_at(q, n, d);
+            note(|| format!("  moved to {q}: {l:?}"));
+            all = all.hull(l);
+        }
+        note(|| format!("hull: {all:?}"));
+        if (all.lo, all.hi) != (here.lo, here.hi) {
+            all.flags |= ambiguity::POSITION;
+        }
+        (vis, all)
+    }
+
+    /// The face, the coordinate and the reference value before any clamp, at `p` (before the
+    /// normal offset) with normal `n`.
+    fn probe(&self, p: Vec3, n: Vec3) -> (usize, ShadowCoord, f32) {
         let s = self.shadow;
         let p = p + n * s.bias.normal_offset;
         let face = self.light.face_for(p);
-        let cube = self.layers.len() == 6;
         let c = self.matrices[face].coord(self.conv, s.bias_matrix, p);
-        if s.guard_behind_light && c.w <= 0.0 {
-            return (1.0, 0);
+        let bias = s.bias.constant + self.slope_bias(p, n);
+        (face, c, c.depth - self.conv.toward_far() * bias)
+    }
+
+    /// Whether a 2D map's `lit` outside policy applies to (u, v).
+    fn outside_lit(&self, u: f32, v: f32) -> bool {
+        !self.cube()
+            && self.shadow.outside == Outside::Lit
+            && !((0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v))
+    }
+
+    fn setup(&self, p: Vec3, n: Vec3) -> Option<Setup> {
+        let s = self.shadow;
+        let (face, c, mut reference) = self.probe(p, n);
+        if (s.guard_behind_light && c.w <= 0.0) || self.outside_lit(c.u, c.v) {
+            return None;
         }
-        if !cube
-            && s.outside == Outside::Lit
-            && !((0.0..=1.0).contains(&c.u) && (0.0..=1.0).contains(&c.v))
-        {
-            return (1.0, 0);
-        }
-        let mut bias = s.bias.constant;
-        if let Some(slope) = s.bias.slope {
-            let cos = n.dot(self.light.to_light(p)).clamp(-1.0, 1.0);
-            bias += (slope.scale * cos.acos().tan()).clamp(0.0, slope.max);
-        }
-        let mut reference = c.depth - self.conv.toward_far() * bias;
         if s.compare == Compare::Hardware && s.format.is_fixed() {
             reference = reference.clamp(0.0, 1.0);
         }
-        let layer = &self.layers[face];
-        let [w, h] = s.size;
-        let outside = if cube {
-            Outside::ClampToEdge
+        Some(Setup { face, c, reference })
+    }
+
+    /// The slope bias min(s·sqrt(1 − c²)/c, max) for c = N·L > 0, else 0.
+    fn slope_bias(&self, p: Vec3, n: Vec3) -> f32 {
+        let Some(slope) = self.shadow.bias.slope else {
+            return 0.0;
+        };
+        let c = n.dot(self.light.to_light(p));
+        if c > 0.0 {
+            (slope.scale * (1.0 - c * c).max(0.0).sqrt() / c).clamp(0.0, slope.max)
         } else {
-            s.outside
-        };
-        let clear = self.conv.clear_depth();
-        // One compare: (passes, within the stored depth's freedom).
-        let tap = |i: i64, j: i64| -> (bool, bool) {
-            let (d, slack) = texel(layer, w, h, i, j, outside, clear, s.format);
-            let pass = self.conv.compare_lit(reference, d);
-            let tie = judge
-                && (reference - d).abs()
-                    <= slack
-                        + s.format.step(reference) as f32
-                        + 4.0 * umbra_case::depth::f32_spacing(reference);
-            (pass, tie)
-        };
+            0.0
+        }
+    }
+
+    fn filter_value(&self, st: &Setup) -> f32 {
+        let s = self.shadow;
+        let [w, h] = s.size;
         let (fw, fh) = (w as f32, h as f32);
-        let mut flags = 0u8;
-        // NEAREST at (x, y) texels: the texel, and whether a neighbour within the sub-texel
-        // precision decides differently.
-        let nearest = |x: f32, y: f32, flags: &mut u8| -> f32 {
-            let (i, j) = (x.floor() as i64, y.floor() as i64);
-            let (pass, tie) = tap(i, j);
-            if judge {
-                if tie {
-                    *flags |= ambiguity::DEPTH_TIE;
-                }
-                let (fx, fy) = (x - x.floor(), y - y.floor());
-                let near_x = if fx < SUBTEXEL {
-                    Some(i - 1)
-                } else if fx > 1.0 - SUBTEXEL {
-                    Some(i + 1)
-                } else {
-                    None
-                };
-                let near_y = if fy < SUBTEXEL {
-                    Some(j - 1)
-                } else if fy > 1.0 - SUBTEXEL {
-                    Some(j + 1)
-                } else {
-                    None
-                };
-                let others = [
-                    near_x.map(|k| (k, j)),
-                    near_y.map(|k| (i, k)),
-                    near_x.zip(near_y),
-                ];
-                if others.iter().flatten().any(|&(a, b)| tap(a, b).0 != pass) {
-                    *flags |= ambiguity::TEXEL_BOUNDARY;
-                }
+        let (u, v) = (st.c.u, st.c.v);
+        let tap = |i: i64, j: i64| -> f32 {
+            let d = self.stored(st.face, i, j, self.tap_addressing());
+            if self.conv.compare_lit(st.reference, d) {
+                1.0
+            } else {
+                0.0
             }
-            if pass { 1.0 } else { 0.0 }
         };
-        let vis = match s.filter {
-            Filter::Nearest => nearest(c.u * fw, c.v * fh, &mut flags),
+        match s.filter {
+            Filter::Nearest => tap((u * fw).floor() as i64, (v * fh).floor() as i64),
             Filter::Linear => {
-                let (x, y) = (c.u * fw - 0.5, c.v * fh - 0.5);
+                let (x, y) = (u * fw - 0.5, v * fh - 0.5);
                 let (i0, j0) = (x.floor(), y.floor());
                 let (a, b) = (x - i0, y - j0);
                 let (i0, j0) = (i0 as i64, j0 as i64);
-                let taps = [
-                    tap(i0, j0),
-                    tap(i0 + 1, j0),
-                    tap(i0, j0 + 1),
-                    tap(i0 + 1, j0 + 1),
-                ];
-                let v = |t: (bool, bool)| if t.0 { 1.0 } else { 0.0 };
-                // Within a texel of a cube face's edge, GL (seamless off unless enabled)
-                // clamps to the face while GLES 3 and Vulkan filter across faces: both legal.
-                let at_seam = cube && (x < 0.5 || y < 0.5 || x > fw - 1.5 || y > fh - 1.5);
-                if judge && at_seam && taps.iter().any(|t| t.0) {
-                    flags |= ambiguity::FILTER;
-                }
-                if judge {
-                    if taps.iter().any(|t| t.1) {
-                        flags |= ambiguity::DEPTH_TIE;
-                    }
-                    if taps.iter().any(|t| t.0 != taps[0].0) {
-                        flags |= ambiguity::FILTER;
-                    }
-                }
-                (1.0 - a) * (1.0 - b) * v(taps[0])
-                    + a * (1.0 - b) * v(taps[1])
-                    + (1.0 - a) * b * v(taps[2])
-                    + a * b * v(taps[3])
+                (1.0 - a) * (1.0 - b) * tap(i0, j0)
+                    + a * (1.0 - b) * tap(i0 + 1, j0)
+                    + (1.0 - a) * b * tap(i0, j0 + 1)
+                    + a * b * tap(i0 + 1, j0 + 1)
             }
             Filter::Pcf(k) => {
                 let half = (k as f32 - 1.0) * 0.5;
                 let mut sum = 0.0;
                 for dy in 0..k {
                     for dx in 0..k {
-                        let u = c.u + (dx as f32 - half) / fw;
-                        let v = c.v + (dy as f32 - half) / fh;
-                        sum += nearest(u * fw, v * fh, &mut flags);
+                        let uu = u + (dx as f32 - half) / fw;
+                        let vv = v + (dy as f32 - half) / fh;
+                        sum += tap((uu * fw).floor() as i64, (vv * fh).floor() as i64);
                     }
                 }
-                let avg = sum / (k * k) as f32;
-                if judge && (avg - 0.5).abs() <= 1.0 / 255.0 {
-                    flags |= ambiguity::FILTER;
+                sum / (k * k) as f32
+            }
+        }
+    }
+
+    /// How the lookup's taps address a cube map: the sampler itself for hardware NEAREST and
+    /// LINEAR (clamped to the face in the value; seams are the judged interval's business),
+    /// the texel centre's direction for hardware PCF taps, clamped indices for manual fetches.
+    fn tap_addressing(&self) -> Addressing {
+        if !self.cube() {
+            return Addressing::Wrap;
+        }
+        match (self.hardware(), self.shadow.filter) {
+            (true, Filter::Pcf(_)) => Addressing::Direction,
+            _ => Addressing::ClampToFace,
+        }
+    }
+
+    /// The stored value at texel (i, j) of `face` under `addressing` and the wrap policy.
+    fn stored(&self, face: usize, i: i64, j: i64, addressing: Addressing) -> f32 {
+        match self.texel(face, i, j, addressing) {
+            Texel::At(f, k) => self.layers[f].values[k],
+            Texel::Clear => self.shadow.format.store(self.conv.clear_depth()),
+        }
+    }
+
+    fn texel(&self, face: usize, i: i64, j: i64, addressing: Addressing) -> Texel {
+        let [w, h] = self.shadow.size;
+        let (wi, hi) = (i64::from(w), i64::from(h));
+        let inside = |i: i64, j: i64| (0..wi).contains(&i) && (0..hi).contains(&j);
+        let at = |f: usize, i: i64, j: i64| Texel::At(f, (j * wi + i) as usize);
+        match addressing {
+            Addressing::ClampToFace => at(face, i.clamp(0, wi - 1), j.clamp(0, hi - 1)),
+            Addressing::Direction => {
+                if inside(i, j) {
+                    return at(face, i, j);
                 }
-                avg
+                // The shader's texel_dir of a virtual texel beyond the edge, in f32 as it is
+                // computed there; the sampler picks the face of that direction.
+                let d = umbra_case::light::cube_texel_dir(face, i as f64, j as f64, f64::from(w));
+                let d32 = d.as_vec3().as_dvec3();
+                let (f, sc, tc) = umbra_case::light::cube_face_coords(d32);
+                let ii = (((sc + 1.0) * 0.5 * f64::from(w)).floor() as i64).clamp(0, wi - 1);
+                let jj = (((tc + 1.0) * 0.5 * f64::from(h)).floor() as i64).clamp(0, hi - 1);
+                at(f, ii, jj)
+            }
+            Addressing::Wrap => {
+                let (i, j) = match self.shadow.outside {
+                    Outside::Border => {
+                        if !inside(i, j) {
+                            return Texel::Clear;
+                        }
+                        (i, j)
+                    }
+                    Outside::Lit | Outside::ClampToEdge => (i.clamp(0, wi - 1), j.clamp(0, hi - 1)),
+                    Outside::Repeat => (i.rem_euclid(wi), j.rem_euclid(hi)),
+                };
+                at(face, i, j)
+            }
+        }
+    }
+
+    /// The legal interval at one lookup point, the point itself free within a box of half
+    /// size `d` along each world axis. The box's effect is linear at that scale: the
+    /// coordinate and the reference value move by at most Σ over the axes of their change
+    /// along each (measured by moving the point), which widens the texel coordinates and the
+    /// reference value; the guard (w ≤ 0) and the `lit` outside test are undecided when w or
+    /// (u, v) lie within that reach of their bound. Where the box reaches another cube face,
+    /// its axis ends are evaluated on their own faces instead.
+    fn legal_at(&self, p: Vec3, n: Vec3, d: f32) -> Legal {
+        let s = self.shadow;
+        let (face, c, raw) = self.probe(p, n);
+        let (mut du, mut dv, mut dr, mut dw) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        if d > 0.0 {
+            for e in [Vec3::X, Vec3::Y, Vec3::Z] {
+                let (f2, c2, r2) = self.probe(p + e * d, n);
+                let (f3, _, _) = self.probe(p - e * d, n);
+                if f2 != face || f3 != face {
+                    let mut all = self.legal_at(p, n, 0.0);
+                    for e in [Vec3::X, Vec3::Y, Vec3::Z] {
+                        for q in [p + e * d, p - e * d] {
+                            all = all.hull(self.legal_at(q, n, 0.0));
+                        }
+                    }
+                    return all;
+                }
+                du += f64::from((c2.u - c.u).abs());
+                dv += f64::from((c2.v - c.v).abs());
+                dr += f64::from((r2 - raw).abs());
+                dw += f64::from((c2.w - c.w).abs());
+            }
+        }
+        let guard_maybe = s.guard_behind_light && f64::from(c.w) - dw <= 0.0;
+        if s.guard_behind_light && f64::from(c.w) + dw <= 0.0 {
+            note(|| "    behind the light: lit".into());
+            return Legal::LIT;
+        }
+        let (u, v) = (f64::from(c.u), f64::from(c.v));
+        let outside_maybe = self.outside_lit((u - du) as f32, v as f32)
+            || self.outside_lit((u + du) as f32, v as f32)
+            || self.outside_lit(u as f32, (v - dv) as f32)
+            || self.outside_lit(u as f32, (v + dv) as f32);
+        let corners_out = [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)]
+            .iter()
+            .all(|(a, b)| self.outside_lit((u + a * du) as f32, (v + b * dv) as f32));
+        if corners_out && self.outside_lit(c.u, c.v) {
+            note(|| "    outside the map: lit".into());
+            return Legal::LIT;
+        }
+        let mut reference = raw;
+        if s.compare == Compare::Hardware && s.format.is_fixed() {
+            reference = reference.clamp(0.0, 1.0);
+        }
+        let st = Setup { face, c, reference };
+        let mut l = self.legal_taps(p, n, &st, (du, dv, dr));
+        if guard_maybe || outside_maybe {
+            l = l.hull(Legal::LIT);
+        }
+        l
+    }
+
+    /// The legal interval of the filter's taps at `st`, the coordinate free within
+    /// (du, dv) and the reference value within dr besides their own arithmetic.
+    fn legal_taps(&self, p: Vec3, n: Vec3, st: &Setup, (du, dv, dr): (f64, f64, f64)) -> Legal {
+        let st = *st;
+        let r = self.reference_range(p, n, &st, dr);
+        note(|| {
+            format!(
+                "    face {} (u, v) = ({}, {}) depth {} w {}; reference {} in [{}, {}]",
+                st.face, st.c.u, st.c.v, st.c.depth, st.c.w, st.reference, r.0, r.1
+            )
+        });
+        let s = self.shadow;
+        let [w, h] = s.size;
+        let (fw, fh) = (f64::from(w), f64::from(h));
+        let (u, v) = (f64::from(st.c.u), f64::from(st.c.v));
+        let addressing = self.tap_addressing();
+        // The coordinate's own arithmetic and the point's box, in texels (see `coord_error`),
+        // and for the sampler's own addressing the 4 sub-texel bits on top.
+        let (ex, ey) = self.coord_error(p, n, &st);
+        let (ex, ey) = (ex + du * fw, ey + dv * fh);
+        if ex.max(ey) > MAX_SPAN {
+            // The point is this uncertain only far from the origin (f32 spacing near the
+            // texel size): any answer is legal, and enumerating texels would not end soon.
+            note(|| format!("    coordinate uncertain by ({ex}, {ey}) texels: anything"));
+            return legal(0.0, 1.0, ambiguity::POSITION);
+        }
+        let sampler = if self.hardware() { SUBTEXEL } else { 0.0 };
+        // What any texel within (x ± err, y ± err) may answer, and whether they differ.
+        let taps = |x: f64, y: f64, err: (f64, f64)| -> (Possible, bool) {
+            let mut all: Option<Possible> = None;
+            let mut differ = false;
+            for i in span(x, err.0) {
+                for j in span(y, err.1) {
+                    let t = self.possible(st.face, i, j, r, addressing);
+                    differ |= all.is_some_and(|a| (a.lit, a.shadow) != (t.lit, t.shadow));
+                    all = Some(all.map_or(t, |a| a.or(t)));
+                }
+            }
+            (all.unwrap_or_default(), differ)
+        };
+        let texel_flag = |differ: bool| if differ { ambiguity::TEXEL_BOUNDARY } else { 0 };
+        match s.filter {
+            Filter::Nearest => {
+                let (t, differ) = taps(u * fw, v * fh, (ex + sampler, ey + sampler));
+                legal(t.min(), t.max(), t.flags() | texel_flag(differ))
+            }
+            Filter::Linear if self.hardware() => self.linear_hardware(&st, r, (ex, ey)),
+            Filter::Linear => {
+                // The shader's own bilinear weights: exact but for the coordinate's
+                // arithmetic, which may also pick the next footprint.
+                let (x, y) = (
+                    f64::from(st.c.u * w as f32 - 0.5),
+                    f64::from(st.c.v * h as f32 - 0.5),
+                );
+                let mut out: Option<Legal> = None;
+                let mut footprints = 0;
+                for i0 in span(x, ex) {
+                    for j0 in span(y, ey) {
+                        footprints += 1;
+                        let a = weight_range(x, ex, i0);
+                        let b = weight_range(y, ey, j0);
+                        let t = [
+                            self.possible(st.face, i0, j0, r, addressing),
+                            self.possible(st.face, i0 + 1, j0, r, addressing),
+                            self.possible(st.face, i0, j0 + 1, r, addressing),
+                            self.possible(st.face, i0 + 1, j0 + 1, r, addressing),
+                        ];
+                        let (lo, hi) = bilinear_range(&t, a, b);
+                        let flags = t.iter().fold(0, |f, t| f | t.flags());
+                        let l = legal(lo - 8.0 * U, hi + 8.0 * U, flags);
+                        out = Some(out.map_or(l, |o| o.hull(l)));
+                    }
+                }
+                let mut l = out.unwrap_or(Legal::LIT);
+                l.flags |= texel_flag(footprints > 1);
+                l
+            }
+            Filter::Pcf(k) => {
+                let half = (k as f32 - 1.0) * 0.5;
+                let (mut lo, mut hi, mut flags) = (0.0, 0.0, 0);
+                for dy in 0..k {
+                    for dx in 0..k {
+                        let uu = st.c.u + (dx as f32 - half) / w as f32;
+                        let vv = st.c.v + (dy as f32 - half) / h as f32;
+                        let (x, y) = (f64::from(uu * w as f32), f64::from(vv * h as f32));
+                        // The offset's own sum and product: two more roundings of x.
+                        let (t, differ) = taps(x, y, (ex + 2.0 * ulp(x), ey + 2.0 * ulp(y)));
+                        lo += t.min();
+                        hi += t.max();
+                        flags |= t.flags() | texel_flag(differ);
+                    }
+                }
+                let n = f64::from(k * k);
+                legal(lo / n, hi / n, flags)
+            }
+        }
+    }
+
+    /// How far the texel coordinates (u·size, v·size) another implementation computes for
+    /// this point may lie from ours: like the reference value's depth, each of t.x, t.y and
+    /// t.w is a 4-term f32 dot product of the same uploaded matrix row with (p, 1), rounded
+    /// within γ₄·Σ|mᵢ·pᵢ| on either side, then divided (2.5 ULP); then scaled by the size.
+    fn coord_error(&self, p: Vec3, n: Vec3, st: &Setup) -> (f64, f64) {
+        let s = self.shadow;
+        let q = p + n * s.bias.normal_offset;
+        let p4 = q.as_dvec3().extend(1.0);
+        let m = match s.bias_matrix {
+            BiasMatrix::BeforeDivide => self.matrices[st.face].texture,
+            BiasMatrix::AfterDivide => self.matrices[st.face].light,
+        }
+        .as_dmat4();
+        let row_abs = |r: usize| -> f64 { (0..4).map(|k| (m.col(k)[r] * p4[k]).abs()).sum() };
+        let row = |r: usize| -> f64 { (0..4).map(|k| m.col(k)[r] * p4[k]).sum() };
+        let wv = row(3).abs().max(1e-30);
+        let err = |r: usize| {
+            let ratio = row(r) / wv;
+            let e =
+                2.0 * gamma(4.0) * (row_abs(r) + ratio.abs() * row_abs(3)) / wv + 3.0 * ulp(ratio);
+            match s.bias_matrix {
+                BiasMatrix::BeforeDivide => e,
+                BiasMatrix::AfterDivide => 0.5 * e + 2.0 * ulp(0.5 * ratio + 0.5),
             }
         };
-        (vis, flags)
+        let [w, h] = s.size;
+        (err(0) * f64::from(w), err(1) * f64::from(h))
+    }
+
+    /// Hardware LINEAR: every footprint the sampler's coordinate precision allows, each tap
+    /// possibly lit or shadowed, weighted as the profile's spec allows.
+    fn linear_hardware(&self, st: &Setup, r: (f64, f64), err: (f64, f64)) -> Legal {
+        let s = self.shadow;
+        let [w, h] = s.size;
+        let (fw, fh) = (f64::from(w), f64::from(h));
+        let (x, y) = (f64::from(st.c.u) * fw - 0.5, f64::from(st.c.v) * fh - 0.5);
+        let (ex, ey) = (SUBTEXEL + err.0, SUBTEXEL + err.1);
+        let mut out: Option<Legal> = None;
+        let (xs, ys) = (span(x, ex), span(y, ey));
+        let footprints = xs.clone().count() * ys.clone().count();
+        for i0 in xs {
+            for j0 in ys.clone() {
+                // The weights this footprint may use: the coordinate within 1/16 texel.
+                let (a, b) = (weight_range(x, ex, i0), weight_range(y, ey, j0));
+                let mut taps = [Possible::default(); 4];
+                let mut seam = false;
+                for (k, (di, dj)) in [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().enumerate() {
+                    match self.linear_tap(st.face, i0 + di, j0 + dj, r) {
+                        Some(t) => taps[k] = t,
+                        None => seam = true,
+                    }
+                }
+                let l = if seam {
+                    // A cube corner on a seamless sampler: "implementations can do pretty much
+                    // anything" (dEQP's reading of the cube-map chapter).
+                    legal(0.0, 1.0, ambiguity::SEAM)
+                } else {
+                    let mut flags = taps.iter().fold(0, |f, t| f | t.flags());
+                    if taps
+                        .iter()
+                        .any(|t| (t.lit, t.shadow) != (taps[0].lit, taps[0].shadow))
+                    {
+                        flags |= ambiguity::FILTER;
+                    }
+                    match self.profile.spec {
+                        Spec::Gl => {
+                            // Any weighting of the four results, NEAREST included.
+                            let lo = taps.iter().map(|t| t.min()).fold(1.0, f64::min);
+                            let hi = taps.iter().map(|t| t.max()).fold(0.0, f64::max);
+                            legal(lo, hi, flags)
+                        }
+                        Spec::Vulkan => {
+                            let (lo, hi) = bilinear_range(&taps, a, b);
+                            legal(lo, hi, flags)
+                        }
+                    }
+                };
+                out = Some(out.map_or(l, |o| o.hull(l)));
+            }
+        }
+        let mut l = out.unwrap_or(Legal::LIT);
+        if footprints > 1 {
+            l.flags |= ambiguity::TEXEL_BOUNDARY;
+        }
+        l
+    }
+
+    /// One LINEAR tap of the sampler: within the map (or its wrap), or on a cube, within the
+    /// face, across a seam (seamless profiles: the neighbouring face's texel; per-face
+    /// filtering: clamped), or None at a corner where both coordinates leave the face.
+    fn linear_tap(&self, face: usize, i: i64, j: i64, r: (f64, f64)) -> Option<Possible> {
+        if !self.cube() {
+            return Some(self.possible(face, i, j, r, Addressing::Wrap));
+        }
+        let [w, h] = self.shadow.size;
+        let (out_i, out_j) = (
+            !(0..i64::from(w)).contains(&i),
+            !(0..i64::from(h)).contains(&j),
+        );
+        if !self.profile.seamless_cube || !(out_i || out_j) {
+            return Some(self.possible(face, i, j, r, Addressing::ClampToFace));
+        }
+        if out_i && out_j {
+            return None;
+        }
+        // The texel across the edge: the direction of the point on the edge at this texel's
+        // position along it, nudged over the edge.
+        let size = f64::from(w);
+        let (ci, cj) = (
+            if out_i {
+                if i < 0 {
+                    -0.5 - 1e-9 * size
+                } else {
+                    size - 0.5 + 1e-9 * size
+                }
+            } else {
+                i as f64
+            },
+            if out_j {
+                if j < 0 {
+                    -0.5 - 1e-9 * size
+                } else {
+                    size - 0.5 + 1e-9 * size
+                }
+            } else {
+                j as f64
+            },
+        );
+        let d = umbra_case::light::cube_texel_dir(face, ci, cj, size);
+        let (f, sc, tc) = umbra_case::light::cube_face_coords(d);
+        let ii = (((sc + 1.0) * 0.5 * size).floor() as i64).clamp(0, i64::from(w) - 1);
+        let jj = (((tc + 1.0) * 0.5 * f64::from(h)).floor() as i64).clamp(0, i64::from(h) - 1);
+        Some(self.possible(f, ii, jj, r, Addressing::ClampToFace))
+    }
+
+    /// What a compare of reference range `r` against texel (i, j) may answer.
+    fn possible(
+        &self,
+        face: usize,
+        i: i64,
+        j: i64,
+        r: (f64, f64),
+        addressing: Addressing,
+    ) -> Possible {
+        let (d_lo, d_hi, by_coverage) = match self.texel(face, i, j, addressing) {
+            Texel::Clear => {
+                let c = f64::from(self.shadow.format.store(self.conv.clear_depth()));
+                (c, c, false)
+            }
+            Texel::At(f, k) => {
+                let l = &self.layers[f];
+                let (lo, hi) = (f64::from(l.lo[k]), f64::from(l.hi[k]));
+                // A fixed-point code reaches the compare as code/(2ⁿ − 1) converted to f32:
+                // allow one ULP either way for that conversion.
+                if self.shadow.format.is_fixed() && !self.profile.packed_depth {
+                    (lo - ulp(lo), hi + ulp(hi), l.maybe[k])
+                } else {
+                    (lo, hi, l.maybe[k])
+                }
+            }
+        };
+        let forward = self.conv.toward_far() > 0.0;
+        // Forward: lit iff reference ≤ stored; reversed: lit iff reference ≥ stored.
+        let (lit, shadow) = if forward {
+            (r.0 <= d_hi, r.1 > d_lo)
+        } else {
+            (r.1 >= d_lo, r.0 < d_hi)
+        };
+        note(|| {
+            format!(
+                "      tap ({i}, {j}) of face {face} ({addressing:?}): stored in [{d_lo}, {d_hi}]{}: lit {lit}, shadowed {shadow}",
+                if by_coverage {
+                    " (through coverage)"
+                } else {
+                    ""
+                }
+            )
+        });
+        Possible {
+            lit,
+            shadow,
+            by_coverage: lit && shadow && by_coverage,
+        }
+    }
+
+    /// The interval of the compare's reference value another implementation may compute at
+    /// this point (the point itself fixed; see [`position_freedom`] for its moves):
+    ///
+    /// - the coordinate: each of t.z and t.w is a 4-term f32 dot product of the same uploaded
+    ///   matrix row with (p, 1), rounded within γ₄·Σ|mᵢ·pᵢ| by either side, so twice that,
+    ///   then a division (2.5 ULP, GLSL 4.60 §4.7.1, SPIR-V) and our own rounding;
+    /// - the bias: the constant is exact; the slope bias moves with c = N·L, whose error is
+    ///   the normal's interpolation and normalisation (≈ 12u), the light direction's (4u, plus
+    ///   the position freedom over the light's distance for a positional light) and the dot
+    ///   product's (3u); then sqrt, a division and a product (8u relative);
+    /// - `extra`: the point's own freedom, measured by the caller;
+    /// - a hardware compare on a fixed-point format clamps the result to [0,1], and may
+    ///   compare in the format's own fixed point: the reference value rounded to a code
+    ///   either way. No spec sets the compare's precision; dEQP and the VK-CTS allow 2⁻¹⁶
+    ///   (`referenceBits`), umbra only the texture's own codes.
+    fn reference_range(&self, p: Vec3, n: Vec3, st: &Setup, extra: f64) -> (f64, f64) {
+        let s = self.shadow;
+        let q = p + n * s.bias.normal_offset;
+        let p4 = q.as_dvec3().extend(1.0);
+        let m = match s.bias_matrix {
+            BiasMatrix::BeforeDivide => self.matrices[st.face].texture,
+            BiasMatrix::AfterDivide => self.matrices[st.face].light,
+        }
+        .as_dmat4();
+        let row = |r: usize| -> f64 { (0..4).map(|k| (m.col(k)[r] * p4[k]).abs()).sum() };
+        let (sz, sw) = (row(2), row(3));
+        let wv = (0..4)
+            .map(|k| m.col(k)[3] * p4[k])
+            .sum::<f64>()
+            .abs()
+            .max(1e-30);
+        let zv = (0..4).map(|k| m.col(k)[2] * p4[k]).sum::<f64>();
+        let ratio = zv / wv;
+        let mut err = 2.0 * gamma(4.0) * (sz + ratio.abs() * sw) / wv + 3.0 * ulp(ratio);
+        if s.bias_matrix == BiasMatrix::AfterDivide {
+            // depth = scale·ndc + offset: one more product and sum.
+            let scale = match self.conv.clip {
+                umbra_case::ClipDepth::MinusOneToOne => 0.5,
+                umbra_case::ClipDepth::ZeroToOne => 1.0,
+            };
+            err = err * scale + 2.0 * ulp(f64::from(st.c.depth));
+        }
+        let depth = f64::from(st.c.depth);
+        let (mut b_lo, mut b_hi) = (f64::from(s.bias.constant), f64::from(s.bias.constant));
+        if let Some(slope) = s.bias.slope {
+            let to_light = self.light.to_light(q);
+            let c = f64::from(n.dot(to_light));
+            let dist = match self.light.kind {
+                LightKind::Directional { .. } => f64::INFINITY,
+                LightKind::Spot { position } | LightKind::Point { position } => {
+                    f64::from((position - q).length())
+                }
+            };
+            let dc = 19.0 * U + f64::from(position_freedom(p, self.reach)) / dist;
+            let tan = |c: f64| {
+                if c > 0.0 {
+                    (1.0 - c * c).max(0.0).sqrt() / c
+                } else {
+                    f64::INFINITY
+                }
+            };
+            let clamp = |t: f64| (f64::from(slope.scale) * t).clamp(0.0, f64::from(slope.max));
+            // tan is decreasing in c on (0, 1]; c ≤ 0 reads 0 bias, the other end of the range.
+            let (c_lo, c_hi) = (c - dc, c + dc);
+            let hi_t = if c_lo > 0.0 {
+                clamp(tan(c_lo)) * (1.0 + 8.0 * U)
+            } else {
+                f64::from(slope.max)
+            };
+            let lo_t = if c_hi > 0.0 {
+                clamp(tan(c_hi.min(1.0))) * (1.0 - 8.0 * U)
+            } else {
+                0.0
+            };
+            let lo_t = if c_lo <= 0.0 { 0.0 } else { lo_t };
+            b_lo += lo_t.min(hi_t);
+            b_hi += hi_t.max(lo_t);
+        }
+        let away = f64::from(self.conv.toward_far());
+        let (o1, o2) = (away * b_lo, away * b_hi);
+        let bias_err = ulp(depth) + extra;
+        let mut lo = depth - err - o1.max(o2) - bias_err;
+        let mut hi = depth + err - o1.min(o2) + bias_err;
+        if s.compare == Compare::Hardware && s.format.is_fixed() {
+            lo = lo.clamp(0.0, 1.0);
+            hi = hi.clamp(0.0, 1.0);
+            if !self.profile.packed_depth {
+                (lo, hi) = s.format.code_range(lo, hi);
+            }
+        }
+        (lo, hi)
     }
 }
 
-/// The stored depth and its slack at texel (i, j) under the wrap policy (border texels hold
-/// the clear depth, exactly).
-#[allow(clippy::too_many_arguments)]
-fn texel(
-    layer: &DepthLayer,
-    w: u32,
-    h: u32,
-    i: i64,
-    j: i64,
-    outside: Outside,
-    clear: f32,
-    format: DepthFormat,
-) -> (f32, f32) {
-    let (w, h) = (i64::from(w), i64::from(h));
-    let (i, j) = match outside {
-        Outside::Border => {
-            if i < 0 || j < 0 || i >= w || j >= h {
-                return (format.store(clear), 0.0);
-            }
-            (i, j)
+/// Where a tap's texel comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Addressing {
+    /// The map's wrap policy (2D maps).
+    Wrap,
+    /// Indices clamped to the cube face (the sampler's per-face addressing, manual fetches).
+    ClampToFace,
+    /// The direction of the texel's centre (hardware PCF taps on a cube).
+    Direction,
+}
+
+/// A texel: (layer, index) or the border's clear value.
+enum Texel {
+    At(usize, usize),
+    Clear,
+}
+
+/// The integer parts coordinate `x` may take within `err`.
+fn span(x: f64, err: f64) -> std::ops::RangeInclusive<i64> {
+    (x - err).floor() as i64..=(x + err).floor() as i64
+}
+
+/// The bilinear weight range of footprint `i0` for coordinate `x` within `err`, in [0,1].
+fn weight_range(x: f64, err: f64, i0: i64) -> (f64, f64) {
+    (
+        (x - err - i0 as f64).clamp(0.0, 1.0),
+        (x + err - i0 as f64).clamp(0.0, 1.0),
+    )
+}
+
+/// The smallest and largest bilinear combination of four taps' possible results (in the
+/// order (0,0), (1,0), (0,1), (1,1)) over the weight box `a` × `b`: the combination is
+/// multilinear in the weights and monotone in each result, so the extremes lie at the box's
+/// corners with each tap at its own extreme.
+fn bilinear_range(taps: &[Possible; 4], a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for aa in [a.0, a.1] {
+        for bb in [b.0, b.1] {
+            let wts = [
+                (1.0 - aa) * (1.0 - bb),
+                aa * (1.0 - bb),
+                (1.0 - aa) * bb,
+                aa * bb,
+            ];
+            lo = lo.min((0..4).map(|k| wts[k] * taps[k].min()).sum());
+            hi = hi.max((0..4).map(|k| wts[k] * taps[k].max()).sum());
         }
-        Outside::Lit | Outside::ClampToEdge => (i.clamp(0, w - 1), j.clamp(0, h - 1)),
-        Outside::Repeat => (i.rem_euclid(w), j.rem_euclid(h)),
-    };
-    let k = (j * w + i) as usize;
-    (layer.values[k], layer.slack[k])
+    }
+    (lo, hi)
+}
+
+fn legal(lo: f64, hi: f64, flags: u8) -> Legal {
+    Legal {
+        lo: crate::shadow_pass::down(lo),
+        hi: crate::shadow_pass::up(hi),
+        flags,
+    }
 }

@@ -34,6 +34,24 @@ const HALF: i64 = ONE / 2;
 /// Guard band, in multiples of w.
 const GUARD: f32 = 4.0;
 
+/// What lies across one edge of a triangle in one view, for the judge's coverage freedom:
+/// snapping (GL and Vulkan promise only 4 sub-pixel bits) may move a boundary of the drawn
+/// surface, but not an edge two drawn triangles share (both snap the same shared vertices).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EdgeKind {
+    /// A diagonal that clipping added inside one source triangle: never a boundary.
+    Internal,
+    /// A boundary of the drawn surface in this view: a silhouette, a mesh border, a clip line.
+    Open,
+    /// Shared with another drawn triangle lying on the other side.
+    Shared {
+        /// That triangle's face id.
+        face: u32,
+        /// That triangle's index in the geometry.
+        tri: u32,
+    },
+}
+
 /// A triangle ready to scan: snapped, oriented counter-clockwise in raster coordinates.
 #[derive(Clone, Copy, Debug)]
 pub struct Tri {
@@ -51,8 +69,13 @@ pub struct Tri {
     pub area: i64,
     /// Whether each edge (opposite vertex i) owns the centres that lie exactly on it.
     pub owns: [bool; 3],
-    /// Inclusive pixel bounds `[x0, y0, x1, y1]`, inside the viewport.
+    /// Inclusive pixel bounds `[x0, y0, x1, y1]`, inside the viewport (may be empty when
+    /// the triangle covers no pixel centre).
     pub bbox: [i32; 4],
+    /// The bounds grown by one pixel, inside the viewport: where coverage may legally differ.
+    pub near_bbox: [i32; 4],
+    /// Per edge (opposite vertex i): what lies across it.
+    pub edges: [EdgeKind; 3],
     /// Index of the source triangle.
     pub source: u32,
     /// Whether the source triangle is front-facing.
@@ -83,6 +106,29 @@ impl Tri {
     /// Perspective-correct weights on the source triangle's vertices at a fragment.
     pub fn source_weights(&self, f: Fragment) -> DVec3 {
         let b = self.screen_bary(f);
+        let p = [
+            b[0] * self.inv_w[0],
+            b[1] * self.inv_w[1],
+            b[2] * self.inv_w[2],
+        ];
+        let s = p[0] + p[1] + p[2];
+        (self.weights[0] * p[0] + self.weights[1] * p[1] + self.weights[2] * p[2]) / s
+    }
+
+    /// Perspective-correct weights on the source triangle's vertices at any point (x, y) of
+    /// the raster in pixels (inside or outside the triangle: the planes are extended).
+    pub fn source_weights_at(&self, x: f64, y: f64) -> DVec3 {
+        let (px, py) = (x * ONE as f64, y * ONE as f64);
+        let a = self.area as f64;
+        let mut b = [0f64; 3];
+        for (i, bi) in b.iter_mut().enumerate() {
+            let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+            let (dx, dy) = (
+                (self.x[k] - self.x[j]) as f64,
+                (self.y[k] - self.y[j]) as f64,
+            );
+            *bi = (dx * (py - self.y[j] as f64) - dy * (px - self.x[j] as f64)) / a;
+        }
         let p = [
             b[0] * self.inv_w[0],
             b[1] * self.inv_w[1],
@@ -165,6 +211,113 @@ impl Tri {
     }
 }
 
+/// How a triangle covers a pixel centre, given the vertex snapping's reach.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Coverage {
+    /// Covered whatever the snapping.
+    Certain,
+    /// Near one edge it shares with the drawn triangle `.0` (its index in the geometry): if
+    /// that triangle is near the same edge too (not near one of its own boundaries), exactly
+    /// one of the two covers the centre (the shared edge moves as a whole, and the tie rule is
+    /// the implementation's).
+    Pair(u32),
+    /// Near a boundary of the drawn surface, or near a vertex: covered or not.
+    Maybe,
+}
+
+impl Tri {
+    /// Calls `visit(x, y, e, coverage)` for every pixel centre in rows `rows` of the grown
+    /// bounds that this triangle covers, or could cover if each vertex moved by up to
+    /// `delta_px` pixels along x and y (vertex snapping), with how it covers it
+    /// ([`Coverage`]). Internal edges (fan diagonals inside one source triangle) never move:
+    /// a centre exactly on one counts as covered by both sides (one plane, one depth).
+    pub fn scan_near(
+        &self,
+        rows: std::ops::Range<i32>,
+        delta_px: f64,
+        mut visit: impl FnMut(i32, i32, [i64; 3], Coverage),
+    ) {
+        let [bx0, by0, bx1, by1] = self.near_bbox;
+        let y_start = by0.max(rows.start);
+        let y_end = (by1 + 1).min(rows.end);
+        let mut tol = [0i64; 3];
+        for i in 0..3 {
+            let (a, b) = ((i + 1) % 3, (i + 2) % 3);
+            let (dx, dy) = (self.x[b] - self.x[a], self.y[b] - self.y[a]);
+            // A vertex moving by δ along x and y moves the edge line by δ·(|dx| + |dy|)/len
+            // along its normal; E = len · distance, so E moves by δ·(|dx| + |dy|).
+            if self.edges[i] != EdgeKind::Internal {
+                tol[i] = (delta_px * ONE as f64 * (dx.abs() + dy.abs()) as f64).ceil() as i64;
+            }
+        }
+        for y in y_start..y_end {
+            let py = i64::from(y) * ONE + HALF;
+            for x in bx0..=bx1 {
+                let px = i64::from(x) * ONE + HALF;
+                let mut e = [0i64; 3];
+                let (mut inside, mut near_open, mut near) = (true, false, 0);
+                let mut partner = 0;
+                for i in 0..3 {
+                    let (a, b) = ((i + 1) % 3, (i + 2) % 3);
+                    let (dx, dy) = (self.x[b] - self.x[a], self.y[b] - self.y[a]);
+                    e[i] = dx * (py - self.y[a]) - dy * (px - self.x[a]);
+                    inside &= e[i] >= -tol[i];
+                    if e[i] <= tol[i] && tol[i] > 0 {
+                        near += 1;
+                        match self.edges[i] {
+                            EdgeKind::Shared { tri, .. } => partner = tri,
+                            _ => near_open = true,
+                        }
+                    }
+                }
+                if inside {
+                    // Near a vertex (two edges at once) the triangles around it need not
+                    // cover the centre between them (the vertex may lie on a silhouette,
+                    // where the fan folds): only near one shared edge alone is a neighbour
+                    // sure to cover what this triangle leaves.
+                    let c = if near_open || near > 1 {
+                        Coverage::Maybe
+                    } else if near == 1 {
+                        Coverage::Pair(partner)
+                    } else {
+                        Coverage::Certain
+                    };
+                    visit(x, y, e, c);
+                }
+            }
+        }
+    }
+
+    /// Window depth at a centre given its edge values (inside or just outside: the plane is
+    /// extended), in f64.
+    pub fn depth_at(&self, e: [i64; 3]) -> f64 {
+        let a = self.area as f64;
+        (0..3).map(|i| e[i] as f64 / a * f64::from(self.z[i])).sum()
+    }
+
+    /// Σ|bᵢ| of the screen-space barycentrics at a centre: 1 inside, a little more just
+    /// outside (how far a vertex displacement carries to the plane's value there).
+    pub fn weight_norm(&self, e: [i64; 3]) -> f64 {
+        let a = self.area as f64;
+        e.iter().map(|v| (*v as f64 / a).abs()).sum()
+    }
+
+    /// The smallest altitude of the triangle in pixels (how well its depth slopes are
+    /// determined by its vertices).
+    pub fn min_altitude(&self) -> f64 {
+        let len = |i: usize| {
+            let (a, b) = ((i + 1) % 3, (i + 2) % 3);
+            let (dx, dy) = (
+                (self.x[b] - self.x[a]) as f64,
+                (self.y[b] - self.y[a]) as f64,
+            );
+            dx.hypot(dy)
+        };
+        let longest = len(0).max(len(1)).max(len(2));
+        self.area as f64 / longest / ONE as f64
+    }
+}
+
 /// Sets up triangles for one viewport.
 #[derive(Clone, Copy, Debug)]
 pub struct Rasterizer {
@@ -186,8 +339,10 @@ struct ClipVertex {
 
 impl Rasterizer {
     /// Clips, projects, snaps and culls source triangle `source` with clip-space corners
-    /// `clip`, appending 0 or more scan-ready triangles to `out`.
-    pub fn setup(&self, clip: [Vec4; 3], source: u32, out: &mut Vec<Tri>) {
+    /// `clip`, appending 0 or more scan-ready triangles to `out`. `edges[j]` says what lies
+    /// across the source edge from corner j to corner j + 1 ([`EdgeKind::Open`] everywhere
+    /// when no judge needs it); edges made by clipping are open, fan diagonals internal.
+    pub fn setup(&self, clip: [Vec4; 3], source: u32, edges: [EdgeKind; 3], out: &mut Vec<Tri>) {
         let zmin = self.conv.clip_z_min_over_w();
         // Plane p: p · (x, y, z, w) ≥ 0.
         let planes = [
@@ -215,17 +370,21 @@ impl Rasterizer {
         if clip.iter().any(|c| !c.is_finite()) {
             return;
         }
+        // What lies across the polygon's edge from vertex i to vertex i + 1.
+        let mut tags = edges.to_vec();
         for plane in planes {
             let d: Vec<f32> = poly.iter().map(|v| plane.dot(v.clip)).collect();
             if d.iter().all(|&x| x >= 0.0) {
                 continue;
             }
             let mut next = Vec::with_capacity(poly.len() + 1);
+            let mut next_tags = Vec::with_capacity(poly.len() + 1);
             for i in 0..poly.len() {
                 let j = (i + 1) % poly.len();
                 let (a, b, da, db) = (poly[i], poly[j], d[i], d[j]);
                 if da >= 0.0 {
                     next.push(a);
+                    next_tags.push(tags[i]);
                 }
                 if (da >= 0.0) != (db >= 0.0) {
                     let t = da / (da - db);
@@ -233,19 +392,40 @@ impl Rasterizer {
                         clip: a.clip + (b.clip - a.clip) * t,
                         weights: a.weights + (b.weights - a.weights) * f64::from(t),
                     });
+                    // Leaving the volume, the next edge runs along the clip plane; entering
+                    // it, the rest of the source edge follows.
+                    next_tags.push(if da >= 0.0 { EdgeKind::Open } else { tags[i] });
                 }
             }
             poly = next;
+            tags = next_tags;
             if poly.len() < 3 {
                 return;
             }
         }
-        for k in 1..poly.len() - 1 {
-            self.setup_clipped([poly[0], poly[k], poly[k + 1]], source, out);
+        let n = poly.len();
+        for k in 1..n - 1 {
+            // Fan triangle (0, k, k+1); its edge opposite corner i runs between the other two.
+            let kinds = [
+                tags[k],
+                if k + 1 == n - 1 {
+                    tags[n - 1]
+                } else {
+                    EdgeKind::Internal
+                },
+                if k == 1 { tags[0] } else { EdgeKind::Internal },
+            ];
+            self.setup_clipped([poly[0], poly[k], poly[k + 1]], source, kinds, out);
         }
     }
 
-    fn setup_clipped(&self, v: [ClipVertex; 3], source: u32, out: &mut Vec<Tri>) {
+    fn setup_clipped(
+        &self,
+        v: [ClipVertex; 3],
+        source: u32,
+        mut edges: [EdgeKind; 3],
+        out: &mut Vec<Tri>,
+    ) {
         let mut x = [0i64; 3];
         let mut y = [0i64; 3];
         let mut z = [0f32; 3];
@@ -281,6 +461,8 @@ impl Rasterizer {
             z.swap(1, 2);
             inv_w.swap(1, 2);
             weights.swap(1, 2);
+            // The edge opposite corner 0 is the same; those opposite 1 and 2 trade places.
+            edges.swap(1, 2);
             area = -area;
         }
         let mut owns = [false; 3];
@@ -291,13 +473,24 @@ impl Rasterizer {
         }
         let lo = |v: i64| (v - HALF + ONE - 1).div_euclid(ONE);
         let hi = |v: i64| (v - HALF).div_euclid(ONE);
-        let x0 = lo(*x.iter().min().unwrap_or(&0)).max(0);
-        let x1 = hi(*x.iter().max().unwrap_or(&0)).min(i64::from(self.width) - 1);
-        let y0 = lo(*y.iter().min().unwrap_or(&0)).max(0);
-        let y1 = hi(*y.iter().max().unwrap_or(&0)).min(i64::from(self.height) - 1);
-        if x0 > x1 || y0 > y1 {
+        let (w_max, h_max) = (i64::from(self.width) - 1, i64::from(self.height) - 1);
+        let (min_x, max_x) = (*x.iter().min().unwrap_or(&0), *x.iter().max().unwrap_or(&0));
+        let (min_y, max_y) = (*y.iter().min().unwrap_or(&0), *y.iter().max().unwrap_or(&0));
+        let near = [
+            (lo(min_x) - 1).max(0),
+            (lo(min_y) - 1).max(0),
+            (hi(max_x) + 1).min(w_max),
+            (hi(max_y) + 1).min(h_max),
+        ];
+        if near[0] > near[2] || near[1] > near[3] {
             return;
         }
+        let bbox = [
+            lo(min_x).max(0),
+            lo(min_y).max(0),
+            hi(max_x).min(w_max),
+            hi(max_y).min(h_max),
+        ];
         out.push(Tri {
             x,
             y,
@@ -306,7 +499,9 @@ impl Rasterizer {
             weights,
             area,
             owns,
-            bbox: [x0 as i32, y0 as i32, x1 as i32, y1 as i32],
+            bbox: bbox.map(|v| v as i32),
+            near_bbox: near.map(|v| v as i32),
+            edges,
             source,
             front,
         });
@@ -320,7 +515,7 @@ mod tests {
     fn tri(r: &Rasterizer, pts: [[f32; 2]; 3]) -> Vec<Tri> {
         let mut out = Vec::new();
         let clip = pts.map(|p| Vec4::new(p[0], p[1], 0.0, 1.0));
-        r.setup(clip, 0, &mut out);
+        r.setup(clip, 0, [EdgeKind::Open; 3], &mut out);
         out
     }
 
@@ -433,7 +628,7 @@ mod tests {
             Vec4::new(1.0, -1.0, 0.5, 1.0),
             Vec4::new(0.0, 1.0, 0.5, 1.0),
         ];
-        r.setup(clip, 7, &mut out);
+        r.setup(clip, 7, [EdgeKind::Open; 3], &mut out);
         assert!(!out.is_empty());
         for t in &out {
             assert!(t.z.iter().all(|z| (-1e-6..=1.0).contains(z)), "{:?}", t.z);

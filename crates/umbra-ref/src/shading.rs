@@ -11,7 +11,7 @@ use umbra_case::format::{Shading, ShadingModel};
 /// Background colour of every backend.
 pub const BACKGROUND: [u8; 4] = [0, 0, 0, 255];
 
-/// Shaded colour of a surface point.
+/// Shaded colour of a surface point, RGBA8.
 pub fn shade(
     s: &Shading,
     albedo: Vec3,
@@ -20,9 +20,24 @@ pub fn shade(
     to_eye: Vec3,
     visibility: f32,
 ) -> [u8; 4] {
+    let c = shade_linear(s, albedo, n, to_light, to_eye, visibility);
+    let q = |x: f32| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
+    [q(c.x), q(c.y), q(c.z), 255]
+}
+
+/// The shading before it is clamped and stored: affine in `visibility` for both models,
+/// which is what lets the judge bound a colour by the visibility a backend wrote.
+pub fn shade_linear(
+    s: &Shading,
+    albedo: Vec3,
+    n: Vec3,
+    to_light: Vec3,
+    to_eye: Vec3,
+    visibility: f32,
+) -> Vec3 {
     let ndl = n.dot(to_light);
     let diffuse = ndl.max(0.0);
-    let c = match s.model {
+    match s.model {
         ShadingModel::Dimmed => {
             let kept = s.dimming + (1.0 - s.dimming) * visibility;
             let spec = if ndl > 0.0 {
@@ -38,7 +53,40 @@ pub fn shade(
                 * albedo
                 * (s.shadowed_factor + (1.0 - s.shadowed_factor) * visibility)
         }
+    }
+}
+
+/// How far another implementation's unclamped colour may lie from ours, per channel, from
+/// the arithmetic the specs leave open (GLSL 4.60 §4.7.1, SPIR-V's precision table; derivation
+/// beside each term):
+/// - N·L and N·H: the interpolated normal (≈ 8u relative) and its normalisation (inversesqrt
+///   2 ULP and a product), the light and half vectors (4u each, plus `moved`, the position
+///   freedom over the light's and the eye's distance), the dot product (3u): `dot_err`;
+/// - the diffuse term moves by albedo·`dot_err`; the specular term k·x^e by k·e·x^(e−1)·
+///   `dot_err` plus pow's own error (exp2(e·log2 x): log2 within 2⁻²¹ absolute near 1, so
+///   e·2⁻²¹ relative, and exp2's few ULP);
+/// - every sum and product of the model: 16u of the result.
+pub fn shade_tolerance(
+    s: &Shading,
+    albedo: Vec3,
+    n: Vec3,
+    to_light: Vec3,
+    to_eye: Vec3,
+    moved: f32,
+) -> f32 {
+    let u = f32::EPSILON * 0.5;
+    let dot_err = 24.0 * u + moved;
+    let diffuse = albedo.max_element() * dot_err;
+    let spec = match s.model {
+        ShadingModel::Dimmed if n.dot(to_light) > 0.0 => {
+            let h = (to_light + to_eye).normalize_or_zero();
+            let x = n.dot(h).max(0.0);
+            let e = s.shininess;
+            s.specular
+                * (e * x.powf((e - 1.0).max(0.0)) * dot_err
+                    + x.powf(e) * (e * 2f32.powi(-21) + 8.0 * u))
+        }
+        _ => 0.0,
     };
-    let q = |x: f32| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
-    [q(c.x), q(c.y), q(c.z), 255]
+    diffuse + spec + 16.0 * u * 2.0
 }

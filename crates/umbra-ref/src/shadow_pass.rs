@@ -6,53 +6,159 @@
 //! signed away from the light by the depth order and limited by the clamp if one is given;
 //! then clamped to the depth range [0,1], converted to the format and depth-tested (LESS
 //! forward, GREATER reversed) against the stored value in the format's own precision.
+//!
+//! A judged render also computes, per texel, the range of values *any* conformant
+//! implementation may store there ([`DepthLayer::lo`], [`DepthLayer::hi`]); see
+//! [`Freedom`] for each term and the clause it comes from.
 
 use glam::Vec4;
 use umbra_case::format::{DepthFormat, Shadow};
-use umbra_case::{Convention, Geometry};
+use umbra_case::{Convention, Geometry, Profile};
 
 use crate::bands::for_each_band;
-use crate::raster::{Rasterizer, Tri};
+use crate::raster::{Coverage, EdgeKind, Rasterizer, Tri};
+
+/// How far another implementation's vertex window coordinates may lie from ours, per axis, in
+/// pixels: GL 4.6 §14.5 and Vulkan "Rasterization" require only 4 sub-pixel bits (and fix no
+/// rounding mode, so up to one 1/16 grid step), ours snap to 8 bits (1/512 by rounding), and
+/// the f32 window coordinates themselves carry about 1/1024 pixel at 16k.
+pub const SNAP_PX: f64 = 1.0 / 16.0 + 1.0 / 512.0 + 1.0 / 1024.0;
 
 /// One rendered face: stored depth per texel, in raster row order (row 0 = window y 0).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct DepthLayer {
     /// Stored values, `width * height`.
     pub values: Vec<f32>,
-    /// Per texel, how far another conformant implementation's stored value may lie from
-    /// ours (see [`slack`]); 0 where nothing was drawn.
-    pub slack: Vec<f32>,
+    /// Judged renders only (else empty): per texel, the smallest window depth a conformant
+    /// implementation may store there (rounded down to f32).
+    pub lo: Vec<f32>,
+    /// Judged renders only: the largest (rounded up to f32).
+    pub hi: Vec<f32>,
+    /// Judged renders only: whether the range reaches a surface that only *may* cover the
+    /// texel (coverage freedom) rather than only depth freedom of the ones that do.
+    pub maybe: Vec<bool>,
 }
 
-/// The freedom the specs leave in a stored depth, for the winning triangle `t`
-/// (NUMERICS.md): the polygon-offset slope may be m = sqrt(dx² + dy²) instead of our
-/// max(|dx|, |dy|), which adds up to (sqrt − max)·|factor|; the unit r is an implementation
-/// constant (Vulkan allows up to 2 steps), so r·|units| either way; and storage may round
-/// either way (±1 step). f32 rounding of the interpolation adds a few ulps of z. And vertex
-/// snapping: GL and Vulkan require only 4 sub-pixel bits, so another implementation's vertex
-/// window coordinates may lie up to 1/32 pixel from the exact ones (ours: 1/512, 8 bits);
-/// the triangle's depth plane at a texel centre then moves by up to (|dx| + |dy|) times that.
-/// It matters on faces steep to the light, where depth changes fast across a texel.
-fn slack(t: &Tri, format: DepthFormat, factor: f32, units: f32) -> f32 {
-    let (dx, dy) = t.depth_slopes();
-    let m_freedom = (dx.hypot(dy) - dx.abs().max(dy.abs())) * f64::from(factor.abs());
-    let snap = (dx.abs() + dy.abs()) * (1.0 / 32.0 + 1.0 / 512.0);
-    let z = t.max_abs_z();
-    let r = f64::from(format.offset_unit(z));
-    let step = format.step(z);
-    (m_freedom
-        + snap
-        + r * f64::from(units.abs())
-        + step
-        + 4.0 * f64::from(umbra_case::depth::f32_spacing(z))) as f32
+/// The freedom of a stored depth, per candidate triangle and texel centre (NUMERICS.md):
+///
+/// - **Vertex snapping** ([`SNAP_PX`]): the depth plane at the centre moves by up to
+///   (|∂z/∂x| + |∂z/∂y|)·δ·Σ|bᵢ|, and the slopes m is made of by up to
+///   (|∂z/∂x| + |∂z/∂y|)·2δ/h (h the smallest altitude, in pixels).
+/// - **Interpolation**: a few f32 roundings of z on either side: 4 ULP(z).
+/// - **Polygon offset, one-sided**: m may be the specs' sqrt(∂x² + ∂y²) or the allowed
+///   max(|∂x|, |∂y|) (ours: max), and r ∈ [2⁻ⁿ, 2·2⁻ⁿ] for fixed point (ours: one step) and
+///   fixed for float ([`DepthFormat::offset_unit_range`]): a conformant offset lies between
+///   the smallest and the largest of m·factor + r·units, clamped like ours.
+/// - **Depth range**: fixed-point stores clamp to [0,1]; a float attachment keeps the value
+///   (Vulkan "Depth Clamping and Range") or clamps it (GL): both.
+/// - **Storage**: fixed point may round to either neighbouring code
+///   ([`DepthFormat::code_range`]); float stores the value.
+///
+/// The GLES 2 path ([`Profile::packed_depth`]) applies umbra's own offset formula in the
+/// shader (m from dFdx/dFdy: the differences of two f32 depths, ±2 ULP(z) per pixel; r fixed),
+/// packs the offset depth into RGBA8 with error ≤ u·d·(1 + 1/254) + 255⁻⁴ each way (see
+/// `umbra-gl`'s packing), and its depth test runs on a 24-bit buffer: the nearest surface may
+/// lose to one within a D24 step.
+///
+/// Over candidates: the stored value is the nearest of what covers the texel. Every triangle
+/// that certainly covers the centre competes; one that only may cover it (within δ of an
+/// open edge, or of a vertex) may or may not; near an edge two triangles share, when both are
+/// near it and neither near a boundary of its own, exactly one of them covers it (the edge
+/// moves as a whole, and the tie rule is the implementation's), so their depths differ there
+/// by the polygon offsets of two slopes. So the nearest possible value is the
+/// nearest lower bound over all of them, and the farthest possible is the nearest of the
+/// certain ones' upper bounds and the farthest upper bound of a shared-edge pair (the clear
+/// value when neither covers).
+#[derive(Clone, Copy, Debug)]
+pub struct Freedom {
+    conv: Convention,
+    format: DepthFormat,
+    factor: f64,
+    units: f64,
+    clamp: f64,
+    packed: bool,
 }
 
-/// Renders one light face with view-projection `light`.
+impl Freedom {
+    /// The freedom of `shadow`'s pass for an implementation of `profile`.
+    pub fn new(conv: Convention, shadow: &Shadow, profile: Profile) -> Freedom {
+        let [factor, units] = shadow.bias.polygon_offset;
+        Freedom {
+            conv,
+            format: shadow.format,
+            factor: f64::from(factor),
+            units: f64::from(units),
+            clamp: f64::from(shadow.bias.polygon_offset_clamp),
+            packed: profile.packed_depth,
+        }
+    }
+
+    /// The smallest and largest offset (a distance away from the light) for triangle `t`.
+    fn offset(&self, t: &Tri) -> (f64, f64) {
+        if self.factor == 0.0 && self.units == 0.0 {
+            return (0.0, 0.0);
+        }
+        let (dx, dy) = t.depth_slopes();
+        let m_max = dx.abs().max(dy.abs());
+        let snap = (dx.abs() + dy.abs()) * 2.0 * SNAP_PX / t.min_altitude().max(1e-9);
+        let z = t.max_abs_z();
+        let (m_lo, m_hi, r_lo, r_hi) = if self.packed {
+            // umbra's GLES 2 shader: m = max(|dFdx z|, |dFdy z|), r = one step of the format.
+            let diff = 2.0 * f64::from(umbra_case::depth::f32_spacing(z));
+            let r = f64::from(self.format.offset_unit(0.0));
+            ((m_max - snap - diff).max(0.0), m_max + snap + diff, r, r)
+        } else {
+            let (r_lo, r_hi) = self.format.offset_unit_range(z);
+            ((m_max - snap).max(0.0), dx.hypot(dy) + snap, r_lo, r_hi)
+        };
+        let ends = |a: f64, b: f64, k: f64| {
+            let (x, y) = (a * k, b * k);
+            (x.min(y), x.max(y))
+        };
+        let (fm_lo, fm_hi) = ends(m_lo, m_hi, self.factor);
+        let (ur_lo, ur_hi) = ends(r_lo, r_hi, self.units);
+        let (mut lo, mut hi) = (fm_lo + ur_lo, fm_hi + ur_hi);
+        if self.clamp > 0.0 {
+            (lo, hi) = (lo.min(self.clamp), hi.min(self.clamp));
+        } else if self.clamp < 0.0 {
+            (lo, hi) = (lo.max(self.clamp), hi.max(self.clamp));
+        }
+        (lo, hi)
+    }
+
+    /// The range of stored values triangle `t` may leave at a centre with edge values `e`.
+    fn stored(&self, t: &Tri, e: [i64; 3], offset: (f64, f64)) -> (f64, f64) {
+        let z = t.depth_at(e);
+        let (dx, dy) = t.depth_slopes();
+        let err = (dx.abs() + dy.abs()) * SNAP_PX * t.weight_norm(e)
+            + 4.0 * f64::from(umbra_case::depth::f32_spacing(z as f32));
+        let away = f64::from(self.conv.toward_far());
+        let (o1, o2) = (away * offset.0, away * offset.1);
+        let (lo, hi) = (z - err + o1.min(o2), z + err + o1.max(o2));
+        if self.packed {
+            let pack = |d: f64| 2f64.powi(-24) * d.abs() * (1.0 + 1.0 / 254.0) + 255f64.powi(-4);
+            let (lo, hi) = (lo.clamp(0.0, 1.0), hi.clamp(0.0, 1.0));
+            // The 24-bit depth test may keep a surface up to one step behind the nearest.
+            let d24 = 1.0 / f64::from((1u32 << 24) - 1);
+            return (lo - pack(lo) - d24, hi + pack(hi) + d24);
+        }
+        let (lo, hi) = if self.format.is_fixed() {
+            (lo.clamp(0.0, 1.0), hi.clamp(0.0, 1.0))
+        } else {
+            (lo.min(lo.clamp(0.0, 1.0)), hi.max(hi.clamp(0.0, 1.0)))
+        };
+        self.format.code_range(lo, hi)
+    }
+}
+
+/// Renders one light face with view-projection `light`; with `judged` (the edge kinds of
+/// this view and the profile judged for), also the freedom of every texel.
 pub fn render_face(
     conv: Convention,
     shadow: &Shadow,
     light: glam::Mat4,
     geo: &Geometry,
+    judged: Option<(&[[EdgeKind; 3]], Profile)>,
 ) -> DepthLayer {
     let [w, h] = shadow.size;
     let raster = Rasterizer {
@@ -61,33 +167,153 @@ pub fn render_face(
         height: h,
         cull: shadow.cull,
     };
-    let tris = setup_all(&raster, light, geo);
+    let tris = setup_all(&raster, light, geo, judged.map(|j| j.0));
     let format = shadow.format;
     let [factor, units] = shadow.bias.polygon_offset;
     let clamp = shadow.bias.polygon_offset_clamp;
     let sign = conv.toward_far();
-    // (stored value, slack) per texel.
-    let mut texels = vec![(format.store(conv.clear_depth()), 0.0f32); (w * h) as usize];
-    for_each_band(&mut texels, w as usize, 1, &tris, |rows, band, touching| {
-        for t in touching {
-            let offset = if factor != 0.0 || units != 0.0 {
-                polygon_offset(t, format, factor, units, clamp)
-            } else {
-                0.0
-            };
-            let freedom = slack(t, format, factor, units);
-            t.scan(rows.clone(), |x, y, frag| {
-                let z = (f64::from(t.depth(frag)) + f64::from(sign) * offset) as f32;
-                let stored = format.store(z.clamp(0.0, 1.0));
-                let i = (y - rows.start) as usize * w as usize + x as usize;
-                if conv.depth_test(stored, band[i].0) {
-                    band[i] = (stored, freedom);
-                }
-            });
-        }
-    });
-    let (values, slack) = texels.into_iter().unzip();
-    DepthLayer { values, slack }
+    // The GLES 2 path stores the offset depth itself (packed to about 32 bits), not a code.
+    let packed = judged.is_some_and(|j| j.1.packed_depth);
+    let mut values = vec![format.store(conv.clear_depth()); (w * h) as usize];
+    for_each_band(
+        &mut values,
+        w as usize,
+        1,
+        &tris,
+        false,
+        |rows, band, touching| {
+            for (_, t) in touching {
+                let offset = if factor != 0.0 || units != 0.0 {
+                    polygon_offset(t, format, factor, units, clamp)
+                } else {
+                    0.0
+                };
+                t.scan(rows.clone(), |x, y, frag| {
+                    let z = (f64::from(t.depth(frag)) + f64::from(sign) * offset) as f32;
+                    let stored = if packed {
+                        z.clamp(0.0, 1.0)
+                    } else {
+                        format.store(z.clamp(0.0, 1.0))
+                    };
+                    let i = (y - rows.start) as usize * w as usize + x as usize;
+                    if conv.depth_test(stored, band[i]) {
+                        band[i] = stored;
+                    }
+                });
+            }
+        },
+    );
+    let Some((_, profile)) = judged else {
+        return DepthLayer {
+            values,
+            ..Default::default()
+        };
+    };
+    let freedom = Freedom::new(conv, shadow, profile);
+    let forward = conv.toward_far() > 0.0;
+    let clear = f64::from(conv.clear_depth());
+    // Per texel: the nearest possible value, the farthest possible over the certain
+    // coverers and over shared-edge pairs (None = none yet), and whether the nearest comes
+    // from a triangle that is not certain to cover.
+    #[derive(Clone, Copy)]
+    struct Acc {
+        near: f64,
+        far_certain: Option<f64>,
+        far_pair: Option<f64>,
+        uncertain: bool,
+    }
+    let start = Acc {
+        near: clear,
+        far_certain: None,
+        far_pair: None,
+        uncertain: false,
+    };
+    let mut acc = vec![start; (w * h) as usize];
+    let nearer = |a: f64, b: f64| if forward { a.min(b) } else { a.max(b) };
+    let farther = |a: f64, b: f64| if forward { a.max(b) } else { a.min(b) };
+    let is_nearer = |a: f64, b: f64| if forward { a < b } else { a > b };
+    for_each_band(
+        &mut acc,
+        w as usize,
+        1,
+        &tris,
+        true,
+        |rows, band, touching| {
+            // Pair visits waiting for their partner, per texel of the band: (this triangle,
+            // the partner, this one's farthest value). A pair guarantees coverage only when both
+            // members are near their shared edge (neither near a boundary of its own).
+            let mut pending: std::collections::HashMap<usize, Vec<(u32, u32, f64)>> =
+                std::collections::HashMap::new();
+            for (_, t) in touching {
+                let offset = freedom.offset(t);
+                t.scan_near(rows.clone(), SNAP_PX, |x, y, e, coverage| {
+                    let (lo, hi) = freedom.stored(t, e, offset);
+                    let (near, far) = if forward { (lo, hi) } else { (hi, lo) };
+                    let i = (y - rows.start) as usize * w as usize + x as usize;
+                    let a = &mut band[i];
+                    if is_nearer(near, a.near) {
+                        a.near = near;
+                        a.uncertain = coverage != Coverage::Certain;
+                    }
+                    match coverage {
+                        Coverage::Certain => {
+                            a.far_certain = Some(a.far_certain.map_or(far, |f| nearer(f, far)));
+                        }
+                        Coverage::Pair(partner) => {
+                            let list = pending.entry(i).or_default();
+                            match list
+                                .iter()
+                                .position(|(me, p, _)| *me == partner && *p == t.source)
+                            {
+                                Some(k) => {
+                                    let (_, _, other) = list.swap_remove(k);
+                                    let worst = farther(far, other);
+                                    a.far_pair =
+                                        Some(a.far_pair.map_or(worst, |f| farther(f, worst)));
+                                }
+                                None => list.push((t.source, partner, far)),
+                            }
+                        }
+                        Coverage::Maybe => {}
+                    }
+                });
+            }
+        },
+    );
+    let mut lo = Vec::with_capacity(acc.len());
+    let mut hi = Vec::with_capacity(acc.len());
+    let mut maybe = Vec::with_capacity(acc.len());
+    for a in acc {
+        let (near, by_maybe) = (a.near, a.uncertain);
+        let far = match (a.far_certain, a.far_pair) {
+            (Some(c), Some(p)) => nearer(c, p),
+            (Some(f), None) | (None, Some(f)) => f,
+            (None, None) => clear,
+        };
+        let far = nearer(far, clear);
+        let (a, b) = if forward { (near, far) } else { (far, near) };
+        lo.push(down(a));
+        hi.push(up(b));
+        maybe.push(by_maybe);
+    }
+    DepthLayer {
+        values,
+        lo,
+        hi,
+        maybe,
+    }
+}
+
+/// The largest f32 not above `x`.
+pub fn down(x: f64) -> f32 {
+    let f = x as f32;
+    if f64::from(f) > x { f.next_down() } else { f }
+}
+
+/// The smallest f32 not below `x`.
+pub fn up(x: f64) -> f32 {
+    let f = x as f32;
+    if f64::from(f) < x { f.next_up() } else { f }
 }
 
 /// The polygon offset of a triangle, as a positive distance away from the light.
@@ -101,8 +327,14 @@ fn polygon_offset(t: &Tri, format: DepthFormat, factor: f32, units: f32, clamp: 
     }
 }
 
-/// Clip-space corners of every triangle under `view_proj`, set up in source order.
-pub fn setup_all(raster: &Rasterizer, view_proj: glam::Mat4, geo: &Geometry) -> Vec<Tri> {
+/// Clip-space corners of every triangle under `view_proj`, set up in source order; `edges`
+/// gives what lies across each source edge in this view (judged renders), else all open.
+pub fn setup_all(
+    raster: &Rasterizer,
+    view_proj: glam::Mat4,
+    geo: &Geometry,
+    edges: Option<&[[EdgeKind; 3]]>,
+) -> Vec<Tri> {
     let clip: Vec<Vec4> = geo
         .positions
         .iter()
@@ -110,7 +342,8 @@ pub fn setup_all(raster: &Rasterizer, view_proj: glam::Mat4, geo: &Geometry) -> 
         .collect();
     let mut tris = Vec::with_capacity(geo.triangles.len());
     for (i, t) in geo.triangles.iter().enumerate() {
-        raster.setup(t.map(|k| clip[k as usize]), i as u32, &mut tris);
+        let kinds = edges.map_or([EdgeKind::Open; 3], |e| e[i]);
+        raster.setup(t.map(|k| clip[k as usize]), i as u32, kinds, &mut tris);
     }
     tris
 }

@@ -3,7 +3,9 @@
 //! right afterwards, `fake/wrong` inverts every shadow. They exist only when the environment
 //! has `UMBRA_FAKE_BACKENDS=1`, so no user run can select one by accident.
 
-use umbra_case::{Backend, BackendError, BackendId, DriverInfo, Frame, Needs, Prepared, Support};
+use umbra_case::{
+    Backend, BackendError, BackendId, DriverInfo, Frame, Needs, Prepared, Profile, Support,
+};
 
 /// Whether fake backends are enabled in this process.
 pub fn enabled() -> bool {
@@ -39,6 +41,10 @@ impl Backend for Fake {
             renderer: format!("{} (test double)", self.id),
             ..Default::default()
         }
+    }
+
+    fn profile(&self) -> Profile {
+        Profile::GL
     }
 
     fn supports(&self, _needs: &Needs) -> Support {

@@ -180,8 +180,8 @@ fn twins_section(results: &[RunResult]) -> String {
         differ: u64,
         tie: u64,
         texel: u64,
-        edge: u64,
-        unjudged: u64,
+        coverage: u64,
+        surface: u64,
         illegal: u64,
         ms: f64,
         case_ms: f64,
@@ -204,9 +204,12 @@ fn twins_section(results: &[RunResult]) -> String {
             row.failed += u64::from(!t.ok);
             row.differ += t.pair.differ;
             row.tie += t.pair.legal_tie;
-            row.texel += t.pair.legal_texel;
-            row.edge += t.pair.legal_edge;
-            row.unjudged += t.pair.legal_unjudged;
+            row.texel += t.pair.legal_texel
+                + t.pair.legal_filter
+                + t.pair.legal_position
+                + t.pair.legal_seam;
+            row.coverage += t.pair.legal_coverage;
+            row.surface += t.pair.legal_surface;
             row.illegal += t.pair.illegal;
             row.ms += t.render_ms;
             row.case_ms += m.total_ms;
@@ -222,10 +225,10 @@ fn twins_section(results: &[RunResult]) -> String {
     let mut s = String::from(
         "<h2>Metamorphic twins</h2><p>Each run also renders its twins on the same backend and compares them with its own frame \
          (<code>bias-order</code>, the other bias-matrix order, is built into every case; the others are each case's \
-         <code>expect.twins</code>). <i>identical</i>: bit-identical visibility; <i>legal</i>: differences only where the \
-         reference's lookup allows them; <i>no_worse</i>: the twin's interior error is not larger. Pixel counts are summed \
+         <code>expect.twins</code>). <i>identical</i>: bit-identical visibility; <i>legal</i>: the twin's frame passes the \
+         same judge as a backend's frame against the case's reference; <i>no_worse</i>: the twin's interior error is not larger. Pixel counts are summed \
          over runs.</p><table><tr><th>twin</th><th>agree</th><th>backend</th><th>runs</th><th>not run</th><th>failed</th>\
-         <th>px differ</th><th>ties</th><th>texel/filter</th><th>edges</th><th>unjudged</th><th>illegal</th>\
+         <th>px differ</th><th>ties</th><th>texel/filter/position</th><th>map coverage</th><th>other surface</th><th>illegal</th>\
          <th>interior error: case → twin</th><th>twin ms / case ms</th><th>first failing run</th></tr>",
     );
     for ((name, agree, backend), r) in &rows {
@@ -247,8 +250,8 @@ fn twins_section(results: &[RunResult]) -> String {
             r.differ,
             r.tie,
             r.texel,
-            r.edge,
-            r.unjudged,
+            r.coverage,
+            r.surface,
             r.illegal,
             r.case_error,
             r.twin_error.map(|e| e.to_string()).unwrap_or("–".into()),

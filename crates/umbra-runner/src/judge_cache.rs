@@ -1,65 +1,112 @@
-//! The judging basis of a case point, the exact truth and the reference's judged frame with
-//! its lookup ambiguity, computed once per point and shared by every backend's worker.
+//! The judging basis of a case point, computed once and shared by every backend's worker:
+//! the exact truth (per point) and the reference's judged render ([`umbra_ref::Judged`], per
+//! point and *effective* profile, [`umbra_case::Profile::effective_for`], so that backends
+//! whose profiles differ only in freedoms the case cannot exercise share one).
 //!
-//! Both depend on the case point only, never on the backend, yet each backend's worker used
-//! to recompute them: twelve times per point, two thirds of a conformance run's worker time.
-//! A conformance run now names a cache directory in `UMBRA_JUDGE_CACHE` (it empties it first,
-//! so nothing survives a rebuild); the first worker to judge a point writes the basis there
-//! (to a temporary name, then renamed, so a reader never sees half a file) and the others
-//! read it. Without the variable (`umbra render`, tests, the self-test) the basis is computed
-//! in place, as before.
+//! Both depend on the case point only, never on the backend's output, yet each backend's
+//! worker used to recompute them. A conformance run names a cache directory in
+//! `UMBRA_JUDGE_CACHE` (it empties it first, so nothing survives a rebuild); the first worker
+//! to need an entry writes it there (to a temporary name, then renamed, so a reader never sees
+//! half a file) and the others read it. Without the variable (`umbra render`, tests, the
+//! self-test) everything is computed in place.
 //!
-//! Format, little-endian: `UMBJ1`, width and height (u32), a u64 key check, then per pixel
-//! the truth's class (u8), edge flag (u8) and face (u32), the reference's RGBA8 colour, its
-//! visibility (f32), whether a surface buffer follows (u8) and its face ids (u32), and the
-//! ambiguity flags (u8). The truth's hit points are not kept (the judge does not read them).
+//! Formats, little-endian, each starting with a magic, width and height (u32) and a u64 key
+//! check (FNV-1a of the resolved case point, and of the profile's name for a judged render):
+//! - `truth-KEY.bin` (`UMBT1`): per pixel the class (u8), the edge flag (u8), the face (u32).
+//!   The hit points are not kept (the judge does not read them).
+//! - `judged-KEY.bin` (`UMBJ3`): the quantum (f32), the reference's RGBA8 colour, its
+//!   visibility (f32), whether a surface buffer follows (u8) and its face ids (u32), then per
+//!   pixel what is legal: lo, hi (f32), flags (u8), c0, c1 (3 × f32 each) and the colour
+//!   tolerance (f32).
 
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use umbra_case::{ClipDepth, Frame, Prepared};
+use umbra_case::{ClipDepth, Frame, Prepared, Profile};
 use umbra_ref::truth::{Class, Truth, ground_truth};
+use umbra_ref::{Judged, PixelLegal};
 
 /// The environment variable naming the cache directory.
 pub const ENV: &str = "UMBRA_JUDGE_CACHE";
 
-const MAGIC: &[u8; 5] = b"UMBJ1";
+const TRUTH_MAGIC: &[u8; 5] = b"UMBT1";
+const JUDGED_MAGIC: &[u8; 5] = b"UMBJ3";
 
-/// The truth, and the reference frame with its ambiguity flags.
+/// The truth, and the reference's judged render for one profile.
 pub struct Basis {
     /// The exact truth.
     pub truth: Truth,
-    /// The reference's frame and, per pixel, [`umbra_ref::lookup::ambiguity`] flags.
-    pub judged: (Frame, Vec<u8>),
+    /// The reference's frame and what every pixel allows.
+    pub judged: Judged,
 }
 
-/// The basis of `prepared`: from the cache when the run has one, else computed.
-pub fn basis(prepared: &Prepared) -> Basis {
-    let Some(dir) = std::env::var_os(ENV).map(PathBuf::from) else {
-        return compute(prepared);
+/// The basis of `prepared` for a backend of `profile`: from the cache when the run has one,
+/// else computed.
+pub fn basis(prepared: &Prepared, profile: Profile) -> Basis {
+    let profile = profile.effective_for(prepared.case());
+    let dir = std::env::var_os(ENV).map(PathBuf::from);
+    let truth = cached(
+        dir.as_deref(),
+        "truth",
+        key(prepared, ""),
+        write_truth,
+        read_truth,
+        || ground_truth(prepared),
+    );
+    let judged = cached(
+        dir.as_deref(),
+        "judged",
+        key(prepared, profile.name()),
+        write_judged,
+        |bytes, k| read_judged(bytes, k, profile),
+        || umbra_ref::render_judged(prepared, ClipDepth::MinusOneToOne, profile),
+    );
+    Basis { truth, judged }
+}
+
+/// One cached artefact: read it, or compute it and write it for the next worker. A cache that
+/// cannot be written only costs time: the value is still right.
+fn cached<T>(
+    dir: Option<&Path>,
+    kind: &str,
+    key: u64,
+    writer: fn(&T, u64) -> Vec<u8>,
+    reader: impl Fn(&[u8], u64) -> Option<T>,
+    compute: impl FnOnce() -> T,
+) -> T {
+    let Some(dir) = dir else {
+        return compute();
     };
-    let key = key(prepared);
-    let file = dir.join(format!("{key:016x}.bin"));
-    if let Some(b) = read(&file, key) {
-        return b;
+    let file = dir.join(format!("{kind}-{key:016x}.bin"));
+    let mut bytes = Vec::new();
+    if std::fs::File::open(&file)
+        .and_then(|mut f| f.read_to_end(&mut bytes))
+        .is_ok()
+    {
+        if let Some(v) = reader(&bytes, key) {
+            return v;
+        }
     }
-    let b = compute(prepared);
-    // A cache that cannot be written only costs time: the basis is still right.
-    let _ = write(&dir, &file, key, &b);
-    b
+    let value = compute();
+    let _ = store(dir, &file, &writer(&value, key));
+    value
 }
 
-fn compute(prepared: &Prepared) -> Basis {
-    Basis {
-        truth: ground_truth(prepared),
-        judged: umbra_ref::render_judged(prepared, ClipDepth::MinusOneToOne),
-    }
+fn store(dir: &Path, file: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let tmp = dir.join(format!(
+        ".{}.{}.tmp",
+        file.file_name().and_then(|n| n.to_str()).unwrap_or("entry"),
+        std::process::id()
+    ));
+    std::fs::File::create(&tmp)?.write_all(bytes)?;
+    std::fs::rename(&tmp, file)
 }
 
-/// 64-bit FNV-1a of the resolved case point (everything the basis depends on).
-fn key(prepared: &Prepared) -> u64 {
-    let text = serde_json::to_string(&prepared.point.case).unwrap_or_default();
+/// 64-bit FNV-1a of the resolved case point and `tag` (everything an entry depends on).
+fn key(prepared: &Prepared, tag: &str) -> u64 {
+    let text = serde_json::to_string(&prepared.point.case).unwrap_or_default() + tag;
     text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
         (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
     })
@@ -86,58 +133,33 @@ fn class_of(b: u8) -> Option<Class> {
     })
 }
 
-fn write(dir: &Path, file: &Path, key: u64, b: &Basis) -> std::io::Result<()> {
-    std::fs::create_dir_all(dir)?;
-    let (frame, ambiguity) = &b.judged;
-    let t = &b.truth;
-    let n = (t.width * t.height) as usize;
-    let mut out = Vec::with_capacity(32 + n * 20);
-    out.extend_from_slice(MAGIC);
-    out.extend_from_slice(&t.width.to_le_bytes());
-    out.extend_from_slice(&t.height.to_le_bytes());
+fn header(out: &mut Vec<u8>, magic: &[u8; 5], w: u32, h: u32, key: u64) {
+    out.extend_from_slice(magic);
+    out.extend_from_slice(&w.to_le_bytes());
+    out.extend_from_slice(&h.to_le_bytes());
     out.extend_from_slice(&key.to_le_bytes());
+}
+
+fn put_f32s(out: &mut Vec<u8>, v: &[f32]) {
+    v.iter()
+        .for_each(|x| out.extend_from_slice(&x.to_le_bytes()));
+}
+
+fn write_truth(t: &Truth, key: u64) -> Vec<u8> {
+    let n = t.class.len();
+    let mut out = Vec::with_capacity(32 + n * 6);
+    header(&mut out, TRUTH_MAGIC, t.width, t.height, key);
     out.extend(t.class.iter().map(|c| class_code(*c)));
     out.extend(t.edge.iter().map(|e| u8::from(*e)));
     t.face
         .iter()
         .for_each(|f| out.extend_from_slice(&f.to_le_bytes()));
-    out.extend_from_slice(&frame.color);
-    frame
-        .visibility
-        .iter()
-        .for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
-    match &frame.surface {
-        Some(s) => {
-            out.push(1);
-            s.iter()
-                .for_each(|f| out.extend_from_slice(&f.to_le_bytes()));
-        }
-        None => out.push(0),
-    }
-    out.extend_from_slice(ambiguity);
-    let tmp = dir.join(format!(".{key:016x}.{}.tmp", std::process::id()));
-    std::fs::File::create(&tmp)?.write_all(&out)?;
-    std::fs::rename(&tmp, file)
+    out
 }
 
-fn read(file: &Path, key: u64) -> Option<Basis> {
-    let mut bytes = Vec::new();
-    std::fs::File::open(file)
-        .ok()?
-        .read_to_end(&mut bytes)
-        .ok()?;
-    let mut r = Reader {
-        bytes: &bytes,
-        at: 0,
-    };
-    if r.take(5)? != MAGIC {
-        return None;
-    }
-    let (width, height) = (r.u32()?, r.u32()?);
-    if r.u64()? != key {
-        return None;
-    }
-    let n = (width as usize).checked_mul(height as usize)?;
+fn read_truth(bytes: &[u8], key: u64) -> Option<Truth> {
+    let mut r = Reader { bytes, at: 0 };
+    let (width, height, n) = r.header(TRUTH_MAGIC, key)?;
     let class = r
         .take(n)?
         .iter()
@@ -145,40 +167,85 @@ fn read(file: &Path, key: u64) -> Option<Basis> {
         .collect::<Option<Vec<_>>>()?;
     let edge = r.take(n)?.iter().map(|b| *b != 0).collect();
     let face = (0..n).map(|_| r.u32()).collect::<Option<Vec<_>>>()?;
+    r.done()?;
+    Some(Truth {
+        width,
+        height,
+        class,
+        edge,
+        face,
+        point: Vec::new(),
+        elapsed: Duration::ZERO,
+    })
+}
+
+fn write_judged(j: &Judged, key: u64) -> Vec<u8> {
+    let f = &j.frame;
+    let n = (f.width * f.height) as usize;
+    let mut out = Vec::with_capacity(32 + n * 50);
+    header(&mut out, JUDGED_MAGIC, f.width, f.height, key);
+    out.extend_from_slice(&j.quantum.to_le_bytes());
+    out.extend_from_slice(&f.color);
+    put_f32s(&mut out, &f.visibility);
+    match &f.surface {
+        Some(s) => {
+            out.push(1);
+            s.iter()
+                .for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
+        }
+        None => out.push(0),
+    }
+    for l in &j.legal {
+        put_f32s(&mut out, &[l.lo, l.hi]);
+        out.push(l.flags);
+        put_f32s(&mut out, &l.c0);
+        put_f32s(&mut out, &l.c1);
+        put_f32s(&mut out, &[l.ctol]);
+    }
+    out
+}
+
+fn read_judged(bytes: &[u8], key: u64, profile: Profile) -> Option<Judged> {
+    let mut r = Reader { bytes, at: 0 };
+    let (width, height, n) = r.header(JUDGED_MAGIC, key)?;
+    let quantum = r.f32()?;
     let color = r.take(n * 4)?.to_vec();
-    let visibility = (0..n)
-        .map(|_| r.u32().map(f32::from_bits))
-        .collect::<Option<Vec<_>>>()?;
+    let visibility = (0..n).map(|_| r.f32()).collect::<Option<Vec<_>>>()?;
     let surface = match r.take(1)?[0] {
         1 => Some((0..n).map(|_| r.u32()).collect::<Option<Vec<_>>>()?),
         _ => None,
     };
-    let ambiguity = r.take(n)?.to_vec();
-    if r.at != bytes.len() {
-        return None;
+    let mut legal = Vec::with_capacity(n);
+    for _ in 0..n {
+        let (lo, hi) = (r.f32()?, r.f32()?);
+        let flags = r.take(1)?[0];
+        let c0 = [r.f32()?, r.f32()?, r.f32()?];
+        let c1 = [r.f32()?, r.f32()?, r.f32()?];
+        let ctol = r.f32()?;
+        legal.push(PixelLegal {
+            lo,
+            hi,
+            flags,
+            c0,
+            c1,
+            ctol,
+        });
     }
-    Some(Basis {
-        truth: Truth {
+    r.done()?;
+    Some(Judged {
+        frame: Frame {
             width,
             height,
-            class,
-            edge,
-            face,
-            point: Vec::new(),
-            elapsed: Duration::ZERO,
+            color,
+            visibility,
+            surface,
+            shadow_map: None,
+            visibility_storage: Default::default(),
+            timings: Default::default(),
         },
-        judged: (
-            Frame {
-                width,
-                height,
-                color,
-                visibility,
-                surface,
-                shadow_map: None,
-                timings: Default::default(),
-            },
-            ambiguity,
-        ),
+        legal,
+        quantum,
+        profile,
     })
 }
 
@@ -196,8 +263,25 @@ impl<'a> Reader<'a> {
     fn u32(&mut self) -> Option<u32> {
         Some(u32::from_le_bytes(self.take(4)?.try_into().ok()?))
     }
+    fn f32(&mut self) -> Option<f32> {
+        self.u32().map(f32::from_bits)
+    }
     fn u64(&mut self) -> Option<u64> {
         Some(u64::from_le_bytes(self.take(8)?.try_into().ok()?))
+    }
+    /// Magic, size and key; the pixel count.
+    fn header(&mut self, magic: &[u8; 5], key: u64) -> Option<(u32, u32, usize)> {
+        if self.take(5)? != magic {
+            return None;
+        }
+        let (w, h) = (self.u32()?, self.u32()?);
+        if self.u64()? != key {
+            return None;
+        }
+        Some((w, h, (w as usize).checked_mul(h as usize)?))
+    }
+    fn done(&self) -> Option<()> {
+        (self.at == self.bytes.len()).then_some(())
     }
 }
 
@@ -211,28 +295,31 @@ mod tests {
             .join("../../cases/basics/square-occluder.json");
         let point = umbra_case::load_file(&file).expect("case").remove(0);
         let prepared = Prepared::new(point);
-        let b = compute(&prepared);
-        let dir = std::env::temp_dir().join(format!("umbra-judge-cache-{}", std::process::id()));
-        let k = key(&prepared);
-        let path = dir.join("x.bin");
-        write(&dir, &path, k, &b).expect("write");
-        let back = read(&path, k).expect("read");
-        assert_eq!(back.truth.class, b.truth.class);
-        assert_eq!(back.truth.edge, b.truth.edge);
-        assert_eq!(back.truth.face, b.truth.face);
-        assert_eq!(back.judged.0.color, b.judged.0.color);
-        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert_eq!(
-            bits(&back.judged.0.visibility),
-            bits(&b.judged.0.visibility)
+        let profile = Profile::GLES2;
+        let truth = ground_truth(&prepared);
+        let judged = umbra_ref::render_judged(&prepared, ClipDepth::MinusOneToOne, profile);
+        let (kt, kj) = (key(&prepared, ""), key(&prepared, profile.name()));
+        assert_ne!(
+            kj,
+            key(&prepared, Profile::GL.name()),
+            "the profile is part of the key"
         );
-        assert_eq!(back.judged.0.surface, b.judged.0.surface);
-        assert_eq!(back.judged.1, b.judged.1);
-        // Another key (another case) is refused, and so is a truncated file.
-        assert!(read(&path, k ^ 1).is_none());
-        let bytes = std::fs::read(&path).expect("bytes");
-        std::fs::write(&path, &bytes[..bytes.len() - 1]).expect("truncate");
-        assert!(read(&path, k).is_none());
-        let _ = std::fs::remove_dir_all(&dir);
+        let back = read_truth(&write_truth(&truth, kt), kt).expect("truth");
+        assert_eq!(
+            (back.class, back.edge, back.face),
+            (truth.class.clone(), truth.edge.clone(), truth.face.clone())
+        );
+        let bytes = write_judged(&judged, kj);
+        let back = read_judged(&bytes, kj, profile).expect("judged");
+        assert_eq!(back.frame.color, judged.frame.color);
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&back.frame.visibility), bits(&judged.frame.visibility));
+        assert_eq!(back.frame.surface, judged.frame.surface);
+        assert_eq!(back.legal, judged.legal);
+        assert_eq!(back.quantum.to_bits(), judged.quantum.to_bits());
+        // Another key (another case or profile) is refused, and so is a truncated file.
+        assert!(read_judged(&bytes, kj ^ 1, profile).is_none());
+        assert!(read_judged(&bytes[..bytes.len() - 1], kj, profile).is_none());
+        assert!(read_truth(&write_truth(&truth, kt)[1..], kt).is_none());
     }
 }

@@ -24,13 +24,18 @@ pub struct Judged {
     pub error: TruthError,
     /// Agreement with the reference (None for the reference itself).
     pub agreement: Option<RefAgreement>,
+    /// Each pixel's judgement (empty for the reference itself).
+    pub pixels: Vec<umbra_compare::reference::PixelJudgement>,
     /// SSIM of the colour against the reference's (None for the reference itself).
     pub ssim: Option<f64>,
     /// The reference frame it was judged against (None for the reference itself).
     pub reference: Option<Frame>,
-    /// Per pixel: whether a shadow difference from the reference is legal there (empty for
-    /// the reference itself, whose goldens are held exactly).
+    /// Per pixel: whether the shadow answer may legally differ from the reference's there
+    /// (empty for the reference itself, whose goldens are held exactly).
     pub legal: Vec<bool>,
+    /// The checks that failed, each with how many pixels (or 1) failed it: the signature an
+    /// expectation matches ([`crate::status::Expectation`]).
+    pub failed: Vec<FailedCheck>,
     /// Time spent judging (truth, reference, error, agreement), twins excluded.
     pub judge_time: Duration,
     /// Time spent rendering and judging the twins.
@@ -39,6 +44,15 @@ pub struct Judged {
     pub twins: Vec<TwinMetric>,
     /// Problems with the result (empty = as expected).
     pub problems: Vec<String>,
+}
+
+/// One failed check of a run: its name and how many pixels failed it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FailedCheck {
+    /// `value`, `nan`, `coverage`, `colour`, `interior`, `twin:NAME`, `golden`, `falls-along`.
+    pub check: String,
+    /// Pixels that failed it (1 for checks that are not counted in pixels).
+    pub count: u64,
 }
 
 /// How one metamorphic twin ([`umbra_case::twin`]) compared with its case on one backend.
@@ -97,56 +111,71 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
         ));
     }
     let start = Instant::now();
-    // The truth, and the reference's lookup ambiguity (which also judges the twins, so even
-    // the reference needs it): computed once per point in a conformance run.
-    let crate::judge_cache::Basis { truth, judged } = crate::judge_cache::basis(&prepared);
+    // The truth, and the reference's judged render for this backend's profile (which also
+    // judges the twins, so even the reference needs it): computed once per point and profile
+    // in a conformance run.
+    let crate::judge_cache::Basis { truth, judged } =
+        crate::judge_cache::basis(&prepared, backend.profile());
     let error = umbra_compare::truth_error(&frame, &truth);
     let mut problems = Vec::new();
+    let mut failed = Vec::new();
     let is_ref = backend.id().0 == "ref";
-    let judged_reference = (!is_ref).then_some(&judged);
-    let agreement = judged_reference.as_ref().map(|(reference, ambiguity)| {
-        umbra_compare::reference::judge(reference, ambiguity, &frame, &truth)
-    });
-    let ssim = judged_reference
-        .as_ref()
-        .and_then(|(reference, _)| umbra_compare::ssim(reference, &frame));
-    let legal = judged_reference
-        .as_ref()
-        .map(|(reference, ambiguity)| {
-            umbra_compare::reference::legal_pixels(reference, ambiguity, &truth)
-        })
-        .unwrap_or_default();
+    let (agreement, pixels) = if is_ref {
+        (None, Vec::new())
+    } else {
+        let (a, px) = umbra_compare::reference::judge(&judged, &frame);
+        (Some(a), px)
+    };
+    let ssim = (!is_ref)
+        .then(|| umbra_compare::ssim(&judged.frame, &frame))
+        .flatten();
+    let legal = if is_ref {
+        Vec::new()
+    } else {
+        umbra_compare::reference::free_pixels(&judged)
+    };
     let twins_start = Instant::now();
-    let twins = run_twins(
-        backend,
-        &as_written,
-        &prepared,
-        &frame,
-        &error,
-        &judged,
-        &truth,
-    );
+    let twins = run_twins(backend, &as_written, &prepared, &frame, &error, &judged);
     let twins_time = twins_start.elapsed();
     for t in &twins {
         if !t.ok {
+            failed.push(FailedCheck {
+                check: format!("twin:{}", t.name),
+                count: t.pair.illegal.max(1),
+            });
             problems.push(format!(
-                "twin {} ({}): {} px differ, {} of them illegal ({}); interior error {} vs the twin's {}",
+                "twin {} ({}): {} px differ, {} illegal ({}; {}); interior error {} vs the twin's {}",
                 t.name,
                 t.agree,
                 t.pair.differ,
                 t.pair.illegal,
+                t.pair.illegal_summary(),
                 t.pair.legal_summary(),
                 t.interior_error,
                 t.twin_interior_error.map(|e| e.to_string()).unwrap_or("-".into())
             ));
         }
     }
-    let reference = judged_reference.map(|(r, _)| r.clone());
+    let reference = (!is_ref).then(|| judged.frame.clone());
     if let Some(a) = &agreement {
         if a.illegal > 0 && prepared.case().expect.backends_agree {
+            for (check, count) in [
+                ("value", a.illegal_value),
+                ("nan", a.illegal_nan),
+                ("coverage", a.illegal_coverage),
+                ("colour", a.illegal_colour),
+            ] {
+                if count > 0 {
+                    failed.push(FailedCheck {
+                        check: check.into(),
+                        count,
+                    });
+                }
+            }
             problems.push(format!(
-                "{} px disagree with the reference where no spec freedom explains it (of {} compared; {})",
+                "{} px break what the specs allow ({}) of {} compared; {}",
                 a.illegal,
+                a.illegal_summary(),
                 a.compared,
                 a.legal_summary()
             ));
@@ -161,6 +190,10 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
         InteriorError::NoFalseShadow => (a.false_shadow > 0, false),
     };
     if shadow_bad || light_bad {
+        failed.push(FailedCheck {
+            check: "interior".into(),
+            count: a.false_shadow * u64::from(shadow_bad) + a.false_light * u64::from(light_bad),
+        });
         problems.push(format!(
             "expect.interior_error is {}, but away from shadow edges {} px are falsely shadowed and {} px falsely lit (of {} judged)",
             serde_json::to_string(&prepared.case().expect.interior_error).unwrap_or_default(),
@@ -175,9 +208,11 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
         truth,
         error,
         agreement,
+        pixels,
         ssim,
         reference,
         legal,
+        failed,
         judge_time,
         twins_time,
         twins,
@@ -185,15 +220,16 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
     }))
 }
 
-/// Renders every twin of the run on the same backend and compares it with `frame`.
+/// Renders every twin of the run on the same backend and compares it with `frame` (`legal`
+/// twins: the twin's frame is judged against the case's own judged render, as a backend's
+/// frame is, since the twin's change must not matter).
 fn run_twins(
     backend: &mut dyn Backend,
     as_written: &CasePoint,
     prepared: &Prepared,
     frame: &Frame,
     error: &TruthError,
-    (reference, ambiguity): &(Frame, Vec<u8>),
-    truth: &umbra_ref::truth::Truth,
+    judged: &umbra_ref::Judged,
 ) -> Vec<TwinMetric> {
     let interior = |e: &TruthError| e.away_from_edges.false_shadow + e.away_from_edges.false_light;
     umbra_case::twin::twins_of(as_written)
@@ -241,8 +277,7 @@ fn run_twins(
                 m.twin_interior_error =
                     Some(interior(&umbra_compare::truth_error(&twin, &twin_truth)));
             }
-            m.pair =
-                umbra_compare::reference::judge_pair(frame, &twin, reference, ambiguity, truth);
+            m.pair = umbra_compare::reference::judge(judged, &twin).0;
             match plan.agree {
                 TwinAgree::Identical => {
                     // Bit-identical visibility wherever either frame covers a surface.
@@ -309,11 +344,18 @@ pub fn describe(j: &Judged) -> String {
     );
     if let Some(a) = &j.agreement {
         s.push_str(&format!(
-            "  vs reference: {} of {} px differ ({}; {} illegal); colour SSIM {:.5}\n",
+            "  vs reference: {} of {} px give another answer ({}); {} illegal{}\n  \
+             check strength: {} px blind ({:.3}%), {} values held to an interval (closest margin {}), {} colours checked; colour SSIM {:.5}\n",
             a.differ,
             a.compared,
             a.legal_summary(),
             a.illegal,
+            if a.illegal > 0 { format!(" ({})", a.illegal_summary()) } else { String::new() },
+            a.blind,
+            100.0 * a.blind_share(),
+            a.value_checked,
+            a.value_margin.map_or("-".into(), |m| format!("{m:.4}")),
+            a.colour_checked,
             j.ssim.unwrap_or(f64::NAN)
         ));
     }

@@ -49,6 +49,9 @@ pub struct RunReport {
     /// A sweep measurement (requests with `repeat`).
     #[serde(default)]
     pub measured: Option<crate::measure::Measured>,
+    /// The checks a failing run failed, with their pixel counts (what expectations match).
+    #[serde(default)]
+    pub failed: Vec<crate::run::FailedCheck>,
 }
 
 /// The figures of one judged run.
@@ -76,8 +79,18 @@ pub struct Metrics {
     pub outside: u64,
     /// Agreement with the reference: share of compared pixels with the same answer.
     pub agreement: Option<f64>,
-    /// Illegal disagreements with the reference.
+    /// Illegal pixels against the reference (every check).
     pub illegal: Option<u64>,
+    /// Every count of the comparison with the reference: compared pixels, each legal class,
+    /// blind pixels, checked values and their closest margin, each illegal check.
+    #[serde(default)]
+    pub reference: Option<umbra_compare::reference::RefAgreement>,
+    /// The profile the run was judged for (`gl`, `gles3`, `gles2-packed`, `vulkan`).
+    #[serde(default)]
+    pub profile: String,
+    /// The backend's visibility target (`f32`, `unorm8`).
+    #[serde(default)]
+    pub visibility_storage: String,
     /// SSIM of the colour against the reference's.
     pub ssim: Option<f64>,
     /// SSIM of the colour against its golden, where one exists.
@@ -231,6 +244,9 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                     }
                 }),
                 illegal: j.agreement.as_ref().map(|a| a.illegal),
+                reference: j.agreement.clone(),
+                profile: backend.profile().name().into(),
+                visibility_storage: j.frame.visibility_storage.name().into(),
                 ssim: j.ssim,
                 ssim_golden: None,
                 shadow_ms: t.shadow_pass.as_secs_f64() * 1e3,
@@ -247,6 +263,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 golden_ms: 0.0,
             };
             let mut problems = j.problems.clone();
+            let mut failed = j.failed.clone();
             let mut metrics = metrics;
             let golden_start = std::time::Instant::now();
             let golden = req.golden.as_ref().map(|dir| {
@@ -254,12 +271,16 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 metrics.ssim_golden = ssim;
                 if g == crate::golden::Golden::Changed {
                     problems.push(msg);
+                    failed.push(crate::run::FailedCheck {
+                        check: "golden".into(),
+                        count: 1,
+                    });
                 }
                 format!("{g:?}").to_lowercase()
             });
             metrics.golden_ms = golden_start.elapsed().as_secs_f64() * 1e3;
-            let failed = !problems.is_empty();
-            if failed {
+            let failing = !problems.is_empty();
+            if failing {
                 if let Some(dir) = &req.failures {
                     let _ = crate::render_cmd::write_images(
                         &dir.join(crate::render_cmd::file_name(&name)),
@@ -268,12 +289,17 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 }
             }
             RunReport {
-                outcome: if failed { "fail".into() } else { "pass".into() },
+                outcome: if failing {
+                    "fail".into()
+                } else {
+                    "pass".into()
+                },
                 reason: problems.join("; "),
                 details: describe(&j),
                 metrics: Some(metrics),
                 golden,
                 measured: None,
+                failed,
             }
         }
     }

@@ -1,7 +1,9 @@
 //! [`WgpuBackend`]: the [`Backend`] trait over a wgpu device.
 
 use umbra_case::format::{Compare, Outside};
-use umbra_case::{Backend, BackendError, BackendId, DriverInfo, Frame, Needs, Prepared, Support};
+use umbra_case::{
+    Backend, BackendError, BackendId, DriverInfo, Frame, Needs, Prepared, Profile, Support,
+};
 
 use crate::device::{Kind, Unavailable, open};
 use crate::render::Gpu;
@@ -54,6 +56,15 @@ impl Backend for WgpuBackend {
             renderer: i.name.clone(),
             version: i.driver.clone(),
             extensions,
+        }
+    }
+
+    fn profile(&self) -> Profile {
+        match self.kind {
+            Kind::VulkanLavapipe => Profile::VULKAN,
+            // wgpu's GL backend drives an OpenGL ES 3 context: GL's sampler rules, cube maps
+            // always seamless.
+            Kind::GlLlvmpipe => Profile::GLES3,
         }
     }
 

@@ -716,6 +716,11 @@ impl Gpu {
             visibility,
             surface: Some(surface),
             shadow_map,
+            visibility_storage: if self.vis_format == wgpu::TextureFormat::R32Float {
+                umbra_case::VisibilityStorage::Float32
+            } else {
+                umbra_case::VisibilityStorage::Unorm8
+            },
             timings: umbra_case::Timings {
                 shadow_pass,
                 lit_pass,

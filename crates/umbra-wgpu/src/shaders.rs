@@ -188,7 +188,8 @@ pub fn lit(k: &Key, shading: &Shading) -> String {
     }
     s.push_str("  var bias = u.bias.x;\n");
     if k.slope {
-        s.push_str("  let cosine = clamp(dot(n, to_light(p)), -1.0, 1.0);\n  bias += clamp(u.bias.y * tan(acos(cosine)), 0.0, u.bias.z);\n");
+        // tan(acos(c)) in its algebraic form (umbra_ref::lookup, step 6).
+        s.push_str("  let cosine = dot(n, to_light(p));\n  if (cosine > 0.0) { bias += clamp(u.bias.y * sqrt(max(1.0 - cosine * cosine, 0.0)) / cosine, 0.0, u.bias.z); }\n");
     }
     s.push_str("  let r = c.z - TOWARD_FAR * bias;\n");
     let hw_direct = !manual && !matches!(k.filter, Filter::Pcf(_));
