@@ -71,6 +71,13 @@ pub struct RefAgreement {
     pub illegal_coverage: u64,
     /// Illegal: a colour that is not the shading of the pixel's own visibility.
     pub illegal_colour: u64,
+    /// Shadow-map texels checked (backends that read their map back).
+    #[serde(default)]
+    pub map_checked: u64,
+    /// Illegal: shadow-map texels holding a value no conformant implementation stores there
+    /// (texels, not pixels; not part of `illegal`).
+    #[serde(default)]
+    pub illegal_map: u64,
     /// Every illegal pixel (a pixel counts once, under the first check it fails).
     pub illegal: u64,
 }
@@ -98,6 +105,7 @@ impl RefAgreement {
             (self.illegal_nan, "NaN visibility"),
             (self.illegal_coverage, "coverage"),
             (self.illegal_colour, "colour"),
+            (self.illegal_map, "shadow-map texel"),
         ] {
             if n > 0 {
                 parts.push(format!("{n} px {what}"));
@@ -242,6 +250,20 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
                 r.illegal += 1;
                 px[i] = PixelJudgement::Illegal;
             }
+        }
+    }
+    if let Some(map) = &frame.shadow_map {
+        if map.values.len() == basis.map.len() {
+            r.map_checked = map.values.len() as u64;
+            r.illegal_map = map
+                .values
+                .iter()
+                .zip(&basis.map)
+                .filter(|(v, (lo, hi))| {
+                    let slack = |x: f32| umbra_case::depth::f32_spacing(x);
+                    !(lo - slack(*lo) <= **v && **v <= hi + slack(*hi))
+                })
+                .count() as u64;
         }
     }
     (r, px)

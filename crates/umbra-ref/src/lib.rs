@@ -61,6 +61,10 @@ pub struct Judged {
     pub quantum: f32,
     /// The profile the intervals are for.
     pub profile: Profile,
+    /// Per shadow-map texel, layer after layer, each top row first (as
+    /// [`umbra_case::DepthMap`] holds them): the range of values a conformant implementation
+    /// may store there ([`shadow_pass::Freedom`]). Empty when not kept.
+    pub map: Vec<(f32, f32)>,
 }
 
 /// Renders like [`render`] and also computes what every pixel allows for `profile`.
@@ -77,13 +81,14 @@ pub fn explain(
     profile: Profile,
     pixel: Option<(u32, u32)>,
 ) -> (Judged, String) {
-    let (frame, legal, trace) = render_inner(run, clip, Some(profile), pixel);
+    let (frame, legal, map, trace) = render_inner(run, clip, Some(profile), pixel);
     (
         Judged {
             frame,
             legal,
             quantum: lookup::quantum(run.case().shadow.filter),
             profile,
+            map,
         },
         trace,
     )
@@ -122,7 +127,7 @@ fn render_inner(
     clip: ClipDepth,
     profile: Option<Profile>,
     pixel: Option<(u32, u32)>,
-) -> (Frame, Vec<PixelLegal>, String) {
+) -> (Frame, Vec<PixelLegal>, Vec<(f32, f32)>, String) {
     let start = Instant::now();
     let case = run.case();
     let conv = convention(case, clip);
@@ -197,8 +202,18 @@ fn render_inner(
     let flip = !conv.window_y_down();
     let [mw, mh] = case.shadow.size;
     let mut values = Vec::with_capacity((mw * mh) as usize * layers.len());
+    let mut map = Vec::new();
     for layer in &layers {
         values.extend(top_first(&layer.values, mw as usize, 1, flip));
+        if profile.is_some() {
+            let pairs: Vec<(f32, f32)> = layer
+                .lo
+                .iter()
+                .copied()
+                .zip(layer.hi.iter().copied())
+                .collect();
+            map.extend(top_first(&pairs, mw as usize, 1, flip));
+        }
     }
     let frame = Frame {
         width: w,
@@ -228,7 +243,7 @@ fn render_inner(
         },
         ..frame
     };
-    (frame, legal, lit.trace)
+    (frame, legal, map, lit.trace)
 }
 
 /// Rows in top-first order: reversed when the raster's row 0 is the bottom (the one Y flip).

@@ -44,7 +44,9 @@ pub struct DepthLayer {
 /// - **Vertex snapping** ([`SNAP_PX`]): the depth plane at the centre moves by up to
 ///   (|∂z/∂x| + |∂z/∂y|)·δ·Σ|bᵢ|, and the slopes m is made of by up to
 ///   (|∂z/∂x| + |∂z/∂y|)·2δ/h (h the smallest altitude, in pixels).
-/// - **Interpolation**: a few f32 roundings of z on either side: 4 ULP(z).
+/// - **Interpolation**: a few f32 roundings of z on either side, 4 ULP(z), and 2 more for the
+///   projection itself: a [0,1] API's matrix gives window z directly where GL's goes through
+///   0.5·z_ndc + 0.5, so the same point's depth differs by an ULP or two between conventions.
 /// - **Polygon offset, one-sided**: m may be the specs' sqrt(∂x² + ∂y²) or the allowed
 ///   max(|∂x|, |∂y|) (ours: max), and r ∈ [2⁻ⁿ, 2·2⁻ⁿ] for fixed point (ours: one step) and
 ///   fixed for float ([`DepthFormat::offset_unit_range`]): a conformant offset lies between
@@ -131,7 +133,7 @@ impl Freedom {
         let z = t.depth_at(e);
         let (dx, dy) = t.depth_slopes();
         let err = (dx.abs() + dy.abs()) * SNAP_PX * t.weight_norm(e)
-            + 4.0 * f64::from(umbra_case::depth::f32_spacing(z as f32));
+            + 6.0 * f64::from(umbra_case::depth::f32_spacing(z as f32));
         let away = f64::from(self.conv.toward_far());
         let (o1, o2) = (away * offset.0, away * offset.1);
         let (lo, hi) = (z - err + o1.min(o2), z + err + o1.max(o2));

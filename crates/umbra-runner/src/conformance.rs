@@ -157,6 +157,8 @@ pub struct RunResult {
     pub reason: String,
     /// Figures of the judged run, when it was judged.
     pub metrics: Option<Metrics>,
+    /// The checks a failing run failed (its signature).
+    pub failed: Vec<crate::run::FailedCheck>,
     /// Wall time of the run including retries, seconds.
     pub time_s: f64,
     /// The command that reproduces this run alone.
@@ -262,6 +264,7 @@ pub fn main(argv: &[String]) -> i32 {
                 status: Status::Fail,
                 reason: e.to_string(),
                 metrics: None,
+                failed: Vec::new(),
                 time_s: 0.0,
                 reproduce: format!("cargo run --bin umbra -- render {}", f.display()),
                 details: String::new(),
@@ -449,6 +452,10 @@ impl Monotone {
                     if let Some((prev_id, prev)) = &previous {
                         if e > *prev && !r.status.is_regression() {
                             r.status = Status::Fail;
+                            r.failed.push(crate::run::FailedCheck {
+                                check: "falls-along".into(),
+                                count: 1,
+                            });
                             r.reason = format!(
                                 "expect.error_falls_along {}: the error against the truth rose to {e} px from {prev} px at {prev_id}",
                                 self.path
@@ -556,14 +563,12 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
     for p in runs {
         let name = p.name();
         let t0 = Instant::now();
-        let (raw, reason, metrics, details) = match (&start_error, &unavailable) {
-            (Some(e), _) => (
+        let outcome = match (&start_error, &unavailable) {
+            (Some(e), _) => Attempt::bare(
                 Status::Crash,
                 format!("the harness could not start its worker process: {e}"),
-                None,
-                String::new(),
             ),
-            (None, Some(why)) => (Status::Skip(why.clone()), why.clone(), None, String::new()),
+            (None, Some(why)) => Attempt::bare(Status::Skip(why.clone()), why.clone()),
             (None, None) => {
                 let req = Request {
                     file: p.file.clone(),
@@ -573,13 +578,19 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
                     repeat: None,
                 };
                 let first = attempt(&mut worker, &start_worker, &req, settings.timeout);
-                if first.0.is_failure() {
+                if first.status.is_failure() {
                     // Rerun once: a different answer is a flake.
                     let second = attempt(&mut worker, &start_worker, &req, settings.timeout);
-                    if second.0 == Status::Pass {
-                        let why =
-                            format!("failed first ({}: {}), passed on rerun", first.0, first.1);
-                        (Status::Flake, why, second.2, second.3)
+                    if second.status == Status::Pass {
+                        let why = format!(
+                            "failed first ({}: {}), passed on rerun",
+                            first.status, first.reason
+                        );
+                        Attempt {
+                            status: Status::Flake,
+                            reason: why,
+                            ..second
+                        }
                     } else {
                         first
                     }
@@ -588,7 +599,14 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
                 }
             }
         };
-        let (status, expected) = settings.expectations.apply(&name, raw);
+        let Attempt {
+            status: raw,
+            reason,
+            metrics,
+            details,
+            failed,
+        } = outcome;
+        let (status, expected) = settings.expectations.apply(&name, raw, &failed);
         let reason = match (&status, expected) {
             (Status::ExpectedFail | Status::UnexpectedPass, Some(why)) => {
                 format!("expected: {why}; got: {reason}")
@@ -604,6 +622,7 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
             status,
             reason,
             metrics,
+            failed,
             time_s: t0.elapsed().as_secs_f64(),
             reproduce: format!(
                 "cargo run --bin umbra -- render {} --backend {} --point '{}'",
@@ -638,60 +657,77 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
     }
 }
 
+/// What one attempt at a run gave.
+struct Attempt {
+    status: Status,
+    reason: String,
+    metrics: Option<Metrics>,
+    details: String,
+    failed: Vec<crate::run::FailedCheck>,
+}
+
+impl Attempt {
+    fn bare(status: Status, reason: String) -> Attempt {
+        Attempt {
+            status,
+            reason,
+            metrics: None,
+            details: String::new(),
+            failed: Vec::new(),
+        }
+    }
+}
+
 /// One attempt at a run, restarting the worker first if the last one died.
 fn attempt(
     worker: &mut Result<Worker, String>,
     start: &dyn Fn() -> Result<Worker, String>,
     req: &Request,
     limit: Duration,
-) -> (Status, String, Option<Metrics>, String) {
+) -> Attempt {
     if worker.is_err() {
         *worker = start();
     }
     let w = match worker {
         Ok(w) => w,
-        Err(e) => {
-            return (
-                Status::Crash,
-                format!("no worker: {e}"),
-                None,
-                String::new(),
-            );
-        }
+        Err(e) => return Attempt::bare(Status::Crash, format!("no worker: {e}")),
     };
     match w.run(req, limit) {
         Reply::Report(r) => from_report(*r),
         Reply::Crashed(how) => {
             *worker = Err(how.clone());
-            (
-                Status::Crash,
-                format!("the worker died: {how}"),
-                None,
-                String::new(),
-            )
+            Attempt::bare(Status::Crash, format!("the worker died: {how}"))
         }
         Reply::TimedOut => {
             *worker = Err("timed out".into());
-            (
+            Attempt::bare(
                 Status::Timeout,
                 format!(
                     "no answer within {} s; the worker was killed",
                     limit.as_secs()
                 ),
-                None,
-                String::new(),
             )
         }
     }
 }
 
-fn from_report(r: RunReport) -> (Status, String, Option<Metrics>, String) {
+fn from_report(r: RunReport) -> Attempt {
     let status = match r.outcome.as_str() {
         "pass" => Status::Pass,
         "skip" => Status::Skip(r.reason.clone()),
         _ => Status::Fail,
     };
-    (status, r.reason, r.metrics, r.details)
+    let mut reason = r.reason;
+    if status == Status::Fail && !r.failed.is_empty() {
+        let _ = write!(reason, " [failed: {}]", crate::status::signature(&r.failed));
+    }
+    Attempt {
+        status,
+        reason,
+        metrics: r.metrics,
+        details: r.details,
+        failed: r.failed,
+    }
 }
 
 fn opt(v: Option<u64>) -> String {
@@ -817,6 +853,7 @@ fn write_reports(
                 "time_ms": r.time_s * 1e3,
                 "name": r.name,
                 "metrics": r.metrics,
+                "failed": r.failed,
                 "reproduce": r.reproduce,
             })
         })

@@ -14,10 +14,11 @@
 //! check (FNV-1a of the resolved case point, and of the profile's name for a judged render):
 //! - `truth-KEY.bin` (`UMBT1`): per pixel the class (u8), the edge flag (u8), the face (u32).
 //!   The hit points are not kept (the judge does not read them).
-//! - `judged-KEY.bin` (`UMBJ3`): the quantum (f32), the reference's RGBA8 colour, its
+//! - `judged-KEY.bin` (`UMBJ4`): the quantum (f32), the reference's RGBA8 colour, its
 //!   visibility (f32), whether a surface buffer follows (u8) and its face ids (u32), then per
 //!   pixel what is legal: lo, hi (f32), flags (u8), c0, c1 (3 × f32 each) and the colour
-//!   tolerance (f32).
+//!   tolerance (f32); then the number of shadow-map texels kept (u32, 0 unless the profile is
+//!   desktop GL's, whose backends read their map back) and their (lo, hi) ranges (f32 each).
 
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -31,7 +32,7 @@ use umbra_ref::{Judged, PixelLegal};
 pub const ENV: &str = "UMBRA_JUDGE_CACHE";
 
 const TRUTH_MAGIC: &[u8; 5] = b"UMBT1";
-const JUDGED_MAGIC: &[u8; 5] = b"UMBJ3";
+const JUDGED_MAGIC: &[u8; 5] = b"UMBJ4";
 
 /// The truth, and the reference's judged render for one profile.
 pub struct Basis {
@@ -60,7 +61,14 @@ pub fn basis(prepared: &Prepared, profile: Profile) -> Basis {
         key(prepared, profile.name()),
         write_judged,
         |bytes, k| read_judged(bytes, k, profile),
-        || umbra_ref::render_judged(prepared, ClipDepth::MinusOneToOne, profile),
+        || {
+            let mut j = umbra_ref::render_judged(prepared, ClipDepth::MinusOneToOne, profile);
+            // Only the GL 3.3 backends read their shadow map back; keep its ranges for them.
+            if profile != Profile::GL {
+                j.map = Vec::new();
+            }
+            j
+        },
     );
     Basis { truth, judged }
 }
@@ -202,6 +210,10 @@ fn write_judged(j: &Judged, key: u64) -> Vec<u8> {
         put_f32s(&mut out, &l.c1);
         put_f32s(&mut out, &[l.ctol]);
     }
+    out.extend_from_slice(&(j.map.len() as u32).to_le_bytes());
+    for (lo, hi) in &j.map {
+        put_f32s(&mut out, &[*lo, *hi]);
+    }
     out
 }
 
@@ -231,6 +243,10 @@ fn read_judged(bytes: &[u8], key: u64, profile: Profile) -> Option<Judged> {
             ctol,
         });
     }
+    let texels = r.u32()? as usize;
+    let map = (0..texels)
+        .map(|_| Some((r.f32()?, r.f32()?)))
+        .collect::<Option<Vec<_>>>()?;
     r.done()?;
     Some(Judged {
         frame: Frame {
@@ -246,6 +262,7 @@ fn read_judged(bytes: &[u8], key: u64, profile: Profile) -> Option<Judged> {
         legal,
         quantum,
         profile,
+        map,
     })
 }
 
@@ -317,6 +334,7 @@ mod tests {
         assert_eq!(back.frame.surface, judged.frame.surface);
         assert_eq!(back.legal, judged.legal);
         assert_eq!(back.quantum.to_bits(), judged.quantum.to_bits());
+        assert_eq!(back.map, judged.map);
         // Another key (another case or profile) is refused, and so is a truncated file.
         assert!(read_judged(&bytes, kj ^ 1, profile).is_none());
         assert!(read_judged(&bytes[..bytes.len() - 1], kj, profile).is_none());

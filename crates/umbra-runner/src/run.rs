@@ -49,7 +49,8 @@ pub struct Judged {
 /// One failed check of a run: its name and how many pixels failed it.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct FailedCheck {
-    /// `value`, `nan`, `coverage`, `colour`, `interior`, `twin:NAME`, `golden`, `falls-along`.
+    /// `value`, `nan`, `coverage`, `colour`, `map`, `interior`, `twin:NAME`, `golden`,
+    /// `falls-along`.
     pub check: String,
     /// Pixels that failed it (1 for checks that are not counted in pixels).
     pub count: u64,
@@ -158,12 +159,13 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
     }
     let reference = (!is_ref).then(|| judged.frame.clone());
     if let Some(a) = &agreement {
-        if a.illegal > 0 && prepared.case().expect.backends_agree {
+        if (a.illegal > 0 || a.illegal_map > 0) && prepared.case().expect.backends_agree {
             for (check, count) in [
                 ("value", a.illegal_value),
                 ("nan", a.illegal_nan),
                 ("coverage", a.illegal_coverage),
                 ("colour", a.illegal_colour),
+                ("map", a.illegal_map),
             ] {
                 if count > 0 {
                     failed.push(FailedCheck {
@@ -173,10 +175,12 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
                 }
             }
             problems.push(format!(
-                "{} px break what the specs allow ({}) of {} compared; {}",
+                "{} px and {} map texels break what the specs allow ({}) of {} px and {} texels compared; {}",
                 a.illegal,
+                a.illegal_map,
                 a.illegal_summary(),
                 a.compared,
+                a.map_checked,
                 a.legal_summary()
             ));
         }
@@ -259,7 +263,12 @@ fn run_twins(
             }
             let twin_prepared = Prepared::new(point);
             let twin = match backend.render(&twin_prepared) {
-                Ok(f) => f,
+                // A twin may change the shadow pass on purpose (another frustum, a moved
+                // scene): only its frame is held to the case, not its map.
+                Ok(f) => Frame {
+                    shadow_map: None,
+                    ..f
+                },
                 Err(e) => {
                     m.ok = false;
                     m.skipped = Some(format!("the twin failed to render: {e}"));

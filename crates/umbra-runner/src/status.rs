@@ -7,8 +7,17 @@
 //! passes on its rerun is `Flake`.
 //!
 //! Expectation files hold one line per pattern: `GLOB,STATUS,REASON`, where GLOB matches the
-//! full run name (`backend/case@sweep`), STATUS is `Fail`, `Crash`, `Timeout` or `Skip`, and
-//! REASON is required (a baseline without a reason is an error). `#` starts a comment.
+//! full run name (`backend/case@sweep`), STATUS is `Crash`, `Timeout`, `Skip` or a failure
+//! with its signature, and REASON is required (a baseline without a reason is an error). `#`
+//! starts a comment.
+//!
+//! An expected failure says *what* fails, as wgpu's `FailureCase` names the reasons it
+//! expects: `Fail:CHECK<=N[+CHECK<=N]...`, each CHECK one of the judge's checks (`value`,
+//! `nan`, `coverage`, `colour`, `map`, `interior`, `twin:NAME`, `golden`, `falls-along`) and
+//! N the most pixels (texels for `map`, 1 for the others) it may fail on. A run that fails a
+//! check not listed, or more pixels than the bound, fails *differently* and is a regression;
+//! one that fails less is still the expected failure. Every failing run's reason ends with
+//! its signature (`failed: value=29+twin:bias-order=29`), ready to copy.
 
 use std::fmt;
 use std::path::Path;
@@ -72,13 +81,128 @@ impl fmt::Display for Status {
     }
 }
 
+/// What an expectation expects of a run.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Expected {
+    /// A failure of these checks, each on at most so many pixels.
+    Fail(Vec<Bound>),
+    /// The worker dies.
+    Crash,
+    /// The run does not finish in time.
+    Timeout,
+    /// The backend cannot run it.
+    Skip,
+}
+
+/// One check of an expected failure and the most pixels it may fail on.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Bound {
+    /// The check's name (`value`, `map`, `twin:bias-order`, ...).
+    pub check: String,
+    /// The most pixels (or texels, or 1) it may fail on.
+    pub max: u64,
+}
+
+/// The checks a failing run may name (`twin:` takes the twin's name).
+pub const CHECKS: &[&str] = &[
+    "value",
+    "nan",
+    "coverage",
+    "colour",
+    "map",
+    "interior",
+    "golden",
+    "falls-along",
+];
+
+impl Expected {
+    /// Parses the STATUS field of an expectation line.
+    pub fn parse(s: &str) -> Result<Expected, String> {
+        match s {
+            "Crash" => return Ok(Expected::Crash),
+            "Timeout" => return Ok(Expected::Timeout),
+            "Skip" => return Ok(Expected::Skip),
+            "Fail" => {
+                return Err(
+                    "an expected failure must say what fails: Fail:CHECK<=N[+CHECK<=N]... (copy it from the run's `failed:` signature)"
+                        .into(),
+                );
+            }
+            _ => {}
+        }
+        let Some(sig) = s.strip_prefix("Fail:") else {
+            return Err(format!(
+                "status {s:?} is not one of Fail:CHECK<=N[+...], Crash, Timeout, Skip"
+            ));
+        };
+        let mut bounds = Vec::new();
+        for item in sig.split('+') {
+            let Some((check, max)) = item.split_once("<=") else {
+                return Err(format!("{item:?} is not CHECK<=N"));
+            };
+            let check = check.trim();
+            let known = CHECKS.contains(&check)
+                || check.strip_prefix("twin:").is_some_and(|n| !n.is_empty());
+            if !known {
+                return Err(format!(
+                    "unknown check {check:?}; the checks are {} and twin:NAME",
+                    CHECKS.join(", ")
+                ));
+            }
+            let max = max
+                .trim()
+                .parse()
+                .map_err(|_| format!("{max:?} in {item:?} is not a whole number"))?;
+            bounds.push(Bound {
+                check: check.to_string(),
+                max,
+            });
+        }
+        Ok(Expected::Fail(bounds))
+    }
+
+    /// The raw status this expectation is about.
+    fn status(&self) -> &'static str {
+        match self {
+            Expected::Fail(_) => "Fail",
+            Expected::Crash => "Crash",
+            Expected::Timeout => "Timeout",
+            Expected::Skip => "Skip",
+        }
+    }
+}
+
+impl fmt::Display for Expected {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Expected::Fail(b) => {
+                let parts: Vec<String> = b
+                    .iter()
+                    .map(|b| format!("{}<={}", b.check, b.max))
+                    .collect();
+                write!(f, "Fail:{}", parts.join("+"))
+            }
+            other => f.write_str(other.status()),
+        }
+    }
+}
+
+/// A failing run's signature, as an expectation would spell it with exact bounds.
+pub fn signature(failed: &[crate::run::FailedCheck]) -> String {
+    failed
+        .iter()
+        .map(|c| format!("{}={}", c.check, c.count))
+        .collect::<Vec<_>>()
+        .join("+")
+}
+
 /// One expectation line.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Expectation {
     /// Glob over the run name.
     pub pattern: String,
-    /// Expected raw status: Fail, Crash, Timeout or Skip.
-    pub status: String,
+    /// What the run is expected to do.
+    pub expected: Expected,
     /// Why.
     pub reason: String,
     /// `file:line`, for messages.
@@ -115,11 +239,8 @@ impl Expectations {
                     parts.next().unwrap_or("").trim(),
                     parts.next().unwrap_or("").trim(),
                 );
-                if !matches!(status, "Fail" | "Crash" | "Timeout" | "Skip") {
-                    return Err(format!(
-                        "{source}: status {status:?} is not one of Fail, Crash, Timeout, Skip; write GLOB,STATUS,REASON"
-                    ));
-                }
+                let expected = Expected::parse(status)
+                    .map_err(|e| format!("{source}: {e}; write GLOB,STATUS,REASON"))?;
                 if reason.is_empty() || pattern.is_empty() {
                     return Err(format!(
                         "{source}: every expectation needs a pattern and a reason; write GLOB,STATUS,REASON"
@@ -127,7 +248,7 @@ impl Expectations {
                 }
                 out.push(Expectation {
                     pattern: pattern.into(),
-                    status: status.into(),
+                    expected,
                     reason: reason.into(),
                     source,
                 });
@@ -143,19 +264,52 @@ impl Expectations {
             .find(|e| crate::glob::matches(&e.pattern, name))
     }
 
-    /// The final status of a raw outcome for `name`.
-    pub fn apply(&self, name: &str, raw: Status) -> (Status, Option<String>) {
+    /// The final status of a raw outcome for `name` that failed the checks `failed`, and
+    /// why (the expectation's reason and, for a failure that does not match its signature,
+    /// how it differs).
+    pub fn apply(
+        &self,
+        name: &str,
+        raw: Status,
+        failed: &[crate::run::FailedCheck],
+    ) -> (Status, Option<String>) {
         let Some(e) = self.find(name) else {
             return (raw, None);
         };
-        let why = Some(format!("{} ({})", e.reason, e.source));
-        match (&raw, e.status.as_str()) {
-            (Status::Pass | Status::Flake, _) => (Status::UnexpectedPass, why),
-            (Status::Fail, "Fail") | (Status::Crash, "Crash") | (Status::Timeout, "Timeout") => {
-                (Status::ExpectedFail, why)
+        let why = format!("{} ({}, {})", e.reason, e.expected, e.source);
+        match (&raw, &e.expected) {
+            (Status::Pass | Status::Flake, _) => (Status::UnexpectedPass, Some(why)),
+            (Status::Fail, Expected::Fail(bounds)) => {
+                let outside: Vec<String> = failed
+                    .iter()
+                    .filter(|c| {
+                        !bounds
+                            .iter()
+                            .any(|b| b.check == c.check && c.count <= b.max)
+                    })
+                    .map(|c| format!("{}={}", c.check, c.count))
+                    .collect();
+                if outside.is_empty() && !failed.is_empty() {
+                    (Status::ExpectedFail, Some(why))
+                } else {
+                    let how = if failed.is_empty() {
+                        "without a judged check".to_string()
+                    } else {
+                        outside.join("+")
+                    };
+                    (
+                        Status::Fail,
+                        Some(format!(
+                            "fails differently than expected: {how} is outside {}; {why}",
+                            e.expected
+                        )),
+                    )
+                }
             }
-            (Status::Skip(_), "Skip") => (raw, why),
-            _ => (raw, why),
+            (Status::Crash, Expected::Crash) | (Status::Timeout, Expected::Timeout) => {
+                (Status::ExpectedFail, Some(why))
+            }
+            _ => (raw, Some(why)),
         }
     }
 }
@@ -164,38 +318,96 @@ impl Expectations {
 mod tests {
     use super::*;
 
+    fn failed(checks: &[(&str, u64)]) -> Vec<crate::run::FailedCheck> {
+        checks
+            .iter()
+            .map(|(c, n)| crate::run::FailedCheck {
+                check: c.to_string(),
+                count: *n,
+            })
+            .collect()
+    }
+
     #[test]
     fn expectations_turn_failures_into_expected_ones_and_passes_into_unexpected() {
         let e = Expectations(vec![Expectation {
             pattern: "gles2/*/spot*".into(),
-            status: "Fail".into(),
+            expected: Expected::parse("Fail:value<=40+twin:bias-order<=40").expect("parse"),
             reason: "driver bug 123".into(),
             source: "x.txt:1".into(),
         }]);
+        let same = failed(&[("value", 29), ("twin:bias-order", 29)]);
         assert_eq!(
-            e.apply("gles2/zink/spot-20deg", Status::Fail).0,
+            e.apply("gles2/zink/spot-20deg", Status::Fail, &same).0,
+            Status::ExpectedFail
+        );
+        // Fewer pixels is still the expected failure.
+        assert_eq!(
+            e.apply(
+                "gles2/zink/spot-20deg",
+                Status::Fail,
+                &failed(&[("value", 3)])
+            )
+            .0,
             Status::ExpectedFail
         );
         assert_eq!(
-            e.apply("gles2/zink/spot-20deg", Status::Pass).0,
+            e.apply("gles2/zink/spot-20deg", Status::Pass, &[]).0,
             Status::UnexpectedPass
         );
         assert_eq!(
-            e.apply("gles2/zink/spot-20deg", Status::Crash).0,
+            e.apply("gles2/zink/spot-20deg", Status::Crash, &[]).0,
             Status::Crash
         );
         assert_eq!(
-            e.apply("gl33/zink/spot-20deg", Status::Fail).0,
+            e.apply("gl33/zink/spot-20deg", Status::Fail, &same).0,
             Status::Fail
         );
         assert!(Status::UnexpectedPass.is_regression() && !Status::ExpectedFail.is_regression());
     }
 
     #[test]
+    fn a_failure_of_another_check_or_of_more_pixels_is_a_regression() {
+        let e = Expectations(vec![Expectation {
+            pattern: "gl33/softpipe/*".into(),
+            expected: Expected::parse("Fail:map<=1000").expect("parse"),
+            reason: "softpipe offset".into(),
+            source: "x.txt:2".into(),
+        }]);
+        let (status, why) = e.apply("gl33/softpipe/x", Status::Fail, &failed(&[("map", 5000)]));
+        assert_eq!(status, Status::Fail);
+        assert!(why.unwrap_or_default().contains("map=5000"));
+        let (status, why) = e.apply(
+            "gl33/softpipe/x",
+            Status::Fail,
+            &failed(&[("map", 10), ("colour", 2)]),
+        );
+        assert_eq!(status, Status::Fail);
+        assert!(why.unwrap_or_default().contains("colour=2"));
+    }
+
+    #[test]
+    fn a_bare_fail_or_an_unknown_check_is_refused_with_the_fix() {
+        let e = Expected::parse("Fail").expect_err("bare");
+        assert!(e.contains("Fail:CHECK<=N"), "{e}");
+        let e = Expected::parse("Fail:shadows<=3").expect_err("unknown");
+        assert!(
+            e.contains("unknown check") && e.contains("twin:NAME"),
+            "{e}"
+        );
+        assert_eq!(
+            Expected::parse("Fail:twin:bias-order<=7")
+                .expect("twin")
+                .to_string(),
+            "Fail:twin:bias-order<=7"
+        );
+    }
+
+    #[test]
     fn a_baseline_line_without_a_reason_is_refused() {
         let dir = std::env::temp_dir().join(format!("umbra-exp-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("dir");
-        std::fs::write(dir.join("bad.txt"), "gl33/*,Fail,\n").expect("write");
+        std::fs::write(dir.join("bad.txt"), "gl33/*,Fail:value<=1,\n").expect("write");
         let err = Expectations::load(&dir).expect_err("no reason");
         assert!(
             err.contains("bad.txt:1") && err.contains("needs a pattern and a reason"),

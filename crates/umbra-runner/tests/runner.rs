@@ -104,23 +104,30 @@ fn crash_hang_flake_and_wrong_each_get_their_status_and_the_run_completes() {
 #[test]
 fn expectations_make_known_failures_expected_and_their_passes_unexpected() {
     let exp = scratch("exp");
+    // The inverted shadows fail the value check (and the colour, which no longer matches the
+    // visibility written) on every pixel, the case's zero interior error, and the built-in
+    // twin likewise.
+    let broad = "Fail:value<=1000000+colour<=1000000+interior<=1000000+twin:bias-order<=1000000";
     std::fs::write(
         exp.join("fake.txt"),
-        "# known bad\nfake/wrong/*,Fail,inverts every shadow on purpose\n",
+        format!("# known bad\nfake/wrong/*,{broad},inverts every shadow on purpose\n"),
     )
     .expect("write");
     let out = scratch("exp-out");
-    let o = umbra(&[
-        "conformance",
-        "--backend",
-        "fake/wrong",
-        "--filter",
-        "square*",
-        "--expectations",
-        exp.to_str().unwrap_or_default(),
-        "--out",
-        out.to_str().unwrap_or_default(),
-    ]);
+    let run = |backend: &str| {
+        umbra(&[
+            "conformance",
+            "--backend",
+            backend,
+            "--filter",
+            "square*",
+            "--expectations",
+            exp.to_str().unwrap_or_default(),
+            "--out",
+            out.to_str().unwrap_or_default(),
+        ])
+    };
+    let o = run("fake/wrong");
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     assert!(
         text(&o).contains("ExpectedFail fake/wrong/square-occluder"),
@@ -128,9 +135,30 @@ fn expectations_make_known_failures_expected_and_their_passes_unexpected() {
         text(&o)
     );
 
+    // The same run against an expectation of another failure (a few map texels) fails
+    // differently: a regression, whose reason names what was not expected.
     std::fs::write(
         exp.join("fake.txt"),
-        "ref/square*,Fail,pretend the reference is broken\n",
+        "fake/wrong/*,Fail:map<=10,expects only a few map texels\n",
+    )
+    .expect("write");
+    let o = run("fake/wrong");
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(
+        text(&o).contains("fails differently than expected: value="),
+        "{}",
+        text(&o)
+    );
+
+    // An expected failure without its signature is refused, with the fix.
+    std::fs::write(exp.join("fake.txt"), "fake/wrong/*,Fail,no signature\n").expect("write");
+    let o = run("fake/wrong");
+    assert_eq!(o.status.code(), Some(125), "{}", text(&o));
+    assert!(text(&o).contains("Fail:CHECK<=N"), "{}", text(&o));
+
+    std::fs::write(
+        exp.join("fake.txt"),
+        "ref/square*,Fail:value<=1,pretend the reference is broken\n",
     )
     .expect("write");
     let o = umbra(&[
