@@ -2,8 +2,45 @@
 //! (EDGE_CASES.md, "Faults the harness must catch"). A fault is active only when the process
 //! has `UMBRA_SELFTEST=1` *and* `UMBRA_FAULT=<name>`: `cargo xtask selftest` sets both in its
 //! worker processes, and no other path can turn one on.
+//!
+//! Two families. The *gross* faults are the classic mistakes of shadow-mapping code, each
+//! visible on most of a frame. The *subtle* ones are what a driver gets wrong by less than a
+//! texel, less than a depth step, only at exact ties, only in filtered values or only in
+//! colour ([`Subtlety`]): a harness that catches only the first family passes most real
+//! driver bugs.
 
-/// A deliberate mistake of the kind real shadow-mapping code makes.
+/// How small a fault's effect is (for the self-test's report).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Subtlety {
+    /// Visible on large parts of a frame.
+    Gross,
+    /// Changes only compares whose two values are exactly equal.
+    ExactTie,
+    /// Moves a lookup or the map by less than a texel.
+    SubTexel,
+    /// Moves a depth by less than a depth step (or a few).
+    SubStep,
+    /// Changes only filtered (PCF, LINEAR) values.
+    Filtered,
+    /// Changes only the shaded colour.
+    Colour,
+}
+
+impl Subtlety {
+    /// Name for reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Subtlety::Gross => "gross",
+            Subtlety::ExactTie => "exact tie",
+            Subtlety::SubTexel => "sub-texel",
+            Subtlety::SubStep => "sub-step",
+            Subtlety::Filtered => "filtered values",
+            Subtlety::Colour => "colour",
+        }
+    }
+}
+
+/// A deliberate mistake of the kind real shadow-mapping code (or a driver) makes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Fault {
     /// The depth compare runs the wrong way (GREATER for LEQUAL).
@@ -29,11 +66,44 @@ pub enum Fault {
     ShadowViewport,
     /// The map is bound to texture unit 1 while the sampler uniform says 0.
     WrongTextureUnit,
+    /// The compare is strict: LESS for LEQUAL (GREATER for GEQUAL). Differs only where the
+    /// reference value equals the stored one.
+    CompareStrict,
+    /// A float (D32F) format's reference value is clamped to [0,1] as a fixed-point one's is.
+    ClampFloat,
+    /// The GLES 2 path's emulated hardware compare forgets to clamp the reference value.
+    NoClamp,
+    /// The lookup coordinate is a quarter texel off along u.
+    QuarterTexel,
+    /// The shadow pass is shifted by half a texel along x (a projection's texel-centre slip).
+    ShadowHalfTexel,
+    /// The normal offset is three quarters of what the case asks.
+    NormalOffsetShort,
+    /// The polygon offset's units are cut to a tenth: r·units below the smallest the specs
+    /// allow on every driver umbra runs (Mesa's r is 2/(2ⁿ − 1), zink's 4/(2ⁿ − 1); the
+    /// smallest legal is 2⁻ⁿ).
+    OffsetUnitsLow,
+    /// The slope bias's scale is 0.8 of what the case asks.
+    SlopeShort,
+    /// The PCF kernel is not centred: offsets k − N/2 instead of k − (N − 1)/2.
+    PcfOffCentre,
+    /// One PCF corner tap is replaced by the centre tap.
+    PcfDoubleCentre,
+    /// The shader's bilinear weights are quantised to quarters.
+    BilinearCoarse,
+    /// The visibility is quantised to 1/16 before it is used and stored.
+    Vis4Bit,
+    /// The colour is written gamma-encoded (square root) where the case is linear.
+    ColourGamma,
+    /// The dimmed model keeps no diffuse in shadow (dimming ignored).
+    DimmingOff,
+    /// The specular term is not shadowed.
+    SpecularUnshadowed,
 }
 
 impl Fault {
     /// Every fault.
-    pub const ALL: [Fault; 11] = [
+    pub const ALL: [Fault; 26] = [
         Fault::CompareFlipped,
         Fault::NoDivide,
         Fault::NoGuard,
@@ -45,6 +115,21 @@ impl Fault {
         Fault::NoYFlip,
         Fault::ShadowViewport,
         Fault::WrongTextureUnit,
+        Fault::CompareStrict,
+        Fault::ClampFloat,
+        Fault::NoClamp,
+        Fault::QuarterTexel,
+        Fault::ShadowHalfTexel,
+        Fault::NormalOffsetShort,
+        Fault::OffsetUnitsLow,
+        Fault::SlopeShort,
+        Fault::PcfOffCentre,
+        Fault::PcfDoubleCentre,
+        Fault::BilinearCoarse,
+        Fault::Vis4Bit,
+        Fault::ColourGamma,
+        Fault::DimmingOff,
+        Fault::SpecularUnshadowed,
     ];
 
     /// The fault's name, as `UMBRA_FAULT` takes it.
@@ -61,6 +146,38 @@ impl Fault {
             Fault::NoYFlip => "no-y-flip",
             Fault::ShadowViewport => "shadow-viewport",
             Fault::WrongTextureUnit => "wrong-texture-unit",
+            Fault::CompareStrict => "compare-strict",
+            Fault::ClampFloat => "clamp-float",
+            Fault::NoClamp => "no-clamp",
+            Fault::QuarterTexel => "quarter-texel",
+            Fault::ShadowHalfTexel => "shadow-half-texel",
+            Fault::NormalOffsetShort => "normal-offset-short",
+            Fault::OffsetUnitsLow => "offset-units-low",
+            Fault::SlopeShort => "slope-short",
+            Fault::PcfOffCentre => "pcf-off-centre",
+            Fault::PcfDoubleCentre => "pcf-double-centre",
+            Fault::BilinearCoarse => "bilinear-coarse",
+            Fault::Vis4Bit => "vis-4bit",
+            Fault::ColourGamma => "colour-gamma",
+            Fault::DimmingOff => "dimming-off",
+            Fault::SpecularUnshadowed => "specular-unshadowed",
+        }
+    }
+
+    /// How small its effect is.
+    pub fn subtlety(self) -> Subtlety {
+        match self {
+            Fault::CompareStrict | Fault::ClampFloat | Fault::NoClamp => Subtlety::ExactTie,
+            Fault::QuarterTexel | Fault::ShadowHalfTexel | Fault::NormalOffsetShort => {
+                Subtlety::SubTexel
+            }
+            Fault::OffsetUnitsLow | Fault::SlopeShort => Subtlety::SubStep,
+            Fault::PcfOffCentre
+            | Fault::PcfDoubleCentre
+            | Fault::BilinearCoarse
+            | Fault::Vis4Bit => Subtlety::Filtered,
+            Fault::ColourGamma | Fault::DimmingOff | Fault::SpecularUnshadowed => Subtlety::Colour,
+            _ => Subtlety::Gross,
         }
     }
 

@@ -367,6 +367,11 @@ impl Renderer {
                 }
             }
             let [factor, units] = s.bias.polygon_offset;
+            let units = if is(umbra_case::fault::Fault::OffsetUnitsLow) {
+                0.1 * units
+            } else {
+                units
+            };
             if es2 {
                 // Applied in the shader (see shaders::shadow_fragment).
                 let sign = conv.toward_far();
@@ -446,7 +451,12 @@ impl Renderer {
                             0
                         },
                 );
-                let m = run.light.views[k].view_proj(conv);
+                let mut m = run.light.views[k].view_proj(conv);
+                if is(umbra_case::fault::Fault::ShadowHalfTexel) {
+                    // Half a texel along x: 2 · ½ / width in NDC.
+                    m = glam::Mat4::from_translation(glam::Vec3::new(1.0 / mw as f32, 0.0, 0.0))
+                        * m;
+                }
                 gl.uniform_matrix_4_f32_slice(vp_loc.as_ref(), false, &m.to_cols_array());
                 gl.draw_arrays(glow::TRIANGLES, 0, count);
                 self.check(&format!("shadow pass (face {k})"))?;
@@ -556,14 +566,14 @@ impl Renderer {
                         glow::TEXTURE_COMPARE_MODE,
                         glow::COMPARE_REF_TO_TEXTURE as i32,
                     );
-                    let func = match (
-                        s.depth_order == DepthOrder::Forward,
-                        is(umbra_case::fault::Fault::CompareFlipped),
-                    ) {
-                        (true, false) => glow::LEQUAL,
-                        (false, false) => glow::GEQUAL,
-                        (true, true) => glow::GREATER,
-                        (false, true) => glow::LESS,
+                    let forward = s.depth_order == DepthOrder::Forward;
+                    let func = match fault {
+                        Some(umbra_case::fault::Fault::CompareFlipped) if forward => glow::GREATER,
+                        Some(umbra_case::fault::Fault::CompareFlipped) => glow::LESS,
+                        Some(umbra_case::fault::Fault::CompareStrict) if forward => glow::LESS,
+                        Some(umbra_case::fault::Fault::CompareStrict) => glow::GREATER,
+                        _ if forward => glow::LEQUAL,
+                        _ => glow::GEQUAL,
                     };
                     gl.tex_parameter_i32(target, glow::TEXTURE_COMPARE_FUNC, func as i32);
                 }

@@ -190,14 +190,13 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
     } else {
         "0.0"
     };
-    let cmp = match (
-        k.order == DepthOrder::Forward,
-        k.fault == Some(Fault::CompareFlipped),
-    ) {
-        (true, false) => "<=",
-        (false, false) => ">=",
-        (true, true) => ">",
-        (false, true) => "<",
+    let cmp = match (k.order == DepthOrder::Forward, k.fault) {
+        (true, Some(Fault::CompareFlipped)) => ">",
+        (false, Some(Fault::CompareFlipped)) => "<",
+        (true, Some(Fault::CompareStrict)) => "<",
+        (false, Some(Fault::CompareStrict)) => ">",
+        (true, _) => "<=",
+        (false, _) => ">=",
     };
     let _ = writeln!(
         s,
@@ -286,7 +285,11 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
         s.push_str("float tap(int f, float i, float j, float r) { return texture(u_map, vec3((vec2(i, j) + 0.5) / u_size, r)); }\n");
     }
     // The lookup.
-    s.push_str("float visibility(vec3 p, vec3 n) {\n  p = p + n * u_normal_offset;\n");
+    if k.fault == Some(Fault::NormalOffsetShort) {
+        s.push_str("float visibility(vec3 p, vec3 n) {\n  p = p + n * (0.75 * u_normal_offset);\n");
+    } else {
+        s.push_str("float visibility(vec3 p, vec3 n) {\n  p = p + n * u_normal_offset;\n");
+    }
     if k.cube {
         s.push_str("  int f = cube_face(p - u_light_pos);\n");
     } else {
@@ -307,6 +310,9 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
     if f == Some(Fault::BiasTwice) {
         s.push_str("  c.xyz = 0.5 * c.xyz + 0.5;\n");
     }
+    if f == Some(Fault::QuarterTexel) {
+        s.push_str("  c.x += 0.25 / u_size.x;\n");
+    }
     if k.guard && f != Some(Fault::NoGuard) {
         s.push_str("  if (c.w <= 0.0) return 1.0;\n");
     }
@@ -316,34 +322,67 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
     s.push_str("  float bias = u_constant;\n");
     if k.slope {
         // tan(acos(c)) in its algebraic form (umbra_ref::lookup, step 6).
-        s.push_str("  float cosine = dot(n, to_light(p));\n  if (cosine > 0.0) bias += clamp(u_slope_scale * sqrt(max(1.0 - cosine * cosine, 0.0)) / cosine, 0.0, u_slope_max);\n");
+        let scale = if f == Some(Fault::SlopeShort) {
+            "0.8 * u_slope_scale"
+        } else {
+            "u_slope_scale"
+        };
+        let _ = writeln!(
+            s,
+            "  float cosine = dot(n, to_light(p));\n  if (cosine > 0.0) bias += clamp({scale} * sqrt(max(1.0 - cosine * cosine, 0.0)) / cosine, 0.0, u_slope_max);"
+        );
     }
     s.push_str("  float r = c.z - TOWARD_FAR * bias;\n");
-    if manual && k.clamp_reference {
+    if manual && k.clamp_reference && f != Some(Fault::NoClamp) {
         s.push_str("  r = clamp(r, 0.0, 1.0);\n"); // hardware semantics emulated (GLES 2)
+    }
+    if !manual && !k.clamp_reference && f == Some(Fault::ClampFloat) {
+        s.push_str("  r = clamp(r, 0.0, 1.0);\n"); // a float format clamped like a fixed one
     }
     let hw_direct = !manual && !matches!(k.filter, Filter::Pcf(_));
     match k.filter {
-        _ if hw_direct && k.cube => s.push_str("  return texture(u_map, vec4(p - u_light_pos, r));\n"),
+        _ if hw_direct && k.cube => {
+            s.push_str("  return texture(u_map, vec4(p - u_light_pos, r));\n")
+        }
         _ if hw_direct && k.bias_matrix == BiasMatrix::BeforeDivide && f.is_none() => {
             s.push_str("  return textureProj(u_map, vec4(t.xy, t.w * r, t.w));\n")
         }
         _ if hw_direct => s.push_str("  return texture(u_map, vec3(c.xy, r));\n"),
-        Filter::Nearest => s.push_str("  return tap(f, floor(c.x * u_size.x), floor(c.y * u_size.y), r);\n"),
-        Filter::Linear => s.push_str(
-            "  vec2 x = c.xy * u_size - 0.5;\n  vec2 i0 = floor(x);\n  vec2 a = x - i0;\n\
-               return (1.0 - a.x) * (1.0 - a.y) * tap(f, i0.x, i0.y, r) + a.x * (1.0 - a.y) * tap(f, i0.x + 1.0, i0.y, r)\n\
+        Filter::Nearest => {
+            s.push_str("  return tap(f, floor(c.x * u_size.x), floor(c.y * u_size.y), r);\n")
+        }
+        Filter::Linear => {
+            s.push_str(
+                "  vec2 x = c.xy * u_size - 0.5;\n  vec2 i0 = floor(x);\n  vec2 a = x - i0;\n",
+            );
+            if f == Some(Fault::BilinearCoarse) {
+                s.push_str("  a = floor(a * 4.0) / 4.0;\n");
+            }
+            s.push_str(
+                "  return (1.0 - a.x) * (1.0 - a.y) * tap(f, i0.x, i0.y, r) + a.x * (1.0 - a.y) * tap(f, i0.x + 1.0, i0.y, r)\n\
                     + (1.0 - a.x) * a.y * tap(f, i0.x, i0.y + 1.0, r) + a.x * a.y * tap(f, i0.x + 1.0, i0.y + 1.0, r);\n",
-        ),
+            );
+        }
         Filter::Pcf(n) => {
+            let centre = if f == Some(Fault::PcfOffCentre) {
+                format!("{n}.0 * 0.5")
+            } else {
+                format!("({n}.0 - 1.0) * 0.5")
+            };
             let _ = writeln!(
                 s,
-                "  float sum = 0.0;\n  float h = ({n}.0 - 1.0) * 0.5;\n\
+                "  float sum = 0.0;\n  float h = {centre};\n\
                    for (int dy = 0; dy < {n}; dy++) {{\n    for (int dx = 0; dx < {n}; dx++) {{\n\
                        vec2 uv = c.xy + (vec2(float(dx), float(dy)) - h) / u_size;\n\
-                       sum += tap(f, floor(uv.x * u_size.x), floor(uv.y * u_size.y), r);\n    }}\n  }}\n\
-                   return sum / float({n} * {n});"
+                       sum += tap(f, floor(uv.x * u_size.x), floor(uv.y * u_size.y), r);\n    }}\n  }}"
             );
+            if f == Some(Fault::PcfDoubleCentre) {
+                s.push_str(
+                    "  vec2 uv0 = c.xy + (vec2(0.0) - h) / u_size;\n\
+                       sum += tap(f, floor(c.x * u_size.x), floor(c.y * u_size.y), r) - tap(f, floor(uv0.x * u_size.x), floor(uv0.y * u_size.y), r);\n",
+                );
+            }
+            let _ = writeln!(s, "  return sum / float({n} * {n});");
         }
     }
     s.push_str("}\n");
@@ -354,12 +393,21 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
     );
     match k.model {
         ShadingModel::Dimmed => {
+            let kept = if k.fault == Some(Fault::DimmingOff) {
+                "vis".to_string()
+            } else {
+                format!("{d:.9} + (1.0 - {d:.9}) * vis", d = shading.dimming)
+            };
+            let lit_spec = if k.fault == Some(Fault::SpecularUnshadowed) {
+                "spec"
+            } else {
+                "vis * spec"
+            };
             let _ = writeln!(
                 s,
-                "  float kept = {d:.9} + (1.0 - {d:.9}) * vis;\n  float spec = 0.0;\n\
+                "  float kept = {kept};\n  float spec = 0.0;\n\
                    if (ndl > 0.0) {{ vec3 hv = l + e; float len = length(hv); if (len > 0.0) spec = {ks:.9} * pow(max(dot(n, hv / len), 0.0), {sh:.9}); }}\n\
-                   return ({a:.9} + kept * diffuse) * albedo + vec3(vis * spec);",
-                d = shading.dimming,
+                   return ({a:.9} + kept * diffuse) * albedo + vec3({lit_spec});",
                 ks = shading.specular,
                 sh = shading.shininess,
                 a = shading.ambient
@@ -379,10 +427,18 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
     s.push_str(
         "vec4 encode(float vis, float face) {\n  float id = face + 1.0;\n\
            return vec4(vis, mod(id, 256.0) / 255.0, mod(floor(id / 256.0), 256.0) / 255.0, floor(id / 65536.0) / 255.0);\n}\n\
-         void main() {\n  vec3 n = normalize(v_normal);\n  float vis = visibility(v_pos, n);\n\
-           vec3 e = normalize(u_eye - v_pos);\n  vec3 col = clamp(shade(v_albedo, n, to_light(v_pos), e, vis), 0.0, 1.0);\n\
+         void main() {\n  vec3 n = normalize(v_normal);\n  float vis = visibility(v_pos, n);\n",
+    );
+    if k.fault == Some(Fault::Vis4Bit) {
+        s.push_str("  vis = floor(vis * 16.0 + 0.5) / 16.0;\n");
+    }
+    s.push_str(
+        "  vec3 e = normalize(u_eye - v_pos);\n  vec3 col = clamp(shade(v_albedo, n, to_light(v_pos), e, vis), 0.0, 1.0);\n\
            float face = floor(v_face + 0.5);\n",
     );
+    if k.fault == Some(Fault::ColourGamma) {
+        s.push_str("  col = sqrt(col);\n");
+    }
     if es2 {
         s.push_str("  gl_FragColor = u_output < 0.5 ? vec4(col, 1.0) : encode(vis, face);\n}\n");
     } else {

@@ -715,9 +715,18 @@ impl Lookup<'_> {
                 let l = &self.layers[f];
                 let (lo, hi) = (f64::from(l.lo[k]), f64::from(l.hi[k]));
                 // A fixed-point code reaches the compare as code/(2ⁿ − 1) converted to f32:
-                // allow one ULP either way for that conversion.
+                // allow one ULP either way for that conversion, except for the codes of 0
+                // and 1, which convert exactly (GL 4.6 §2.3.5.1, Vulkan "Fixed-Point Data
+                // Conversions"): a cleared texel is exactly the clear value.
                 if self.shadow.format.is_fixed() && !self.profile.packed_depth {
-                    (lo - ulp(lo), hi + ulp(hi), l.maybe[k])
+                    let widen = |x: f64, dir: f64| {
+                        if x == 0.0 || x == 1.0 {
+                            x
+                        } else {
+                            x + dir * ulp(x)
+                        }
+                    };
+                    (widen(lo, -1.0), widen(hi, 1.0), l.maybe[k])
                 } else {
                     (lo, hi, l.maybe[k])
                 }

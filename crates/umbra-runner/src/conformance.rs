@@ -576,6 +576,7 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
                     failures: Some(settings.failures.clone()),
                     golden: settings.golden.clone(),
                     repeat: None,
+                    no_twins: false,
                 };
                 let first = attempt(&mut worker, &start_worker, &req, settings.timeout);
                 if first.status.is_failure() {

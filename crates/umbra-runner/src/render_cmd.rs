@@ -68,7 +68,7 @@ pub fn main(argv: &[String]) -> i32 {
     for point in selected {
         let id = point.id();
         println!("{id} on {backend_id}");
-        match run_point(backend.as_mut(), point) {
+        match run_point(backend.as_mut(), point, true) {
             Outcome::Skip(why) => println!("  skip: {why}"),
             Outcome::Error(e) => {
                 println!("  error: {e}");

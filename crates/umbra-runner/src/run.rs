@@ -90,8 +90,9 @@ pub enum Outcome {
     Error(String),
 }
 
-/// Renders `point` on `backend` and judges it against the truth (and the reference).
-pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
+/// Renders `point` on `backend` and judges it against the truth (and the reference), with its
+/// metamorphic twins when `twins` is set.
+pub fn run_point(backend: &mut dyn Backend, point: CasePoint, twins: bool) -> Outcome {
     if let Support::Unsupported(why) = backend.supports(&Needs::of(&point.case)) {
         return Outcome::Skip(why);
     }
@@ -136,7 +137,11 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint) -> Outcome {
         umbra_compare::reference::free_pixels(&judged)
     };
     let twins_start = Instant::now();
-    let twins = run_twins(backend, &as_written, &prepared, &frame, &error, &judged);
+    let twins = if twins {
+        run_twins(backend, &as_written, &prepared, &frame, &error, &judged)
+    } else {
+        Vec::new()
+    };
     let twins_time = twins_start.elapsed();
     for t in &twins {
         if !t.ok {

@@ -1,12 +1,20 @@
-//! `umbra selftest`: proves the harness can tell right from wrong. For every named fault
-//! ([`umbra_case::fault::Fault`]) and every backend it applies to, a worker runs with the fault
-//! turned on (`UMBRA_SELFTEST=1`, `UMBRA_FAULT=name`) and is fed case points, in the catalogue's
-//! order, until the judge fails one (or the worker crashes or hangs): the fault is caught. A
-//! fault that every case point lets through is missed, and a missed fault fails the self-test.
-//! Goldens are not consulted, so a catch is the judge's (truth and reference), not a picture
-//! diff.
+//! `umbra selftest`: proves the harness can tell right from wrong, subtly wrong included.
+//!
+//! For every named fault ([`umbra_case::fault::Fault`]) and every backend it applies to, a
+//! worker runs with the fault turned on (`UMBRA_SELFTEST=1`, `UMBRA_FAULT=name`) and is fed
+//! the case points that exercise it ([`exercises`]), judged as in a conformance run (twins and
+//! goldens aside, so a catch is the judge's: truth, reference, values, colour, map).
+//!
+//! - A catch counts only if the faulted run is a regression once the expectations
+//!   (`expectations/`) are applied: a point expected to fail catches the fault only when the
+//!   fault makes it fail *differently* (another check, or more pixels than its bound).
+//! - Up to [`SAMPLE`] exercising points, spread over the catalogue, are run and every catch is
+//!   counted, by the checks that failed; if none catches, the rest are tried until one does.
+//! - A fault caught by one point only is a warning (one case away from going blind); one
+//!   that no point catches is missed, and a missed fault fails the self-test.
 
-use std::path::PathBuf;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Duration;
 
@@ -14,39 +22,103 @@ use umbra_case::fault::Fault;
 
 use crate::args::Args;
 use crate::pool::{Reply, Worker};
+use crate::status::Expectations;
 use crate::worker::Request;
 
 /// Usage line.
-pub const USAGE: &str =
-    "umbra selftest [--backend ID]... [--cases DIR] [--timeout SECS] [--jobs N]";
+pub const USAGE: &str = "umbra selftest [--backend ID]... [--fault NAME]... [--cases DIR] [--expectations DIR] [--timeout SECS] [--jobs N]";
+
+/// How many exercising points each fault × backend pair runs at least.
+pub const SAMPLE: usize = 6;
 
 /// Whether `fault` means anything on backend `id`.
 pub fn applies(fault: Fault, id: &str) -> bool {
-    let gl = umbra_gl::parse_id(id).is_some();
-    let wgpu = umbra_wgpu::Kind::parse(id).is_some();
+    let gl = umbra_gl::parse_id(id);
+    let es2 = gl.is_some_and(|(api, _)| api == umbra_gl::Api::Gles2);
+    let wgpu = umbra_wgpu::Kind::parse(id);
+    let wgpu_gl = wgpu == Some(umbra_wgpu::Kind::GlLlvmpipe);
+    if gl.is_none() && wgpu.is_none() {
+        return false;
+    }
     match fault {
-        Fault::GlDepthRange => wgpu,
-        Fault::WrongComponent | Fault::WrongTextureUnit => gl,
-        _ => gl || wgpu,
+        Fault::GlDepthRange => wgpu.is_some(),
+        Fault::WrongComponent | Fault::WrongTextureUnit => gl.is_some(),
+        // The GLES 2 path has no float depth, and is the only one that clamps in the shader.
+        Fault::ClampFloat => !es2,
+        Fault::NoClamp => es2,
+        // A manual LINEAR filter; wgpu's GL backend has no manual compare.
+        Fault::BilinearCoarse => !wgpu_gl,
+        _ => true,
     }
 }
 
-/// Whether case `c` exercises `fault` at all (points that do are tried first; the rest stay
-/// eligible, so this orders the hunt without deciding it).
-pub fn exercises(fault: Fault, c: &umbra_case::Case) -> bool {
-    use umbra_case::format::{Compare, Light, Outside};
+/// Whether case `c` exercises `fault` on backend `id` at all: only such points are run for it.
+pub fn exercises(fault: Fault, c: &umbra_case::Case, id: &str) -> bool {
+    let es2 = umbra_gl::parse_id(id).is_some_and(|(api, _)| api == umbra_gl::Api::Gles2);
+    use umbra_case::format::{Compare, DepthFormat, Filter, Light, Outside, ShadingModel};
+    let s = &c.shadow;
     match fault {
-        Fault::WrongComponent => c.shadow.compare == Compare::Manual,
-        Fault::Repeat => c.shadow.outside != Outside::Lit,
+        // GLES 2 compares by hand whatever the case says.
+        Fault::WrongComponent => s.compare == Compare::Manual || es2,
+        Fault::Repeat => s.outside != Outside::Lit,
         Fault::NoGuard | Fault::NoDivide => !matches!(c.light, Light::Directional(_)),
-        Fault::ShadowViewport => c.shadow.size != c.camera.size,
+        Fault::ShadowViewport => s.size != c.camera.size,
+        Fault::ClampFloat => s.format == DepthFormat::Depth32f && s.compare == Compare::Hardware,
+        Fault::NoClamp => s.format.is_fixed() && s.compare == Compare::Hardware,
+        Fault::QuarterTexel => !matches!(c.light, Light::Point(_)),
+        Fault::NormalOffsetShort => s.bias.normal_offset != 0.0,
+        Fault::OffsetUnitsLow => s.bias.polygon_offset[1] != 0.0,
+        Fault::SlopeShort => s.bias.slope.is_some(),
+        Fault::PcfOffCentre | Fault::PcfDoubleCentre => matches!(s.filter, Filter::Pcf(_)),
+        Fault::BilinearCoarse => s.filter == Filter::Linear && s.compare == Compare::Manual,
+        Fault::Vis4Bit => s.filter != Filter::Nearest,
+        Fault::DimmingOff => c.shading.model == ShadingModel::Dimmed && c.shading.dimming > 0.0,
+        Fault::SpecularUnshadowed => {
+            c.shading.model == ShadingModel::Dimmed && c.shading.specular > 0.0
+        }
         _ => true,
+    }
+}
+
+/// What one fault did on one backend.
+#[derive(Clone, Debug, Default)]
+pub struct Hunt {
+    /// Points run.
+    pub tried: usize,
+    /// Points that caught the fault, each with its failed checks.
+    pub caught: Vec<(String, String)>,
+    /// Why nothing was run or caught, when so.
+    pub note: Option<String>,
+}
+
+impl Hunt {
+    /// The checks that caught it, each with how many points.
+    pub fn by_check(&self) -> BTreeMap<String, usize> {
+        let mut m = BTreeMap::new();
+        for (_, checks) in &self.caught {
+            for c in checks.split('+').filter(|c| !c.is_empty()) {
+                let name = c.split('=').next().unwrap_or(c).to_string();
+                *m.entry(name).or_insert(0) += 1;
+            }
+        }
+        m
     }
 }
 
 /// Runs the command; returns the exit code.
 pub fn main(argv: &[String]) -> i32 {
-    let args = match Args::parse(argv, &["backend", "cases", "timeout", "jobs"], &[]) {
+    let args = match Args::parse(
+        argv,
+        &[
+            "backend",
+            "fault",
+            "cases",
+            "expectations",
+            "timeout",
+            "jobs",
+        ],
+        &[],
+    ) {
         Ok(a) => a,
         Err(e) => {
             eprintln!("error: {e}\nusage: {USAGE}");
@@ -64,6 +136,15 @@ pub fn main(argv: &[String]) -> i32 {
         .and_then(|j| j.parse().ok())
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
         .max(1);
+    let expectations = match Expectations::load(Path::new(
+        args.value("expectations").unwrap_or("expectations"),
+    )) {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 125;
+        }
+    };
     let mut backends: Vec<String> = args
         .values("backend")
         .iter()
@@ -74,6 +155,23 @@ pub fn main(argv: &[String]) -> i32 {
             .into_iter()
             .filter(|b| b != "ref")
             .collect();
+    }
+    let mut faults: Vec<Fault> = Vec::new();
+    for name in args.values("fault") {
+        match Fault::parse(name) {
+            Some(f) => faults.push(f),
+            None => {
+                let all: Vec<&str> = Fault::ALL.iter().map(|f| f.name()).collect();
+                eprintln!(
+                    "error: --fault {name:?} is not a fault; the faults are {}",
+                    all.join(", ")
+                );
+                return 125;
+            }
+        }
+    }
+    if faults.is_empty() {
+        faults = Fault::ALL.to_vec();
     }
     let mut points = Vec::new();
     for f in umbra_case::case_files(&cases).unwrap_or_default() {
@@ -89,11 +187,19 @@ pub fn main(argv: &[String]) -> i32 {
         eprintln!("error: no case under {}", cases.display());
         return 125;
     }
+    // One judging cache for the whole self-test (the same points serve many faults), fresh
+    // so that nothing from an older build is read.
+    let cache = PathBuf::from("target/umbra/cache/selftest");
+    let _ = std::fs::remove_dir_all(&cache);
+    let cache = std::fs::canonicalize(".")
+        .map(|d| d.join(&cache))
+        .unwrap_or(cache);
     let pairs: Vec<(String, Fault)> = backends
         .iter()
         .flat_map(|b| {
-            Fault::ALL
-                .into_iter()
+            faults
+                .iter()
+                .copied()
                 .filter(|f| applies(*f, b))
                 .map(move |f| (b.clone(), f))
         })
@@ -105,32 +211,86 @@ pub fn main(argv: &[String]) -> i32 {
             s.spawn(|| {
                 let next = || queue.lock().ok().and_then(|mut q| q.pop());
                 while let Some((backend, fault)) = next() {
-                    let verdict = hunt(&backend, fault, &points, timeout);
-                    println!(
-                        "{:<18} {:<20} {}",
-                        fault.name(),
-                        backend,
-                        verdict
-                            .as_ref()
-                            .map_or_else(|e| format!("MISSED: {e}"), |c| format!("caught by {c}"))
-                    );
+                    let h = hunt(&backend, fault, &points, &expectations, &cache, timeout);
+                    println!("{}", line(fault, &backend, &h));
                     if let Ok(mut r) = results.lock() {
-                        r.push((backend, fault, verdict));
+                        r.push((backend, fault, h));
                     }
                 }
             });
         }
     });
-    let results = results.into_inner().unwrap_or_default();
-    let caught = results.iter().filter(|r| r.2.is_ok()).count();
-    let missed: Vec<_> = results.iter().filter(|r| r.2.is_err()).collect();
-    for (b, f, v) in &missed {
-        if let Err(e) = v {
-            println!("  missed: {} on {b}: {e}", f.name());
+    let mut results = results.into_inner().unwrap_or_default();
+    results.sort_by(|a, b| (a.1.name(), &a.0).cmp(&(b.1.name(), &b.0)));
+    summary(&results)
+}
+
+/// One line per fault × backend.
+fn line(fault: Fault, backend: &str, h: &Hunt) -> String {
+    let head = format!("{:<20} {:<18}", fault.name(), backend);
+    if h.caught.is_empty() {
+        return format!(
+            "{head} MISSED: {} ({} points tried)",
+            h.note
+                .clone()
+                .unwrap_or_else(|| "no point caught it".into()),
+            h.tried
+        );
+    }
+    let checks: Vec<String> = h
+        .by_check()
+        .iter()
+        .map(|(c, n)| format!("{c}×{n}"))
+        .collect();
+    format!(
+        "{head} caught by {} of {} points ({}); e.g. {}{}",
+        h.caught.len(),
+        h.tried,
+        checks.join(", "),
+        h.caught[0].0,
+        if h.caught.len() == 1 {
+            "  WARNING: one point only"
+        } else {
+            ""
         }
+    )
+}
+
+/// The per-fault table and the closing line; the exit code.
+fn summary(results: &[(String, Fault, Hunt)]) -> i32 {
+    println!(
+        "\nper fault: subtlety, backends caught / applicable, fewest catching points on a backend"
+    );
+    let mut by_fault: BTreeMap<&str, Vec<&(String, Fault, Hunt)>> = BTreeMap::new();
+    for r in results {
+        by_fault.entry(r.1.name()).or_default().push(r);
+    }
+    let mut warnings = 0;
+    for f in Fault::ALL {
+        let Some(rs) = by_fault.get(f.name()) else {
+            continue;
+        };
+        let caught = rs.iter().filter(|r| !r.2.caught.is_empty()).count();
+        let fewest = rs.iter().map(|r| r.2.caught.len()).min().unwrap_or(0);
+        warnings += rs.iter().filter(|r| r.2.caught.len() == 1).count();
+        println!(
+            "  {:<20} {:<16} {caught}/{} backends, fewest {fewest} points",
+            f.name(),
+            f.subtlety().name(),
+            rs.len()
+        );
+    }
+    let caught = results.iter().filter(|r| !r.2.caught.is_empty()).count();
+    let missed: Vec<_> = results.iter().filter(|r| r.2.caught.is_empty()).collect();
+    for (b, f, h) in &missed {
+        println!(
+            "  missed: {} on {b}: {}",
+            f.name(),
+            h.note.clone().unwrap_or_default()
+        );
     }
     println!(
-        "selftest: {caught} of {} fault × backend pairs caught",
+        "selftest: {caught} of {} fault × backend pairs caught ({warnings} by one point only)",
         results.len()
     );
     println!("selftest: {caught} passed, {} failed", missed.len());
@@ -143,52 +303,90 @@ pub fn main(argv: &[String]) -> i32 {
     }
 }
 
-/// Feeds points to a faulted worker until one fails; Ok(what caught it) or Err(why not).
+/// Runs the points that exercise `fault` on a faulted `backend` worker and counts catches.
 fn hunt(
     backend: &str,
     fault: Fault,
     points: &[(PathBuf, usize, umbra_case::CasePoint)],
+    expectations: &Expectations,
+    cache: &Path,
     timeout: Duration,
-) -> Result<String, String> {
+) -> Hunt {
+    let mut h = Hunt::default();
     let mut env = crate::registry::driver_env(backend).unwrap_or_default();
-    env.extend([("UMBRA_SELFTEST", "1"), ("UMBRA_FAULT", fault.name())]);
-    let mut worker = Worker::start(backend, &env, timeout)?;
+    let cache = cache.to_string_lossy().into_owned();
+    env.extend([
+        ("UMBRA_SELFTEST", "1"),
+        ("UMBRA_FAULT", fault.name()),
+        (crate::judge_cache::ENV, cache.as_str()),
+    ]);
+    let mut worker = match Worker::start(backend, &env, timeout) {
+        Ok(w) => w,
+        Err(e) => {
+            h.note = Some(format!("no worker: {e}"));
+            return h;
+        }
+    };
     if let Some(u) = worker.hello.get("unavailable") {
-        return Err(format!("backend unavailable: {u}"));
+        h.note = Some(format!("backend unavailable: {u}"));
+        return h;
     }
-    let mut order: Vec<&(PathBuf, usize, umbra_case::CasePoint)> = points.iter().collect();
-    order.sort_by_key(|(_, _, p)| !exercises(fault, &p.case));
-    for (file, index, point) in order {
-        let id = point.id();
+    let candidates: Vec<&(PathBuf, usize, umbra_case::CasePoint)> = points
+        .iter()
+        .filter(|(_, _, p)| exercises(fault, &p.case, backend))
+        .collect();
+    if candidates.is_empty() {
+        h.note = Some("no case point exercises it".into());
+        return h;
+    }
+    // A spread of SAMPLE points first, then the rest in order until one catches.
+    let step = (candidates.len() / SAMPLE).max(1);
+    let mut order: Vec<usize> = (0..candidates.len()).step_by(step).take(SAMPLE).collect();
+    let rest: Vec<usize> = (0..candidates.len())
+        .filter(|i| !order.contains(i))
+        .collect();
+    order.extend(rest);
+    for (k, &i) in order.iter().enumerate() {
+        if k >= SAMPLE && !h.caught.is_empty() {
+            break;
+        }
+        let (file, index, point) = candidates[i];
         let req = Request {
             file: file.clone(),
             index: *index,
             failures: None,
             golden: None,
             repeat: None,
+            no_twins: true,
         };
+        h.tried += 1;
         match worker.run(&req, timeout) {
             Reply::Report(r) if r.outcome == "fail" => {
-                return Ok(format!(
-                    "{id} ({})",
-                    r.reason
-                        .lines()
-                        .next()
-                        .unwrap_or("")
-                        .chars()
-                        .take(90)
-                        .collect::<String>()
-                ));
+                let name = format!("{backend}/{}", point.id());
+                let (status, _) = expectations.apply(&name, crate::status::Status::Fail, &r.failed);
+                if status.is_regression() {
+                    let checks = crate::status::signature(&r.failed);
+                    h.caught.push((point.id(), checks));
+                }
             }
             Reply::Report(_) => {}
-            Reply::Crashed(how) => return Ok(format!("{id} (the worker died: {how})")),
-            Reply::TimedOut => return Ok(format!("{id} (timeout)")),
+            Reply::Crashed(how) => {
+                h.caught.push((point.id(), format!("crash ({how})")));
+                match Worker::start(backend, &env, timeout) {
+                    Ok(w) => worker = w,
+                    Err(_) => break,
+                }
+            }
+            Reply::TimedOut => {
+                h.caught.push((point.id(), "timeout".into()));
+                match Worker::start(backend, &env, timeout) {
+                    Ok(w) => worker = w,
+                    Err(_) => break,
+                }
+            }
         }
     }
-    Err(format!(
-        "all {} case points passed with the fault on",
-        points.len()
-    ))
+    h
 }
 
 #[cfg(test)]
@@ -206,14 +404,22 @@ mod tests {
                 && !applies(Fault::WrongTextureUnit, "wgpu-gl/llvmpipe")
         );
         assert!(
+            applies(Fault::NoClamp, "gles2/llvmpipe") && !applies(Fault::NoClamp, "gl33/llvmpipe")
+        );
+        assert!(!applies(Fault::ClampFloat, "gles2/zink"));
+        assert!(!applies(Fault::BilinearCoarse, "wgpu-gl/llvmpipe"));
+        assert!(
             !Fault::ALL.iter().any(|f| applies(*f, "ref")),
             "the reference is the yardstick, not a suspect"
         );
-        let applicable: usize = crate::registry::known()
-            .iter()
-            .map(|b| Fault::ALL.iter().filter(|f| applies(**f, b)).count())
-            .sum();
-        assert_eq!(applicable, 9 * 10 + 2 * 9);
+        // Every fault applies somewhere, on GL, GLES 2 or wgpu.
+        for f in Fault::ALL {
+            assert!(
+                crate::registry::known().iter().any(|b| applies(f, b)),
+                "{} applies nowhere",
+                f.name()
+            );
+        }
     }
 
     #[test]
@@ -228,5 +434,17 @@ mod tests {
                 .iter()
                 .all(|f| Fault::parse(f.name()) == Some(*f))
         );
+    }
+
+    #[test]
+    fn there_are_a_dozen_subtle_faults_on_each_api() {
+        use umbra_case::fault::Subtlety;
+        for backend in ["gl33/llvmpipe", "gles2/llvmpipe", "wgpu-vk/lavapipe"] {
+            let subtle = Fault::ALL
+                .iter()
+                .filter(|f| f.subtlety() != Subtlety::Gross && applies(**f, backend))
+                .count();
+            assert!(subtle >= 12, "{backend}: only {subtle} subtle faults");
+        }
     }
 }

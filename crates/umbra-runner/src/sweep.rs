@@ -357,6 +357,7 @@ pub fn main(argv: &[String]) -> i32 {
                 failures: None,
                 golden: None,
                 repeat: Some(repeat),
+                no_twins: false,
             };
             let (result, skipped) = match w.run(&req, timeout) {
                 Reply::Report(r) => match (r.outcome.as_str(), r.measured) {
@@ -441,6 +442,7 @@ pub fn measure_backends(
                     failures: None,
                     golden: None,
                     repeat: Some(repeat),
+                    no_twins: false,
                 };
                 match w.run(&req, timeout) {
                     Reply::Report(r) => r.measured.ok_or(r.reason),

@@ -31,6 +31,9 @@ pub struct Request {
     /// reference, twins or goldens).
     #[serde(default)]
     pub repeat: Option<u32>,
+    /// Skip the metamorphic twins (the self-test judges the frame alone).
+    #[serde(default)]
+    pub no_twins: bool,
 }
 
 /// What one run produced (the raw outcome; expectations are the parent's business).
@@ -211,7 +214,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             },
         };
     }
-    match run_point(backend, point) {
+    match run_point(backend, point, !req.no_twins) {
         Outcome::Skip(why) => RunReport {
             outcome: "skip".into(),
             reason: why,

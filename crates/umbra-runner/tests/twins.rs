@@ -14,7 +14,7 @@ fn point(rel: &str, index: usize) -> umbra_case::CasePoint {
 }
 
 fn judged(p: umbra_case::CasePoint) -> Box<umbra_runner::run::Judged> {
-    match run_point(&mut umbra_ref::RefBackend, p) {
+    match run_point(&mut umbra_ref::RefBackend, p, true) {
         Outcome::Done(j) => j,
         Outcome::Skip(s) | Outcome::Error(s) => panic!("{s}"),
     }

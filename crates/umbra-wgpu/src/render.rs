@@ -155,6 +155,11 @@ impl Gpu {
             immediate_size: 0,
         });
         let [factor, units] = s.bias.polygon_offset;
+        let units = if is(umbra_case::fault::Fault::OffsetUnitsLow) {
+            0.1 * units
+        } else {
+            units
+        };
         let sign = conv.toward_far();
         let bias = wgpu::DepthBiasState {
             constant: (sign * units) as i32,
@@ -254,6 +259,10 @@ impl Gpu {
             if cube {
                 m = conv.cube_face_render_flip() * m;
             }
+            if is(umbra_case::fault::Fault::ShadowHalfTexel) {
+                // Half a texel along x: 2 · ½ / width in NDC.
+                m = glam::Mat4::from_translation(glam::Vec3::new(1.0 / mw as f32, 0.0, 0.0)) * m;
+            }
             let ub = uniform_buffer(
                 d,
                 &self.queue,
@@ -338,6 +347,7 @@ impl Gpu {
             directional: matches!(run.light.kind, LightKind::Directional { .. }),
             filter: s.filter,
             compare: s.compare,
+            clamp_reference: s.compare == Compare::Hardware && s.format.is_fixed(),
             outside: s.outside,
             guard: s.guard_behind_light,
             bias_matrix: s.bias_matrix,
@@ -500,7 +510,8 @@ impl Gpu {
                 outside,
                 order,
                 cube,
-                is(umbra_case::fault::Fault::CompareFlipped),
+                is(umbra_case::fault::Fault::CompareFlipped)
+                    || is(umbra_case::fault::Fault::CompareStrict),
             )
         });
         let mut group_entries = vec![

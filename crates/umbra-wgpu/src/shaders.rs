@@ -29,6 +29,8 @@ pub struct Key {
     pub filter: Filter,
     /// Compare mechanism.
     pub compare: Compare,
+    /// The sampler clamps the reference to [0,1] (hardware compare on a fixed-point format).
+    pub clamp_reference: bool,
     /// What a lookup outside [0,1]² returns (the sampler's address mode for hardware
     /// compare; the shader's wrap for manual compare).
     pub outside: Outside,
@@ -91,14 +93,13 @@ pub fn lit(k: &Key, shading: &Shading) -> String {
     } else {
         "0.0"
     };
-    let cmp = match (
-        k.order == DepthOrder::Forward,
-        k.fault == Some(Fault::CompareFlipped),
-    ) {
-        (true, false) => "<=",
-        (false, false) => ">=",
-        (true, true) => ">",
-        (false, true) => "<",
+    let cmp = match (k.order == DepthOrder::Forward, k.fault) {
+        (true, Some(Fault::CompareFlipped)) => ">",
+        (false, Some(Fault::CompareFlipped)) => "<",
+        (true, Some(Fault::CompareStrict)) => "<",
+        (false, Some(Fault::CompareStrict)) => ">",
+        (true, _) => "<=",
+        (false, _) => ">=",
     };
     let _ = writeln!(
         s,
@@ -153,9 +154,13 @@ pub fn lit(k: &Key, shading: &Shading) -> String {
     } else {
         s.push_str("fn tap(f: i32, i: f32, j: f32, r: f32) -> f32 { return textureSampleCompareLevel(map, samp, (vec2<f32>(i, j) + 0.5) / u.size.xy, r); }\n");
     }
-    s.push_str(
-        "fn visibility(p_in: vec3<f32>, n: vec3<f32>) -> f32 {\n  let p = p_in + n * u.bias.w;\n",
-    );
+    if k.fault == Some(Fault::NormalOffsetShort) {
+        s.push_str("fn visibility(p_in: vec3<f32>, n: vec3<f32>) -> f32 {\n  let p = p_in + n * (0.75 * u.bias.w);\n");
+    } else {
+        s.push_str(
+            "fn visibility(p_in: vec3<f32>, n: vec3<f32>) -> f32 {\n  let p = p_in + n * u.bias.w;\n",
+        );
+    }
     if k.cube {
         s.push_str("  let f = cube_face(p - u.light_pos.xyz);\n");
     } else {
@@ -177,6 +182,9 @@ pub fn lit(k: &Key, shading: &Shading) -> String {
     if k.fault == Some(Fault::BiasTwice) {
         s.push_str("  c = vec4<f32>(0.5 * c.x + 0.5, 0.5 - 0.5 * c.y, c.z, c.w);\n");
     }
+    if k.fault == Some(Fault::QuarterTexel) {
+        s.push_str("  c.x = c.x + 0.25 / u.size.x;\n");
+    }
     if k.guard && k.fault != Some(Fault::NoGuard) {
         s.push_str("  if (c.w <= 0.0) { return 1.0; }\n");
     }
@@ -189,28 +197,61 @@ pub fn lit(k: &Key, shading: &Shading) -> String {
     s.push_str("  var bias = u.bias.x;\n");
     if k.slope {
         // tan(acos(c)) in its algebraic form (umbra_ref::lookup, step 6).
-        s.push_str("  let cosine = dot(n, to_light(p));\n  if (cosine > 0.0) { bias += clamp(u.bias.y * sqrt(max(1.0 - cosine * cosine, 0.0)) / cosine, 0.0, u.bias.z); }\n");
+        let scale = if k.fault == Some(Fault::SlopeShort) {
+            "0.8 * u.bias.y"
+        } else {
+            "u.bias.y"
+        };
+        let _ = writeln!(
+            s,
+            "  let cosine = dot(n, to_light(p));\n  if (cosine > 0.0) {{ bias += clamp({scale} * sqrt(max(1.0 - cosine * cosine, 0.0)) / cosine, 0.0, u.bias.z); }}"
+        );
     }
-    s.push_str("  let r = c.z - TOWARD_FAR * bias;\n");
+    s.push_str("  var r = c.z - TOWARD_FAR * bias;\n");
+    if !manual && !k.clamp_reference && k.fault == Some(Fault::ClampFloat) {
+        s.push_str("  r = clamp(r, 0.0, 1.0);\n"); // a float format clamped like a fixed one
+    }
     let hw_direct = !manual && !matches!(k.filter, Filter::Pcf(_));
     match k.filter {
-        _ if hw_direct && k.cube => s.push_str("  return textureSampleCompareLevel(map, samp, p - u.light_pos.xyz, r);\n"),
+        _ if hw_direct && k.cube => {
+            s.push_str("  return textureSampleCompareLevel(map, samp, p - u.light_pos.xyz, r);\n")
+        }
         _ if hw_direct => s.push_str("  return textureSampleCompareLevel(map, samp, c.xy, r);\n"),
-        Filter::Nearest => s.push_str("  return tap(f, floor(c.x * u.size.x), floor(c.y * u.size.y), r);\n"),
-        Filter::Linear => s.push_str(
-            "  let x = c.xy * u.size.xy - 0.5;\n  let i0 = floor(x);\n  let a = x - i0;\n\
-               return (1.0 - a.x) * (1.0 - a.y) * tap(f, i0.x, i0.y, r) + a.x * (1.0 - a.y) * tap(f, i0.x + 1.0, i0.y, r)\n\
+        Filter::Nearest => {
+            s.push_str("  return tap(f, floor(c.x * u.size.x), floor(c.y * u.size.y), r);\n")
+        }
+        Filter::Linear => {
+            s.push_str(
+                "  let x = c.xy * u.size.xy - 0.5;\n  let i0 = floor(x);\n  var a = x - i0;\n",
+            );
+            if k.fault == Some(Fault::BilinearCoarse) {
+                s.push_str("  a = floor(a * 4.0) / 4.0;\n");
+            }
+            s.push_str(
+                "  return (1.0 - a.x) * (1.0 - a.y) * tap(f, i0.x, i0.y, r) + a.x * (1.0 - a.y) * tap(f, i0.x + 1.0, i0.y, r)\n\
                     + (1.0 - a.x) * a.y * tap(f, i0.x, i0.y + 1.0, r) + a.x * a.y * tap(f, i0.x + 1.0, i0.y + 1.0, r);\n",
-        ),
+            );
+        }
         Filter::Pcf(n) => {
+            let centre = if k.fault == Some(Fault::PcfOffCentre) {
+                format!("f32({n}) * 0.5")
+            } else {
+                format!("(f32({n}) - 1.0) * 0.5")
+            };
             let _ = writeln!(
                 s,
-                "  var sum = 0.0;\n  let h = (f32({n}) - 1.0) * 0.5;\n\
+                "  var sum = 0.0;\n  let h = {centre};\n\
                    for (var dy = 0; dy < {n}; dy++) {{\n    for (var dx = 0; dx < {n}; dx++) {{\n\
                        let uv = c.xy + (vec2<f32>(f32(dx), f32(dy)) - h) / u.size.xy;\n\
-                       sum += tap(f, floor(uv.x * u.size.x), floor(uv.y * u.size.y), r);\n    }}\n  }}\n\
-                   return sum / f32({n} * {n});"
+                       sum += tap(f, floor(uv.x * u.size.x), floor(uv.y * u.size.y), r);\n    }}\n  }}"
             );
+            if k.fault == Some(Fault::PcfDoubleCentre) {
+                s.push_str(
+                    "  let uv0 = c.xy + (vec2<f32>(0.0) - h) / u.size.xy;\n\
+                       sum += tap(f, floor(c.x * u.size.x), floor(c.y * u.size.y), r) - tap(f, floor(uv0.x * u.size.x), floor(uv0.y * u.size.y), r);\n",
+                );
+            }
+            let _ = writeln!(s, "  return sum / f32({n} * {n});");
         }
     }
     s.push_str("}\n");
@@ -220,12 +261,21 @@ pub fn lit(k: &Key, shading: &Shading) -> String {
     );
     match k.model {
         ShadingModel::Dimmed => {
+            let kept = if k.fault == Some(Fault::DimmingOff) {
+                "vis".to_string()
+            } else {
+                format!("{d:.9} + (1.0 - {d:.9}) * vis", d = shading.dimming)
+            };
+            let lit_spec = if k.fault == Some(Fault::SpecularUnshadowed) {
+                "spec"
+            } else {
+                "vis * spec"
+            };
             let _ = writeln!(
                 s,
-                "  let kept = {d:.9} + (1.0 - {d:.9}) * vis;\n  var spec = 0.0;\n\
+                "  let kept = {kept};\n  var spec = 0.0;\n\
                    if (ndl > 0.0) {{ let hv = l + e; let len = length(hv); if (len > 0.0) {{ spec = {ks:.9} * pow(max(dot(n, hv / len), 0.0), {sh:.9}); }} }}\n\
-                   return ({a:.9} + kept * diffuse) * albedo + vec3<f32>(vis * spec);",
-                d = shading.dimming,
+                   return ({a:.9} + kept * diffuse) * albedo + vec3<f32>({lit_spec});",
                 ks = shading.specular,
                 sh = shading.shininess,
                 a = shading.ambient
@@ -243,9 +293,20 @@ pub fn lit(k: &Key, shading: &Shading) -> String {
     s.push_str("}\n");
     s.push_str(
         "struct FOut {\n  @location(0) color: vec4<f32>,\n  @location(1) vis: vec4<f32>,\n  @location(2) face: u32,\n}\n\
-         @fragment fn fs(v: VOut) -> FOut {\n  let n = normalize(v.normal);\n  let vis = visibility(v.pos, n);\n\
-           let e = normalize(u.eye.xyz - v.pos);\n  var o: FOut;\n\
-           o.color = vec4<f32>(clamp(shade(v.albedo, n, to_light(v.pos), e, vis), vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);\n\
+         @fragment fn fs(v: VOut) -> FOut {\n  let n = normalize(v.normal);\n  var vis = visibility(v.pos, n);\n",
+    );
+    if k.fault == Some(Fault::Vis4Bit) {
+        s.push_str("  vis = floor(vis * 16.0 + 0.5) / 16.0;\n");
+    }
+    s.push_str(
+        "  let e = normalize(u.eye.xyz - v.pos);\n  var o: FOut;\n\
+           var col = clamp(shade(v.albedo, n, to_light(v.pos), e, vis), vec3<f32>(0.0), vec3<f32>(1.0));\n",
+    );
+    if k.fault == Some(Fault::ColourGamma) {
+        s.push_str("  col = sqrt(col);\n");
+    }
+    s.push_str(
+        "  o.color = vec4<f32>(col, 1.0);\n\
            o.vis = vec4<f32>(vis, 0.0, 0.0, 1.0);\n  o.face = u32(floor(v.face + 0.5)) + 1u;\n  return o;\n}\n",
     );
     s
