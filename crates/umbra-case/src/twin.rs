@@ -53,7 +53,7 @@ pub fn twins_of(point: &CasePoint) -> Vec<TwinPlan> {
 }
 
 /// `point` with each dotted path in `set` given its value; the twin has no twins of its own.
-fn with_values(
+pub fn with_values(
     point: &CasePoint,
     set: &BTreeMap<String, Value>,
     what: &str,

@@ -57,6 +57,10 @@ pub struct RefAgreement {
     pub legal_surface: u64,
     /// Pixels where any answer would pass (interval ⊇ {0, 1}, or another surface legally).
     pub blind: u64,
+    /// The blind pixels by the freedom that makes them so (same precedence as the legal
+    /// classes): `[tie, coverage, texel, filter, seam, position, other surface]`.
+    #[serde(default)]
+    pub blind_by: [u64; 7],
     /// Pixels whose value was held to an interval that excludes 0 or 1.
     pub value_checked: u64,
     /// The smallest distance of a checked value from its bound (None: nothing checked).
@@ -140,6 +144,44 @@ pub enum PixelJudgement {
     Illegal,
 }
 
+/// The names of [`RefAgreement::blind_by`]'s entries.
+pub const REASONS: [&str; 7] = [
+    "depth tie",
+    "map coverage",
+    "texel selection",
+    "filter weights",
+    "cube seam",
+    "lookup position",
+    "other surface",
+];
+
+/// The index in [`REASONS`] of the first freedom a pixel's flags name (ties first).
+pub fn reason_index(f: u8) -> usize {
+    if f & ambiguity::DEPTH_TIE != 0 {
+        0
+    } else if f & ambiguity::COVERAGE != 0 {
+        1
+    } else if f & ambiguity::TEXEL_BOUNDARY != 0 {
+        2
+    } else if f & ambiguity::FILTER != 0 {
+        3
+    } else if f & ambiguity::SEAM != 0 {
+        4
+    } else if f & ambiguity::SURFACE != 0 {
+        6
+    } else {
+        5
+    }
+}
+
+impl RefAgreement {
+    /// The freedom that accounts for most blind pixels, and its share of them.
+    pub fn main_blind_reason(&self) -> Option<(&'static str, f64)> {
+        let (i, n) = self.blind_by.iter().enumerate().max_by_key(|(_, n)| **n)?;
+        (*n > 0).then(|| (REASONS[i], *n as f64 / self.blind.max(1) as f64))
+    }
+}
+
 /// Whether `v` is a value the interval allows: within ε of [lo, hi] and, for a filter with
 /// discrete results (`quantum` > 0), within ε of a multiple of the quantum in the interval.
 pub fn value_ok(v: f32, lo: f32, hi: f32, quantum: f32, eps: f32) -> bool {
@@ -194,6 +236,7 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
             if l.flags & ambiguity::SURFACE != 0 {
                 r.legal_surface += 1;
                 r.blind += 1;
+                r.blind_by[6] += 1;
                 px[i] = PixelJudgement::Blind;
             } else {
                 r.illegal_coverage += 1;
@@ -215,25 +258,20 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
         } else {
             if blind {
                 r.blind += 1;
+                r.blind_by[reason_index(l.flags)] += 1;
             } else {
                 r.value_checked += 1;
                 let margin = (v - (l.lo - eps)).min(l.hi + eps - v);
                 r.value_margin = Some(r.value_margin.map_or(margin, |m| m.min(margin)));
             }
             if differs {
-                let f = l.flags;
-                let class = if f & ambiguity::DEPTH_TIE != 0 {
-                    &mut r.legal_tie
-                } else if f & ambiguity::COVERAGE != 0 {
-                    &mut r.legal_coverage
-                } else if f & ambiguity::TEXEL_BOUNDARY != 0 {
-                    &mut r.legal_texel
-                } else if f & ambiguity::FILTER != 0 {
-                    &mut r.legal_filter
-                } else if f & ambiguity::SEAM != 0 {
-                    &mut r.legal_seam
-                } else {
-                    &mut r.legal_position
+                let class = match reason_index(l.flags) {
+                    0 => &mut r.legal_tie,
+                    1 => &mut r.legal_coverage,
+                    2 => &mut r.legal_texel,
+                    3 => &mut r.legal_filter,
+                    4 => &mut r.legal_seam,
+                    _ => &mut r.legal_position,
                 };
                 *class += 1;
             }

@@ -386,6 +386,14 @@ pub fn main(argv: &[String]) -> i32 {
     }
     let passed = count("Pass") + count("ExpectedFail") + count("Flake");
     println!("{}", budget.line());
+    if let Some((median, max, above, runs)) = crate::html::blind_stats(&results) {
+        println!(
+            "check strength: blind area median {:.3}%, max {:.2}%, {above} of {runs} judged runs above {:.0}% (report.html, Check strength)",
+            100.0 * median,
+            100.0 * max,
+            100.0 * crate::html::BLIND_FLAG
+        );
+    }
     println!("statuses: {}", breakdown(&results));
     // The closing line, alone, in the form CI tools read.
     println!(

@@ -116,6 +116,7 @@ pub fn report(
             ),
         );
     }
+    s.push_str(&strength_section(results));
     s.push_str(&twins_section(results));
     s.push_str(&crate::error_curves::section(results));
     // The latest `umbra sweep` (speed against error), when one has run in this target dir.
@@ -127,7 +128,7 @@ pub fn report(
     }
     s.push_str(
         "<h2>All runs</h2><table><tr><th>run</th><th>status</th><th>false shadow</th><th>false light</th>\
-         <th>interior fs/fl</th><th>agreement</th><th>illegal</th><th>SSIM ref</th><th>SSIM golden</th><th>render ms</th><th>clock</th></tr>",
+         <th>interior fs/fl</th><th>agreement</th><th>illegal</th><th>compared</th><th>blind</th><th>values held</th><th>margin</th><th>SSIM ref</th><th>SSIM golden</th><th>render ms</th><th>clock</th></tr>",
     );
     for r in results {
         let m = r.metrics.as_ref();
@@ -148,6 +149,12 @@ pub fn report(
             m.and_then(|m| m.illegal)
                 .map(|a| a.to_string())
                 .unwrap_or_default(),
+            reference(m, |a| a.compared.to_string()),
+            reference(m, |a| format!("{:.3}%", 100.0 * a.blind_share())),
+            reference(m, |a| a.value_checked.to_string()),
+            reference(m, |a| {
+                a.value_margin.map_or("–".into(), |v| format!("{v:.4}"))
+            }),
             opt5(m.and_then(|m| m.ssim)),
             opt5(m.and_then(|m| m.ssim_golden)),
             m.map(|m| format!("{:.1}", m.total_ms)).unwrap_or_default(),
@@ -166,6 +173,127 @@ pub fn report(
         s.push_str("</tr>");
     }
     s.push_str("</table></body></html>\n");
+    s
+}
+
+fn reference(
+    m: Option<&crate::worker::Metrics>,
+    f: impl Fn(&umbra_compare::reference::RefAgreement) -> String,
+) -> String {
+    m.and_then(|m| m.reference.as_ref())
+        .map(f)
+        .unwrap_or_default()
+}
+
+/// Blind area above this share of a run's compared pixels is flagged.
+pub const BLIND_FLAG: f64 = 0.01;
+
+/// The blind-area figures of a set of runs: (median, max, runs above [`BLIND_FLAG`], runs).
+pub fn blind_stats(results: &[RunResult]) -> Option<(f64, f64, usize, usize)> {
+    let mut shares: Vec<f64> = results
+        .iter()
+        .filter_map(|r| r.metrics.as_ref()?.reference.as_ref())
+        .filter(|a| a.compared > 0)
+        .map(|a| a.blind_share())
+        .collect();
+    if shares.is_empty() {
+        return None;
+    }
+    shares.sort_by(f64::total_cmp);
+    let median = shares[shares.len() / 2];
+    let max = shares[shares.len() - 1];
+    let above = shares.iter().filter(|s| **s > BLIND_FLAG).count();
+    Some((median, max, above, shares.len()))
+}
+
+/// How strong the checks were: the blind area (pixels where any answer passes) per case and
+/// backend, runs above 1 % flagged with the freedom that makes them blind.
+fn strength_section(results: &[RunResult]) -> String {
+    use std::collections::{BTreeMap, BTreeSet};
+    let mut s = String::from(
+        "<h2>Check strength</h2><p>Per run, the <i>blind area</i> is the share of compared pixels where any \
+         visibility would pass (the legal interval holds both 0 and 1, or another surface may legally show): \
+         what the judge cannot see. Everywhere else a value outside its interval, a colour that is not the shading \
+         of its own visibility, or a coverage difference fails. The freedom behind the blind pixels is named after \
+         the spec clause it comes from (README, Judging).</p>",
+    );
+    let Some((median, max, above, runs)) = blind_stats(results) else {
+        s.push_str("<p>No run was judged against the reference.</p>");
+        return s;
+    };
+    let _ = write!(
+        s,
+        "<p>{runs} judged runs: blind area median {:.3} %, max {:.2} %, {above} runs above {:.0} %.</p>",
+        100.0 * median,
+        100.0 * max,
+        100.0 * BLIND_FLAG
+    );
+    let mut cells: BTreeMap<(String, String), (f64, String)> = BTreeMap::new();
+    let mut backends = BTreeSet::new();
+    let mut flagged = Vec::new();
+    for r in results {
+        let Some(a) = r.metrics.as_ref().and_then(|m| m.reference.as_ref()) else {
+            continue;
+        };
+        let case = r.case.split('@').next().unwrap_or(&r.case).to_string();
+        backends.insert(r.backend.clone());
+        let share = a.blind_share();
+        let cell = cells
+            .entry((case, r.backend.clone()))
+            .or_insert((0.0, String::new()));
+        if share >= cell.0 {
+            *cell = (share, r.case.clone());
+        }
+        if share > BLIND_FLAG {
+            flagged.push((share, r, a.main_blind_reason()));
+        }
+    }
+    let cases: BTreeSet<&String> = cells.keys().map(|(c, _)| c).collect();
+    s.push_str("<table><tr><th>case (worst point)</th>");
+    for b in &backends {
+        let _ = write!(s, "<th>{}</th>", esc(b));
+    }
+    s.push_str("</tr>");
+    for c in cases {
+        let _ = write!(s, "<tr><td>{}</td>", esc(c));
+        for b in &backends {
+            match cells.get(&(c.clone(), b.clone())) {
+                Some((share, point)) => {
+                    let class = if *share > BLIND_FLAG {
+                        " class=\"Fail\""
+                    } else {
+                        ""
+                    };
+                    let _ = write!(
+                        s,
+                        "<td{class} title=\"{}\">{:.2}%</td>",
+                        esc(point),
+                        100.0 * share
+                    );
+                }
+                None => s.push_str("<td>–</td>"),
+            }
+        }
+        s.push_str("</tr>");
+    }
+    s.push_str("</table>");
+    flagged.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let _ = write!(
+        s,
+        "<h3>Runs above {:.0} % blind</h3><table><tr><th>run</th><th>blind</th><th>mostly</th></tr>",
+        100.0 * BLIND_FLAG
+    );
+    for (share, r, why) in flagged {
+        let why = why.map_or(String::new(), |(w, f)| format!("{w} ({:.0} %)", 100.0 * f));
+        let _ = write!(
+            s,
+            "<tr><td>{}</td><td>{:.2} %</td><td style=\"text-align:left\">{}</td></tr>",
+            esc(&r.name),
+            100.0 * share,
+            esc(&why)
+        );
+    }
+    s.push_str("</table>");
     s
 }
 

@@ -122,10 +122,22 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint, twins: bool) -> Ou
     let mut problems = Vec::new();
     let mut failed = Vec::new();
     let is_ref = backend.id().0 == "ref";
-    let (agreement, pixels) = if is_ref {
-        (None, Vec::new())
-    } else {
+    // The reference too is judged against its own judged render: its value at every pixel
+    // must lie in its own interval, and its map in its own ranges. Anything else is a bug in
+    // umbra's model, caught on every case in every conformance run.
+    let (agreement, pixels) = {
         let (a, px) = umbra_compare::reference::judge(&judged, &frame);
+        if is_ref && (a.illegal > 0 || a.illegal_map > 0) {
+            problems.push(format!(
+                "umbra's reference is not legal under its own model here ({}; {} map texels): a bug in umbra's tolerance model, not in a driver",
+                a.illegal_summary(),
+                a.illegal_map
+            ));
+            failed.push(FailedCheck {
+                check: "value".into(),
+                count: a.illegal.max(a.illegal_map),
+            });
+        }
         (Some(a), px)
     };
     let ssim = (!is_ref)
@@ -163,7 +175,7 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint, twins: bool) -> Ou
         }
     }
     let reference = (!is_ref).then(|| judged.frame.clone());
-    if let Some(a) = &agreement {
+    if let Some(a) = agreement.as_ref().filter(|_| !is_ref) {
         if (a.illegal > 0 || a.illegal_map > 0) && prepared.case().expect.backends_agree {
             for (check, count) in [
                 ("value", a.illegal_value),
