@@ -8,8 +8,9 @@
 //! - A catch counts only if the faulted run is a regression once the expectations
 //!   (`expectations/`) are applied: a point expected to fail catches the fault only when the
 //!   fault makes it fail *differently* (another check, or more pixels than its bound).
-//! - Up to [`SAMPLE`] exercising points, spread over the catalogue, are run and every catch is
-//!   counted, by the checks that failed; if none catches, the rest are tried until one does.
+//! - Up to [`SAMPLE`] of the points built to see the fault ([`aimed_at`]) and up to
+//!   [`SAMPLE`] others, each a spread, are run and every catch is counted, by the checks that
+//!   failed; if none catches, the rest are tried until one does.
 //! - A fault caught by one point only is a warning (one case away from going blind); one
 //!   that no point catches is missed, and a missed fault fails the self-test.
 
@@ -26,7 +27,7 @@ use crate::status::Expectations;
 use crate::worker::Request;
 
 /// Usage line.
-pub const USAGE: &str = "umbra selftest [--backend ID]... [--fault NAME]... [--cases DIR] [--expectations DIR] [--timeout SECS] [--jobs N]";
+pub const USAGE: &str = "umbra selftest [--backend ID]... [--fault NAME]... [--cases DIR] [--expectations DIR] [--timeout SECS] [--jobs N] [--verbose]";
 
 /// How many exercising points each fault × backend pair runs at least.
 pub const SAMPLE: usize = 6;
@@ -61,7 +62,8 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, id: &str) -> bool {
         // GLES 2 compares by hand whatever the case says.
         Fault::WrongComponent => s.compare == Compare::Manual || es2,
         Fault::Repeat => s.outside != Outside::Lit,
-        Fault::NoGuard | Fault::NoDivide => !matches!(c.light, Light::Directional(_)),
+        Fault::NoGuard => !matches!(c.light, Light::Directional(_)) && s.guard_behind_light,
+        Fault::NoDivide => !matches!(c.light, Light::Directional(_)),
         Fault::ShadowViewport => s.size != c.camera.size,
         Fault::ClampFloat => s.format == DepthFormat::Depth32f && s.compare == Compare::Hardware,
         Fault::NoClamp => s.format.is_fixed() && s.compare == Compare::Hardware,
@@ -78,6 +80,28 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, id: &str) -> bool {
         }
         _ => true,
     }
+}
+
+/// The cases built to see `fault` (magnified views, exact ties, the guard's own case): their
+/// points are tried first, so a subtle fault is not left to whichever points a spread over
+/// the catalogue happens to pick.
+pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
+    let cases: &[&str] = match fault {
+        Fault::CompareStrict | Fault::ClampFloat | Fault::NoClamp => &["far-clamp", "beyond-far"],
+        Fault::QuarterTexel | Fault::ShadowHalfTexel => {
+            &["contact", "filters-magnified", "guard-magnified"]
+        }
+        Fault::NormalOffsetShort | Fault::OffsetUnitsLow | Fault::SlopeShort => {
+            &["bias-forms-magnified", "contact", "grazing"]
+        }
+        Fault::PcfOffCentre | Fault::PcfDoubleCentre | Fault::BilinearCoarse | Fault::Vis4Bit => {
+            &["filters-magnified", "filters"]
+        }
+        Fault::NoGuard => &["guard-magnified", "behind-spot", "bias-matrix"],
+        Fault::Repeat => &["outside"],
+        _ => &[],
+    };
+    cases.contains(&c.name.as_str())
 }
 
 /// What one fault did on one backend.
@@ -117,7 +141,7 @@ pub fn main(argv: &[String]) -> i32 {
             "timeout",
             "jobs",
         ],
-        &[],
+        &["verbose"],
     ) {
         Ok(a) => a,
         Err(e) => {
@@ -173,6 +197,7 @@ pub fn main(argv: &[String]) -> i32 {
     if faults.is_empty() {
         faults = Fault::ALL.to_vec();
     }
+    let verbose = args.has("verbose");
     let mut points = Vec::new();
     for f in umbra_case::case_files(&cases).unwrap_or_default() {
         match umbra_case::load_file(&f) {
@@ -211,7 +236,15 @@ pub fn main(argv: &[String]) -> i32 {
             s.spawn(|| {
                 let next = || queue.lock().ok().and_then(|mut q| q.pop());
                 while let Some((backend, fault)) = next() {
-                    let h = hunt(&backend, fault, &points, &expectations, &cache, timeout);
+                    let h = hunt(
+                        &backend,
+                        fault,
+                        &points,
+                        &expectations,
+                        &cache,
+                        timeout,
+                        verbose,
+                    );
                     println!("{}", line(fault, &backend, &h));
                     if let Ok(mut r) = results.lock() {
                         r.push((backend, fault, h));
@@ -311,6 +344,7 @@ fn hunt(
     expectations: &Expectations,
     cache: &Path,
     timeout: Duration,
+    verbose: bool,
 ) -> Hunt {
     let mut h = Hunt::default();
     let mut env = crate::registry::driver_env(backend).unwrap_or_default();
@@ -339,15 +373,35 @@ fn hunt(
         h.note = Some("no case point exercises it".into());
         return h;
     }
-    // A spread of SAMPLE points first, then the rest in order until one catches.
-    let step = (candidates.len() / SAMPLE).max(1);
-    let mut order: Vec<usize> = (0..candidates.len()).step_by(step).take(SAMPLE).collect();
+    // A spread of up to SAMPLE of the points aimed at the fault, and a spread of SAMPLE
+    // over the others; then the rest in order until one catches.
+    let (aimed, others): (Vec<usize>, Vec<usize>) =
+        (0..candidates.len()).partition(|&i| aimed_at(fault, &candidates[i].2.case));
+    let spread = |v: &[usize]| -> Vec<usize> {
+        let step = (v.len() / SAMPLE).max(1);
+        v.iter().copied().step_by(step).take(SAMPLE).collect()
+    };
+    // The aimed points round-robin over their cases, so each aimed case gets its turn.
+    let mut by_case: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+    for &i in &aimed {
+        by_case
+            .entry(candidates[i].2.case.name.as_str())
+            .or_default()
+            .push(i);
+    }
+    let rounds = by_case.values().map(Vec::len).max().unwrap_or(0);
+    let aimed: Vec<usize> = (0..rounds)
+        .flat_map(|k| by_case.values().filter_map(move |v| v.get(k).copied()))
+        .collect();
+    let mut order: Vec<usize> = aimed.iter().copied().take(SAMPLE).collect();
+    order.extend(spread(&others));
+    let sampled = order.len();
     let rest: Vec<usize> = (0..candidates.len())
         .filter(|i| !order.contains(i))
         .collect();
     order.extend(rest);
     for (k, &i) in order.iter().enumerate() {
-        if k >= SAMPLE && !h.caught.is_empty() {
+        if k >= sampled && !h.caught.is_empty() {
             break;
         }
         let (file, index, point) = candidates[i];
@@ -360,16 +414,23 @@ fn hunt(
             no_twins: true,
         };
         h.tried += 1;
+        let name = format!("{backend}/{}", point.id());
         match worker.run(&req, timeout) {
             Reply::Report(r) if r.outcome == "fail" => {
-                let name = format!("{backend}/{}", point.id());
                 let (status, _) = expectations.apply(&name, crate::status::Status::Fail, &r.failed);
+                let checks = crate::status::signature(&r.failed);
+                if verbose {
+                    println!("  {} {name}: {status:?} [{checks}]", fault.name());
+                }
                 if status.is_regression() {
-                    let checks = crate::status::signature(&r.failed);
                     h.caught.push((point.id(), checks));
                 }
             }
-            Reply::Report(_) => {}
+            Reply::Report(r) => {
+                if verbose {
+                    println!("  {} {name}: {} {}", fault.name(), r.outcome, r.reason);
+                }
+            }
             Reply::Crashed(how) => {
                 h.caught.push((point.id(), format!("crash ({how})")));
                 match Worker::start(backend, &env, timeout) {
@@ -445,6 +506,42 @@ mod tests {
                 .filter(|f| f.subtlety() != Subtlety::Gross && applies(**f, backend))
                 .count();
             assert!(subtle >= 12, "{backend}: only {subtle} subtle faults");
+        }
+    }
+
+    #[test]
+    fn aimed_cases_exist_and_exercise_their_fault() {
+        // A renamed case must not silently drop a fault back to the catalogue-wide spread.
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases");
+        let points: Vec<umbra_case::CasePoint> = umbra_case::case_files(&root)
+            .expect("cases/")
+            .iter()
+            .flat_map(|f| umbra_case::load_file(f).expect("a valid case"))
+            .collect();
+        for f in Fault::ALL {
+            let aimed: Vec<_> = points.iter().filter(|p| aimed_at(f, &p.case)).collect();
+            if aimed.is_empty() {
+                continue;
+            }
+            assert!(
+                aimed.iter().any(|p| exercises(f, &p.case, "gl33/llvmpipe")
+                    || exercises(f, &p.case, "gles2/llvmpipe")),
+                "{}: no aimed point exercises it",
+                f.name()
+            );
+        }
+        for f in [
+            Fault::CompareStrict,
+            Fault::QuarterTexel,
+            Fault::OffsetUnitsLow,
+            Fault::Vis4Bit,
+            Fault::NoGuard,
+        ] {
+            assert!(
+                points.iter().any(|p| aimed_at(f, &p.case)),
+                "{}: its aimed cases are gone",
+                f.name()
+            );
         }
     }
 }
