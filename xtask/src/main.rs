@@ -12,7 +12,13 @@
 //! - `cargo xtask bless [ARGS]`: a conformance run that accepts every changed or new golden
 //!   (insta's `INSTA_UPDATE=always`), then lists what changed under `golden/` for review in
 //!   `git diff` before committing. Refused under `CI=true`: CI never writes a golden.
+//! - `cargo xtask fetch-mesa [--dir DIR]`: a second Mesa (bookworm-backports, 25.0.7) unpacked
+//!   into a directory without changing the system (`fetch_mesa`), for `--mesa DIR`.
+//! - `cargo xtask drivers --baseline A --candidate B`, `cargo xtask bisect --mesa-src DIR
+//!   --good REV --bad REV`, `cargo xtask reduce CASE --point ID --backend ID`: the same set-up,
+//!   then `umbra drivers`, `umbra bisect`, `umbra reduce`.
 
+mod fetch_mesa;
 mod mesa;
 
 use std::process::{Command, ExitCode};
@@ -34,12 +40,21 @@ fn main() -> ExitCode {
             mesa::ensure();
             umbra(&["sweep"], &args[1..])
         }
+        Some(cmd @ ("drivers" | "bisect" | "reduce")) => {
+            mesa::ensure();
+            umbra(&[cmd], &args[1..])
+        }
+        Some("fetch-mesa") => fetch_mesa::main(&args[1..], &workspace_root()),
         _ => {
             eprintln!(
                 "usage:\n  cargo xtask conformance [--filter GLOB] [--backend ID]... [--verbose]\n  \
                  cargo xtask test [-- CARGO TEST ARGS]\n  \
                  cargo xtask sweep [--scene CASE.json] [--point ID] [--backend ID|all]... [--repeat N]\n  \
-                 cargo xtask bless [--filter GLOB] [--backend ID]..."
+                 cargo xtask bless [--filter GLOB] [--backend ID]...\n  \
+                 cargo xtask fetch-mesa [--dir DIR] [--suite SUITE]\n  \
+                 cargo xtask drivers --baseline PREFIX|system --candidate PREFIX|system [--filter GLOB] [--backend ID]...\n  \
+                 cargo xtask bisect --mesa-src DIR --good REV --bad REV [--filter GLOB] [--backend ID]...\n  \
+                 cargo xtask reduce CASE.json --point ID --backend ID [-o OUT.json]"
             );
             2
         }

@@ -7,7 +7,7 @@ use std::process::Command;
 
 /// Runs this executable with `args` and the environment `env`; returns its exit code (125 if
 /// it could not start or died from a signal).
-pub fn rerun(args: &[String], env: &[(&str, &str)]) -> i32 {
+pub fn rerun(args: &[String], env: &[(String, String)]) -> i32 {
     let exe = match std::env::current_exe() {
         Ok(e) => e,
         Err(e) => {

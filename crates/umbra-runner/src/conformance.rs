@@ -33,7 +33,7 @@ use crate::status::{Expectations, Status};
 use crate::worker::{Metrics, Request, RunReport};
 
 /// Usage line.
-pub const USAGE: &str = "umbra conformance [--cases DIR] [--filter GLOB] [--backend ID]... [--shard I/N] [--jobs N] [--timeout SECS] [--expectations DIR] [--golden DIR|none] [--out DIR] [--verbose]";
+pub const USAGE: &str = "umbra conformance [--cases DIR] [--filter GLOB] [--backend ID]... [--shard I/N] [--jobs N] [--timeout SECS] [--expectations DIR] [--golden DIR|none] [--out DIR] [--mesa PREFIX|BUILD_DIR|system] [--verbose]";
 
 /// A point's swept values, `(path, value)` in axis order.
 type SweepValues = Vec<(String, serde_json::Value)>;
@@ -149,6 +149,8 @@ pub struct RunResult {
     pub backend: String,
     /// The case point id.
     pub case: String,
+    /// The case file.
+    pub file: String,
     /// The point's swept values, `(path, value)` in axis order.
     pub values: Vec<(String, serde_json::Value)>,
     /// Final status.
@@ -159,6 +161,9 @@ pub struct RunResult {
     pub metrics: Option<Metrics>,
     /// The checks a failing run failed (its signature).
     pub failed: Vec<crate::run::FailedCheck>,
+    /// What became of its golden: `unchanged`, `written`, `changed`, or
+    /// `changed-other-driver` (differs, and was blessed on another Mesa version: failed, with both versions named).
+    pub golden: Option<String>,
     /// Wall time of the run including retries, seconds.
     pub time_s: f64,
     /// The command that reproduces this run alone.
@@ -191,11 +196,19 @@ pub fn main(argv: &[String]) -> i32 {
             "timeout",
             "expectations",
             "golden",
+            "mesa",
         ],
         &["verbose"],
     ) {
         Ok(a) => a,
         Err(e) => return usage(&e),
+    };
+    let build = match crate::mesa_build::select(args.value("mesa")) {
+        Ok(b) => b,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 125;
+        }
     };
     let cases_dir = PathBuf::from(args.value("cases").unwrap_or("cases"));
     let out = PathBuf::from(args.value("out").unwrap_or("target/umbra"));
@@ -260,11 +273,13 @@ pub fn main(argv: &[String]) -> i32 {
                 name: format!("cases/{}", f.display()),
                 backend: String::new(),
                 case: f.display().to_string(),
+                file: f.display().to_string(),
                 values: Vec::new(),
                 status: Status::Fail,
                 reason: e.to_string(),
                 metrics: None,
                 failed: Vec::new(),
+                golden: None,
                 time_s: 0.0,
                 reproduce: format!("cargo run --bin umbra -- render {}", f.display()),
                 details: String::new(),
@@ -334,7 +349,10 @@ pub fn main(argv: &[String]) -> i32 {
     }
     let total = groups.values().map(Vec::len).sum::<usize>();
     let queue = Mutex::new(groups.into_iter().collect::<VecDeque<_>>());
-    let done = Mutex::new((results, String::new(), 0usize, 0usize));
+    let done = Mutex::new(Collected {
+        results,
+        ..Default::default()
+    });
     std::thread::scope(|s| {
         for _ in 0..jobs {
             s.spawn(|| {
@@ -347,13 +365,25 @@ pub fn main(argv: &[String]) -> i32 {
             });
         }
     });
-    let (mut results, drivers, unavailable_runs, _) = match done.into_inner() {
+    let Collected {
+        mut results,
+        drivers,
+        mut driver_rows,
+        refused,
+        unavailable_runs,
+        ..
+    } = match done.into_inner() {
         Ok(d) => d,
         Err(_) => {
             eprintln!("error: a worker thread panicked");
             return 125;
         }
     };
+    driver_rows.sort_by(|a, b| a["backend"].as_str().cmp(&b["backend"].as_str()));
+    let drivers = format!(
+        "Mesa: {}\n{drivers}",
+        build.map_or("the system's".to_string(), |b| b.describe())
+    );
     results.sort_by(|a, b| a.name.cmp(&b.name));
     for m in &monotone {
         m.judge(&mut results);
@@ -361,7 +391,11 @@ pub fn main(argv: &[String]) -> i32 {
 
     // Report.
     let budget = TimeBudget::of(&results, started.elapsed());
-    if let Err(e) = write_reports(&out, &results, &drivers, &budget) {
+    let header = serde_json::json!({
+        "mesa_build": build,
+        "drivers": driver_rows,
+    });
+    if let Err(e) = write_reports(&out, &results, &drivers, &header, &budget) {
         eprintln!("error: cannot write reports under {}: {e}", out.display());
         return 125;
     }
@@ -395,13 +429,56 @@ pub fn main(argv: &[String]) -> i32 {
         );
     }
     println!("statuses: {}", breakdown(&results));
+    let foreign = results
+        .iter()
+        .filter(|r| r.golden.as_deref() == Some("changed-other-driver"))
+        .count();
+    if foreign > 0 {
+        println!(
+            "goldens: {foreign} differ and were blessed on another driver version (golden/{}); each run's reason names both versions",
+            crate::golden::MANIFEST
+        );
+    }
+    // Blessing (`cargo xtask bless`): record the driver each backend's goldens now match.
+    if std::env::var("INSTA_UPDATE").is_ok_and(|v| v == "always") {
+        if let Some(dir) = &settings.golden {
+            let entries: Vec<(String, String)> = driver_rows
+                .iter()
+                .filter_map(|r| {
+                    let b = r["backend"].as_str()?;
+                    let v = r["mesa"].as_str()?;
+                    results
+                        .iter()
+                        .any(|x| x.backend == b && x.golden.is_some())
+                        .then(|| (b.to_string(), v.to_string()))
+                })
+                .collect();
+            if entries.is_empty() {
+                // Nothing Mesa-backed was blessed: the manifest stays as it is.
+            } else if let Err(e) = crate::golden::record_blessed(dir, &entries) {
+                eprintln!(
+                    "error: cannot record the blessed drivers in {}: {e}",
+                    dir.display()
+                );
+            }
+        }
+    }
     // The closing line, alone, in the form CI tools read.
     println!(
         "conformance: {passed} passed, {} failed, {} skipped",
         regressions.len(),
         count("Skip")
     );
-    if !regressions.is_empty() {
+    if !refused.is_empty() {
+        for r in &refused {
+            eprintln!("error: {r}");
+        }
+        eprintln!(
+            "error: {} backend(s) did not run on the Mesa build asked for; their runs were not judged",
+            refused.len()
+        );
+        125
+    } else if !regressions.is_empty() {
         1
     } else if unavailable_runs == results.len() && !results.is_empty() {
         eprintln!("error: no selected backend is available here, nothing ran");
@@ -512,16 +589,30 @@ fn first_line(s: &str) -> &str {
     s.lines().next().unwrap_or("")
 }
 
-type Done = Mutex<(Vec<RunResult>, String, usize, usize)>;
+/// What the backend groups collect while they run.
+#[derive(Default)]
+struct Collected {
+    results: Vec<RunResult>,
+    /// drivers.txt: one line per backend.
+    drivers: String,
+    /// report.json's `drivers`: per backend, the driver, the build and the expectation files
+    /// that applied.
+    driver_rows: Vec<serde_json::Value>,
+    /// Backends whose worker refused the Mesa build (fell back, or its driver did not load).
+    refused: Vec<String>,
+    unavailable_runs: usize,
+    finished: usize,
+}
+
+type Done = Mutex<Collected>;
 
 /// Runs one backend's runs in its workers.
 fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done, total: usize) {
-    let env = crate::registry::driver_env(backend).unwrap_or_default();
-    let mut env: Vec<(&str, &str)> = env;
+    let mut env = crate::registry::worker_env(backend);
     if crate::fake::enabled() {
-        env.push(("UMBRA_FAKE_BACKENDS", "1"));
+        env.push(("UMBRA_FAKE_BACKENDS".into(), "1".into()));
     }
-    env.push((crate::judge_cache::ENV, &settings.judge_cache));
+    env.push((crate::judge_cache::ENV.into(), settings.judge_cache.clone()));
     let start_worker = || {
         let t = Instant::now();
         let w = Worker::start(backend, &env, settings.timeout);
@@ -543,6 +634,19 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
         Ok(w) => (w.hello.clone(), None),
         Err(e) => (serde_json::json!({ "unavailable": e }), Some(e.clone())),
     };
+    let refused = hello
+        .get("refused")
+        .and_then(|u| u.as_str())
+        .map(str::to_string);
+    // Expectations for this backend's driver (`@applies`), and which files they come from.
+    let facts = crate::status::DriverFacts::from_hello(&hello["ready"]);
+    let expectations = settings.expectations.for_driver(&facts);
+    let files: Vec<String> = expectations
+        .files()
+        .iter()
+        .map(|(f, n)| format!("{f} ({n})"))
+        .collect();
+    let build = hello["ready"]["build"].as_str().map(str::to_string);
     let driver_line = match (hello.get("ready"), hello.get("unavailable")) {
         (Some(r), _) => format!(
             "{backend}: {} | {} | {} | {}\n",
@@ -559,19 +663,53 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
                 .unwrap_or_default()
         ),
         (_, Some(u)) => format!("{backend}: unavailable: {}\n", u.as_str().unwrap_or("")),
-        _ => format!("{backend}: said {hello}\n"),
+        _ => match &refused {
+            Some(why) => format!("{backend}: refused: {why}\n"),
+            None => format!("{backend}: said {hello}\n"),
+        },
     };
+    let driver_line = format!(
+        "{}{}",
+        driver_line,
+        match (&build, files.is_empty()) {
+            (Some(b), _) => format!("  build: {b}; expectations: {}\n", files.join(", ")),
+            (None, false) => format!("  expectations: {}\n", files.join(", ")),
+            (None, true) => String::new(),
+        }
+    );
+    let row = serde_json::json!({
+        "backend": backend,
+        "vendor": hello["ready"]["vendor"],
+        "renderer": hello["ready"]["renderer"],
+        "version": hello["ready"]["version"],
+        "mesa": facts.mesa,
+        "build": build,
+        "unavailable": hello.get("unavailable"),
+        "refused": refused,
+        "expectations": files,
+    });
     let unavailable = hello
         .get("unavailable")
         .and_then(|u| u.as_str())
         .map(str::to_string);
     if let Ok(mut d) = done.lock() {
-        d.1.push_str(&driver_line);
+        d.drivers.push_str(&driver_line);
+        d.driver_rows.push(row);
+        if let Some(why) = &refused {
+            d.refused.push(format!("{backend}: {why}"));
+        }
     }
     for p in runs {
         let name = p.name();
         let t0 = Instant::now();
         let outcome = match (&start_error, &unavailable) {
+            _ if refused.is_some() => Attempt::bare(
+                Status::Crash,
+                format!(
+                    "not run: the worker refused the Mesa build: {}",
+                    refused.as_deref().unwrap_or("")
+                ),
+            ),
             (Some(e), _) => Attempt::bare(
                 Status::Crash,
                 format!("the harness could not start its worker process: {e}"),
@@ -614,8 +752,9 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
             metrics,
             details,
             failed,
+            golden,
         } = outcome;
-        let (status, expected) = settings.expectations.apply(&name, raw, &failed);
+        let (status, expected) = expectations.apply(&name, raw, &failed);
         let reason = match (&status, expected) {
             (Status::ExpectedFail | Status::UnexpectedPass, Some(why)) => {
                 format!("expected: {why}; got: {reason}")
@@ -627,11 +766,13 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
             name: name.clone(),
             backend: p.backend.clone(),
             case: p.id.clone(),
+            file: p.file.display().to_string(),
             values: p.values.clone(),
             status,
             reason,
             metrics,
             failed,
+            golden,
             time_s: t0.elapsed().as_secs_f64(),
             reproduce: format!(
                 "cargo run --bin umbra -- render {} --backend {} --point '{}'",
@@ -642,11 +783,11 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
             details,
         };
         if let Ok(mut d) = done.lock() {
-            d.3 += 1;
+            d.finished += 1;
             let r = &result;
             let mut line = format!(
                 "[{}/{total}] {} {} ({:.0} ms)",
-                d.3,
+                d.finished,
                 r.status,
                 r.name,
                 r.time_s * 1e3
@@ -659,9 +800,9 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
                 println!("{}", r.details);
             }
             if unavailable.is_some() && start_error.is_none() {
-                d.2 += 1;
+                d.unavailable_runs += 1;
             }
-            d.0.push(result);
+            d.results.push(result);
         }
     }
 }
@@ -673,6 +814,7 @@ struct Attempt {
     metrics: Option<Metrics>,
     details: String,
     failed: Vec<crate::run::FailedCheck>,
+    golden: Option<String>,
 }
 
 impl Attempt {
@@ -683,6 +825,7 @@ impl Attempt {
             metrics: None,
             details: String::new(),
             failed: Vec::new(),
+            golden: None,
         }
     }
 }
@@ -736,6 +879,7 @@ fn from_report(r: RunReport) -> Attempt {
         metrics: r.metrics,
         details: r.details,
         failed: r.failed,
+        golden: r.golden,
     }
 }
 
@@ -747,6 +891,7 @@ fn write_reports(
     out: &Path,
     results: &[RunResult],
     drivers: &str,
+    header: &serde_json::Value,
     budget: &TimeBudget,
 ) -> std::io::Result<()> {
     let wall = Duration::from_secs_f64(budget.wall_s);
@@ -851,7 +996,9 @@ fn write_reports(
             };
             serde_json::json!({
                 "case": r.case,
+                "file": r.file,
                 "backend": r.backend,
+                "golden": r.golden,
                 "status": r.status.name(),
                 "reason": r.reason,
                 "false_shadow": rate(|m| m.false_shadow),
@@ -873,6 +1020,8 @@ fn write_reports(
         "time_budget": budget,
         "harness_overhead_share": budget.overhead_share(),
         "command": std::env::args().collect::<Vec<_>>().join(" "),
+        "mesa_build": header["mesa_build"],
+        "drivers": header["drivers"],
         "runs": runs,
     });
     let junit = junit(results);

@@ -7,6 +7,13 @@
 //! `CI=true` insta writes nothing and the run fails. A missing golden is a change too.
 //! `cargo xtask bless` runs with `INSTA_UPDATE=always` and lists what it wrote.
 //!
+//! Goldens stay per backend id; `golden/blessed-on.json` records, per backend, the Mesa
+//! version its goldens were blessed on (`cargo xtask bless` writes it). A run on another
+//! version (`--mesa`, or a distribution upgrade) compares as always and a difference still
+//! fails, but its reason says plainly that the golden was blessed on another version ("blessed
+//! on Mesa 22.3.6, this driver is Mesa 25.0.7"), because the likeliest cause is then the
+//! driver's change, not umbra's; `cargo xtask drivers` shows the two builds side by side.
+//!
 //! Tolerance (the same backend on another day): each 8-bit colour channel may differ by one
 //! step (the output's rounding), except on pixels where the judge already allows the shadow
 //! answer itself to differ (the reference agreement's legal pixels: ties, texel boundaries,
@@ -138,4 +145,37 @@ pub fn check(
             )
         }
     }
+}
+
+/// The manifest of driver versions the goldens were blessed on, in the golden directory.
+pub const MANIFEST: &str = "blessed-on.json";
+
+/// The Mesa version backend `id`'s goldens in `dir` were blessed on, if recorded.
+pub fn blessed_on(dir: &Path, id: &str) -> Option<String> {
+    let text = std::fs::read_to_string(dir.join(MANIFEST)).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    v[id].as_str().map(str::to_string)
+}
+
+/// Records that backend `id`'s goldens were (re)blessed on Mesa `version` (keeps the others).
+pub fn record_blessed(dir: &Path, entries: &[(String, String)]) -> std::io::Result<()> {
+    let path = dir.join(MANIFEST);
+    let mut map: std::collections::BTreeMap<String, String> = std::fs::read_to_string(&path)
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .unwrap_or_default();
+    for (id, v) in entries {
+        map.insert(id.clone(), v.clone());
+    }
+    let text = serde_json::to_string_pretty(&map).unwrap_or_default() + "\n";
+    if std::fs::read_to_string(&path).is_ok_and(|t| t == text) {
+        return Ok(());
+    }
+    std::fs::write(path, text)
+}
+
+/// Whether two Mesa versions are the same release for goldens (numeric parts only, so a
+/// distribution's packaging suffix does not matter).
+pub fn same_release(a: &str, b: &str) -> bool {
+    crate::status::version_parts(a) == crate::status::version_parts(b)
 }

@@ -6,8 +6,10 @@
 //! report set come with the conformance runner.
 
 pub mod args;
+pub mod bisect;
 pub mod child;
 pub mod conformance;
+pub mod drivers;
 pub mod error_curves;
 pub mod fake;
 pub mod glob;
@@ -15,8 +17,10 @@ pub mod golden;
 pub mod html;
 pub mod judge_cache;
 pub mod measure;
+pub mod mesa_build;
 pub mod pareto_plot;
 pub mod pool;
+pub mod reduce;
 pub mod registry;
 pub mod render_cmd;
 pub mod run;

@@ -12,12 +12,20 @@ fn main() -> ExitCode {
         Some("worker") => umbra_runner::worker::main(&argv[1..]),
         Some("selftest") => umbra_runner::selftest::main(&argv[1..]),
         Some("sweep") => umbra_runner::sweep::main(&argv[1..]),
+        Some("drivers") => umbra_runner::drivers::main(&argv[1..]),
+        Some("bisect") => umbra_runner::bisect::main(&argv[1..]),
+        Some("bisect-step") => umbra_runner::bisect::step(&argv[1..]),
+        Some("reduce") => umbra_runner::reduce::main(&argv[1..]),
         Some("-h" | "--help" | "help") => {
             println!(
-                "usage:\n  {}\n  {}\n  {}",
+                "usage:\n  {}\n  {}\n  {}\n  {}\n  {}\n  {}\n  {}",
                 render_cmd::USAGE,
                 conformance::USAGE,
-                umbra_runner::sweep::USAGE
+                umbra_runner::selftest::USAGE,
+                umbra_runner::sweep::USAGE,
+                umbra_runner::drivers::USAGE,
+                umbra_runner::bisect::USAGE,
+                umbra_runner::reduce::USAGE
             );
             0
         }

@@ -30,7 +30,7 @@ pub struct Worker {
 
 impl Worker {
     /// Starts `umbra worker --backend id` with `env`; waits up to `limit` for its hello.
-    pub fn start(id: &str, env: &[(&str, &str)], limit: Duration) -> Result<Worker, String> {
+    pub fn start(id: &str, env: &[(String, String)], limit: Duration) -> Result<Worker, String> {
         let exe =
             std::env::current_exe().map_err(|e| format!("cannot find this executable: {e}"))?;
         Worker::start_exe(&exe, id, env, limit)
@@ -41,7 +41,7 @@ impl Worker {
     pub fn start_exe(
         exe: &std::path::Path,
         id: &str,
-        env: &[(&str, &str)],
+        env: &[(String, String)],
         limit: Duration,
     ) -> Result<Worker, String> {
         let mut cmd = Command::new(exe);

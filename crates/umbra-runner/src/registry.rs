@@ -52,8 +52,36 @@ pub fn driver_env(id: &str) -> Option<Vec<(&'static str, &'static str)>> {
     }
 }
 
-/// Whether this process can host the id (its driver environment is in place).
+/// Everything a worker process for `id` needs in its environment: the driver's variables,
+/// and, when a Mesa build is selected ([`crate::mesa_build`]) and the backend runs on Mesa,
+/// the build's loader variables.
+pub fn worker_env(id: &str) -> Vec<(String, String)> {
+    let mut env: Vec<(String, String)> = driver_env(id)
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
+    if let Some(build) = crate::mesa_build::selected() {
+        if crate::mesa_build::is_mesa_backed(id) {
+            env.extend(build.env());
+        }
+    }
+    env
+}
+
+/// Whether this process can host the id (its driver environment is in place, and the
+/// selected Mesa build's, which only a fresh process can load).
 pub fn hostable_here(id: &str) -> bool {
+    if let Some(build) = crate::mesa_build::selected() {
+        let here = std::env::var(crate::mesa_build::ENV).ok();
+        if crate::mesa_build::is_mesa_backed(id)
+            && (here.as_deref() != Some(&*build.root.to_string_lossy())
+                || std::env::var_os("LIBGL_DRIVERS_PATH").as_deref()
+                    != build.dri.as_deref().map(|d| d.as_os_str()))
+        {
+            return false;
+        }
+    }
     match (umbra_wgpu::Kind::parse(id), umbra_gl::parse_id(id)) {
         (Some(umbra_wgpu::Kind::GlLlvmpipe), _) => umbra_gl::Driver::Llvmpipe.is_selected(),
         (Some(umbra_wgpu::Kind::VulkanLavapipe), _) => {

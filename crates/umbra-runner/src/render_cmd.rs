@@ -10,14 +10,20 @@ use crate::args::Args;
 use crate::run::{Outcome, describe, run_point};
 
 /// Usage line.
-pub const USAGE: &str =
-    "umbra render CASE.json [--backend ref|gl33/llvmpipe|gles2/zink|...] [-o DIR] [--point GLOB]";
+pub const USAGE: &str = "umbra render CASE.json [--backend ref|gl33/llvmpipe|gles2/zink|...] [-o DIR] [--point GLOB] [--mesa PREFIX|BUILD_DIR|system]";
 
 /// Runs the command; returns the process exit code.
 pub fn main(argv: &[String]) -> i32 {
-    let args = match Args::parse(argv, &["backend", "o", "out", "point"], &[]) {
+    let args = match Args::parse(argv, &["backend", "o", "out", "point", "mesa"], &[]) {
         Ok(a) => a,
         Err(e) => return usage_error(&e),
+    };
+    let build = match crate::mesa_build::select(args.value("mesa")) {
+        Ok(b) => b,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 125;
+        }
     };
     let [case] = args.positional.as_slice() else {
         return usage_error("give exactly one case file");
@@ -29,19 +35,36 @@ pub fn main(argv: &[String]) -> i32 {
             .unwrap_or("target/umbra/render"),
     );
     if !crate::registry::hostable_here(backend_id) {
-        let env = crate::registry::driver_env(backend_id).unwrap_or_default();
+        let env = crate::registry::worker_env(backend_id);
         let mut again = vec!["render".to_string()];
         again.extend(argv.iter().cloned());
         return crate::child::rerun(&again, &env);
     }
+    let on_build = build.filter(|_| crate::mesa_build::is_mesa_backed(backend_id));
+    if let Some(why) = on_build.and_then(|b| b.lacks(backend_id)) {
+        println!("skip {backend_id}: {why}");
+        return 0;
+    }
     let mut backend = match crate::registry::create(backend_id) {
         Ok(b) => b,
         Err(crate::registry::CreateError::Unknown(e)) => return usage_error(&e),
+        Err(e) if on_build.is_some() => {
+            eprintln!("error: {backend_id}: the driver of the Mesa build did not load: {e}");
+            return 125;
+        }
         Err(e) => {
             println!("skip {backend_id}: {e}");
             return 0;
         }
     };
+    if let Some(b) = on_build.filter(|b| b.layout != "fake (tests)") {
+        if let Err(e) = crate::mesa_build::check_loaded(&b.root, &crate::mesa_build::loaded_libs())
+        {
+            eprintln!("error: {backend_id}: {e}");
+            return 125;
+        }
+        println!("{backend_id} on the Mesa build {}", b.describe());
+    }
     let points = match umbra_case::load_file(Path::new(case)) {
         Ok(p) => p,
         Err(e) => {

@@ -27,7 +27,7 @@ use crate::status::Expectations;
 use crate::worker::Request;
 
 /// Usage line.
-pub const USAGE: &str = "umbra selftest [--backend ID]... [--fault NAME]... [--cases DIR] [--expectations DIR] [--timeout SECS] [--jobs N] [--verbose]";
+pub const USAGE: &str = "umbra selftest [--backend ID]... [--fault NAME]... [--cases DIR] [--expectations DIR] [--timeout SECS] [--jobs N] [--mesa PREFIX|BUILD_DIR|system] [--verbose]";
 
 /// How many exercising points each fault × backend pair runs at least.
 pub const SAMPLE: usize = 6;
@@ -113,6 +113,8 @@ pub struct Hunt {
     pub caught: Vec<(String, String)>,
     /// Why nothing was run or caught, when so.
     pub note: Option<String>,
+    /// The worker refused the Mesa build asked for (`--mesa`): the self-test cannot stand.
+    pub refused: bool,
 }
 
 impl Hunt {
@@ -140,6 +142,7 @@ pub fn main(argv: &[String]) -> i32 {
             "expectations",
             "timeout",
             "jobs",
+            "mesa",
         ],
         &["verbose"],
     ) {
@@ -149,6 +152,10 @@ pub fn main(argv: &[String]) -> i32 {
             return 125;
         }
     };
+    if let Err(e) = crate::mesa_build::select(args.value("mesa")) {
+        eprintln!("error: {e}");
+        return 125;
+    }
     let cases = PathBuf::from(args.value("cases").unwrap_or("cases"));
     let timeout = Duration::from_secs(
         args.value("timeout")
@@ -327,7 +334,7 @@ fn summary(results: &[(String, Fault, Hunt)]) -> i32 {
         results.len()
     );
     println!("selftest: {caught} passed, {} failed", missed.len());
-    if results.is_empty() {
+    if results.is_empty() || results.iter().any(|r| r.2.refused) {
         125
     } else if missed.is_empty() {
         0
@@ -347,12 +354,12 @@ fn hunt(
     verbose: bool,
 ) -> Hunt {
     let mut h = Hunt::default();
-    let mut env = crate::registry::driver_env(backend).unwrap_or_default();
+    let mut env = crate::registry::worker_env(backend);
     let cache = cache.to_string_lossy().into_owned();
     env.extend([
-        ("UMBRA_SELFTEST", "1"),
-        ("UMBRA_FAULT", fault.name()),
-        (crate::judge_cache::ENV, cache.as_str()),
+        ("UMBRA_SELFTEST".into(), "1".into()),
+        ("UMBRA_FAULT".into(), fault.name().into()),
+        (crate::judge_cache::ENV.into(), cache),
     ]);
     let mut worker = match Worker::start(backend, &env, timeout) {
         Ok(w) => w,
@@ -365,6 +372,14 @@ fn hunt(
         h.note = Some(format!("backend unavailable: {u}"));
         return h;
     }
+    if let Some(why) = worker.hello.get("refused").and_then(|v| v.as_str()) {
+        h.note = Some(format!("refused the Mesa build: {why}"));
+        h.refused = true;
+        return h;
+    }
+    let expectations = expectations.for_driver(&crate::status::DriverFacts::from_hello(
+        &worker.hello["ready"],
+    ));
     let candidates: Vec<&(PathBuf, usize, umbra_case::CasePoint)> = points
         .iter()
         .filter(|(_, _, p)| exercises(fault, &p.case, backend))

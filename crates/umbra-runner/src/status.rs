@@ -18,6 +18,14 @@
 //! check not listed, or more pixels than the bound, fails *differently* and is a regression;
 //! one that fails less is still the expected failure. Every failing run's reason ends with
 //! its signature (`failed: value=29+twin:bias-order=29`), ready to copy.
+//!
+//! Expectations may name the drivers they apply to, as wgpu's per-driver failure cases do:
+//! a line `@applies TERM...` makes the lines after it (to the next `@applies`, or the end of
+//! the file) apply only to backends whose driver matches every term. A term is
+//! `mesa>=22.3`, `mesa<22.4`, `mesa=25.0.7` (also `<=`, `>`; `=` matches a version prefix,
+//! so `mesa=22.3` is any 22.3.x) against the Mesa version the driver reports, or
+//! `renderer=GLOB` against its renderer string. `@applies all` lifts the condition. A
+//! backend with no Mesa version (the reference) matches no `mesa` term.
 
 use std::fmt;
 use std::path::Path;
@@ -207,6 +215,131 @@ pub struct Expectation {
     pub reason: String,
     /// `file:line`, for messages.
     pub source: String,
+    /// The file it came from.
+    pub file: String,
+    /// The drivers it applies to (from the `@applies` line above it; empty: all).
+    pub applies: Selector,
+}
+
+/// What a backend's driver is, for `@applies` ([`Selector`]).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct DriverFacts {
+    /// The Mesa version the driver reports (`22.3.6`, `25.0.7-2~bpo12+1`), if it is Mesa.
+    pub mesa: Option<String>,
+    /// The renderer string.
+    pub renderer: String,
+}
+
+impl DriverFacts {
+    /// From a worker's `ready` hello.
+    pub fn from_hello(ready: &serde_json::Value) -> DriverFacts {
+        let s = |k: &str| ready[k].as_str().unwrap_or("").to_string();
+        let (version, renderer) = (s("version"), s("renderer"));
+        DriverFacts {
+            mesa: crate::mesa_build::reported_version([version.as_str(), renderer.as_str()]),
+            renderer,
+        }
+    }
+}
+
+/// The drivers an expectation applies to: every term must match (none: every driver).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Selector(pub Vec<Term>);
+
+/// One condition of a [`Selector`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Term {
+    /// The Mesa version compared with `op` (`>=`, `<=`, `>`, `<`, `=`) to these components.
+    Mesa(String, Vec<u32>),
+    /// A glob over the renderer string.
+    Renderer(String),
+}
+
+/// The numeric components of a version string, up to the first non-numeric part
+/// (`25.0.7-2~bpo12+1` → [25, 0, 7]).
+pub fn version_parts(v: &str) -> Vec<u32> {
+    v.split(['.', '-', '~', '+', ' '])
+        .map_while(|p| p.parse().ok())
+        .collect()
+}
+
+impl Selector {
+    /// Parses the terms of an `@applies` line.
+    pub fn parse(text: &str) -> Result<Selector, String> {
+        let mut terms = Vec::new();
+        for t in text.split_whitespace() {
+            if t == "all" {
+                continue;
+            }
+            if let Some(glob) = t.strip_prefix("renderer=") {
+                terms.push(Term::Renderer(glob.to_string()));
+                continue;
+            }
+            let Some(rest) = t.strip_prefix("mesa") else {
+                return Err(format!(
+                    "@applies term {t:?} is neither mesa<OP>VERSION nor renderer=GLOB (e.g. mesa>=22.3 mesa<22.4, renderer=*zink*)"
+                ));
+            };
+            let op = [">=", "<=", ">", "<", "="]
+                .into_iter()
+                .find(|op| rest.starts_with(op))
+                .ok_or_else(|| format!("@applies term {t:?} needs one of >= <= > < ="))?;
+            let parts = version_parts(&rest[op.len()..]);
+            if parts.is_empty() {
+                return Err(format!("@applies term {t:?} has no version number"));
+            }
+            terms.push(Term::Mesa(op.to_string(), parts));
+        }
+        Ok(Selector(terms))
+    }
+
+    /// Whether a driver matches every term.
+    pub fn matches(&self, d: &DriverFacts) -> bool {
+        self.0.iter().all(|t| match t {
+            Term::Renderer(g) => crate::glob::matches(g, &d.renderer),
+            Term::Mesa(op, want) => {
+                let Some(have) = d.mesa.as_deref().map(version_parts) else {
+                    return false;
+                };
+                if op == "=" {
+                    return have.len() >= want.len() && have[..want.len()] == want[..];
+                }
+                let n = have.len().max(want.len());
+                let pad = |v: &[u32]| {
+                    (0..n)
+                        .map(|i| v.get(i).copied().unwrap_or(0))
+                        .collect::<Vec<_>>()
+                };
+                let (h, w) = (pad(&have), pad(want));
+                match op.as_str() {
+                    ">=" => h >= w,
+                    "<=" => h <= w,
+                    ">" => h > w,
+                    _ => h < w,
+                }
+            }
+        })
+    }
+}
+
+impl fmt::Display for Selector {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.0.is_empty() {
+            return f.write_str("all");
+        }
+        let parts: Vec<String> = self
+            .0
+            .iter()
+            .map(|t| match t {
+                Term::Renderer(g) => format!("renderer={g}"),
+                Term::Mesa(op, v) => format!(
+                    "mesa{op}{}",
+                    v.iter().map(u32::to_string).collect::<Vec<_>>().join(".")
+                ),
+            })
+            .collect();
+        f.write_str(&parts.join(" "))
+    }
 }
 
 /// Every expectation of a directory, in file and line order.
@@ -227,12 +360,17 @@ impl Expectations {
         let mut out = Vec::new();
         for f in files {
             let text = std::fs::read_to_string(&f).map_err(|e| format!("{}: {e}", f.display()))?;
+            let mut applies = Selector::default();
             for (n, line) in text.lines().enumerate() {
                 let line = line.trim();
                 if line.is_empty() || line.starts_with('#') {
                     continue;
                 }
                 let source = format!("{}:{}", f.display(), n + 1);
+                if let Some(rest) = line.strip_prefix("@applies") {
+                    applies = Selector::parse(rest).map_err(|e| format!("{source}: {e}"))?;
+                    continue;
+                }
                 let mut parts = line.splitn(3, ',');
                 let (pattern, status, reason) = (
                     parts.next().unwrap_or("").trim(),
@@ -251,10 +389,35 @@ impl Expectations {
                     expected,
                     reason: reason.into(),
                     source,
+                    file: f.display().to_string(),
+                    applies: applies.clone(),
                 });
             }
         }
         Ok(Expectations(out))
+    }
+
+    /// The expectations that apply to a backend with driver `d`.
+    pub fn for_driver(&self, d: &DriverFacts) -> Expectations {
+        Expectations(
+            self.0
+                .iter()
+                .filter(|e| e.applies.matches(d))
+                .cloned()
+                .collect(),
+        )
+    }
+
+    /// The files these expectations come from, each with how many of its lines are here.
+    pub fn files(&self) -> Vec<(String, usize)> {
+        let mut out: Vec<(String, usize)> = Vec::new();
+        for e in &self.0 {
+            match out.iter_mut().find(|(f, _)| *f == e.file) {
+                Some((_, n)) => *n += 1,
+                None => out.push((e.file.clone(), 1)),
+            }
+        }
+        out
     }
 
     /// The first expectation whose pattern matches `name`.
@@ -335,6 +498,8 @@ mod tests {
             expected: Expected::parse("Fail:value<=40+twin:bias-order<=40").expect("parse"),
             reason: "driver bug 123".into(),
             source: "x.txt:1".into(),
+            file: "x.txt".into(),
+            applies: Selector::default(),
         }]);
         let same = failed(&[("value", 29), ("twin:bias-order", 29)]);
         assert_eq!(
@@ -373,6 +538,8 @@ mod tests {
             expected: Expected::parse("Fail:map<=1000").expect("parse"),
             reason: "softpipe offset".into(),
             source: "x.txt:2".into(),
+            file: "x.txt".into(),
+            applies: Selector::default(),
         }]);
         let (status, why) = e.apply("gl33/softpipe/x", Status::Fail, &failed(&[("map", 5000)]));
         assert_eq!(status, Status::Fail);
@@ -413,6 +580,54 @@ mod tests {
             err.contains("bad.txt:1") && err.contains("needs a pattern and a reason"),
             "{err}"
         );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn expectations_select_drivers_by_version_and_renderer() {
+        let dir = std::env::temp_dir().join(format!("umbra-exp-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        std::fs::write(
+            dir.join("mesa.txt"),
+            "gl33/llvmpipe/a,Fail:value<=1,everywhere\n\
+             @applies mesa>=22.3 mesa<22.4\n\
+             gl33/llvmpipe/b,Fail:value<=2,22.3 only\n\
+             @applies mesa=25.0 renderer=llvmpipe*\n\
+             gl33/llvmpipe/c,Fail:value<=3,25.0 llvmpipe only\n\
+             @applies all\n\
+             gl33/llvmpipe/d,Fail:value<=4,everywhere again\n",
+        )
+        .expect("write");
+        let all = Expectations::load(&dir).expect("load");
+        let facts = |v: &str, r: &str| DriverFacts {
+            mesa: crate::mesa_build::reported_version([v]),
+            renderer: r.into(),
+        };
+        let names = |e: &Expectations| e.0.iter().map(|x| x.pattern.clone()).collect::<Vec<_>>();
+        let old = all.for_driver(&facts(
+            "4.5 (Core Profile) Mesa 22.3.6",
+            "llvmpipe (LLVM 15.0.6, 256 bits)",
+        ));
+        assert_eq!(
+            names(&old),
+            ["gl33/llvmpipe/a", "gl33/llvmpipe/b", "gl33/llvmpipe/d"]
+        );
+        let new = all.for_driver(&facts(
+            "4.5 (Core Profile) Mesa 25.0.7-2~bpo12+1",
+            "llvmpipe (LLVM 15.0.6, 256 bits)",
+        ));
+        assert_eq!(
+            names(&new),
+            ["gl33/llvmpipe/a", "gl33/llvmpipe/c", "gl33/llvmpipe/d"]
+        );
+        let zink = all.for_driver(&facts("Mesa 25.0.7", "zink Vulkan 1.3(llvmpipe)"));
+        assert_eq!(names(&zink), ["gl33/llvmpipe/a", "gl33/llvmpipe/d"]);
+        let reference = all.for_driver(&DriverFacts::default());
+        assert_eq!(names(&reference), ["gl33/llvmpipe/a", "gl33/llvmpipe/d"]);
+        assert_eq!(old.files().len(), 1);
+        std::fs::write(dir.join("bad.txt"), "@applies mesa~22\n").expect("write");
+        let e = Expectations::load(&dir).expect_err("bad term");
+        assert!(e.contains("bad.txt:1") && e.contains(">="), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -28,7 +28,7 @@ use crate::pool::{Reply, Worker};
 use crate::worker::Request;
 
 /// Usage line.
-pub const USAGE: &str = "umbra sweep [--scene CASE.json] [--point ID] [--backend ID|all]... [--repeat N] [--timeout SECS] [--out DIR]";
+pub const USAGE: &str = "umbra sweep [--scene CASE.json] [--point ID] [--backend ID|all]... [--repeat N] [--timeout SECS] [--out DIR] [--mesa PREFIX|BUILD_DIR|system]";
 
 /// Backends swept when none is named: the reference and one of each GPU API family.
 pub const DEFAULT_BACKENDS: [&str; 3] = ["ref", "gl33/llvmpipe", "wgpu-vk/lavapipe"];
@@ -252,7 +252,9 @@ fn write_case(
 pub fn main(argv: &[String]) -> i32 {
     let args = match Args::parse(
         argv,
-        &["scene", "point", "backend", "repeat", "timeout", "out"],
+        &[
+            "scene", "point", "backend", "repeat", "timeout", "out", "mesa",
+        ],
         &[],
     ) {
         Ok(a) => a,
@@ -261,6 +263,10 @@ pub fn main(argv: &[String]) -> i32 {
             return 2;
         }
     };
+    if let Err(e) = crate::mesa_build::select(args.value("mesa")) {
+        eprintln!("error: {e}");
+        return 125;
+    }
     let scene = PathBuf::from(args.value("scene").unwrap_or(DEFAULT_SCENE.0));
     let repeat = match args.value("repeat").map(str::parse::<u32>).transpose() {
         Ok(r) => r.unwrap_or(5).max(1),
@@ -324,7 +330,7 @@ pub fn main(argv: &[String]) -> i32 {
     let mut rows: Vec<Row> = Vec::new();
     let mut done = 0;
     for backend in &backends {
-        let env = crate::registry::driver_env(backend).unwrap_or_default();
+        let env = crate::registry::worker_env(backend);
         let start = || Worker::start(backend, &env, timeout);
         let mut worker = start();
         for (index, t) in plan.iter().enumerate() {
@@ -342,6 +348,10 @@ pub fn main(argv: &[String]) -> i32 {
                     continue;
                 }
             };
+            if let Some(why) = w.hello.get("refused").and_then(Value::as_str) {
+                eprintln!("error: {why}");
+                return 125;
+            }
             if let Some(why) = w.hello.get("unavailable").and_then(Value::as_str) {
                 rows.push(Row {
                     backend: backend.clone(),
@@ -431,10 +441,13 @@ pub fn measure_backends(
     backends
         .iter()
         .map(|b| {
-            let env = crate::registry::driver_env(b).unwrap_or_default();
+            let env = crate::registry::worker_env(b);
             let result = Worker::start_exe(exe, b, &env, timeout).and_then(|mut w| {
                 if let Some(why) = w.hello.get("unavailable").and_then(Value::as_str) {
                     return Err(format!("unavailable: {why}"));
+                }
+                if let Some(why) = w.hello.get("refused").and_then(Value::as_str) {
+                    return Err(format!("refused the Mesa build: {why}"));
                 }
                 let req = Request {
                     file: file.to_path_buf(),

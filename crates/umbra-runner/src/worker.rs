@@ -119,6 +119,21 @@ pub struct Metrics {
     /// See `judge_ms`.
     #[serde(default)]
     pub golden_ms: f64,
+    /// 64-bit FNV-1a of the frame's colour bytes: two builds' frames are the same picture
+    /// exactly when these match (`umbra drivers`).
+    #[serde(default)]
+    pub color_hash: String,
+    /// The same over the visibility values' bits.
+    #[serde(default)]
+    pub visibility_hash: String,
+}
+
+/// 64-bit FNV-1a, as 16 hex digits.
+pub fn fnv64(bytes: impl IntoIterator<Item = u8>) -> String {
+    let h = bytes.into_iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    });
+    format!("{h:016x}")
 }
 
 /// Runs the worker loop; returns the exit code.
@@ -137,21 +152,69 @@ pub fn main(argv: &[String]) -> i32 {
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     let created = std::time::Instant::now();
+    // On a Mesa build (`--mesa`), a backend whose driver the build lacks is a skip, and one
+    // whose driver does not load, or loads from elsewhere, is refused: never a silent run
+    // on the system's Mesa.
+    let build = std::env::var(crate::mesa_build::ENV)
+        .ok()
+        .filter(|_| crate::mesa_build::is_mesa_backed(id))
+        .map(|root| crate::mesa_build::MesaBuild::open(std::path::Path::new(&root)));
+    let say = |out: &mut std::io::StdoutLock, v: serde_json::Value| {
+        let _ = writeln!(out, "{v}");
+        let _ = out.flush();
+    };
+    let build = match build {
+        Some(Err(e)) => {
+            say(
+                &mut out,
+                serde_json::json!({ "refused": format!("--mesa: {e}") }),
+            );
+            return 0;
+        }
+        Some(Ok(b)) => {
+            if let Some(why) = b.lacks(id) {
+                say(&mut out, serde_json::json!({ "unavailable": why }));
+                return 0;
+            }
+            Some(b)
+        }
+        None => None,
+    };
     let mut backend = match crate::registry::create(id) {
         Ok(b) => {
             let i = b.info();
             let create_ms = created.elapsed().as_secs_f64() * 1e3;
-            let hello = serde_json::json!({ "ready": { "vendor": i.vendor, "renderer": i.renderer, "version": i.version, "extensions": i.extensions, "create_ms": create_ms } });
-            let _ = writeln!(out, "{hello}");
-            let _ = out.flush();
+            let libs = crate::mesa_build::loaded_libs();
+            if let Some(build) = &build {
+                if build.layout != "fake (tests)" {
+                    if let Err(e) = crate::mesa_build::check_loaded(&build.root, &libs) {
+                        say(
+                            &mut out,
+                            serde_json::json!({ "refused": format!("{id}: {e}") }),
+                        );
+                        return 0;
+                    }
+                }
+            }
+            let hello = serde_json::json!({ "ready": {
+                "vendor": i.vendor, "renderer": i.renderer, "version": i.version,
+                "extensions": i.extensions, "create_ms": create_ms,
+                "build": build.as_ref().map(|b| b.describe()),
+                "mesa_libs": libs,
+            } });
+            say(&mut out, hello);
             b
         }
         Err(e) => {
-            let _ = writeln!(
-                out,
-                "{}",
-                serde_json::json!({ "unavailable": e.to_string() })
-            );
+            let v = match &build {
+                // The build has the driver (lacks() said so), yet it did not come up.
+                Some(b) => serde_json::json!({ "refused": format!(
+                    "{id}: the driver of the Mesa build in {} did not load: {e}",
+                    b.root.display()
+                ) }),
+                None => serde_json::json!({ "unavailable": e.to_string() }),
+            };
+            say(&mut out, v);
             return 0;
         }
     };
@@ -264,22 +327,53 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 judge_ms: j.judge_time.as_secs_f64() * 1e3,
                 twins_ms: j.twins_time.as_secs_f64() * 1e3,
                 golden_ms: 0.0,
+                color_hash: fnv64(j.frame.color.iter().copied()),
+                visibility_hash: fnv64(
+                    j.frame
+                        .visibility
+                        .iter()
+                        .flat_map(|v| v.to_bits().to_le_bytes()),
+                ),
             };
             let mut problems = j.problems.clone();
             let mut failed = j.failed.clone();
             let mut metrics = metrics;
             let golden_start = std::time::Instant::now();
+            let mut notes = Vec::new();
             let golden = req.golden.as_ref().map(|dir| {
                 let (g, msg, ssim) = crate::golden::check(dir, &name, &j.frame, &j.legal);
                 metrics.ssim_golden = ssim;
-                if g == crate::golden::Golden::Changed {
-                    problems.push(msg);
-                    failed.push(crate::run::FailedCheck {
-                        check: "golden".into(),
-                        count: 1,
-                    });
+                // A golden blessed on another driver version still fails; the reason says so.
+                let info = backend.info();
+                let here = crate::mesa_build::reported_version([
+                    info.version.as_str(),
+                    info.renderer.as_str(),
+                ]);
+                let blessed = crate::golden::blessed_on(dir, &backend.id().0);
+                let foreign = match (&here, &blessed) {
+                    (Some(h), Some(b)) => (!crate::golden::same_release(h, b)).then_some((h, b)),
+                    _ => None,
+                };
+                match (g, foreign) {
+                    (crate::golden::Golden::Changed, foreign) => {
+                        problems.push(match foreign {
+                            Some((h, b)) => format!(
+                                "{msg}; this golden was blessed on Mesa {b} and this driver is Mesa {h}: the difference may be the driver's change between them (compare the two with `cargo xtask drivers`, and bless on this version only after review)"
+                            ),
+                            None => msg,
+                        });
+                        failed.push(crate::run::FailedCheck {
+                            check: "golden".into(),
+                            count: 1,
+                        });
+                        if foreign.is_some() {
+                            "changed-other-driver".to_string()
+                        } else {
+                            "changed".to_string()
+                        }
+                    }
+                    (g, _) => format!("{g:?}").to_lowercase(),
                 }
-                format!("{g:?}").to_lowercase()
             });
             metrics.golden_ms = golden_start.elapsed().as_secs_f64() * 1e3;
             let failing = !problems.is_empty();
@@ -297,7 +391,12 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 } else {
                     "pass".into()
                 },
-                reason: problems.join("; "),
+                reason: problems
+                    .iter()
+                    .chain(&notes)
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join("; "),
                 details: describe(&j),
                 metrics: Some(metrics),
                 golden,

@@ -63,6 +63,8 @@ fn goldens_fail_on_change_and_are_only_written_by_blessing() {
     let o = umbra(&golden, &out, &[("INSTA_UPDATE", "always")]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     let written = files(&golden);
+    // The golden (snapshot + picture); the reference has no driver version, so no manifest
+    // of blessed drivers is written.
     assert_eq!(written.len(), 2, "{written:?}");
     let png = golden.join(
         written

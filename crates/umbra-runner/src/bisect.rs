@@ -1,0 +1,455 @@
+//! `umbra bisect --mesa-src DIR --good REV --bad REV`: finds the Mesa commit that broke a
+//! case, with `git bisect run` over a Mesa source tree.
+//!
+//! - **Configure once.** The build directory (default `target/umbra/bisect/build`) is set up
+//!   with meson the first time, for the drivers umbra runs: llvmpipe and softpipe (swrast),
+//!   zink, lavapipe, surfaceless EGL through glvnd, no GLX or window systems
+//!   ([`MESON_OPTIONS`]; add your own with `--meson-option`). Later commits rebuild
+//!   incrementally in the same directory (ninja rebuilds what changed; meson reconfigures
+//!   itself when a build file changed).
+//! - **Each commit into its own prefix**: `meson install --destdir PREFIXES/<commit>`, which
+//!   `--mesa` then loads (and checks it loaded). A commit that does not build is 125
+//!   (`git bisect skip`).
+//! - **Test**: `umbra conformance --mesa PREFIX` on the chosen cases and backends (`--filter`,
+//!   `--backend`), goldens off: 0 good, 1 bad, 125 when nothing could be judged.
+//! - At the end it prints the first bad commit, the case's failure on it, and every step with
+//!   its build and test time (also in `WORK/steps.csv`, with the full transcript in
+//!   `WORK/bisect.log`).
+//!
+//! `--build-script PATH` replaces meson: it is run as `PATH SRC PREFIX` in the source tree
+//! and must install a Mesa (or, in umbra's own tests, a fake build) into PREFIX.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::Instant;
+
+use crate::args::Args;
+
+/// Usage line.
+pub const USAGE: &str = "umbra bisect --mesa-src DIR --good REV --bad REV [--filter GLOB] [--backend ID]... [--work DIR] [--build-script PATH] [--meson-option OPT]... [--cases DIR] [--expectations DIR]";
+
+/// The one-time configuration: the smallest Mesa that holds every driver umbra runs.
+pub const MESON_OPTIONS: &[&str] = &[
+    "--prefix=/usr",
+    "--libdir=lib/x86_64-linux-gnu",
+    "--buildtype=release",
+    "-Db_ndebug=true",
+    "-Dplatforms=",
+    "-Dglx=disabled",
+    "-Degl=enabled",
+    "-Dgbm=disabled",
+    "-Dglvnd=true",
+    "-Dgles1=disabled",
+    "-Dgles2=enabled",
+    "-Dopengl=true",
+    "-Dshared-glapi=enabled",
+    "-Dgallium-drivers=swrast,zink",
+    "-Dvulkan-drivers=swrast",
+    "-Dllvm=enabled",
+    "-Dshared-llvm=enabled",
+    "-Ddri3=disabled",
+    "-Dgallium-va=disabled",
+    "-Dgallium-vdpau=disabled",
+    "-Dgallium-xa=disabled",
+    "-Dgallium-nine=false",
+    "-Dgallium-opencl=disabled",
+    "-Dosmesa=false",
+    "-Dvalgrind=disabled",
+    "-Dlibunwind=disabled",
+    "-Dbuild-tests=false",
+    "-Dvideo-codecs=",
+    "-Dvulkan-layers=",
+    "-Dtools=",
+];
+
+fn git(src: &Path, args: &[&str]) -> Result<String, String> {
+    let out = Command::new("git")
+        .arg("-C")
+        .arg(src)
+        .args(args)
+        .output()
+        .map_err(|e| format!("cannot run git: {e}"))?;
+    if out.status.success() {
+        Ok(String::from_utf8_lossy(&out.stdout).trim().to_string())
+    } else {
+        Err(format!(
+            "git {} failed: {}",
+            args.join(" "),
+            String::from_utf8_lossy(&out.stderr).trim()
+        ))
+    }
+}
+
+fn absolute(p: &str) -> PathBuf {
+    let p = PathBuf::from(p);
+    if p.is_absolute() {
+        p
+    } else {
+        std::env::current_dir().map(|d| d.join(&p)).unwrap_or(p)
+    }
+}
+
+/// The settings a step needs, passed to `umbra bisect-step` on its command line.
+const STEP_KEYS: &[&str] = &[
+    "src",
+    "work",
+    "filter",
+    "build-script",
+    "cases",
+    "expectations",
+];
+
+/// Runs the command; returns the exit code (0: a first bad commit was found; 1: not found
+/// or ambiguous; 125: bad input or set-up).
+pub fn main(argv: &[String]) -> i32 {
+    let args = match Args::parse(
+        argv,
+        &[
+            "mesa-src",
+            "good",
+            "bad",
+            "filter",
+            "backend",
+            "work",
+            "build-script",
+            "meson-option",
+            "cases",
+            "expectations",
+        ],
+        &[],
+    ) {
+        Ok(a) => a,
+        Err(e) => return usage(&e),
+    };
+    let (Some(src), Some(good), Some(bad)) = (
+        args.value("mesa-src"),
+        args.value("good"),
+        args.value("bad"),
+    ) else {
+        return usage("give --mesa-src DIR, --good REV and --bad REV");
+    };
+    let src = absolute(src);
+    if let Err(e) = git(&src, &["rev-parse", "--git-dir"]) {
+        eprintln!(
+            "error: --mesa-src {}: not a git work tree ({e}); fix: clone Mesa, or `git init` an unpacked source and commit it",
+            src.display()
+        );
+        return 125;
+    }
+    match git(&src, &["status", "--porcelain", "--untracked-files=no"]) {
+        Ok(s) if s.is_empty() => {}
+        Ok(s) => {
+            eprintln!(
+                "error: --mesa-src {} has uncommitted changes, which bisect's checkouts would clobber:\n{s}\nfix: commit or stash them",
+                src.display()
+            );
+            return 125;
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 125;
+        }
+    }
+    for (flag, rev) in [("--good", good), ("--bad", bad)] {
+        if let Err(e) = git(
+            &src,
+            &["rev-parse", "--verify", &format!("{rev}^{{commit}}")],
+        ) {
+            eprintln!(
+                "error: {flag} {rev}: not a commit of {} ({e})",
+                src.display()
+            );
+            return 125;
+        }
+    }
+    let work = absolute(args.value("work").unwrap_or("target/umbra/bisect"));
+    let _ = std::fs::create_dir_all(&work);
+    let _ = std::fs::remove_file(work.join("steps.csv"));
+    let script = args.value("build-script").map(absolute);
+    if let Some(s) = &script {
+        if !s.is_file() {
+            eprintln!("error: --build-script {}: no such file", s.display());
+            return 125;
+        }
+    } else {
+        // Configure once.
+        let build = work.join("build");
+        if !build.join("build.ninja").is_file() {
+            let t = Instant::now();
+            let mut cmd = Command::new("meson");
+            cmd.arg("setup").arg(&build).arg(&src).args(MESON_OPTIONS);
+            for o in args.values("meson-option") {
+                cmd.arg(o);
+            }
+            println!("bisect: configuring once: {cmd:?}");
+            match cmd.status() {
+                Ok(s) if s.success() => println!(
+                    "bisect: configured in {:.0} s; the first build compiles all of Mesa's swrast, zink and lavapipe (about 40 min on 2 cores), later ones only what a commit touched",
+                    t.elapsed().as_secs_f64()
+                ),
+                Ok(s) => {
+                    eprintln!(
+                        "error: meson setup failed ({s}); fix: install Mesa's build dependencies (README, \"Bisecting a Mesa tree\") and check that `python3` has mako"
+                    );
+                    return 125;
+                }
+                Err(e) => {
+                    eprintln!(
+                        "error: cannot run meson: {e}; fix: apt-get install meson ninja-build"
+                    );
+                    return 125;
+                }
+            }
+        }
+    }
+    let exe = match std::env::current_exe() {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: cannot find this executable: {e}");
+            return 125;
+        }
+    };
+    // The step's arguments, every path absolute (git bisect run works in the source tree).
+    let mut step: Vec<String> = vec!["bisect-step".into()];
+    let cases = absolute(args.value("cases").unwrap_or("cases"));
+    let expectations = absolute(args.value("expectations").unwrap_or("expectations"));
+    for (k, v) in [
+        ("src", Some(src.display().to_string())),
+        ("work", Some(work.display().to_string())),
+        ("filter", args.value("filter").map(str::to_string)),
+        (
+            "build-script",
+            script.as_ref().map(|s| s.display().to_string()),
+        ),
+        ("cases", Some(cases.display().to_string())),
+        ("expectations", Some(expectations.display().to_string())),
+    ] {
+        if let Some(v) = v {
+            step.push(format!("--{k}"));
+            step.push(v);
+        }
+    }
+    for b in args.values("backend") {
+        step.push("--backend".into());
+        step.push(b.to_string());
+    }
+    let started = Instant::now();
+    let _ = git(&src, &["bisect", "reset"]);
+    if let Err(e) = git(&src, &["bisect", "start", bad, good]) {
+        eprintln!("error: {e}");
+        return 125;
+    }
+    println!(
+        "bisect: {} between good {good} and bad {bad}",
+        src.display()
+    );
+    let log_path = work.join("bisect.log");
+    // Stream git's output (each step's line among it) and keep it for the transcript.
+    let mut transcript = String::new();
+    match Command::new("git")
+        .arg("-C")
+        .arg(&src)
+        .args(["bisect", "run"])
+        .arg(&exe)
+        .args(&step)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+    {
+        Ok(mut child) => {
+            if let Some(out) = child.stdout.take() {
+                use std::io::BufRead as _;
+                for line in std::io::BufReader::new(out).lines().map_while(Result::ok) {
+                    println!("{line}");
+                    transcript.push_str(&line);
+                    transcript.push('\n');
+                }
+            }
+            let _ = child.wait();
+        }
+        Err(e) => transcript = format!("cannot run git bisect run: {e}"),
+    }
+    let bisect_log = git(&src, &["bisect", "log"]).unwrap_or_default();
+    let _ = git(&src, &["bisect", "reset"]);
+    if let Ok(mut f) = std::fs::File::create(&log_path) {
+        let _ = write!(f, "{transcript}\n# git bisect log\n{bisect_log}\n");
+    }
+    // The steps, as the step processes recorded them.
+    let steps = std::fs::read_to_string(work.join("steps.csv")).unwrap_or_default();
+    println!("\nbisect: steps (commit, build s, test s, verdict, subject):");
+    for l in steps.lines() {
+        println!("  {l}");
+    }
+    let first_bad = transcript
+        .lines()
+        .find_map(|l| l.strip_suffix(" is the first bad commit"))
+        .map(str::to_string);
+    println!(
+        "bisect: {:.0} s in all; transcript in {}",
+        started.elapsed().as_secs_f64(),
+        log_path.display()
+    );
+    match first_bad {
+        Some(sha) => {
+            let subject = git(&src, &["log", "-1", "--format=%h %s", &sha]).unwrap_or_default();
+            println!("bisect: first bad commit: {sha}\nbisect:   {subject}");
+            let short = git(&src, &["rev-parse", "--short=12", &sha]).unwrap_or(sha.clone());
+            let report = work
+                .join("reports")
+                .join(&short)
+                .join("latest")
+                .join("report.json");
+            if let Some(r) = std::fs::read_to_string(&report)
+                .ok()
+                .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            {
+                println!("bisect: the case's failure on it ({}):", report.display());
+                for run in r["runs"].as_array().into_iter().flatten() {
+                    let status = run["status"].as_str().unwrap_or("");
+                    if matches!(status, "Fail" | "Crash" | "Timeout" | "UnexpectedPass") {
+                        println!(
+                            "  {status} {}: {}",
+                            run["name"].as_str().unwrap_or(""),
+                            run["reason"]
+                                .as_str()
+                                .unwrap_or("")
+                                .lines()
+                                .next()
+                                .unwrap_or("")
+                        );
+                    }
+                }
+            }
+            0
+        }
+        None => {
+            let tail: Vec<&str> = transcript.lines().rev().take(8).collect();
+            eprintln!(
+                "bisect: no single first bad commit; git said:\n{}",
+                tail.into_iter().rev().collect::<Vec<_>>().join("\n")
+            );
+            1
+        }
+    }
+}
+
+fn usage(msg: &str) -> i32 {
+    eprintln!("error: {msg}\nusage: {USAGE}");
+    125
+}
+
+/// `umbra bisect-step`: one commit (HEAD of the source tree): build, install into its own
+/// prefix, test. Exit 0 good, 1 bad, 125 skip (did not build, or could not be tested).
+pub fn step(argv: &[String]) -> i32 {
+    let mut valued: Vec<&str> = STEP_KEYS.to_vec();
+    valued.push("backend");
+    let args = match Args::parse(argv, &valued, &[]) {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("error: bisect-step: {e}");
+            return 125;
+        }
+    };
+    let (Some(src), Some(work)) = (args.value("src"), args.value("work")) else {
+        eprintln!("error: bisect-step needs --src and --work");
+        return 125;
+    };
+    let (src, work) = (PathBuf::from(src), PathBuf::from(work));
+    let sha = git(&src, &["rev-parse", "--short=12", "HEAD"]).unwrap_or_else(|_| "unknown".into());
+    let subject = git(&src, &["log", "-1", "--format=%s"]).unwrap_or_default();
+    let prefix = work.join("prefixes").join(&sha);
+    let log = work.join("logs");
+    let _ = std::fs::create_dir_all(&log);
+    let build_log = log.join(format!("{sha}-build.log"));
+    let t = Instant::now();
+    let built = if prefix.is_dir() {
+        true
+    } else {
+        let run = |cmd: &mut Command| -> bool {
+            let Ok(f) = std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(&build_log)
+            else {
+                return false;
+            };
+            let f2 = f.try_clone().ok();
+            cmd.current_dir(&src).stdout(Stdio::from(f));
+            if let Some(f2) = f2 {
+                cmd.stderr(Stdio::from(f2));
+            }
+            cmd.status().is_ok_and(|s| s.success())
+        };
+        match args.value("build-script") {
+            Some(script) => run(Command::new(script).arg(&src).arg(&prefix)),
+            None => {
+                let build = work.join("build");
+                run(Command::new("ninja").arg("-C").arg(&build))
+                    && run(Command::new("meson")
+                        .args(["install", "--no-rebuild", "--quiet", "-C"])
+                        .arg(&build)
+                        .arg("--destdir")
+                        .arg(&prefix))
+            }
+        }
+    };
+    let build_s = t.elapsed().as_secs_f64();
+    let record = |test_s: f64, verdict: &str| {
+        if let Ok(mut f) = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(work.join("steps.csv"))
+        {
+            let _ = writeln!(
+                f,
+                "{sha},{build_s:.1},{test_s:.1},{verdict},{}",
+                subject.replace(',', ";")
+            );
+        }
+        println!(
+            "bisect-step: {sha} {subject}: built in {build_s:.1} s, tested in {test_s:.1} s: {verdict}"
+        );
+    };
+    if !built {
+        let _ = std::fs::remove_dir_all(&prefix);
+        record(0.0, "skip (does not build; see the log)");
+        return 125;
+    }
+    let t = Instant::now();
+    let Ok(exe) = std::env::current_exe() else {
+        return 125;
+    };
+    let report = work.join("reports").join(&sha);
+    let mut cmd = Command::new(exe);
+    cmd.arg("conformance")
+        .arg("--mesa")
+        .arg(&prefix)
+        .args(["--golden", "none", "--out"])
+        .arg(&report);
+    for k in ["filter", "cases", "expectations"] {
+        if let Some(v) = args.value(k) {
+            cmd.arg(format!("--{k}")).arg(v);
+        }
+    }
+    for b in args.values("backend") {
+        cmd.args(["--backend", b]);
+    }
+    let test_log = log.join(format!("{sha}-test.log"));
+    if let Ok(f) = std::fs::File::create(&test_log) {
+        cmd.stdout(Stdio::from(f));
+    }
+    let code = cmd
+        .env_remove(crate::mesa_build::ENV)
+        .status()
+        .ok()
+        .and_then(|s| s.code());
+    let test_s = t.elapsed().as_secs_f64();
+    let (verdict, exit) = match code {
+        Some(0) => ("good", 0),
+        Some(1) => ("bad", 1),
+        _ => ("skip (could not be tested; see the test log)", 125),
+    };
+    record(test_s, verdict);
+    exit
+}

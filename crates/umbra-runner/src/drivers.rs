@@ -1,0 +1,654 @@
+//! `umbra drivers --baseline A --candidate B`: two Mesa builds side by side.
+//!
+//! Each side is a conformance run of the catalogue (`--mesa A`, then `--mesa B`; `system` is
+//! the system's Mesa), in a process of its own, without goldens (a golden guards one driver
+//! against itself; here the builds are compared with each other). The two `report.json` are
+//! then joined run by run, and every case point whose verdict, error against the truth,
+//! agreement with the reference or picture changed is listed:
+//!
+//! - `regression`: passed on the baseline, fails (or crashes, or hangs) on the candidate;
+//! - `fix`: the reverse;
+//! - `changed failure`: fails on both, with another signature (other checks or counts);
+//! - `support`: runs on one side and is a skip on the other;
+//! - `picture`: same verdict, another frame (colour or visibility hashes differ);
+//! - `numbers`: same frame bytes aside, the error or the judge's counts changed (this
+//!   cannot happen without a picture change unless the judge itself changed).
+//!
+//! The verdicts are *raw* (before expectations): an expected failure on one version is still
+//! a failure, so a driver fix of a known bug shows as a fix. Outputs in `--out` (default
+//! `target/umbra/drivers/`): `report.html` (baseline | candidate | reference | difference for
+//! each changed point, up to `--pictures N`), `changes.csv`, deqp-runner-style
+//! `regressions.csv` and `fixes.csv` (`test,status`), and each side's full conformance
+//! reports. Exit 1 when there is a regression, 0 otherwise, 125 when a side could not run.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+use serde_json::Value;
+
+use crate::args::Args;
+use crate::html::{base64, esc};
+
+/// Usage line.
+pub const USAGE: &str = "umbra drivers --baseline PREFIX|system --candidate PREFIX|system [--filter GLOB] [--backend ID]... [--cases DIR] [--expectations DIR] [--out DIR] [--pictures N] [--jobs N]";
+
+/// One run's raw verdict.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Verdict {
+    /// `pass`, `fail`, `skip`, `crash`, `timeout`.
+    pub kind: String,
+    /// For a failure, its signature (`value=12+map=3`).
+    pub signature: String,
+}
+
+impl Verdict {
+    /// From a report.json run: expectations undone (ExpectedFail is a failure, UnexpectedPass
+    /// and Flake a pass).
+    pub fn of(run: &Value) -> Verdict {
+        let status = run["status"].as_str().unwrap_or("");
+        let kind = match status {
+            "Pass" | "UnexpectedPass" | "Flake" => "pass",
+            "Skip" => "skip",
+            "Crash" => "crash",
+            "Timeout" => "timeout",
+            _ => "fail",
+        };
+        let signature = run["failed"]
+            .as_array()
+            .map(|f| {
+                f.iter()
+                    .map(|c| {
+                        format!(
+                            "{}={}",
+                            c["check"].as_str().unwrap_or(""),
+                            c["count"].as_u64().unwrap_or(0)
+                        )
+                    })
+                    .collect::<Vec<_>>()
+                    .join("+")
+            })
+            .unwrap_or_default();
+        Verdict {
+            kind: kind.into(),
+            signature,
+        }
+    }
+
+    fn failing(&self) -> bool {
+        matches!(self.kind.as_str(), "fail" | "crash" | "timeout")
+    }
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.kind == "fail" && !self.signature.is_empty() {
+            write!(f, "fail ({})", self.signature)
+        } else {
+            f.write_str(&self.kind)
+        }
+    }
+}
+
+/// One changed case point.
+#[derive(Clone, Debug)]
+pub struct Change {
+    /// Run name (`backend/case@sweep`).
+    pub name: String,
+    /// `regression`, `fix`, `changed failure`, `support`, `picture`, `numbers`.
+    pub kind: &'static str,
+    /// Baseline verdict.
+    pub baseline: Verdict,
+    /// Candidate verdict.
+    pub candidate: Verdict,
+    /// What else changed, in words.
+    pub detail: String,
+    /// The case file, point id and backend, for pictures.
+    pub file: String,
+    /// See `file`.
+    pub point: String,
+    /// See `file`.
+    pub backend: String,
+}
+
+/// Joins two report.json run lists and lists what changed.
+pub fn compare(baseline: &Value, candidate: &Value) -> Vec<Change> {
+    let runs = |r: &Value| -> BTreeMap<String, Value> {
+        r["runs"]
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|x| Some((x["name"].as_str()?.to_string(), x.clone())))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let (a, b) = (runs(baseline), runs(candidate));
+    let mut names: Vec<&String> = a.keys().chain(b.keys()).collect();
+    names.sort();
+    names.dedup();
+    let mut out = Vec::new();
+    let none = Value::Null;
+    for name in names {
+        let (ra, rb) = (a.get(name).unwrap_or(&none), b.get(name).unwrap_or(&none));
+        let (va, vb) = (Verdict::of(ra), Verdict::of(rb));
+        let (va, vb) = (
+            if ra.is_null() {
+                Verdict {
+                    kind: "absent".into(),
+                    signature: String::new(),
+                }
+            } else {
+                va
+            },
+            if rb.is_null() {
+                Verdict {
+                    kind: "absent".into(),
+                    signature: String::new(),
+                }
+            } else {
+                vb
+            },
+        );
+        let mut detail = Vec::new();
+        let m = |r: &Value, k: &str| r["metrics"][k].clone();
+        let num = |r: &Value, k: &str| m(r, k).as_u64();
+        for (k, what) in [
+            ("false_shadow", "false shadow"),
+            ("false_light", "false light"),
+        ] {
+            if num(ra, k) != num(rb, k) {
+                detail.push(format!(
+                    "{what} {} → {} px",
+                    opt(num(ra, k)),
+                    opt(num(rb, k))
+                ));
+            }
+        }
+        let refc = |r: &Value, k: &str| r["metrics"]["reference"][k].as_u64();
+        for (k, what) in [
+            ("illegal", "illegal"),
+            ("differ", "differ from the reference"),
+        ] {
+            if refc(ra, k) != refc(rb, k) {
+                detail.push(format!(
+                    "{what} {} → {} px",
+                    opt(refc(ra, k)),
+                    opt(refc(rb, k))
+                ));
+            }
+        }
+        let hash = |r: &Value, k: &str| m(r, k).as_str().map(str::to_string);
+        let picture = hash(ra, "color_hash") != hash(rb, "color_hash")
+            || hash(ra, "visibility_hash") != hash(rb, "visibility_hash");
+        if picture && !ra.is_null() && !rb.is_null() && va.kind != "skip" && vb.kind != "skip" {
+            detail.push("picture changed".into());
+        }
+        let kind = if va.kind == "pass" && vb.failing() {
+            "regression"
+        } else if va.failing() && vb.kind == "pass" {
+            "fix"
+        } else if va.failing() && vb.failing() && va != vb {
+            "changed failure"
+        } else if va.kind != vb.kind {
+            "support"
+        } else if picture && va.kind != "skip" {
+            "picture"
+        } else if !detail.is_empty() {
+            "numbers"
+        } else {
+            continue;
+        };
+        let pick = if rb.is_null() { ra } else { rb };
+        out.push(Change {
+            name: name.clone(),
+            kind,
+            baseline: va,
+            candidate: vb,
+            detail: detail.join("; "),
+            file: pick["file"].as_str().unwrap_or("").to_string(),
+            point: pick["case"].as_str().unwrap_or("").to_string(),
+            backend: pick["backend"].as_str().unwrap_or("").to_string(),
+        });
+    }
+    let rank = |k: &str| match k {
+        "regression" => 0,
+        "fix" => 1,
+        "changed failure" => 2,
+        "support" => 3,
+        "picture" => 4,
+        _ => 5,
+    };
+    out.sort_by(|x, y| (rank(x.kind), &x.name).cmp(&(rank(y.kind), &y.name)));
+    out
+}
+
+fn opt(v: Option<u64>) -> String {
+    v.map_or("-".into(), |v| v.to_string())
+}
+
+/// Runs the command; returns the exit code.
+pub fn main(argv: &[String]) -> i32 {
+    let args = match Args::parse(
+        argv,
+        &[
+            "baseline",
+            "candidate",
+            "filter",
+            "backend",
+            "cases",
+            "expectations",
+            "out",
+            "pictures",
+            "jobs",
+            "timeout",
+        ],
+        &[],
+    ) {
+        Ok(a) => a,
+        Err(e) => return usage(&e),
+    };
+    let (Some(base), Some(cand)) = (args.value("baseline"), args.value("candidate")) else {
+        return usage(
+            "give both --baseline and --candidate (a Mesa prefix or build directory, or `system`)",
+        );
+    };
+    for (flag, v) in [("--baseline", base), ("--candidate", cand)] {
+        if v != "system" {
+            if let Err(e) = crate::mesa_build::MesaBuild::open(Path::new(v)) {
+                eprintln!("error: {flag} {v}: {e}");
+                return 125;
+            }
+        }
+    }
+    let pictures: usize = match args.value("pictures").map(str::parse).transpose() {
+        Ok(n) => n.unwrap_or(60),
+        Err(_) => return usage("--pictures takes a number"),
+    };
+    let out = PathBuf::from(args.value("out").unwrap_or("target/umbra/drivers"));
+    let _ = std::fs::remove_dir_all(&out);
+    let Ok(exe) = std::env::current_exe() else {
+        eprintln!("error: cannot find this executable");
+        return 125;
+    };
+    let mut reports = Vec::new();
+    for (side, mesa) in [("baseline", base), ("candidate", cand)] {
+        let dir = out.join(side);
+        let _ = std::fs::create_dir_all(&dir);
+        let mut cmd = Command::new(&exe);
+        cmd.args(["conformance", "--mesa", mesa, "--golden", "none", "--out"])
+            .arg(&dir);
+        for k in ["filter", "cases", "expectations", "jobs", "timeout"] {
+            if let Some(v) = args.value(k) {
+                cmd.arg(format!("--{k}")).arg(v);
+            }
+        }
+        for b in args.values("backend") {
+            cmd.args(["--backend", b]);
+        }
+        let log = dir.join("conformance.log");
+        let Ok(file) = std::fs::File::create(&log) else {
+            eprintln!("error: cannot write {}", log.display());
+            return 125;
+        };
+        cmd.env_remove(crate::mesa_build::ENV)
+            .stdout(Stdio::from(file));
+        println!(
+            "drivers: running the {side} ({mesa}); log in {}",
+            log.display()
+        );
+        let started = std::time::Instant::now();
+        let code = cmd.status().ok().and_then(|s| s.code()).unwrap_or(125);
+        let tail = std::fs::read_to_string(&log).unwrap_or_default();
+        let closing = tail
+            .lines()
+            .rev()
+            .find(|l| l.starts_with("conformance:"))
+            .unwrap_or("no closing line");
+        println!(
+            "drivers: {side} done in {:.0} s (exit {code}): {closing}",
+            started.elapsed().as_secs_f64()
+        );
+        if code == 125 {
+            eprintln!(
+                "error: the {side} run could not run ({mesa}); see {}",
+                log.display()
+            );
+            return 125;
+        }
+        let report = std::fs::read_to_string(dir.join("latest").join("report.json"))
+            .ok()
+            .and_then(|t| serde_json::from_str::<Value>(&t).ok());
+        let Some(report) = report else {
+            eprintln!(
+                "error: the {side} run wrote no report.json under {}",
+                dir.display()
+            );
+            return 125;
+        };
+        reports.push(report);
+    }
+    let changes = compare(&reports[0], &reports[1]);
+    let label = |r: &Value, mesa: &str| {
+        let versions: Vec<String> = r["drivers"]
+            .as_array()
+            .map(|d| {
+                d.iter()
+                    .filter_map(|x| x["mesa"].as_str().map(str::to_string))
+                    .collect()
+            })
+            .unwrap_or_default();
+        let mut v = versions;
+        v.sort();
+        v.dedup();
+        format!(
+            "{mesa} (Mesa {})",
+            if v.is_empty() {
+                "?".into()
+            } else {
+                v.join(", ")
+            }
+        )
+    };
+    let (la, lb) = (label(&reports[0], base), label(&reports[1], cand));
+    // Pictures for the first N changes.
+    for c in changes.iter().take(pictures) {
+        render_pictures(&exe, &out, c, base, cand);
+    }
+    if let Err(e) = write_outputs(&out, &changes, &la, &lb, &reports) {
+        eprintln!("error: cannot write under {}: {e}", out.display());
+        return 125;
+    }
+    let compared = reports[1]["runs"].as_array().map_or(0, Vec::len);
+    let count = |k: &str| changes.iter().filter(|c| c.kind == k).count();
+    println!("\ndrivers: baseline {la} vs candidate {lb}");
+    println!(
+        "drivers: {compared} runs compared: {} regressions, {} fixes, {} changed failures, {} support changes, {} changed pictures, {} changed numbers",
+        count("regression"),
+        count("fix"),
+        count("changed failure"),
+        count("support"),
+        count("picture"),
+        count("numbers")
+    );
+    for c in changes
+        .iter()
+        .filter(|c| c.kind != "picture" && c.kind != "numbers")
+    {
+        println!(
+            "  {:<16} {}: {} → {}{}",
+            c.kind,
+            c.name,
+            c.baseline,
+            c.candidate,
+            if c.detail.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", c.detail)
+            }
+        );
+    }
+    println!("drivers: report in {}", out.join("report.html").display());
+    i32::from(count("regression") > 0)
+}
+
+fn usage(msg: &str) -> i32 {
+    eprintln!("error: {msg}\nusage: {USAGE}");
+    125
+}
+
+/// The directory of one change's pictures.
+fn picture_dir(out: &Path, c: &Change) -> PathBuf {
+    out.join("pictures").join(crate::golden::stem(&c.name))
+}
+
+/// Renders a changed point on both builds and on the reference, and the difference.
+fn render_pictures(exe: &Path, out: &Path, c: &Change, base: &str, cand: &str) {
+    let dir = picture_dir(out, c);
+    for (side, backend, mesa) in [
+        ("baseline", c.backend.as_str(), base),
+        ("candidate", c.backend.as_str(), cand),
+        ("reference", "ref", "system"),
+    ] {
+        let _ = Command::new(exe)
+            .args([
+                "render",
+                &c.file,
+                "--point",
+                &c.point,
+                "--backend",
+                backend,
+                "--mesa",
+                mesa,
+                "-o",
+            ])
+            .arg(dir.join(side))
+            .env_remove(crate::mesa_build::ENV)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status();
+    }
+    let a = image::open(dir.join("baseline").join("color.png")).map(|i| i.to_rgba8());
+    let b = image::open(dir.join("candidate").join("color.png")).map(|i| i.to_rgba8());
+    if let (Ok(a), Ok(b)) = (a, b) {
+        if a.dimensions() == b.dimensions() {
+            let mut d = image::RgbaImage::new(a.width(), a.height());
+            for ((pa, pb), pd) in a.pixels().zip(b.pixels()).zip(d.pixels_mut()) {
+                let diff =
+                    pa.0.iter()
+                        .zip(pb.0.iter())
+                        .take(3)
+                        .map(|(x, y)| x.abs_diff(*y))
+                        .max()
+                        .unwrap_or(0);
+                *pd = if diff == 0 {
+                    let g = (u16::from(pa.0[0]) + u16::from(pa.0[1]) + u16::from(pa.0[2])) / 12;
+                    image::Rgba([g as u8, g as u8, g as u8, 255])
+                } else {
+                    image::Rgba([255, 64u8.saturating_add(diff.saturating_mul(4)), 255, 255])
+                };
+            }
+            let _ = d.save(dir.join("difference.png"));
+        }
+    }
+}
+
+fn img(path: &Path, caption: &str) -> String {
+    match std::fs::read(path) {
+        Ok(bytes) => format!(
+            "<figure><img src=\"data:image/png;base64,{}\" alt=\"{caption}\"><figcaption>{caption}</figcaption></figure>",
+            base64(&bytes)
+        ),
+        Err(_) => format!(
+            "<figure><div class=\"none\">no picture</div><figcaption>{caption}</figcaption></figure>"
+        ),
+    }
+}
+
+fn write_outputs(
+    out: &Path,
+    changes: &[Change],
+    la: &str,
+    lb: &str,
+    reports: &[Value],
+) -> std::io::Result<()> {
+    std::fs::create_dir_all(out)?;
+    let q = |s: &str| {
+        if s.contains([',', '"', '\n']) {
+            format!("\"{}\"", s.replace('"', "\"\""))
+        } else {
+            s.to_string()
+        }
+    };
+    let mut csv = String::from("test,change,baseline,candidate,detail\n");
+    let mut regressions = String::new();
+    let mut fixes = String::new();
+    for c in changes {
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{}",
+            q(&c.name),
+            c.kind,
+            q(&c.baseline.to_string()),
+            q(&c.candidate.to_string()),
+            q(&c.detail)
+        );
+        let status = |v: &Verdict| match v.kind.as_str() {
+            "pass" => "Pass",
+            "skip" => "Skip",
+            "crash" => "Crash",
+            "timeout" => "Timeout",
+            _ => "Fail",
+        };
+        match c.kind {
+            "regression" => {
+                let _ = writeln!(regressions, "{},{}", q(&c.name), status(&c.candidate));
+            }
+            "fix" => {
+                let _ = writeln!(fixes, "{},{}", q(&c.name), status(&c.candidate));
+            }
+            _ => {}
+        }
+    }
+    std::fs::write(out.join("changes.csv"), csv)?;
+    std::fs::write(out.join("regressions.csv"), regressions)?;
+    std::fs::write(out.join("fixes.csv"), fixes)?;
+    let mut h = String::new();
+    let _ = write!(
+        h,
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>umbra drivers: {}</title><style>\
+         body{{font-family:sans-serif;margin:1.5em}} table{{border-collapse:collapse}} td,th{{border:1px solid #ccc;padding:2px 6px;font-size:13px}}\
+         figure{{display:inline-block;margin:4px}} figure img{{max-width:300px;image-rendering:pixelated}} .none{{width:200px;height:150px;background:#eee}}\
+         .regression{{color:#b00}} .fix{{color:#070}}</style></head><body>",
+        esc(lb)
+    );
+    let _ = write!(
+        h,
+        "<h1>Driver builds compared</h1><p>baseline: <b>{}</b><br>candidate: <b>{}</b></p>",
+        esc(la),
+        esc(lb)
+    );
+    for (side, r) in ["baseline", "candidate"].iter().zip(reports) {
+        let _ = write!(
+            h,
+            "<h3>{side}: drivers</h3><table><tr><th>backend</th><th>version</th><th>build</th><th>expectations applied</th></tr>"
+        );
+        for d in r["drivers"].as_array().into_iter().flatten() {
+            let _ = write!(
+                h,
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                esc(d["backend"].as_str().unwrap_or("")),
+                esc(d["version"]
+                    .as_str()
+                    .or(d["unavailable"].as_str())
+                    .unwrap_or("")),
+                esc(d["build"].as_str().unwrap_or("system")),
+                esc(&d["expectations"]
+                    .as_array()
+                    .map(|a| a
+                        .iter()
+                        .filter_map(Value::as_str)
+                        .collect::<Vec<_>>()
+                        .join(", "))
+                    .unwrap_or_default())
+            );
+        }
+        h.push_str("</table>");
+    }
+    let _ = write!(
+        h,
+        "<h2>{} changed runs</h2><table><tr><th>change</th><th>run</th><th>baseline</th><th>candidate</th><th>detail</th></tr>",
+        changes.len()
+    );
+    for c in changes {
+        let cls = c.kind.replace(' ', "-");
+        let _ = write!(
+            h,
+            "<tr><td class=\"{cls}\">{}</td><td><a href=\"#{}\">{}</a></td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            c.kind,
+            esc(&crate::golden::stem(&c.name)),
+            esc(&c.name),
+            esc(&c.baseline.to_string()),
+            esc(&c.candidate.to_string()),
+            esc(&c.detail)
+        );
+    }
+    h.push_str("</table><h2>Pictures</h2>");
+    for c in changes {
+        let dir = picture_dir(out, c);
+        if !dir.exists() {
+            continue;
+        }
+        let _ = write!(
+            h,
+            "<h3 id=\"{}\">{} <small>({}: {} → {})</small></h3>",
+            esc(&crate::golden::stem(&c.name)),
+            esc(&c.name),
+            c.kind,
+            esc(&c.baseline.to_string()),
+            esc(&c.candidate.to_string())
+        );
+        h.push_str(&img(&dir.join("baseline").join("color.png"), "baseline"));
+        h.push_str(&img(&dir.join("candidate").join("color.png"), "candidate"));
+        h.push_str(&img(&dir.join("reference").join("color.png"), "reference"));
+        h.push_str(&img(
+            &dir.join("difference.png"),
+            "difference (magenta: changed)",
+        ));
+    }
+    h.push_str("</body></html>");
+    std::fs::write(out.join("report.html"), h)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(name: &str, status: &str, failed: &[(&str, u64)], hash: &str, fs: u64) -> Value {
+        serde_json::json!({
+            "name": name, "status": status, "case": "c", "backend": "b", "file": "cases/c.json",
+            "failed": failed.iter().map(|(c, n)| serde_json::json!({"check": c, "count": n})).collect::<Vec<_>>(),
+            "metrics": {"false_shadow": fs, "false_light": 0, "color_hash": hash, "visibility_hash": hash,
+                        "reference": {"illegal": failed.first().map_or(0, |f| f.1), "differ": 0}}
+        })
+    }
+
+    #[test]
+    fn changes_are_classified_on_raw_verdicts() {
+        let a = serde_json::json!({"runs": [
+            run("b/same", "Pass", &[], "1", 0),
+            run("b/regressed", "Pass", &[], "1", 0),
+            run("b/fixed", "ExpectedFail", &[("value", 9)], "1", 0),
+            run("b/other-failure", "ExpectedFail", &[("value", 9)], "1", 0),
+            run("b/picture", "Pass", &[], "1", 3),
+            run("b/now-supported", "Skip", &[], "", 0),
+        ]});
+        let b = serde_json::json!({"runs": [
+            run("b/same", "Pass", &[], "1", 0),
+            run("b/regressed", "Fail", &[("value", 4)], "2", 0),
+            run("b/fixed", "UnexpectedPass", &[], "2", 0),
+            run("b/other-failure", "Fail", &[("map", 2)], "1", 0),
+            run("b/picture", "Pass", &[], "2", 5),
+            run("b/now-supported", "Pass", &[], "1", 0),
+        ]});
+        let c = compare(&a, &b);
+        let kinds: Vec<(&str, &str)> = c.iter().map(|c| (c.name.as_str(), c.kind)).collect();
+        assert_eq!(
+            kinds,
+            [
+                ("b/regressed", "regression"),
+                ("b/fixed", "fix"),
+                ("b/other-failure", "changed failure"),
+                ("b/now-supported", "support"),
+                ("b/picture", "picture"),
+            ]
+        );
+        assert_eq!(c[0].candidate.to_string(), "fail (value=4)");
+        assert!(
+            c[4].detail.contains("false shadow 3 → 5 px"),
+            "{}",
+            c[4].detail
+        );
+    }
+}

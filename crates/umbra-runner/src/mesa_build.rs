@@ -1,0 +1,487 @@
+//! Driver builds as an input: `--mesa PATH` (or `UMBRA_MESA=PATH`) runs every Mesa-backed
+//! backend against the Mesa in PATH instead of the system's.
+//!
+//! PATH may be an install prefix (`meson install --destdir D` gives `D/usr/...`), a Mesa
+//! meson build directory (uninstalled: Mesa's build links `*_dri.so` beside libgallium for
+//! `meson devenv`), or Debian packages unpacked with `dpkg -x` (`cargo xtask fetch-mesa`).
+//! The libraries are found by name, not by layout: `libEGL_mesa.so.0`, a `dri/` directory
+//! of `*_dri.so`, `libvulkan_lvp.so`, and the shared libraries beside them.
+//!
+//! Each worker gets the loader's variables ([`MesaBuild::env`]): `LD_LIBRARY_PATH`, glvnd's
+//! `__EGL_VENDOR_LIBRARY_FILENAMES` and the Vulkan loader's `VK_ICD_FILENAMES` /
+//! `VK_DRIVER_FILES`, both pointing at JSON files umbra writes with *absolute* library paths
+//! (the shipped ones name a bare file, which the loaders would resolve on the system's path),
+//! and `LIBGL_DRIVERS_PATH`. Loaders fall back silently, so the worker then checks what it
+//! really loaded ([`check_loaded`], from `/proc/self/maps`): a Mesa library from outside the
+//! build, or no Mesa driver at all, refuses the run with the path that was loaded. A backend
+//! whose driver the build does not have ([`MesaBuild::lacks`]) is a skip that says so.
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use serde::Serialize;
+
+/// The environment variable equivalent of `--mesa` (also how a worker learns its build).
+pub const ENV: &str = "UMBRA_MESA";
+
+/// A marker file that makes a directory a fake Mesa build, for the runner's own tests (only
+/// with fake backends enabled): `{"version": "...", "fault": "invert" | null}`.
+pub const FAKE_MARKER: &str = "umbra-fake-mesa.json";
+
+/// A Mesa build found on disk.
+#[derive(Clone, Debug, Serialize)]
+pub struct MesaBuild {
+    /// The directory given, canonical.
+    pub root: PathBuf,
+    /// `install prefix`, `build directory` or `fake (tests)`.
+    pub layout: &'static str,
+    /// The version the tree says it is (meson's project info, a pkg-config file, or the
+    /// versioned libgallium's name); the version the driver reports is in each backend's
+    /// driver line.
+    pub version: Option<String>,
+    /// glvnd's Mesa vendor library.
+    pub egl: Option<PathBuf>,
+    /// The directory of the DRI drivers.
+    pub dri: Option<PathBuf>,
+    /// The DRI drivers present (`swrast`, `zink`, ...).
+    pub dri_drivers: Vec<String>,
+    /// Lavapipe's ICD library.
+    pub lavapipe: Option<PathBuf>,
+    /// Directories for `LD_LIBRARY_PATH`.
+    pub lib_dirs: Vec<PathBuf>,
+    /// Where umbra's loader JSON files for this build live.
+    pub generated: PathBuf,
+}
+
+static SELECTED: OnceLock<Option<MesaBuild>> = OnceLock::new();
+
+/// The build this process runs its workers against (none: the system's Mesa).
+pub fn selected() -> Option<&'static MesaBuild> {
+    SELECTED.get().and_then(Option::as_ref)
+}
+
+/// Selects the build from `--mesa VALUE`, else from `UMBRA_MESA`; `system` (or nothing)
+/// means the system's Mesa. Call once, before any worker starts.
+pub fn select(flag: Option<&str>) -> Result<Option<&'static MesaBuild>, String> {
+    let env = std::env::var(ENV).ok().filter(|v| !v.is_empty());
+    let (value, from) = match (flag, env.as_deref()) {
+        (Some(v), _) => (Some(v.to_string()), "--mesa"),
+        (None, Some(v)) => (Some(v.to_string()), ENV),
+        _ => (None, ""),
+    };
+    let build = match value.as_deref() {
+        None | Some("system") => None,
+        Some(v) => Some(MesaBuild::open(Path::new(v)).map_err(|e| format!("{from} {v}: {e}"))?),
+    };
+    let _ = SELECTED.set(build);
+    Ok(selected())
+}
+
+impl MesaBuild {
+    /// Finds the Mesa libraries under `path` and writes the loader files for them.
+    pub fn open(path: &Path) -> Result<MesaBuild, String> {
+        let root = std::fs::canonicalize(path).map_err(|e| {
+            format!(
+                "{e}; fix: give a Mesa install prefix (meson install --destdir DIR), a Mesa build directory, or a directory of unpacked Debian packages (cargo xtask fetch-mesa)"
+            )
+        })?;
+        let generated = std::env::temp_dir().join(format!(
+            "umbra-mesa-{:08x}",
+            crate::golden::fnv1a(&root.to_string_lossy())
+        ));
+        if crate::fake::enabled() && root.join(FAKE_MARKER).is_file() {
+            let fake: serde_json::Value = std::fs::read_to_string(root.join(FAKE_MARKER))
+                .ok()
+                .and_then(|t| serde_json::from_str(&t).ok())
+                .ok_or_else(|| format!("{FAKE_MARKER} is not JSON"))?;
+            return Ok(MesaBuild {
+                version: fake["version"].as_str().map(str::to_string),
+                root,
+                layout: "fake (tests)",
+                egl: None,
+                dri: None,
+                dri_drivers: Vec::new(),
+                lavapipe: None,
+                lib_dirs: Vec::new(),
+                generated,
+            });
+        }
+        let mut found = Found::default();
+        walk(&root, 0, &mut found);
+        if found.egl.is_none() && found.lavapipe.is_none() && found.dri.is_none() {
+            return Err(
+                "no Mesa library under it (looked for libEGL_mesa.so.0, dri/*_dri.so and libvulkan_lvp.so); fix: give the prefix or build directory that holds them".into(),
+            );
+        }
+        let mut lib_dirs: Vec<PathBuf> = Vec::new();
+        for lib in found.egl.iter().chain(&found.lavapipe).chain(&found.shared) {
+            if let Some(d) = lib.parent() {
+                if !lib_dirs.iter().any(|x| x == d) {
+                    lib_dirs.push(d.to_path_buf());
+                }
+            }
+        }
+        let layout = if root.join("meson-info").is_dir() || root.join("build.ninja").is_file() {
+            "build directory"
+        } else {
+            "install prefix"
+        };
+        let build = MesaBuild {
+            version: version_of(&root, &found),
+            root,
+            layout,
+            egl: found.egl,
+            dri: found.dri,
+            dri_drivers: found.dri_drivers,
+            lavapipe: found.lavapipe,
+            lib_dirs,
+            generated,
+        };
+        build.write_loader_files(found.icd_api.as_deref())?;
+        Ok(build)
+    }
+
+    fn write_loader_files(&self, icd_api: Option<&str>) -> Result<(), String> {
+        let fail = |e: std::io::Error| format!("cannot write {}: {e}", self.generated.display());
+        std::fs::create_dir_all(&self.generated).map_err(fail)?;
+        if let Some(egl) = &self.egl {
+            let json = serde_json::json!({
+                "file_format_version": "1.0.0",
+                "ICD": { "library_path": egl }
+            });
+            std::fs::write(self.generated.join("50_mesa.json"), json.to_string()).map_err(fail)?;
+        }
+        if let Some(lvp) = &self.lavapipe {
+            let json = serde_json::json!({
+                "file_format_version": "1.0.0",
+                "ICD": { "library_path": lvp, "api_version": icd_api.unwrap_or("1.3.0") }
+            });
+            std::fs::write(self.generated.join("lvp_icd.json"), json.to_string()).map_err(fail)?;
+        }
+        Ok(())
+    }
+
+    /// The loader variables a worker needs to load this build (and `UMBRA_MESA`, so the
+    /// worker checks what it loaded).
+    pub fn env(&self) -> Vec<(String, String)> {
+        let mut env = vec![(ENV.to_string(), self.root.to_string_lossy().into_owned())];
+        if !self.lib_dirs.is_empty() {
+            let mut dirs: Vec<String> = self
+                .lib_dirs
+                .iter()
+                .map(|d| d.to_string_lossy().into_owned())
+                .collect();
+            if let Ok(old) = std::env::var("LD_LIBRARY_PATH") {
+                dirs.extend(old.split(':').filter(|s| !s.is_empty()).map(str::to_string));
+            }
+            env.push(("LD_LIBRARY_PATH".into(), dirs.join(":")));
+        }
+        if self.egl.is_some() {
+            env.push((
+                "__EGL_VENDOR_LIBRARY_FILENAMES".into(),
+                self.generated.join("50_mesa.json").to_string_lossy().into(),
+            ));
+        }
+        if let Some(dri) = &self.dri {
+            env.push(("LIBGL_DRIVERS_PATH".into(), dri.to_string_lossy().into()));
+        }
+        // Without lavapipe in the build, point the Vulkan loader at nothing rather than at the
+        // system's ICDs: wgpu-vk and zink then skip instead of silently using the system.
+        let icd = if self.lavapipe.is_some() {
+            self.generated
+                .join("lvp_icd.json")
+                .to_string_lossy()
+                .into_owned()
+        } else {
+            self.generated
+                .join("no-icd.json")
+                .to_string_lossy()
+                .into_owned()
+        };
+        env.push(("VK_ICD_FILENAMES".into(), icd.clone()));
+        env.push(("VK_DRIVER_FILES".into(), icd));
+        env
+    }
+
+    /// What backend `id` needs that this build lacks, if anything.
+    pub fn lacks(&self, id: &str) -> Option<String> {
+        if self.layout == "fake (tests)" {
+            return (!id.starts_with("fake/"))
+                .then(|| format!("{} is a fake build (tests only)", self.root.display()));
+        }
+        let dri = |name: &str| self.dri_drivers.iter().any(|d| d == name);
+        let need_lvp = || {
+            self.lavapipe.is_none().then(|| {
+                format!(
+                    "the Mesa build in {} has no lavapipe (libvulkan_lvp.so)",
+                    self.root.display()
+                )
+            })
+        };
+        let need_dri = |name: &str| {
+            (self.egl.is_none() || !dri(name)).then(|| {
+                format!(
+                    "the Mesa build in {} has no {} (libEGL_mesa.so.0 and dri/{name}_dri.so)",
+                    self.root.display(),
+                    if name == "swrast" {
+                        "llvmpipe/softpipe"
+                    } else {
+                        name
+                    }
+                )
+            })
+        };
+        match (umbra_wgpu::Kind::parse(id), umbra_gl::parse_id(id)) {
+            (Some(umbra_wgpu::Kind::VulkanLavapipe), _) => need_lvp(),
+            (Some(umbra_wgpu::Kind::GlLlvmpipe), _) => need_dri("swrast"),
+            (None, Some((_, umbra_gl::Driver::Zink))) => need_dri("zink").or_else(need_lvp),
+            (None, Some(_)) => need_dri("swrast"),
+            _ => None,
+        }
+    }
+
+    /// One line for reports: where the build is and what it says it is.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({}, {})",
+            self.root.display(),
+            self.layout,
+            self.version.as_deref().unwrap_or("version unknown")
+        )
+    }
+}
+
+/// Whether backend `id` runs on Mesa (and so on the selected build).
+pub fn is_mesa_backed(id: &str) -> bool {
+    umbra_gl::parse_id(id).is_some()
+        || umbra_wgpu::Kind::parse(id).is_some()
+        || id == crate::fake::MESA
+}
+
+#[derive(Default)]
+struct Found {
+    egl: Option<PathBuf>,
+    dri: Option<PathBuf>,
+    dri_drivers: Vec<String>,
+    lavapipe: Option<PathBuf>,
+    icd_api: Option<String>,
+    /// Mesa's other shared libraries (glapi, gbm, gallium): their directories join
+    /// LD_LIBRARY_PATH.
+    shared: Vec<PathBuf>,
+    pkg_version: Option<String>,
+    project_version: Option<String>,
+}
+
+/// Walks `dir` (not into `.git`, meson's private directories or symlinked directories) for
+/// the libraries, to a depth that covers `usr/lib/x86_64-linux-gnu/dri` and a build
+/// directory's `src/gallium/targets/dri`.
+fn walk(dir: &Path, depth: usize, found: &mut Found) {
+    if depth > 6 {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let mut entries: Vec<_> = entries.filter_map(Result::ok).collect();
+    entries.sort_by_key(|e| e.file_name());
+    let mut drivers_here = Vec::new();
+    for e in entries {
+        let path = e.path();
+        let name = e.file_name().to_string_lossy().into_owned();
+        let Ok(ft) = e.file_type() else { continue };
+        if ft.is_dir() {
+            if name.starts_with('.')
+                || name.ends_with(".p")
+                || name == "meson-private"
+                || name == "include"
+            {
+                continue;
+            }
+            walk(&path, depth + 1, found);
+            continue;
+        }
+        if name == "libEGL_mesa.so.0" && found.egl.is_none() {
+            found.egl = Some(path);
+        } else if name == "libvulkan_lvp.so" && found.lavapipe.is_none() {
+            found.lavapipe = Some(path);
+        } else if let Some(d) = name.strip_suffix("_dri.so") {
+            if !d.starts_with("lib") {
+                drivers_here.push(d.to_string());
+            }
+        } else if (name.starts_with("libglapi.so.") || name.starts_with("libgbm.so."))
+            || (name.starts_with("libgallium") && name.contains(".so"))
+        {
+            if name.starts_with("libgallium-") && found.pkg_version.is_none() {
+                found.pkg_version = name
+                    .strip_prefix("libgallium-")
+                    .and_then(|v| v.strip_suffix(".so"))
+                    .map(str::to_string);
+            }
+            found.shared.push(path);
+        } else if name.starts_with("lvp_") && name.ends_with(".json") && found.icd_api.is_none() {
+            found.icd_api = std::fs::read_to_string(&path)
+                .ok()
+                .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+                .and_then(|v| v["ICD"]["api_version"].as_str().map(str::to_string));
+        } else if (name == "dri.pc" || name == "egl.pc") && found.pkg_version.is_none() {
+            found.pkg_version = std::fs::read_to_string(&path).ok().and_then(|t| {
+                t.lines()
+                    .find_map(|l| l.strip_prefix("Version:").map(|v| v.trim().to_string()))
+            });
+        } else if name == "intro-projectinfo.json" {
+            found.project_version = std::fs::read_to_string(&path)
+                .ok()
+                .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+                .and_then(|v| v["version"].as_str().map(str::to_string));
+        }
+    }
+    if !drivers_here.is_empty() && found.dri.is_none() {
+        found.dri = Some(dir.to_path_buf());
+        found.dri_drivers = drivers_here;
+    }
+}
+
+fn version_of(_root: &Path, found: &Found) -> Option<String> {
+    found
+        .project_version
+        .clone()
+        .or_else(|| found.pkg_version.clone())
+}
+
+/// The Mesa libraries this process has mapped (`/proc/self/maps`), by name: glvnd's vendor
+/// library, glapi, gbm, gallium, the DRI drivers and lavapipe.
+pub fn loaded_libs() -> Vec<PathBuf> {
+    let maps = std::fs::read_to_string("/proc/self/maps").unwrap_or_default();
+    let mut libs: Vec<PathBuf> = maps
+        .lines()
+        .filter_map(|l| l.split_whitespace().nth(5))
+        .filter(|p| p.starts_with('/'))
+        .map(PathBuf::from)
+        .filter(|p| is_mesa_lib(p))
+        .collect();
+    libs.sort();
+    libs.dedup();
+    libs
+}
+
+fn is_mesa_lib(p: &Path) -> bool {
+    let name = p
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    name.starts_with("libEGL_mesa")
+        || name.starts_with("libglapi")
+        || name.starts_with("libgbm")
+        || name.starts_with("libgallium")
+        || name.starts_with("libvulkan_lvp")
+        || name.starts_with("libdril")
+        || name.ends_with("_dri.so")
+}
+
+fn is_driver_lib(p: &Path) -> bool {
+    let name = p
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    name.ends_with("_dri.so") || name.starts_with("libgallium") || name.starts_with("libvulkan_lvp")
+}
+
+/// Checks that every Mesa library in `libs` lies under `root` and that a driver is among
+/// them; the error names what was loaded instead.
+pub fn check_loaded(root: &Path, libs: &[PathBuf]) -> Result<(), String> {
+    let outside: Vec<String> = libs
+        .iter()
+        .filter(|l| !l.starts_with(root))
+        .map(|l| l.display().to_string())
+        .collect();
+    if !outside.is_empty() {
+        return Err(format!(
+            "the worker fell back to a Mesa outside the build in {}: it loaded {}; fix: check that the build has the driver's libraries (libEGL_mesa.so.0, dri/*_dri.so, libvulkan_lvp.so) and that they load (ldd on them names what is missing)",
+            root.display(),
+            outside.join(", ")
+        ));
+    }
+    if !libs.iter().any(|l| is_driver_lib(l)) {
+        return Err(format!(
+            "no Mesa driver from {} was loaded (loaded: {}); the backend did not reach the build's driver",
+            root.display(),
+            if libs.is_empty() {
+                "none".to_string()
+            } else {
+                libs.iter()
+                    .map(|l| l.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            }
+        ));
+    }
+    Ok(())
+}
+
+/// The Mesa version a driver reports ("4.5 (Core Profile) Mesa 25.0.7-2~bpo12+1" →
+/// "25.0.7-2~bpo12+1"), from any of the strings given.
+pub fn reported_version<'a>(strings: impl IntoIterator<Item = &'a str>) -> Option<String> {
+    strings.into_iter().find_map(|s| {
+        let i = s.find("Mesa ")?;
+        let v: String = s[i + 5..]
+            .chars()
+            .take_while(|c| !c.is_whitespace() && *c != ')' && *c != ',')
+            .collect();
+        v.chars().next().filter(char::is_ascii_digit).map(|_| v)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn versions_are_read_from_driver_strings() {
+        assert_eq!(
+            reported_version(["4.5 (Core Profile) Mesa 25.0.7-2~bpo12+1"]).as_deref(),
+            Some("25.0.7-2~bpo12+1")
+        );
+        assert_eq!(
+            reported_version([
+                "llvmpipe (LLVM 15.0.6, 256 bits)",
+                "Mesa 22.3.6 (LLVM 15.0.6)"
+            ])
+            .as_deref(),
+            Some("22.3.6")
+        );
+        assert_eq!(reported_version(["OpenGL ES 3.2 NVIDIA 550.1"]), None);
+    }
+
+    #[test]
+    fn a_library_outside_the_build_is_refused_by_path() {
+        let root = Path::new("/opt/mesa");
+        let ok = [PathBuf::from("/opt/mesa/usr/lib/dri/swrast_dri.so")];
+        assert!(check_loaded(root, &ok).is_ok());
+        let fell_back = [
+            PathBuf::from("/opt/mesa/usr/lib/libEGL_mesa.so.0"),
+            PathBuf::from("/usr/lib/x86_64-linux-gnu/dri/swrast_dri.so"),
+        ];
+        let e = check_loaded(root, &fell_back).expect_err("a system library must be refused");
+        assert!(
+            e.contains("fell back") && e.contains("/usr/lib/x86_64-linux-gnu/dri/swrast_dri.so"),
+            "{e}"
+        );
+        let no_driver = [PathBuf::from("/opt/mesa/usr/lib/libEGL_mesa.so.0")];
+        assert!(
+            check_loaded(root, &no_driver)
+                .expect_err("no driver loaded must be refused")
+                .contains("no Mesa driver")
+        );
+    }
+
+    #[test]
+    fn a_directory_without_mesa_is_refused_with_the_fix() {
+        let dir = std::env::temp_dir().join(format!("umbra-no-mesa-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("usr/lib")).expect("temp dir");
+        let e = MesaBuild::open(&dir).expect_err("an empty dir is no build");
+        assert!(e.contains("no Mesa library") && e.contains("fix:"), "{e}");
+        let e = MesaBuild::open(&dir.join("missing")).expect_err("a missing dir is no build");
+        assert!(e.contains("fix:"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -1,0 +1,679 @@
+//! `umbra reduce CASE.json --point ID --backend ID`: shrinks a failing case point to a
+//! minimal case file for a bug report.
+//!
+//! The point must fail on the backend (its frame, not only a twin or a golden). The reducer
+//! then tries smaller cases one change at a time, greedily, and keeps a change when the
+//! smaller case still **fails the same way** on the backend and still **passes on the
+//! reference** (judged against its own model, with the case's own claims): so the reduced
+//! case is one the harness stands behind, not one that fails for a new reason. "The same
+//! way" means: the smaller case fails some of the checks the point failed and no other (a
+//! fault that breaks the shadow map and, through it, 40 pixels' visibility may be left
+//! breaking the map alone; it may not start failing the colour check), plus every check named
+//! with `--check` (to keep, say, the visibility failure a bug report shows); a crash or hang
+//! must stay a crash or hang. The changes, in order of what they save:
+//!
+//! 1. no sweep (the point's values are baked in) and no twins;
+//! 2. objects removed (halves first, then one at a time), sphere tessellation halved, inline
+//!    mesh triangles removed;
+//! 3. the camera's image and the shadow map halved (down to 16 pixels a side);
+//! 4. technique, shading and light fields back to their defaults, one at a time (filter,
+//!    bias terms, compare, attachments, cull, outside, ...);
+//! 5. fields equal to their defaults dropped from the text (no render needed).
+//!
+//! It prints each change it kept, and writes the reduced case (`name-reduced`, with an
+//! `about` saying where it came from and how it fails) to `-o` (default
+//! `target/umbra/reduce/NAME-reduced.json`). The environment passes to the workers, so a
+//! self-test fault (`UMBRA_SELFTEST=1 UMBRA_FAULT=...`) or a `--mesa` build reduces like a
+//! driver bug.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use serde_json::Value;
+
+use crate::args::Args;
+use crate::pool::{Reply, Worker};
+use crate::worker::Request;
+
+/// Usage line.
+pub const USAGE: &str = "umbra reduce CASE.json --point ID --backend ID [--check CHECK]... [-o OUT.json] [--timeout SECS] [--mesa PREFIX|BUILD_DIR|system] [--verbose]";
+
+/// How a run ended, in the terms "fails the same way" compares.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// Passed.
+    Pass,
+    /// Failed these checks (twins and goldens aside).
+    Fail(BTreeSet<String>),
+    /// The worker died or hung.
+    Crash(String),
+    /// Skipped, or the case did not load.
+    Other(String),
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Verdict::Pass => f.write_str("pass"),
+            Verdict::Fail(c) => write!(
+                f,
+                "fails {}",
+                c.iter().cloned().collect::<Vec<_>>().join("+")
+            ),
+            Verdict::Crash(how) => write!(f, "crash ({how})"),
+            Verdict::Other(why) => f.write_str(why),
+        }
+    }
+}
+
+/// Size figures of a case, for the before/after line.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Size {
+    /// Triangles drawn.
+    pub triangles: usize,
+    /// Camera pixels.
+    pub pixels: u64,
+    /// Shadow-map texels (all faces).
+    pub texels: u64,
+}
+
+impl Size {
+    /// The size of a case given as JSON (None if it does not load).
+    pub fn of(case: &Value) -> Option<Size> {
+        let points = umbra_case::load_str(&case.to_string(), Path::new("reduce.json")).ok()?;
+        let p = points.into_iter().next()?;
+        let g = umbra_case::tessellate(&p.case.scene);
+        let faces = if matches!(p.case.light, umbra_case::format::Light::Point(_)) {
+            6
+        } else {
+            1
+        };
+        Some(Size {
+            triangles: g.triangles.len(),
+            pixels: u64::from(p.case.camera.size[0]) * u64::from(p.case.camera.size[1]),
+            texels: faces * u64::from(p.case.shadow.size[0]) * u64::from(p.case.shadow.size[1]),
+        })
+    }
+}
+
+/// Runs candidates on the backend and on the reference.
+struct Judge {
+    backend: String,
+    worker: Option<Worker>,
+    reference: Option<Worker>,
+    timeout: Duration,
+    dir: PathBuf,
+    tried: usize,
+    /// Why the last candidate was not kept.
+    last: String,
+    /// Checks every candidate must still fail (`--check`).
+    required: BTreeSet<String>,
+}
+
+impl Judge {
+    fn run_on(&mut self, reference: bool, case: &Value) -> Verdict {
+        self.tried += 1;
+        let file = self.dir.join(format!("candidate-{}.json", self.tried));
+        if std::fs::write(
+            &file,
+            serde_json::to_string_pretty(case).unwrap_or_default(),
+        )
+        .is_err()
+        {
+            return Verdict::Other(format!("cannot write {}", file.display()));
+        }
+        let id = if reference {
+            "ref".to_string()
+        } else {
+            self.backend.clone()
+        };
+        let slot = if reference {
+            &mut self.reference
+        } else {
+            &mut self.worker
+        };
+        if slot.is_none() {
+            let env = crate::registry::worker_env(&id);
+            match Worker::start(&id, &env, self.timeout) {
+                Ok(w) => {
+                    if let Some(u) = w.hello.get("unavailable").or(w.hello.get("refused")) {
+                        return Verdict::Other(format!("{id} cannot run: {u}"));
+                    }
+                    *slot = Some(w);
+                }
+                Err(e) => return Verdict::Other(format!("no worker for {id}: {e}")),
+            }
+        }
+        let Some(w) = slot.as_mut() else {
+            return Verdict::Other("no worker".into());
+        };
+        let req = Request {
+            file: file.clone(),
+            index: 0,
+            failures: None,
+            golden: None,
+            repeat: None,
+            no_twins: true,
+        };
+        let v = match w.run(&req, self.timeout) {
+            Reply::Report(r) => match r.outcome.as_str() {
+                "pass" => Verdict::Pass,
+                "fail" if r.failed.is_empty() => Verdict::Other(format!("error: {}", r.reason)),
+                "fail" => Verdict::Fail(
+                    r.failed
+                        .iter()
+                        .map(|c| c.check.clone())
+                        .filter(|c| !c.starts_with("twin:") && c != "golden")
+                        .collect(),
+                ),
+                _ => Verdict::Other(format!("{}: {}", r.outcome, r.reason)),
+            },
+            Reply::Crashed(how) => {
+                *slot = None;
+                Verdict::Crash(how)
+            }
+            Reply::TimedOut => {
+                *slot = None;
+                Verdict::Crash("timeout".into())
+            }
+        };
+        let _ = std::fs::remove_file(&file);
+        v
+    }
+
+    /// Whether `case` fails on the backend as `want` does and passes on the reference.
+    fn keeps(&mut self, case: &Value, want: &Verdict) -> bool {
+        if Size::of(case).is_none() {
+            self.last = "does not load".into();
+            return false;
+        }
+        let got = self.run_on(false, case);
+        let same = match (&got, want) {
+            (Verdict::Fail(a), Verdict::Fail(b)) => {
+                !a.is_empty() && a.is_subset(b) && self.required.is_subset(a)
+            }
+            (Verdict::Crash(_), Verdict::Crash(_)) => true,
+            _ => false,
+        };
+        if !same {
+            self.last = format!("{} {got}", self.backend);
+            return false;
+        }
+        let r = self.run_on(true, case);
+        self.last = format!("ref {r}");
+        r == Verdict::Pass
+    }
+}
+
+/// Runs the command; returns the exit code (0: reduced, 1: the point does not fail as
+/// required, 125: bad input).
+pub fn main(argv: &[String]) -> i32 {
+    let args = match Args::parse(
+        argv,
+        &["point", "backend", "o", "out", "timeout", "mesa", "check"],
+        &["verbose"],
+    ) {
+        Ok(a) => a,
+        Err(e) => return usage(&e),
+    };
+    let [file] = args.positional.as_slice() else {
+        return usage("give exactly one case file");
+    };
+    let (Some(point_id), Some(backend)) = (args.value("point"), args.value("backend")) else {
+        return usage("give --point ID and --backend ID");
+    };
+    if let Err(e) = crate::mesa_build::select(args.value("mesa")) {
+        eprintln!("error: {e}");
+        return 125;
+    }
+    if !crate::registry::is_known(backend) || backend == "ref" {
+        eprintln!(
+            "error: --backend {backend:?}: give a backend other than ref; this build has: {}",
+            crate::registry::known().join(", ")
+        );
+        return 125;
+    }
+    let points = match umbra_case::load_file(Path::new(file)) {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 125;
+        }
+    };
+    let Some(point) = points.iter().find(|p| p.id() == point_id) else {
+        eprintln!(
+            "error: {file} has no point {point_id:?}; its points: {}",
+            points.iter().map(|p| p.id()).collect::<Vec<_>>().join(", ")
+        );
+        return 125;
+    };
+    let timeout = Duration::from_secs(
+        args.value("timeout")
+            .and_then(|t| t.parse().ok())
+            .unwrap_or(120),
+    );
+    let dir = std::env::temp_dir().join(format!("umbra-reduce-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let mut judge = Judge {
+        backend: backend.to_string(),
+        worker: None,
+        reference: None,
+        timeout,
+        dir: dir.clone(),
+        tried: 0,
+        last: String::new(),
+        required: args.values("check").into_iter().map(String::from).collect(),
+    };
+    let Ok(mut case) = serde_json::to_value(&point.case) else {
+        eprintln!("error: cannot write the point as JSON");
+        return 125;
+    };
+    // 1. No sweep (the point's values are in `case` already) and no twins.
+    if let Some(o) = case.as_object_mut() {
+        o.remove("sweep");
+    }
+    if let Some(e) = case.get_mut("expect").and_then(Value::as_object_mut) {
+        e.remove("twins");
+        e.remove("error_falls_along");
+    }
+    let want = judge.run_on(false, &case);
+    match &want {
+        Verdict::Fail(c) if !c.is_empty() && judge.required.is_subset(c) => {}
+        Verdict::Fail(c) if !c.is_empty() => {
+            eprintln!(
+                "error: --check {}: {point_id} on {backend} fails {} only; name checks it fails",
+                judge
+                    .required
+                    .iter()
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join(" --check "),
+                c.iter().cloned().collect::<Vec<_>>().join("+")
+            );
+            let _ = std::fs::remove_dir_all(&dir);
+            return 125;
+        }
+        Verdict::Crash(_) => {}
+        other => {
+            eprintln!(
+                "error: {point_id} on {backend} {other} once its twins and golden are set aside; reduce needs a point whose own frame fails (or that crashes)"
+            );
+            let _ = std::fs::remove_dir_all(&dir);
+            return 1;
+        }
+    }
+    let reference = judge.run_on(true, &case);
+    if reference != Verdict::Pass {
+        eprintln!(
+            "error: {point_id} does not pass on the reference ({reference}): nothing to reduce against"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+        return 1;
+    }
+    let before = Size::of(&case).unwrap_or_default();
+    println!(
+        "reduce: {point_id} on {backend} {want}; passes on ref; {}",
+        size_line(&before)
+    );
+    let verbose = args.has("verbose");
+    let mut removed: Vec<String> = Vec::new();
+    let mut keep = |case: &mut Value, cand: Value, what: String, judge: &mut Judge| -> bool {
+        if judge.keeps(&cand, &want) {
+            let s = Size::of(&cand).unwrap_or_default();
+            println!("  kept: {what} ({})", size_line(&s));
+            removed.push(what);
+            *case = cand;
+            true
+        } else {
+            if verbose {
+                println!("  not kept: {what} ({})", judge.last);
+            }
+            false
+        }
+    };
+
+    // 2. Objects: halves, then one at a time, until nothing more goes.
+    loop {
+        let n = case["scene"]["objects"].as_array().map_or(0, Vec::len);
+        let mut progress = false;
+        let mut chunk = n / 2;
+        while chunk >= 1 && !progress {
+            let mut start = 0;
+            while start < case["scene"]["objects"].as_array().map_or(0, Vec::len) {
+                let objs = case["scene"]["objects"]
+                    .as_array()
+                    .cloned()
+                    .unwrap_or_default();
+                if objs.len() <= 1 {
+                    break;
+                }
+                let end = (start + chunk).min(objs.len());
+                let mut cand = case.clone();
+                let rest: Vec<Value> = objs
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| *i < start || *i >= end)
+                    .map(|(_, o)| o.clone())
+                    .collect();
+                cand["scene"]["objects"] = Value::Array(rest);
+                let what = format!(
+                    "removed object{} {}",
+                    if end - start > 1 { "s" } else { "" },
+                    describe_objects(&objs[start..end])
+                );
+                if keep(&mut case, cand, what, &mut judge) {
+                    progress = true;
+                } else {
+                    start = end;
+                }
+            }
+            chunk /= 2;
+        }
+        if !progress {
+            break;
+        }
+    }
+    // Tessellation and meshes.
+    let n = case["scene"]["objects"].as_array().map_or(0, Vec::len);
+    for i in 0..n {
+        loop {
+            let o = case["scene"]["objects"][i].clone();
+            let Some(seg) = o["sphere"]["segments"].as_u64().filter(|s| *s > 4) else {
+                break;
+            };
+            let mut cand = case.clone();
+            cand["scene"]["objects"][i]["sphere"]["segments"] = Value::from((seg / 2).max(4));
+            if !keep(
+                &mut case,
+                cand,
+                format!("sphere {i}: segments {seg} → {}", (seg / 2).max(4)),
+                &mut judge,
+            ) {
+                break;
+            }
+        }
+        let tris = case["scene"]["objects"][i]["mesh"]["triangles"]
+            .as_array()
+            .cloned();
+        if let Some(tris) = tris {
+            let mut t = 0;
+            let mut current = tris;
+            while t < current.len() && current.len() > 1 {
+                let mut cand = case.clone();
+                let mut fewer = current.clone();
+                fewer.remove(t);
+                cand["scene"]["objects"][i]["mesh"]["triangles"] = Value::Array(fewer.clone());
+                if keep(
+                    &mut case,
+                    cand,
+                    format!("mesh {i}: triangle {t}"),
+                    &mut judge,
+                ) {
+                    current = fewer;
+                } else {
+                    t += 1;
+                }
+            }
+        }
+    }
+    // 3. Image and map sizes.
+    for (path, what) in [
+        (["camera", "size"], "camera image"),
+        (["shadow", "size"], "shadow map"),
+    ] {
+        loop {
+            let s = &case[path[0]][path[1]];
+            let (Some(w), Some(h)) = (s[0].as_u64(), s[1].as_u64()) else {
+                break;
+            };
+            if w < 32 || h < 32 {
+                break;
+            }
+            let mut cand = case.clone();
+            cand[path[0]][path[1]] = serde_json::json!([w / 2, h / 2]);
+            if !keep(
+                &mut case,
+                cand,
+                format!("{what} {w}x{h} → {}x{}", w / 2, h / 2),
+                &mut judge,
+            ) {
+                break;
+            }
+        }
+    }
+    // 4. Fields back to their defaults, one at a time.
+    for section in ["shadow", "shading", "expect"] {
+        let keys: Vec<String> = case[section]
+            .as_object()
+            .map(|o| o.keys().cloned().collect())
+            .unwrap_or_default();
+        for k in keys {
+            if section == "shadow" && k == "size" {
+                continue;
+            }
+            if let Some(sub) = case[section][&k].as_object().cloned() {
+                for sk in sub.keys() {
+                    let mut cand = case.clone();
+                    if let Some(o) = cand[section][&k].as_object_mut() {
+                        o.remove(sk);
+                    }
+                    if differs(&case, &cand) {
+                        keep(
+                            &mut case,
+                            cand,
+                            format!("{section}.{k}.{sk} → default"),
+                            &mut judge,
+                        );
+                    }
+                }
+            }
+            let mut cand = case.clone();
+            if let Some(o) = cand[section].as_object_mut() {
+                o.remove(&k);
+            }
+            if differs(&case, &cand) {
+                keep(
+                    &mut case,
+                    cand,
+                    format!("{section}.{k} → default"),
+                    &mut judge,
+                );
+            }
+        }
+    }
+    // 5. Drop what equals its default from the text.
+    case = strip_defaults(case);
+    let after = Size::of(&case).unwrap_or_default();
+    // How the reduced case fails, as written (a subset of the point's failed checks).
+    let now = judge.run_on(false, &case);
+    let name = format!("{}-reduced", point.case.name);
+    case["name"] = Value::from(name.clone());
+    case["about"] = Value::from(format!(
+        "reduced by umbra reduce from {file} point {point_id} on {backend}, where it {want}; reduced, it {now} there and passes on the reference; {} changes kept ({} candidates tried): {}",
+        removed.len(),
+        judge.tried,
+        if removed.is_empty() {
+            "none".into()
+        } else {
+            removed.join("; ")
+        }
+    ));
+    if let Some(o) = case.as_object_mut() {
+        o.retain(|_, v| !v.is_null());
+    }
+    let out = args
+        .value("o")
+        .or(args.value("out"))
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("target/umbra/reduce").join(format!("{name}.json")));
+    if let Some(parent) = out.parent() {
+        let _ = std::fs::create_dir_all(parent);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    // The reduced case must load as written.
+    let text = case_text(&tidy(case), 0) + "\n";
+    if let Err(e) = umbra_case::load_str(&text, &out) {
+        eprintln!("error: the reduced case does not load ({e}); this is a bug in the reducer");
+        return 125;
+    }
+    if let Err(e) = std::fs::write(&out, text) {
+        eprintln!("error: cannot write {}: {e}", out.display());
+        return 125;
+    }
+    println!(
+        "reduce: {} → {}; it {now}; {} changes kept of {} candidates tried",
+        size_line(&before),
+        size_line(&after),
+        removed.len(),
+        judge.tried
+    );
+    println!(
+        "reduce: wrote {} (cargo run --bin umbra -- render {} --backend {backend})",
+        out.display(),
+        out.display()
+    );
+    0
+}
+
+/// The case as a person would write it: f32 values at their shortest (0.4, not
+/// 0.4000000059604645), no nulls.
+fn tidy(v: Value) -> Value {
+    match v {
+        Value::Number(n) if n.is_f64() => {
+            let f = n.as_f64().unwrap_or_default();
+            // Values that came from f32 fields print as that f32's shortest decimal.
+            let short: f64 = format!("{}", f as f32).parse().unwrap_or(f);
+            let keep = if (short as f32) == (f as f32) {
+                short
+            } else {
+                f
+            };
+            if keep.fract() == 0.0 && keep.abs() < 1e15 {
+                Value::from(keep as i64)
+            } else {
+                serde_json::Number::from_f64(keep).map_or(Value::Null, Value::Number)
+            }
+        }
+        Value::Array(a) => Value::Array(a.into_iter().map(tidy).collect()),
+        Value::Object(o) => Value::Object(
+            o.into_iter()
+                .filter(|(_, v)| !v.is_null())
+                .map(|(k, v)| (k, tidy(v)))
+                .collect(),
+        ),
+        other => other,
+    }
+}
+
+/// JSON in the catalogue's layout: name and about first, then scene, camera, light, shadow,
+/// shading, expect; arrays of numbers and small objects on one line.
+fn case_text(v: &Value, depth: usize) -> String {
+    const ORDER: [&str; 8] = [
+        "name", "about", "scene", "camera", "light", "shadow", "shading", "expect",
+    ];
+    let one_line = v.to_string();
+    if one_line.len() <= 90 || !matches!(v, Value::Object(_) | Value::Array(_)) {
+        return one_line;
+    }
+    let pad = "  ".repeat(depth + 1);
+    let end = "  ".repeat(depth);
+    match v {
+        Value::Object(o) => {
+            let mut keys: Vec<&String> = o.keys().collect();
+            keys.sort_by_key(|k| ORDER.iter().position(|o| o == k).unwrap_or(ORDER.len()));
+            let items: Vec<String> = keys
+                .iter()
+                .map(|k| {
+                    format!(
+                        "{pad}{}: {}",
+                        Value::from(k.as_str()),
+                        case_text(&o[*k], depth + 1)
+                    )
+                })
+                .collect();
+            format!("{{\n{}\n{end}}}", items.join(",\n"))
+        }
+        Value::Array(a) => {
+            let items: Vec<String> = a
+                .iter()
+                .map(|x| format!("{pad}{}", case_text(x, depth + 1)))
+                .collect();
+            format!("[\n{}\n{end}]", items.join(",\n"))
+        }
+        _ => one_line,
+    }
+}
+
+fn usage(msg: &str) -> i32 {
+    eprintln!("error: {msg}\nusage: {USAGE}");
+    125
+}
+
+fn size_line(s: &Size) -> String {
+    format!(
+        "{} triangles, {} pixels, {} map texels",
+        s.triangles, s.pixels, s.texels
+    )
+}
+
+fn describe_objects(objs: &[Value]) -> String {
+    objs.iter()
+        .map(|o| {
+            o.as_object()
+                .and_then(|m| m.keys().next().cloned())
+                .unwrap_or_else(|| "?".into())
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Whether two case texts parse to different cases (a removal that changes nothing is not
+/// worth a render).
+fn differs(a: &Value, b: &Value) -> bool {
+    let parse = |v: &Value| {
+        umbra_case::load_str(&v.to_string(), Path::new("reduce.json"))
+            .ok()
+            .and_then(|p| p.into_iter().next())
+            .map(|p| p.case)
+    };
+    match (parse(a), parse(b)) {
+        (Some(x), Some(y)) => x != y,
+        _ => false,
+    }
+}
+
+/// Removes every field whose removal leaves the same case (a default written out).
+fn strip_defaults(mut case: Value) -> Value {
+    fn paths(v: &Value, prefix: &mut Vec<String>, out: &mut Vec<Vec<String>>) {
+        if let Some(o) = v.as_object() {
+            for (k, child) in o {
+                prefix.push(k.clone());
+                paths(child, prefix, out);
+                out.push(prefix.clone());
+                prefix.pop();
+            }
+        }
+    }
+    let mut all = Vec::new();
+    paths(&case, &mut Vec::new(), &mut all);
+    for p in all {
+        if p.len() == 1 && (p[0] == "name" || p[0] == "about") {
+            continue;
+        }
+        let mut cand = case.clone();
+        let mut node = &mut cand;
+        for k in &p[..p.len() - 1] {
+            node = &mut node[k.as_str()];
+        }
+        if let Some(o) = node.as_object_mut() {
+            o.remove(&p[p.len() - 1]);
+        } else {
+            continue;
+        }
+        if Size::of(&cand).is_some() && !differs(&case, &cand) {
+            case = cand;
+        }
+    }
+    case
+}

@@ -1,0 +1,382 @@
+//! Driver builds as an input, without building Mesa: `--mesa` loads a relocated copy of the
+//! system's Mesa and checks what it loaded, refuses a build whose driver does not load or
+//! that falls back to the system's libraries; per-driver expectations select by the version
+//! the driver reports; and `umbra bisect` finds the first bad commit of a small fake source
+//! tree whose build script makes fake builds (one commit does not build: 125, skipped).
+
+mod common;
+
+use common::{scratch, text};
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn umbra(args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_umbra"));
+    c.args(args).current_dir(repo()).env_remove("UMBRA_MESA");
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    c.output().expect("run umbra")
+}
+
+const SYSTEM_LIB: &str = "/usr/lib/x86_64-linux-gnu";
+
+/// A prefix holding copies of the system Mesa's EGL vendor library, GBM and swrast driver (and
+/// glapi when `with_glapi`), laid out like an install.
+fn relocated_mesa(name: &str, with_glapi: bool) -> PathBuf {
+    let p = scratch(name);
+    let lib = p.join("usr/lib/x86_64-linux-gnu");
+    std::fs::create_dir_all(lib.join("dri")).expect("mkdir");
+    let copy = |from: &str, to: &Path| {
+        std::fs::copy(Path::new(SYSTEM_LIB).join(from), to).unwrap_or_else(|e| {
+            panic!("{SYSTEM_LIB}/{from}: {e}; these tests need the system's Mesa (cargo xtask test installs it)")
+        });
+    };
+    copy("libEGL_mesa.so.0", &lib.join("libEGL_mesa.so.0"));
+    copy("dri/swrast_dri.so", &lib.join("dri/swrast_dri.so"));
+    copy("libgbm.so.1", &lib.join("libgbm.so.1"));
+    if with_glapi {
+        copy("libglapi.so.0", &lib.join("libglapi.so.0"));
+    }
+    p
+}
+
+fn conformance_on(prefix: &Path, out: &Path) -> Output {
+    umbra(
+        &[
+            "conformance",
+            "--mesa",
+            prefix.to_str().unwrap_or_default(),
+            "--backend",
+            "gl33/llvmpipe",
+            "--filter",
+            "l-occluder",
+            "--golden",
+            "none",
+            "--out",
+            out.to_str().unwrap_or_default(),
+        ],
+        &[],
+    )
+}
+
+#[test]
+fn a_relocated_mesa_loads_from_its_prefix_and_the_report_names_it() {
+    let prefix = relocated_mesa("mesa-ok", true);
+    let out = scratch("mesa-ok-out");
+    let o = conformance_on(&prefix, &out);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    let drivers = std::fs::read_to_string(out.join("latest/drivers.txt")).expect("drivers.txt");
+    let canonical = std::fs::canonicalize(&prefix).expect("canonical");
+    assert!(
+        drivers.contains(&format!("Mesa: {}", canonical.display())) && drivers.contains("build: "),
+        "{drivers}"
+    );
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("latest/report.json")).expect("report.json"),
+    )
+    .expect("json");
+    assert!(report["mesa_build"]["root"].as_str().is_some(), "{report}");
+    assert!(
+        report["drivers"][0]["mesa"]
+            .as_str()
+            .is_some_and(|v| v.starts_with(char::is_numeric))
+    );
+}
+
+#[test]
+fn a_build_that_falls_back_to_the_system_is_refused_with_the_library_it_loaded() {
+    // No libglapi in the prefix: the prefix's libEGL_mesa takes the system's.
+    let prefix = relocated_mesa("mesa-fallback", false);
+    let out = scratch("mesa-fallback-out");
+    let o = conformance_on(&prefix, &out);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(
+        t.contains("fell back to a Mesa outside the build") && t.contains("libglapi"),
+        "{t}"
+    );
+}
+
+#[test]
+fn a_build_whose_driver_does_not_load_is_refused() {
+    let p = scratch("mesa-garbage");
+    let lib = p.join("usr/lib/x86_64-linux-gnu");
+    std::fs::create_dir_all(lib.join("dri")).expect("mkdir");
+    std::fs::write(lib.join("libEGL_mesa.so.0"), "not a library").expect("write");
+    std::fs::write(lib.join("dri/swrast_dri.so"), "not a library").expect("write");
+    let out = scratch("mesa-garbage-out");
+    let o = conformance_on(&p, &out);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(t.contains("did not load") || t.contains("fell back"), "{t}");
+    // A directory with no Mesa at all is refused before anything runs, with the fix.
+    let empty = scratch("mesa-empty");
+    let o = conformance_on(&empty, &out);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(t.contains("no Mesa library") && t.contains("fix:"), "{t}");
+}
+
+/// A fake build directory reporting `version`, rendering wrong when `fault`.
+fn fake_build(name: &str, version: &str, fault: bool) -> PathBuf {
+    let p = scratch(name);
+    let marker = serde_json::json!({"version": version, "fault": fault.then_some("invert")});
+    std::fs::write(p.join("umbra-fake-mesa.json"), marker.to_string()).expect("write");
+    p
+}
+
+#[test]
+fn expectations_apply_to_the_driver_versions_they_name() {
+    let exp = scratch("exp-versions");
+    std::fs::write(
+        exp.join("fake.txt"),
+        "@applies mesa>=1.1 mesa<2\nfake/mesa/l-occluder,Fail:value<=100000+interior<=100000+colour<=100000+twin:bias-order<=100000+twin:moved-100m<=100000,inverted shadows in 1.1.x\n",
+    )
+    .expect("write");
+    let run = |build: &Path, out: &str| {
+        let out = scratch(out);
+        let o = umbra(
+            &[
+                "conformance",
+                "--mesa",
+                build.to_str().unwrap_or_default(),
+                "--backend",
+                "fake/mesa",
+                "--filter",
+                "l-occluder",
+                "--golden",
+                "none",
+                "--expectations",
+                exp.to_str().unwrap_or_default(),
+                "--out",
+                out.to_str().unwrap_or_default(),
+            ],
+            &[("UMBRA_FAKE_BACKENDS", "1")],
+        );
+        let drivers = std::fs::read_to_string(out.join("latest/drivers.txt")).unwrap_or_default();
+        (o, drivers)
+    };
+    // 1.1.3 is covered: an expected failure, and the report lists the file that applied.
+    let (o, drivers) = run(&fake_build("fake-113", "1.1.3", true), "exp-113");
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(t.contains("ExpectedFail"), "{t}");
+    assert!(
+        drivers.contains("expectations: ") && drivers.contains("fake.txt"),
+        "{drivers}"
+    );
+    // 2.0.0 is not: the same failure is a regression, and no file applied.
+    let (o, drivers) = run(&fake_build("fake-200", "2.0.0", true), "exp-200");
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("regression: Fail fake/mesa/l-occluder"), "{t}");
+    assert!(!drivers.contains("fake.txt"), "{drivers}");
+}
+
+fn git(dir: &Path, args: &[&str]) -> String {
+    let o = Command::new("git")
+        .arg("-C")
+        .arg(dir)
+        .args(["-c", "user.name=umbra", "-c", "user.email=umbra@localhost"])
+        .args(args)
+        .output()
+        .expect("git");
+    assert!(o.status.success(), "git {args:?}: {}", text(&o));
+    String::from_utf8_lossy(&o.stdout).trim().to_string()
+}
+
+#[test]
+fn bisect_names_the_first_bad_commit_of_a_fake_tree_and_skips_one_that_does_not_build() {
+    let src = scratch("bisect-src");
+    git(&src, &["init", "-q"]);
+    std::fs::write(
+        src.join("build.sh"),
+        "#!/bin/sh\nset -e\nif [ -f \"$1/BROKEN\" ]; then echo 'build error' >&2; exit 1; fi\nmkdir -p \"$2\"\ncp \"$1/fake-mesa.json\" \"$2/umbra-fake-mesa.json\"\n",
+    )
+    .expect("write");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(src.join("build.sh"), std::fs::Permissions::from_mode(0o755))
+            .expect("chmod");
+    }
+    let mut commits = Vec::new();
+    for n in 1..=8 {
+        let fault = n >= 6;
+        let marker =
+            serde_json::json!({"version": format!("1.0.{n}"), "fault": fault.then_some("invert")});
+        std::fs::write(src.join("fake-mesa.json"), marker.to_string()).expect("write");
+        if n == 3 {
+            std::fs::write(src.join("BROKEN"), "").expect("write");
+        } else {
+            let _ = std::fs::remove_file(src.join("BROKEN"));
+        }
+        git(&src, &["add", "-A"]);
+        git(&src, &["commit", "-q", "-m", &format!("commit {n}")]);
+        commits.push(git(&src, &["rev-parse", "HEAD"]));
+    }
+    let work = scratch("bisect-work");
+    let no_exp = scratch("bisect-exp");
+    let o = umbra(
+        &[
+            "bisect",
+            "--mesa-src",
+            src.to_str().unwrap_or_default(),
+            "--good",
+            &commits[0],
+            "--bad",
+            &commits[7],
+            "--build-script",
+            src.join("build.sh").to_str().unwrap_or_default(),
+            "--backend",
+            "fake/mesa",
+            "--filter",
+            "l-occluder",
+            "--work",
+            work.to_str().unwrap_or_default(),
+            "--expectations",
+            no_exp.to_str().unwrap_or_default(),
+        ],
+        &[("UMBRA_FAKE_BACKENDS", "1")],
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(
+        t.contains(&format!("first bad commit: {}", commits[5])),
+        "{t}"
+    );
+    assert!(t.contains("commit 6"), "{t}");
+    let steps = std::fs::read_to_string(work.join("steps.csv")).expect("steps.csv");
+    assert!(steps.lines().any(|l| l.contains(",bad,")), "{steps}");
+    assert!(steps.lines().any(|l| l.contains(",good,")), "{steps}");
+    // The tree is left as it was.
+    assert_eq!(git(&src, &["rev-parse", "HEAD"]), commits[7]);
+}
+
+#[test]
+fn bisect_reports_a_commit_that_does_not_build_as_skipped() {
+    // Good 2, bad 4, 3 does not build: git cannot decide between 3 and 4, and says so.
+    let src = scratch("bisect-skip-src");
+    git(&src, &["init", "-q"]);
+    std::fs::write(
+        src.join("build.sh"),
+        "#!/bin/sh\nset -e\nif [ -f \"$1/BROKEN\" ]; then exit 1; fi\nmkdir -p \"$2\"\ncp \"$1/fake-mesa.json\" \"$2/umbra-fake-mesa.json\"\n",
+    )
+    .expect("write");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(src.join("build.sh"), std::fs::Permissions::from_mode(0o755))
+            .expect("chmod");
+    }
+    let mut commits = Vec::new();
+    for n in 1..=4 {
+        let marker = serde_json::json!({"version": format!("1.0.{n}"), "fault": (n == 4).then_some("invert")});
+        std::fs::write(src.join("fake-mesa.json"), marker.to_string()).expect("write");
+        if n == 3 {
+            std::fs::write(src.join("BROKEN"), "").expect("write");
+        } else {
+            let _ = std::fs::remove_file(src.join("BROKEN"));
+        }
+        git(&src, &["add", "-A"]);
+        git(&src, &["commit", "-q", "-m", &format!("commit {n}")]);
+        commits.push(git(&src, &["rev-parse", "HEAD"]));
+    }
+    let work = scratch("bisect-skip-work");
+    let o = umbra(
+        &[
+            "bisect",
+            "--mesa-src",
+            src.to_str().unwrap_or_default(),
+            "--good",
+            &commits[1],
+            "--bad",
+            &commits[3],
+            "--build-script",
+            src.join("build.sh").to_str().unwrap_or_default(),
+            "--backend",
+            "fake/mesa",
+            "--filter",
+            "l-occluder",
+            "--work",
+            work.to_str().unwrap_or_default(),
+        ],
+        &[("UMBRA_FAKE_BACKENDS", "1")],
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    let steps = std::fs::read_to_string(work.join("steps.csv")).expect("steps.csv");
+    assert!(steps.contains("skip (does not build"), "{steps}");
+    assert!(t.contains("no single first bad commit"), "{t}");
+}
+
+#[test]
+fn a_golden_blessed_on_another_version_fails_and_names_both_versions() {
+    let golden = scratch("golden-versions");
+    let run = |build: &Path, out: &str, bless: bool| {
+        let mut env = vec![("UMBRA_FAKE_BACKENDS", "1")];
+        env.push(if bless {
+            ("INSTA_UPDATE", "always")
+        } else {
+            ("CI", "true")
+        });
+        umbra(
+            &[
+                "conformance",
+                "--mesa",
+                build.to_str().unwrap_or_default(),
+                "--backend",
+                "fake/mesa",
+                "--filter",
+                "l-occluder",
+                "--golden",
+                golden.to_str().unwrap_or_default(),
+                "--out",
+                scratch(out).to_str().unwrap_or_default(),
+            ],
+            &env,
+        )
+    };
+    let o = run(
+        &fake_build("golden-100", "1.0.0", false),
+        "golden-bless",
+        true,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let manifest =
+        std::fs::read_to_string(golden.join("blessed-on.json")).expect("blessed-on.json");
+    assert!(
+        manifest.contains("\"fake/mesa\"") && manifest.contains("1.0.0"),
+        "{manifest}"
+    );
+    // The same picture on 1.0.7 passes: the golden guards the picture, not the version.
+    let o = run(
+        &fake_build("golden-107", "1.0.7", false),
+        "golden-same",
+        false,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    // A changed picture on 2.0.0 fails, and says the golden is from 1.0.0.
+    let o = run(
+        &fake_build("golden-200", "2.0.0", true),
+        "golden-other",
+        false,
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(
+        t.contains("blessed on Mesa 1.0.0") && t.contains("this driver is Mesa 2.0.0"),
+        "{t}"
+    );
+    assert!(
+        t.contains("differ and were blessed on another driver version"),
+        "{t}"
+    );
+}

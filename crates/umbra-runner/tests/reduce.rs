@@ -1,0 +1,121 @@
+//! `umbra reduce` on a case point that fails under one of the self-test's faults (a driver
+//! bug made to order): the reduced case has at most a quarter of the triangles and of the
+//! pixels, still fails the same way on that backend, and still passes on the reference.
+
+mod common;
+
+use common::{scratch, text};
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn umbra(args: &[&str], fault: Option<&str>) -> Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_umbra"));
+    c.args(args)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
+        .env_remove("UMBRA_MESA")
+        .env_remove("UMBRA_SELFTEST")
+        .env_remove("UMBRA_FAULT");
+    if let Some(f) = fault {
+        c.env("UMBRA_SELFTEST", "1").env("UMBRA_FAULT", f);
+    }
+    c.output().expect("run umbra")
+}
+
+fn size(file: &Path) -> (usize, u64) {
+    let points = umbra_case::load_file(file).expect("loads");
+    let p = &points[0];
+    let tris = umbra_case::tessellate(&p.case.scene).triangles.len();
+    (
+        tris,
+        u64::from(p.case.camera.size[0]) * u64::from(p.case.camera.size[1]),
+    )
+}
+
+#[test]
+fn a_faulted_point_reduces_to_a_quarter_and_still_fails_the_same_way() {
+    let fault = "shadow-half-texel";
+    let backend = "gl33/llvmpipe";
+    let case = "cases/bias/acne-cull-front.json";
+    let out = scratch("reduce").join("reduced.json");
+    let o = umbra(
+        &[
+            "reduce",
+            case,
+            "--point",
+            "acne-cull-front",
+            "--backend",
+            backend,
+            "-o",
+            out.to_str().unwrap_or_default(),
+        ],
+        Some(fault),
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let (tris0, px0) = size(&root.join(case));
+    let (tris, px) = size(&out);
+    assert!(tris * 4 <= tris0, "{tris} of {tris0} triangles\n{t}");
+    assert!(px * 4 <= px0, "{px} of {px0} pixels\n{t}");
+    let reduced = std::fs::read_to_string(&out).expect("reduced case");
+    assert!(
+        reduced.contains("reduced by umbra reduce from cases/bias/acne-cull-front.json"),
+        "{reduced}"
+    );
+    // Still failing under the fault, by the same check the reducer kept.
+    let file = out.to_str().unwrap_or_default();
+    let o = umbra(
+        &[
+            "render",
+            file,
+            "--backend",
+            backend,
+            "-o",
+            scratch("reduce-render").to_str().unwrap_or_default(),
+        ],
+        Some(fault),
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    // Still passing on the reference, and on the backend without the fault.
+    for (b, f) in [("ref", None), (backend, None)] {
+        let o = umbra(
+            &[
+                "render",
+                file,
+                "--backend",
+                b,
+                "-o",
+                scratch("reduce-ok").to_str().unwrap_or_default(),
+            ],
+            f,
+        );
+        assert_eq!(o.status.code(), Some(0), "{b}: {}", text(&o));
+    }
+}
+
+#[test]
+fn a_point_that_passes_is_not_reduced() {
+    let o = umbra(
+        &[
+            "reduce",
+            "cases/basics/square-occluder.json",
+            "--point",
+            "square-occluder",
+            "--backend",
+            "gl33/llvmpipe",
+            "-o",
+            scratch("reduce-pass")
+                .join("x.json")
+                .to_str()
+                .unwrap_or_default(),
+        ],
+        None,
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(
+        t.contains("reduce needs a point whose own frame fails"),
+        "{t}"
+    );
+}
