@@ -339,7 +339,6 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             let mut failed = j.failed.clone();
             let mut metrics = metrics;
             let golden_start = std::time::Instant::now();
-            let mut notes = Vec::new();
             let golden = req.golden.as_ref().map(|dir| {
                 let (g, msg, ssim) = crate::golden::check(dir, &name, &j.frame, &j.legal);
                 metrics.ssim_golden = ssim;
@@ -391,12 +390,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 } else {
                     "pass".into()
                 },
-                reason: problems
-                    .iter()
-                    .chain(&notes)
-                    .cloned()
-                    .collect::<Vec<_>>()
-                    .join("; "),
+                reason: problems.join("; "),
                 details: describe(&j),
                 metrics: Some(metrics),
                 golden,
