@@ -12,6 +12,9 @@
 //!   (`git bisect skip`).
 //! - **Test**: `umbra conformance --mesa PREFIX` on the chosen cases and backends (`--filter`,
 //!   `--backend`), goldens off: 0 good, 1 bad, 125 when nothing could be judged.
+//! - **Ends first**: the good and the bad commit are built and tested before git bisects
+//!   (`--no-check-ends` skips it): cases that already fail on the good commit, or pass on the
+//!   bad one, would make git name a meaningless commit, so that is an error (125).
 //! - At the end it prints the first bad commit, the case's failure on it, and every step with
 //!   its build and test time (also in `WORK/steps.csv`, with the full transcript in
 //!   `WORK/bisect.log`).
@@ -27,7 +30,7 @@ use std::time::Instant;
 use crate::args::Args;
 
 /// Usage line.
-pub const USAGE: &str = "umbra bisect --mesa-src DIR --good REV --bad REV [--filter GLOB] [--backend ID]... [--work DIR] [--build-script PATH] [--meson-option OPT]... [--cases DIR] [--expectations DIR]";
+pub const USAGE: &str = "umbra bisect --mesa-src DIR --good REV --bad REV [--filter GLOB] [--backend ID]... [--work DIR] [--build-script PATH] [--meson-option OPT]... [--cases DIR] [--expectations DIR] [--no-check-ends]";
 
 /// The one-time configuration: the smallest Mesa that holds every driver umbra runs.
 pub const MESON_OPTIONS: &[&str] = &[
@@ -117,7 +120,7 @@ pub fn main(argv: &[String]) -> i32 {
             "cases",
             "expectations",
         ],
-        &[],
+        &["no-check-ends"],
     ) {
         Ok(a) => a,
         Err(e) => return usage(&e),
@@ -236,6 +239,14 @@ pub fn main(argv: &[String]) -> i32 {
     }
     let started = Instant::now();
     let _ = git(&src, &["bisect", "reset"]);
+    // Each bisection starts its own list of steps.
+    let _ = std::fs::remove_file(work.join("steps.csv"));
+    if !args.has("no-check-ends") {
+        if let Err(e) = check_ends(&src, &exe, &step, good, bad) {
+            eprintln!("error: {e}");
+            return 125;
+        }
+    }
     if let Err(e) = git(&src, &["bisect", "start", bad, good]) {
         eprintln!("error: {e}");
         return 125;
@@ -332,6 +343,52 @@ pub fn main(argv: &[String]) -> i32 {
             1
         }
     }
+}
+
+/// Builds and tests the two ends first: a bisection whose "good" commit already fails, or
+/// whose "bad" one passes, would name a meaningless commit. The tree is left where it was.
+fn check_ends(
+    src: &Path,
+    exe: &Path,
+    step: &[String],
+    good: &str,
+    bad: &str,
+) -> Result<(), String> {
+    let here = match git(src, &["symbolic-ref", "-q", "--short", "HEAD"]) {
+        Ok(branch) if !branch.is_empty() => branch,
+        _ => git(src, &["rev-parse", "HEAD"])?,
+    };
+    let mut outcome = Ok(());
+    for (rev, want, what) in [(good, 0, "good"), (bad, 1, "bad")] {
+        println!("bisect: checking the {what} end, {rev}");
+        if let Err(e) = git(src, &["checkout", "-q", "--detach", rev]) {
+            outcome = Err(e);
+            break;
+        }
+        let code = Command::new(exe)
+            .args(step)
+            .current_dir(src)
+            .status()
+            .ok()
+            .and_then(|s| s.code());
+        if code == Some(want) {
+            continue;
+        }
+        outcome = Err(match (what, code) {
+            (_, Some(125)) => format!(
+                "the {what} commit {rev} could not be built or tested (see its logs under the work directory); pick another {what} commit"
+            ),
+            ("good", _) => format!(
+                "the chosen cases already fail on the good commit {rev}: pick an older --good, or a --filter/--backend that passes there (its report is under the work directory's reports/)"
+            ),
+            _ => format!(
+                "the chosen cases pass on the bad commit {rev}: nothing to bisect; check --filter and --backend (umbra conformance --mesa on that build shows what fails)"
+            ),
+        });
+        break;
+    }
+    git(src, &["checkout", "-q", &here])?;
+    outcome
 }
 
 fn usage(msg: &str) -> i32 {

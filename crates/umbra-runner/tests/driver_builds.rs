@@ -192,10 +192,11 @@ fn git(dir: &Path, args: &[&str]) -> String {
     String::from_utf8_lossy(&o.stdout).trim().to_string()
 }
 
-#[test]
-fn bisect_names_the_first_bad_commit_of_a_fake_tree_and_skips_one_that_does_not_build() {
-    let src = scratch("bisect-src");
-    git(&src, &["init", "-q"]);
+/// A fake Mesa source tree of `n` commits whose build script copies a fake build marker
+/// into the prefix: commit k (1-based) reports version 1.0.k, renders wrong from
+/// `fault_from` on, and does not build when k is in `broken`. Returns the commits.
+fn fake_tree(src: &Path, n: usize, broken: &[usize], fault_from: usize) -> Vec<String> {
+    git(src, &["init", "-q"]);
     std::fs::write(
         src.join("build.sh"),
         "#!/bin/sh\nset -e\nif [ -f \"$1/BROKEN\" ]; then echo 'build error' >&2; exit 1; fi\nmkdir -p \"$2\"\ncp \"$1/fake-mesa.json\" \"$2/umbra-fake-mesa.json\"\n",
@@ -208,31 +209,41 @@ fn bisect_names_the_first_bad_commit_of_a_fake_tree_and_skips_one_that_does_not_
             .expect("chmod");
     }
     let mut commits = Vec::new();
-    for n in 1..=8 {
-        let fault = n >= 6;
-        let marker =
-            serde_json::json!({"version": format!("1.0.{n}"), "fault": fault.then_some("invert")});
+    for k in 1..=n {
+        let marker = serde_json::json!({
+            "version": format!("1.0.{k}"),
+            "fault": (k >= fault_from).then_some("invert"),
+        });
         std::fs::write(src.join("fake-mesa.json"), marker.to_string()).expect("write");
-        if n == 3 {
+        if broken.contains(&k) {
             std::fs::write(src.join("BROKEN"), "").expect("write");
         } else {
             let _ = std::fs::remove_file(src.join("BROKEN"));
         }
-        git(&src, &["add", "-A"]);
-        git(&src, &["commit", "-q", "-m", &format!("commit {n}")]);
-        commits.push(git(&src, &["rev-parse", "HEAD"]));
+        git(src, &["add", "-A"]);
+        git(src, &["commit", "-q", "-m", &format!("commit {k}")]);
+        commits.push(git(src, &["rev-parse", "HEAD"]));
     }
-    let work = scratch("bisect-work");
-    let no_exp = scratch("bisect-exp");
-    let o = umbra(
+    commits
+}
+
+/// `umbra bisect` over a fake tree, on fake/mesa and the l-occluder case.
+fn bisect(src: &Path, good: &str, bad: &str, work: &Path) -> Output {
+    let no_exp = scratch(&format!(
+        "{}-exp",
+        work.file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or("bisect")
+    ));
+    umbra(
         &[
             "bisect",
             "--mesa-src",
             src.to_str().unwrap_or_default(),
             "--good",
-            &commits[0],
+            good,
             "--bad",
-            &commits[7],
+            bad,
             "--build-script",
             src.join("build.sh").to_str().unwrap_or_default(),
             "--backend",
@@ -245,7 +256,16 @@ fn bisect_names_the_first_bad_commit_of_a_fake_tree_and_skips_one_that_does_not_
             no_exp.to_str().unwrap_or_default(),
         ],
         &[("UMBRA_FAKE_BACKENDS", "1")],
-    );
+    )
+}
+
+#[test]
+fn bisect_names_the_first_bad_commit_of_a_fake_tree_and_skips_one_that_does_not_build() {
+    let src = scratch("bisect-src");
+    // 8 commits; 3 does not build; wrong from 6 on.
+    let commits = fake_tree(&src, 8, &[3], 6);
+    let work = scratch("bisect-work");
+    let o = bisect(&src, &commits[0], &commits[7], &work);
     let t = text(&o);
     assert_eq!(o.status.code(), Some(0), "{t}");
     assert!(
@@ -264,57 +284,31 @@ fn bisect_names_the_first_bad_commit_of_a_fake_tree_and_skips_one_that_does_not_
 fn bisect_reports_a_commit_that_does_not_build_as_skipped() {
     // Good 2, bad 4, 3 does not build: git cannot decide between 3 and 4, and says so.
     let src = scratch("bisect-skip-src");
-    git(&src, &["init", "-q"]);
-    std::fs::write(
-        src.join("build.sh"),
-        "#!/bin/sh\nset -e\nif [ -f \"$1/BROKEN\" ]; then exit 1; fi\nmkdir -p \"$2\"\ncp \"$1/fake-mesa.json\" \"$2/umbra-fake-mesa.json\"\n",
-    )
-    .expect("write");
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        std::fs::set_permissions(src.join("build.sh"), std::fs::Permissions::from_mode(0o755))
-            .expect("chmod");
-    }
-    let mut commits = Vec::new();
-    for n in 1..=4 {
-        let marker = serde_json::json!({"version": format!("1.0.{n}"), "fault": (n == 4).then_some("invert")});
-        std::fs::write(src.join("fake-mesa.json"), marker.to_string()).expect("write");
-        if n == 3 {
-            std::fs::write(src.join("BROKEN"), "").expect("write");
-        } else {
-            let _ = std::fs::remove_file(src.join("BROKEN"));
-        }
-        git(&src, &["add", "-A"]);
-        git(&src, &["commit", "-q", "-m", &format!("commit {n}")]);
-        commits.push(git(&src, &["rev-parse", "HEAD"]));
-    }
+    let commits = fake_tree(&src, 4, &[3], 4);
     let work = scratch("bisect-skip-work");
-    let o = umbra(
-        &[
-            "bisect",
-            "--mesa-src",
-            src.to_str().unwrap_or_default(),
-            "--good",
-            &commits[1],
-            "--bad",
-            &commits[3],
-            "--build-script",
-            src.join("build.sh").to_str().unwrap_or_default(),
-            "--backend",
-            "fake/mesa",
-            "--filter",
-            "l-occluder",
-            "--work",
-            work.to_str().unwrap_or_default(),
-        ],
-        &[("UMBRA_FAKE_BACKENDS", "1")],
-    );
+    let o = bisect(&src, &commits[1], &commits[3], &work);
     let t = text(&o);
     assert_eq!(o.status.code(), Some(1), "{t}");
     let steps = std::fs::read_to_string(work.join("steps.csv")).expect("steps.csv");
     assert!(steps.contains("skip (does not build"), "{steps}");
     assert!(t.contains("no single first bad commit"), "{t}");
+}
+
+#[test]
+fn bisect_refuses_ends_that_do_not_fail_as_claimed() {
+    let src = scratch("bisect-ends-src");
+    let commits = fake_tree(&src, 4, &[], 2);
+    // "Good" already fails.
+    let o = bisect(&src, &commits[2], &commits[3], &scratch("bisect-ends-good"));
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(t.contains("already fail on the good commit"), "{t}");
+    // "Bad" passes.
+    let o = bisect(&src, &commits[0], &commits[0], &scratch("bisect-ends-bad"));
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(t.contains("pass on the bad commit"), "{t}");
+    assert_eq!(git(&src, &["rev-parse", "HEAD"]), commits[3]);
 }
 
 #[test]
