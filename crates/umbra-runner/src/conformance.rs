@@ -442,17 +442,26 @@ pub fn main(argv: &[String]) -> i32 {
     // Blessing (`cargo xtask bless`): record the driver each backend's goldens now match.
     if std::env::var("INSTA_UPDATE").is_ok_and(|v| v == "always") {
         if let Some(dir) = &settings.golden {
-            let entries: Vec<(String, String)> = driver_rows
-                .iter()
-                .filter_map(|r| {
-                    let b = r["backend"].as_str()?;
-                    let v = r["mesa"].as_str()?;
-                    results
-                        .iter()
-                        .any(|x| x.backend == b && x.golden.is_some())
-                        .then(|| (b.to_string(), v.to_string()))
-                })
-                .collect();
+            let version_of = |b: &str| {
+                driver_rows
+                    .iter()
+                    .find(|r| r["backend"].as_str() == Some(b))
+                    .and_then(|r| r["mesa"].as_str())
+                    .map(str::to_string)
+            };
+            // Each backend (kept if already recorded), then each golden written now.
+            let mut entries: Vec<(String, String)> = Vec::new();
+            for r in &results {
+                let Some(v) = version_of(&r.backend) else {
+                    continue;
+                };
+                if r.golden.is_some() && !entries.iter().any(|(k, _)| *k == r.backend) {
+                    entries.push((r.backend.clone(), v.clone()));
+                }
+                if r.golden.as_deref() == Some("written") {
+                    entries.push((crate::golden::stem(&r.name), v));
+                }
+            }
             if entries.is_empty() {
                 // Nothing Mesa-backed was blessed: the manifest stays as it is.
             } else if let Err(e) = crate::golden::record_blessed(dir, &entries) {

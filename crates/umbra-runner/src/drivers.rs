@@ -110,6 +110,31 @@ pub struct Change {
     pub point: String,
     /// See `file`.
     pub backend: String,
+    /// The pictures' measured difference, once rendered.
+    pub measured: Option<PictureDiff>,
+}
+
+/// How two renders of one point differ, pixel by pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PictureDiff {
+    /// Pixels compared.
+    pub pixels: u64,
+    /// Pixels whose colour differs in any channel.
+    pub colour_px: u64,
+    /// The largest difference of one 8-bit channel.
+    pub colour_max: u8,
+    /// Pixels whose stored visibility differs.
+    pub visibility_px: u64,
+}
+
+impl std::fmt::Display for PictureDiff {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "colour differs on {} of {} px, by at most {}/255 a channel; visibility differs on {} px",
+            self.colour_px, self.pixels, self.colour_max, self.visibility_px
+        )
+    }
 }
 
 /// Joins two report.json run lists and lists what changed.
@@ -210,6 +235,7 @@ pub fn compare(baseline: &Value, candidate: &Value) -> Vec<Change> {
             file: pick["file"].as_str().unwrap_or("").to_string(),
             point: pick["case"].as_str().unwrap_or("").to_string(),
             backend: pick["backend"].as_str().unwrap_or("").to_string(),
+            measured: None,
         });
     }
     let rank = |k: &str| match k {
@@ -263,7 +289,7 @@ pub fn main(argv: &[String]) -> i32 {
         }
     }
     let pictures: usize = match args.value("pictures").map(str::parse).transpose() {
-        Ok(n) => n.unwrap_or(60),
+        Ok(n) => n.unwrap_or(200),
         Err(_) => return usage("--pictures takes a number"),
     };
     let out = PathBuf::from(args.value("out").unwrap_or("target/umbra/drivers"));
@@ -329,7 +355,7 @@ pub fn main(argv: &[String]) -> i32 {
         };
         reports.push(report);
     }
-    let changes = compare(&reports[0], &reports[1]);
+    let mut changes = compare(&reports[0], &reports[1]);
     let label = |r: &Value, mesa: &str| {
         let versions: Vec<String> = r["drivers"]
             .as_array()
@@ -353,8 +379,15 @@ pub fn main(argv: &[String]) -> i32 {
     };
     let (la, lb) = (label(&reports[0], base), label(&reports[1], cand));
     // Pictures for the first N changes.
-    for c in changes.iter().take(pictures) {
-        render_pictures(&exe, &out, c, base, cand);
+    for c in changes.iter_mut().take(pictures) {
+        c.measured = render_pictures(&exe, &out, c, base, cand);
+        if let Some(m) = c.measured {
+            c.detail = if c.detail.is_empty() || c.detail == "picture changed" {
+                m.to_string()
+            } else {
+                format!("{}; {m}", c.detail)
+            };
+        }
     }
     if let Err(e) = write_outputs(&out, &changes, &la, &lb, &reports) {
         eprintln!("error: cannot write under {}: {e}", out.display());
@@ -389,6 +422,24 @@ pub fn main(argv: &[String]) -> i32 {
             }
         );
     }
+    // Changed pictures, per backend, with the measured size of the change.
+    let mut by_backend: BTreeMap<&str, (usize, usize, PictureDiff)> = BTreeMap::new();
+    for c in changes.iter().filter(|c| c.kind == "picture") {
+        let e = by_backend.entry(c.backend.as_str()).or_default();
+        e.0 += 1;
+        if let Some(m) = c.measured {
+            e.1 += 1;
+            e.2.colour_px = e.2.colour_px.max(m.colour_px);
+            e.2.colour_max = e.2.colour_max.max(m.colour_max);
+            e.2.visibility_px = e.2.visibility_px.max(m.visibility_px);
+        }
+    }
+    for (b, (n, measured, m)) in &by_backend {
+        println!(
+            "  picture          {b}: {n} points; of the {measured} rendered, at most {} px differ in colour, by at most {}/255, and at most {} px in visibility",
+            m.colour_px, m.colour_max, m.visibility_px
+        );
+    }
     println!("drivers: report in {}", out.join("report.html").display());
     i32::from(count("regression") > 0)
 }
@@ -404,7 +455,13 @@ fn picture_dir(out: &Path, c: &Change) -> PathBuf {
 }
 
 /// Renders a changed point on both builds and on the reference, and the difference.
-fn render_pictures(exe: &Path, out: &Path, c: &Change, base: &str, cand: &str) {
+fn render_pictures(
+    exe: &Path,
+    out: &Path,
+    c: &Change,
+    base: &str,
+    cand: &str,
+) -> Option<PictureDiff> {
     let dir = picture_dir(out, c);
     for (side, backend, mesa) in [
         ("baseline", c.backend.as_str(), base),
@@ -429,29 +486,48 @@ fn render_pictures(exe: &Path, out: &Path, c: &Change, base: &str, cand: &str) {
             .stderr(Stdio::null())
             .status();
     }
-    let a = image::open(dir.join("baseline").join("color.png")).map(|i| i.to_rgba8());
-    let b = image::open(dir.join("candidate").join("color.png")).map(|i| i.to_rgba8());
-    if let (Ok(a), Ok(b)) = (a, b) {
-        if a.dimensions() == b.dimensions() {
-            let mut d = image::RgbaImage::new(a.width(), a.height());
-            for ((pa, pb), pd) in a.pixels().zip(b.pixels()).zip(d.pixels_mut()) {
-                let diff =
-                    pa.0.iter()
-                        .zip(pb.0.iter())
-                        .take(3)
-                        .map(|(x, y)| x.abs_diff(*y))
-                        .max()
-                        .unwrap_or(0);
-                *pd = if diff == 0 {
-                    let g = (u16::from(pa.0[0]) + u16::from(pa.0[1]) + u16::from(pa.0[2])) / 12;
-                    image::Rgba([g as u8, g as u8, g as u8, 255])
-                } else {
-                    image::Rgba([255, 64u8.saturating_add(diff.saturating_mul(4)), 255, 255])
-                };
-            }
-            let _ = d.save(dir.join("difference.png"));
-        }
+    let load = |side: &str, file: &str| {
+        image::open(dir.join(side).join(file))
+            .ok()
+            .map(|i| i.to_rgba8())
+    };
+    let (a, b) = (
+        load("baseline", "color.png")?,
+        load("candidate", "color.png")?,
+    );
+    if a.dimensions() != b.dimensions() {
+        return None;
     }
+    let mut m = PictureDiff {
+        pixels: u64::from(a.width()) * u64::from(a.height()),
+        ..PictureDiff::default()
+    };
+    let mut d = image::RgbaImage::new(a.width(), a.height());
+    for ((pa, pb), pd) in a.pixels().zip(b.pixels()).zip(d.pixels_mut()) {
+        let diff =
+            pa.0.iter()
+                .zip(pb.0.iter())
+                .take(3)
+                .map(|(x, y)| x.abs_diff(*y))
+                .max()
+                .unwrap_or(0);
+        m.colour_max = m.colour_max.max(diff);
+        *pd = if diff == 0 {
+            let g = (u16::from(pa.0[0]) + u16::from(pa.0[1]) + u16::from(pa.0[2])) / 12;
+            image::Rgba([g as u8, g as u8, g as u8, 255])
+        } else {
+            m.colour_px += 1;
+            image::Rgba([255, 64u8.saturating_add(diff.saturating_mul(4)), 255, 255])
+        };
+    }
+    let _ = d.save(dir.join("difference.png"));
+    if let (Some(va), Some(vb)) = (
+        load("baseline", "visibility.png"),
+        load("candidate", "visibility.png"),
+    ) {
+        m.visibility_px = va.pixels().zip(vb.pixels()).filter(|(x, y)| x != y).count() as u64;
+    }
+    Some(m)
 }
 
 fn img(path: &Path, caption: &str) -> String {

@@ -7,8 +7,10 @@
 //! `CI=true` insta writes nothing and the run fails. A missing golden is a change too.
 //! `cargo xtask bless` runs with `INSTA_UPDATE=always` and lists what it wrote.
 //!
-//! Goldens stay per backend id; `golden/blessed-on.json` records, per backend, the Mesa
-//! version its goldens were blessed on (`cargo xtask bless` writes it). A run on another
+//! Goldens stay per backend id; `golden/blessed-on.json` records the Mesa version goldens were
+//! blessed on (`cargo xtask bless` writes it): per backend, the version its goldens were first
+//! blessed on, and per golden written since, that golden's (so one golden blessed on a newer
+//! Mesa, for a feature the older one skips, does not relabel the rest). A run on another
 //! version (`--mesa`, or a distribution upgrade) compares as always and a difference still
 //! fails, but its reason says plainly that the golden was blessed on another version ("blessed
 //! on Mesa 22.3.6, this driver is Mesa 25.0.7"), because the likeliest cause is then the
@@ -150,22 +152,33 @@ pub fn check(
 /// The manifest of driver versions the goldens were blessed on, in the golden directory.
 pub const MANIFEST: &str = "blessed-on.json";
 
-/// The Mesa version backend `id`'s goldens in `dir` were blessed on, if recorded.
-pub fn blessed_on(dir: &Path, id: &str) -> Option<String> {
+/// The Mesa version the golden of run `name` on backend `id` was blessed on, if recorded: the
+/// golden's own entry (written when that golden was written), else the backend's (the
+/// version the backend's goldens were first blessed on).
+pub fn blessed_on(dir: &Path, id: &str, name: &str) -> Option<String> {
     let text = std::fs::read_to_string(dir.join(MANIFEST)).ok()?;
     let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    v[id].as_str().map(str::to_string)
+    v[stem(name).as_str()]
+        .as_str()
+        .or(v[id].as_str())
+        .map(str::to_string)
 }
 
-/// Records that backend `id`'s goldens were (re)blessed on Mesa `version` (keeps the others).
+/// Records blessings: `(key, version)` where the key is a golden's stem (that golden was
+/// written on that version) or a backend id (set only if the backend has no entry yet). Keeps
+/// every other entry; leaves the file untouched when nothing changes.
 pub fn record_blessed(dir: &Path, entries: &[(String, String)]) -> std::io::Result<()> {
     let path = dir.join(MANIFEST);
     let mut map: std::collections::BTreeMap<String, String> = std::fs::read_to_string(&path)
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok())
         .unwrap_or_default();
-    for (id, v) in entries {
-        map.insert(id.clone(), v.clone());
+    for (key, v) in entries {
+        if key.contains('/') {
+            map.entry(key.clone()).or_insert_with(|| v.clone());
+        } else {
+            map.insert(key.clone(), v.clone());
+        }
     }
     let text = serde_json::to_string_pretty(&map).unwrap_or_default() + "\n";
     if std::fs::read_to_string(&path).is_ok_and(|t| t == text) {

@@ -235,8 +235,17 @@ impl DriverFacts {
     pub fn from_hello(ready: &serde_json::Value) -> DriverFacts {
         let s = |k: &str| ready[k].as_str().unwrap_or("").to_string();
         let (version, renderer) = (s("version"), s("renderer"));
+        // wgpu reports the driver's version among its notes ("driver_info Mesa 22.3.6 ...").
+        let notes: Vec<&str> = ready["extensions"]
+            .as_array()
+            .map(|a| a.iter().filter_map(|e| e.as_str()).collect())
+            .unwrap_or_default();
         DriverFacts {
-            mesa: crate::mesa_build::reported_version([version.as_str(), renderer.as_str()]),
+            mesa: crate::mesa_build::reported_version(
+                [version.as_str(), renderer.as_str()]
+                    .into_iter()
+                    .chain(notes.iter().copied()),
+            ),
             renderer,
         }
     }
@@ -581,6 +590,18 @@ mod tests {
             "{err}"
         );
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_wgpu_hello_gives_its_mesa_version_from_the_driver_info() {
+        let hello = serde_json::json!({
+            "vendor": "0x10005", "renderer": "llvmpipe (LLVM 15.0.6, 256 bits)", "version": "",
+            "extensions": ["backend Vulkan", "driver_info Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)"],
+        });
+        assert_eq!(
+            DriverFacts::from_hello(&hello).mesa.as_deref(),
+            Some("25.0.7-2~bpo12+1")
+        );
     }
 
     #[test]

@@ -344,11 +344,12 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 metrics.ssim_golden = ssim;
                 // A golden blessed on another driver version still fails; the reason says so.
                 let info = backend.info();
-                let here = crate::mesa_build::reported_version([
-                    info.version.as_str(),
-                    info.renderer.as_str(),
-                ]);
-                let blessed = crate::golden::blessed_on(dir, &backend.id().0);
+                let here = crate::mesa_build::reported_version(
+                    [info.version.as_str(), info.renderer.as_str()]
+                        .into_iter()
+                        .chain(info.extensions.iter().map(String::as_str)),
+                );
+                let blessed = crate::golden::blessed_on(dir, &backend.id().0, &name);
                 let foreign = match (&here, &blessed) {
                     (Some(h), Some(b)) => (!crate::golden::same_release(h, b)).then_some((h, b)),
                     _ => None,
