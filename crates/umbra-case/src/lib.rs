@@ -25,6 +25,7 @@ pub mod format;
 pub mod frame;
 pub mod light;
 pub mod load;
+pub mod memory;
 pub mod offset;
 pub mod prepare;
 pub mod profile;

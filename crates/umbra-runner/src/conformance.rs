@@ -33,7 +33,7 @@ use crate::status::{Expectations, Status};
 use crate::worker::{Metrics, Request, RunReport};
 
 /// Usage line.
-pub const USAGE: &str = "umbra conformance [--cases DIR] [--filter GLOB] [--backend ID]... [--shard I/N] [--jobs N] [--timeout SECS] [--expectations DIR] [--golden DIR|none] [--out DIR] [--mesa PREFIX|BUILD_DIR|system] [--verbose]";
+pub const USAGE: &str = "umbra conformance [--cases DIR] [--filter GLOB] [--backend ID]... [--shard I/N] [--jobs N] [--timeout SECS] [--expectations DIR] [--golden DIR|none] [--out DIR] [--mesa PREFIX|BUILD_DIR|system] [--max-memory SIZE] [--verbose]";
 
 /// A point's swept values, `(path, value)` in axis order.
 type SweepValues = Vec<(String, serde_json::Value)>;
@@ -197,6 +197,7 @@ pub fn main(argv: &[String]) -> i32 {
             "expectations",
             "golden",
             "mesa",
+            "max-memory",
         ],
         &["verbose"],
     ) {
@@ -235,6 +236,9 @@ pub fn main(argv: &[String]) -> i32 {
         Ok(t) => Duration::from_secs(t.unwrap_or(300)),
         Err(_) => return usage("--timeout takes whole seconds"),
     };
+    if let Err(e) = crate::memory_limit::select(args.value("max-memory"), jobs) {
+        return usage(&e);
+    }
     let expectations = match Expectations::load(Path::new(
         args.value("expectations").unwrap_or("expectations"),
     )) {

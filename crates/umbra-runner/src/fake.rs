@@ -3,7 +3,9 @@
 //! right afterwards, `fake/wrong` inverts every shadow, and `fake/mesa` stands in for a Mesa
 //! driver build (`--mesa DIR` with a [`crate::mesa_build::FAKE_MARKER`] file: it reports that
 //! file's version, and inverts every shadow when the file says `"fault": "invert"`), so the
-//! bisect driver and per-driver expectations are tested without building Mesa. They exist
+//! bisect driver and per-driver expectations are tested without building Mesa; `fake/hog`
+//! is a runaway that keeps allocating (64 MiB every 20 ms, up to 16 GiB), for the memory
+//! limit. They exist
 //! only when the environment has `UMBRA_FAKE_BACKENDS=1`, so no user run can select one by
 //! accident.
 
@@ -19,7 +21,14 @@ pub fn enabled() -> bool {
 }
 
 /// The fake ids.
-pub const IDS: [&str; 5] = ["fake/crash", "fake/hang", "fake/flaky", "fake/wrong", MESA];
+pub const IDS: [&str; 6] = [
+    "fake/crash",
+    "fake/hang",
+    "fake/flaky",
+    "fake/wrong",
+    MESA,
+    "fake/hog",
+];
 
 /// The fake that runs on a fake Mesa build.
 pub const MESA: &str = "fake/mesa";
@@ -80,6 +89,18 @@ impl Backend for Fake {
 
     fn render(&mut self, run: &Prepared) -> Result<Frame, BackendError> {
         self.calls += 1;
+        if self.id == "fake/hog" {
+            let mut held: Vec<Vec<u8>> = Vec::new();
+            for _ in 0..256 {
+                // Touched, so it is resident.
+                held.push(vec![1u8; 64 << 20]);
+                std::thread::sleep(std::time::Duration::from_millis(20));
+            }
+            return Err(BackendError::Other(format!(
+                "fake/hog held {} MiB and was not stopped",
+                held.len() * 64
+            )));
+        }
         let mut frame = umbra_ref::render(run, umbra_case::ClipDepth::MinusOneToOne);
         match self.id {
             "fake/crash" => std::process::abort(),

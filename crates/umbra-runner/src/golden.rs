@@ -120,9 +120,15 @@ pub fn check(
     settings.set_omit_expression(true);
     settings.set_description(format!("umbra golden: colour of {name}"));
     let name_ext = format!("{stem}.png");
+    // insta reports a mismatch by panicking: keep that panic (and, with RUST_BACKTRACE set,
+    // its backtrace) off the output; the run's reason says what happened and how to review
+    // it, in one line. The hook is global, and workers render on one thread.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         settings.bind(|| insta::assert_binary_snapshot!(name_ext.as_str(), bytes.clone()));
     }));
+    std::panic::set_hook(hook);
     match (outcome, within) {
         (Ok(()), true) => (Golden::Unchanged, String::new(), ssim),
         (Ok(()), false) => (Golden::Written, format!("golden {stem} written"), ssim),

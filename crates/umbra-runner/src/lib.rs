@@ -17,6 +17,7 @@ pub mod golden;
 pub mod html;
 pub mod judge_cache;
 pub mod measure;
+pub mod memory_limit;
 pub mod mesa_build;
 pub mod pareto_plot;
 pub mod pool;

@@ -5,6 +5,7 @@ use std::process::ExitCode;
 use umbra_runner::{conformance, render_cmd};
 
 fn main() -> ExitCode {
+    quiet_on_closed_pipe();
     let argv: Vec<String> = std::env::args().skip(1).collect();
     let code = match argv.first().map(String::as_str) {
         Some("render") => render_cmd::main(&argv[1..]),
@@ -42,4 +43,23 @@ fn main() -> ExitCode {
         }
     };
     ExitCode::from(code.clamp(0, 255) as u8)
+}
+
+/// `umbra render CASE | head -1`: when the reader of stdout goes away, stop quietly (exit 0,
+/// as ripgrep does) instead of panicking in `println!`. Any other panic keeps the default
+/// report.
+fn quiet_on_closed_pipe() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if msg.starts_with("failed printing to stdout") && msg.contains("Broken pipe") {
+            std::process::exit(0);
+        }
+        default(info);
+    }));
 }

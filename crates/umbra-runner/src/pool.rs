@@ -1,11 +1,12 @@
 //! The parent's side of the workers: one worker process per backend (with the driver's
 //! environment), fed one run at a time; a per-run timeout; a dead or hung worker costs its
-//! run (Crash or Timeout) and a fresh worker takes the rest.
+//! run (Crash or Timeout) and a fresh worker takes the rest; so does one whose resident
+//! memory goes over the budget ([`crate::memory_limit`]).
 
 use std::io::{BufRead, BufReader, Write};
 use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use crate::worker::{Request, RunReport};
 
@@ -99,16 +100,32 @@ impl Worker {
         {
             return Reply::Crashed(self.stop());
         }
-        match self.lines.recv_timeout(limit) {
-            Ok(line) => match serde_json::from_str(&line) {
-                Ok(r) => Reply::Report(Box::new(r)),
-                Err(e) => Reply::Crashed(format!("unreadable answer {line:?}: {e}")),
-            },
-            Err(RecvTimeoutError::Timeout) => {
-                self.stop();
-                Reply::TimedOut
+        // Wait in short ticks, watching the worker's resident memory against the budget.
+        let deadline = Instant::now() + limit;
+        let budget = crate::memory_limit::budget();
+        loop {
+            let tick =
+                crate::memory_limit::POLL.min(deadline.saturating_duration_since(Instant::now()));
+            match self.lines.recv_timeout(tick) {
+                Ok(line) => {
+                    return match serde_json::from_str(&line) {
+                        Ok(r) => Reply::Report(Box::new(r)),
+                        Err(e) => Reply::Crashed(format!("unreadable answer {line:?}: {e}")),
+                    };
+                }
+                Err(RecvTimeoutError::Timeout) if Instant::now() >= deadline => {
+                    self.stop();
+                    return Reply::TimedOut;
+                }
+                Err(RecvTimeoutError::Timeout) => {
+                    if let Some(why) = crate::memory_limit::over(self.child.id(), budget) {
+                        let _ = self.child.kill();
+                        let _ = self.child.wait();
+                        return Reply::Crashed(why);
+                    }
+                }
+                Err(RecvTimeoutError::Disconnected) => return Reply::Crashed(self.stop()),
             }
-            Err(RecvTimeoutError::Disconnected) => Reply::Crashed(self.stop()),
         }
     }
 

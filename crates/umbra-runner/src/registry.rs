@@ -66,6 +66,14 @@ pub fn worker_env(id: &str) -> Vec<(String, String)> {
             env.extend(build.env());
         }
     }
+    env.push((
+        crate::memory_limit::ENV.to_string(),
+        crate::memory_limit::budget().to_string(),
+    ));
+    // insta's own mismatch summary repeats what the run's reason says; unless asked for.
+    if std::env::var_os("INSTA_OUTPUT").is_none() {
+        env.push(("INSTA_OUTPUT".into(), "none".into()));
+    }
     env
 }
 

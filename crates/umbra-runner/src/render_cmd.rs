@@ -10,12 +10,20 @@ use crate::args::Args;
 use crate::run::{Outcome, describe, run_point};
 
 /// Usage line.
-pub const USAGE: &str = "umbra render CASE.json [--backend ref|gl33/llvmpipe|gles2/zink|...] [-o DIR] [--point GLOB] [--mesa PREFIX|BUILD_DIR|system]";
+pub const USAGE: &str = "umbra render CASE.json [--backend ref|gl33/llvmpipe|gles2/zink|...] [-o DIR] [--point GLOB] [--mesa PREFIX|BUILD_DIR|system] [--max-memory SIZE]";
 
 /// Runs the command; returns the process exit code.
 pub fn main(argv: &[String]) -> i32 {
-    let args = match Args::parse(argv, &["backend", "o", "out", "point", "mesa"], &[]) {
+    let args = match Args::parse(
+        argv,
+        &["backend", "o", "out", "point", "mesa", "max-memory"],
+        &[],
+    ) {
         Ok(a) => a,
+        Err(e) => return usage_error(&e),
+    };
+    let budget = match crate::memory_limit::select(args.value("max-memory"), 1) {
+        Ok(b) => b,
         Err(e) => return usage_error(&e),
     };
     let build = match crate::mesa_build::select(args.value("mesa")) {
@@ -86,6 +94,18 @@ pub fn main(argv: &[String]) -> i32 {
         );
         return 1;
     }
+    // Refuse what cannot fit before anything renders, then watch what does.
+    let mut estimated = 0;
+    for p in &selected {
+        let triangles = umbra_case::tessellate(&p.case.scene).triangles.len();
+        let e = umbra_case::memory::estimate(&p.case, triangles);
+        if let Some(why) = e.refuse(budget) {
+            eprintln!("error: {case} point {}: {why}", p.id());
+            return 125;
+        }
+        estimated = estimated.max(e.total());
+    }
+    crate::memory_limit::watch_self(budget);
     let many = selected.len() > 1;
     let mut code = 0;
     for point in selected {
@@ -120,6 +140,14 @@ pub fn main(argv: &[String]) -> i32 {
                 }
             }
         }
+    }
+    if let Some(peak) = crate::memory_limit::peak_self() {
+        println!(
+            "memory: peak resident {} (estimate {}, budget {})",
+            umbra_case::memory::gib(peak),
+            umbra_case::memory::gib(estimated),
+            umbra_case::memory::gib(budget)
+        );
     }
     code
 }

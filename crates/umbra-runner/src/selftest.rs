@@ -27,7 +27,7 @@ use crate::status::Expectations;
 use crate::worker::Request;
 
 /// Usage line.
-pub const USAGE: &str = "umbra selftest [--backend ID]... [--fault NAME]... [--cases DIR] [--expectations DIR] [--timeout SECS] [--jobs N] [--mesa PREFIX|BUILD_DIR|system] [--verbose]";
+pub const USAGE: &str = "umbra selftest [--backend ID]... [--fault NAME]... [--cases DIR] [--expectations DIR] [--timeout SECS] [--jobs N] [--mesa PREFIX|BUILD_DIR|system] [--max-memory SIZE] [--verbose]";
 
 /// How many exercising points each fault × backend pair runs at least.
 pub const SAMPLE: usize = 6;
@@ -143,6 +143,7 @@ pub fn main(argv: &[String]) -> i32 {
             "timeout",
             "jobs",
             "mesa",
+            "max-memory",
         ],
         &["verbose"],
     ) {
@@ -167,6 +168,10 @@ pub fn main(argv: &[String]) -> i32 {
         .and_then(|j| j.parse().ok())
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
         .max(1);
+    if let Err(e) = crate::memory_limit::select(args.value("max-memory"), jobs) {
+        eprintln!("error: {e}\nusage: {USAGE}");
+        return 125;
+    }
     let expectations = match Expectations::load(Path::new(
         args.value("expectations").unwrap_or("expectations"),
     )) {

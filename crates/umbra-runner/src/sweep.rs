@@ -28,7 +28,7 @@ use crate::pool::{Reply, Worker};
 use crate::worker::Request;
 
 /// Usage line.
-pub const USAGE: &str = "umbra sweep [--scene CASE.json] [--point ID] [--backend ID|all]... [--repeat N] [--timeout SECS] [--out DIR] [--mesa PREFIX|BUILD_DIR|system]";
+pub const USAGE: &str = "umbra sweep [--scene CASE.json] [--point ID] [--backend ID|all]... [--repeat N] [--timeout SECS] [--out DIR] [--mesa PREFIX|BUILD_DIR|system] [--max-memory SIZE]";
 
 /// Backends swept when none is named: the reference and one of each GPU API family.
 pub const DEFAULT_BACKENDS: [&str; 3] = ["ref", "gl33/llvmpipe", "wgpu-vk/lavapipe"];
@@ -253,7 +253,14 @@ pub fn main(argv: &[String]) -> i32 {
     let args = match Args::parse(
         argv,
         &[
-            "scene", "point", "backend", "repeat", "timeout", "out", "mesa",
+            "scene",
+            "point",
+            "backend",
+            "repeat",
+            "timeout",
+            "out",
+            "mesa",
+            "max-memory",
         ],
         &[],
     ) {
@@ -266,6 +273,10 @@ pub fn main(argv: &[String]) -> i32 {
     if let Err(e) = crate::mesa_build::select(args.value("mesa")) {
         eprintln!("error: {e}");
         return 125;
+    }
+    if let Err(e) = crate::memory_limit::select(args.value("max-memory"), 1) {
+        eprintln!("error: {e}\nusage: {USAGE}");
+        return 2;
     }
     let scene = PathBuf::from(args.value("scene").unwrap_or(DEFAULT_SCENE.0));
     let repeat = match args.value("repeat").map(str::parse::<u32>).transpose() {

@@ -257,6 +257,25 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
         };
     };
     let name = format!("{}/{}", backend.id(), point.id());
+    // Refuse, before rendering, a run whose case cannot fit in the memory budget.
+    let triangles = umbra_case::tessellate(&point.case.scene).triangles.len();
+    if let Some(why) =
+        umbra_case::memory::estimate(&point.case, triangles).refuse(crate::memory_limit::budget())
+    {
+        return RunReport {
+            outcome: "fail".into(),
+            reason: format!(
+                "{} point {}: refused before rendering: {why}",
+                req.file.display(),
+                point.id()
+            ),
+            failed: vec![crate::run::FailedCheck {
+                check: "memory".into(),
+                count: 1,
+            }],
+            ..Default::default()
+        };
+    }
     if let Some(n) = req.repeat {
         use crate::measure::{Measurement, measure};
         return match measure(backend, point, n) {

@@ -113,3 +113,31 @@ fn goldens_fail_on_change_and_are_only_written_by_blessing() {
     );
     let _ = std::fs::remove_dir_all(&root);
 }
+
+#[test]
+fn a_golden_mismatch_is_one_line_even_with_backtraces_on() {
+    let root: PathBuf =
+        std::env::temp_dir().join(format!("umbra-golden-bt-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let (golden, out) = (root.join("golden"), root.join("out"));
+    std::fs::create_dir_all(&golden).expect("dir");
+    let o = umbra(&golden, &out, &[("CI", "true"), ("RUST_BACKTRACE", "1")]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    for noise in ["stack backtrace", "panicked", "Snapshot Summary"] {
+        assert!(!t.contains(noise), "{noise:?} in:\n{t}");
+    }
+    // One line on the terminal per mismatch (the run's line), the command to review it in it.
+    let lines: Vec<&str> = t
+        .lines()
+        .filter(|l| l.contains("has no golden yet"))
+        .collect();
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.starts_with("[1/1] Fail ref/square-occluder")
+                && l.contains("cargo xtask bless")),
+        "{t}"
+    );
+    let _ = std::fs::remove_dir_all(&root);
+}

@@ -1,0 +1,207 @@
+//! What one run of a case needs in memory, estimated from the case before anything renders,
+//! so that a case that validates but cannot fit (an 8192² image with a 16384² cube map asks
+//! for tens of GiB) is refused with the fields to shrink instead of taking the machine down.
+//!
+//! The estimate is linear in what a case controls: camera pixels, shadow-map texels (all
+//! faces) and triangles, plus a fixed base. Each coefficient covers every buffer that scales
+//! with it over a whole judged run: the backend's frame, the reference's frame and map, the
+//! truth, the judge's per-pixel intervals and classes, the twins (rendered one after the
+//! other), the driver's own copies (GL textures, readbacks, llvmpipe's tiles) and the PNGs.
+//! They are measured, not guessed: peak resident memory (`VmHWM`, printed by `umbra render`)
+//! of a plane-and-box case on ref, gl33/llvmpipe and wgpu-vk/lavapipe (2 cores, Mesa 22.3.6):
+//!
+//! | image, map          | ref      | gl33/llvmpipe | wgpu-vk/lavapipe |
+//! |---------------------|----------|---------------|------------------|
+//! | 256², 32² (base)    | 19 MiB   | 100 MiB       | 104 MiB          |
+//! | 256², 2048²         | 270 MiB  | 369 MiB       | 356 MiB          |
+//! | 256², 4096²         | 1.0 GiB  | 1.2 GiB       | 1.0 GiB          |
+//! | 1024², 512²         | 221 MiB  | 292 MiB       | 302 MiB          |
+//! | 2048², 512²         | 824 MiB  | 890 MiB       | 892 MiB          |
+//! | 512², 1024² × 6     | 235 MiB  | 338 MiB       | 319 MiB          |
+//!
+//! that is up to 71 bytes a texel (gl33, 4096²), 201 a pixel (ref, 2048²) and a 104 MiB base;
+//! the constants below add about a fifth on each, and summing the parts (the peaks of the map
+//! and the judging phases do not add up) adds more. Triangles are not calibrated beyond the
+//! catalogue's few thousand. The test `estimate_bounds_measured_peaks` in `umbra-runner`
+//! re-measures four of these sizes on all three backends and fails if a run needs more than
+//! its estimate.
+
+use crate::Case;
+use crate::format::Light;
+
+/// Bytes per camera pixel over a judged run (measured; see the module notes).
+pub const BYTES_PER_PIXEL: u64 = 240;
+/// Bytes per shadow-map texel, all faces (measured; see the module notes).
+pub const BYTES_PER_TEXEL: u64 = 80;
+/// Bytes per drawn triangle (geometry, its f64 copy for the truth, the acceleration grid).
+pub const BYTES_PER_TRIANGLE: u64 = 2_000;
+/// What a worker holds before any case: the process, the driver, the compiled shaders.
+pub const BASE_BYTES: u64 = 160 << 20;
+
+/// One part of an estimate: the case field that controls it, and its size.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Part {
+    /// The case field to shrink (`camera.size`, `shadow.size`, `scene.objects`).
+    pub field: &'static str,
+    /// What it is, with the figures (`8192×8192 px`).
+    pub what: String,
+    /// Bytes.
+    pub bytes: u64,
+}
+
+/// The memory one run of a case needs.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Estimate {
+    /// The parts, largest first; the fixed base is not among them.
+    pub parts: Vec<Part>,
+}
+
+impl Estimate {
+    /// Bytes in all, base included.
+    pub fn total(&self) -> u64 {
+        BASE_BYTES + self.parts.iter().map(|p| p.bytes).sum::<u64>()
+    }
+
+    /// Why a run does not fit in `budget` bytes, naming the fields to shrink (None if it
+    /// fits).
+    pub fn refuse(&self, budget: u64) -> Option<String> {
+        let total = self.total();
+        if total <= budget {
+            return None;
+        }
+        let parts: Vec<String> = self
+            .parts
+            .iter()
+            .filter(|p| p.bytes >= 1 << 20)
+            .map(|p| format!("{} {}: {}", p.field, p.what, gib(p.bytes)))
+            .collect();
+        let shrink: Vec<&str> = self
+            .parts
+            .iter()
+            .filter(|p| p.bytes >= total / 10)
+            .map(|p| p.field)
+            .collect();
+        Some(format!(
+            "this run needs about {} ({}; base {}), more than the memory budget of {}; fix: shrink {} (each halving of a side quarters its part), or raise the budget with --max-memory if the machine has the memory",
+            gib(total),
+            parts.join(", "),
+            gib(BASE_BYTES),
+            gib(budget),
+            shrink.join(" or ")
+        ))
+    }
+}
+
+/// The estimate for one run of `case` with `triangles` drawn triangles.
+pub fn estimate(case: &Case, triangles: usize) -> Estimate {
+    let [cw, ch] = case.camera.size;
+    let [sw, sh] = case.shadow.size;
+    let faces: u64 = if matches!(case.light, Light::Point(_)) {
+        6
+    } else {
+        1
+    };
+    let pixels = u64::from(cw) * u64::from(ch);
+    let texels = faces * u64::from(sw) * u64::from(sh);
+    let mut parts = vec![
+        Part {
+            field: "shadow.size",
+            what: if faces == 6 {
+                format!("{sw}×{sh} × 6 cube faces")
+            } else {
+                format!("{sw}×{sh}")
+            },
+            bytes: texels.saturating_mul(BYTES_PER_TEXEL),
+        },
+        Part {
+            field: "camera.size",
+            what: format!("{cw}×{ch} px"),
+            bytes: pixels.saturating_mul(BYTES_PER_PIXEL),
+        },
+        Part {
+            field: "scene.objects",
+            what: format!("{triangles} triangles"),
+            bytes: (triangles as u64).saturating_mul(BYTES_PER_TRIANGLE),
+        },
+    ];
+    parts.sort_by_key(|p| std::cmp::Reverse(p.bytes));
+    Estimate { parts }
+}
+
+/// Bytes as GiB (or MiB below one GiB), for messages.
+pub fn gib(bytes: u64) -> String {
+    if bytes >= 1 << 30 {
+        format!("{:.1} GiB", bytes as f64 / f64::from(1u32 << 30))
+    } else {
+        format!("{:.0} MiB", bytes as f64 / f64::from(1u32 << 20))
+    }
+}
+
+/// Parses a size such as `512MiB`, `4GiB`, `2G`, `1500M` or a byte count.
+pub fn parse_size(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (num, unit) = t.split_at(split);
+    let n: f64 = num
+        .parse()
+        .map_err(|_| format!("{text:?} is not a size; write e.g. 512MiB or 4GiB"))?;
+    let scale: u64 = match unit.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 1,
+        "k" | "kb" | "kib" => 1 << 10,
+        "m" | "mb" | "mib" => 1 << 20,
+        "g" | "gb" | "gib" => 1 << 30,
+        "t" | "tb" | "tib" => 1 << 40,
+        other => {
+            return Err(format!(
+                "{text:?}: unknown unit {other:?}; write e.g. 512MiB or 4GiB"
+            ));
+        }
+    };
+    Ok((n * scale as f64) as u64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn case(text: &str) -> Case {
+        let points = crate::load_str(text, std::path::Path::new("t.json")).expect("loads");
+        points.into_iter().next().expect("a point").case
+    }
+
+    #[test]
+    fn a_huge_point_light_case_is_refused_naming_the_map_first() {
+        let c = case(
+            r#"{"name": "huge", "about": "t", "scene": {"objects": [{"plane": {"point": [0,0,0], "half_extent": 5}}]},
+                "camera": {"eye": [0,5,5], "target": [0,0,0], "fov_y_deg": 50, "near": 0.5, "far": 30, "size": [8192, 8192]},
+                "light": {"point": {"position": [0,3,0], "near": 0.1, "far": 40}},
+                "shadow": {"size": [16384, 16384]}}"#,
+        );
+        let e = estimate(&c, 2);
+        assert_eq!(e.parts[0].field, "shadow.size");
+        let why = e.refuse(8 << 30).expect("refused");
+        assert!(
+            why.contains("shrink shadow.size or camera.size") && why.contains("6 cube faces"),
+            "{why}"
+        );
+        // A catalogue-sized case fits in a small budget.
+        let small = case(
+            r#"{"name": "small", "about": "t", "scene": {"objects": [{"plane": {"point": [0,0,0], "half_extent": 5}}]},
+                "camera": {"eye": [0,5,5], "target": [0,0,0], "fov_y_deg": 50, "near": 0.5, "far": 30, "size": [200, 150]},
+                "light": {"spot": {"position": [1,3,0], "target": [0,0,0], "fov_y_deg": 60, "near": 1, "far": 20}},
+                "shadow": {"size": [512, 512]}}"#,
+        );
+        assert_eq!(estimate(&small, 2).refuse(1 << 30), None);
+    }
+
+    #[test]
+    fn sizes_parse_with_units() {
+        assert_eq!(parse_size("512MiB"), Ok(512 << 20));
+        assert_eq!(parse_size("4G"), Ok(4 << 30));
+        assert_eq!(parse_size("1.5GiB"), Ok(3 << 29));
+        assert!(parse_size("lots").is_err());
+        assert!(parse_size("4 parsecs").is_err());
+    }
+}
