@@ -422,6 +422,11 @@ pub struct Bias {
     /// Shader slope bias: `min(scale · tan(acos(N·L)), max)` in depth units. Default: none.
     #[serde(default)]
     pub slope: Option<SlopeBias>,
+    /// Shader bias linear in N·L: `max(scale · (1 − N·L), min)` in depth units, the form of
+    /// LearnOpenGL's shadow-mapping chapter (scale 0.05, min 0.005) and the many programs
+    /// copied from it. Default: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub n_dot_l: Option<NdotLBias>,
     /// World-space distance the lookup point moves along the surface normal. Default 0.
     #[serde(default)]
     pub normal_offset: f32,
@@ -435,6 +440,16 @@ pub struct SlopeBias {
     pub scale: f32,
     /// Upper clamp. Required, ≥ 0.
     pub max: f32,
+}
+
+/// Shader bias `max(scale · (1 − N·L), min)`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NdotLBias {
+    /// Scale of 1 − N·L. Required, ≥ 0.
+    pub scale: f32,
+    /// The least bias. Required, ≥ 0.
+    pub min: f32,
 }
 
 /// Face culling.

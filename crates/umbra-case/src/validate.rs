@@ -539,6 +539,18 @@ impl Validator<'_> {
                 }
             }
         }
+        if let Some(nl) = b.n_dot_l {
+            for (n, x) in [("scale", nl.scale), ("min", nl.min)] {
+                let sp = format!("shadow.bias.n_dot_l.{n}");
+                if self.finite(&sp, x) && x < 0.0 {
+                    self.err(
+                        sp,
+                        format!("must be ≥ 0, got {x}"),
+                        "bias distances point away from the light: use a positive number",
+                    );
+                }
+            }
+        }
         self.finite("shadow.bias.normal_offset", b.normal_offset);
     }
 

@@ -102,8 +102,10 @@ impl Backend for GlBackend {
 
     fn supports(&self, needs: &Needs) -> Support {
         let api = self.renderer.api;
-        if needs.polygon_offset_clamp {
-            return Support::Unsupported("a polygon-offset clamp needs glPolygonOffsetClamp (GL 4.6), which umbra's GL layer (glow 0.18) does not expose".into());
+        // GLES 2 applies the offset (and its clamp) in the shader; the others need the
+        // extension's entry point, loaded by name (glow does not carry it).
+        if needs.polygon_offset_clamp && api != Api::Gles2 && !self.renderer.has_offset_clamp() {
+            return Support::Unsupported("a polygon-offset clamp needs glPolygonOffsetClamp (GL 4.6, ARB_polygon_offset_clamp) or glPolygonOffsetClampEXT (EXT_polygon_offset_clamp), which this driver does not advertise".into());
         }
         if api == Api::Gles2
             && !(self.has("GL_OES_standard_derivatives") && self.has("GL_EXT_frag_depth"))

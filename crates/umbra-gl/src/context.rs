@@ -7,6 +7,7 @@
 //! display has no window configs) and the context is made current with no surface; all
 //! rendering goes to framebuffer objects.
 
+use glow::HasContext as _;
 use khronos_egl as egl;
 
 use crate::api::Api;
@@ -22,6 +23,10 @@ pub struct Unavailable(pub String);
 pub struct GlContext {
     /// The GL function table.
     pub gl: glow::Context,
+    /// `glPolygonOffsetClamp` (GL 4.6, ARB_polygon_offset_clamp) or
+    /// `glPolygonOffsetClampEXT` (EXT_polygon_offset_clamp, also on GLES), loaded by name
+    /// because glow does not carry it; None when the driver advertises neither.
+    pub polygon_offset_clamp: Option<PolygonOffsetClamp>,
     egl: egl::DynamicInstance<egl::EGL1_5>,
     display: egl::Display,
     context: egl::Context,
@@ -114,8 +119,24 @@ impl GlContext {
                     .map_or(std::ptr::null(), |f| f as *const _)
             })
         };
+        // Only an advertised extension's pointer is usable: Mesa hands out a pointer for
+        // any name it knows, supported by this context or not.
+        let exts = gl.supported_extensions();
+        let clamp_name = if exts.contains("GL_ARB_polygon_offset_clamp") {
+            Some("glPolygonOffsetClamp")
+        } else if exts.contains("GL_EXT_polygon_offset_clamp") {
+            Some("glPolygonOffsetClampEXT")
+        } else {
+            None
+        };
+        let polygon_offset_clamp = clamp_name.and_then(|n| egl.get_proc_address(n)).map(|f| {
+            // SAFETY: EGL returned the entry point for this name, whose GL signature is
+            // void (GLfloat factor, GLfloat units, GLfloat clamp), calling convention APIENTRY.
+            unsafe { std::mem::transmute::<extern "system" fn(), PolygonOffsetClamp>(f) }
+        });
         Ok(GlContext {
             gl,
+            polygon_offset_clamp,
             egl,
             display,
             context,
@@ -123,6 +144,9 @@ impl GlContext {
         })
     }
 }
+
+/// The signature of `glPolygonOffsetClamp[EXT]`.
+pub type PolygonOffsetClamp = unsafe extern "system" fn(f32, f32, f32);
 
 impl GlContext {
     /// Makes this context current on the calling thread again: another library in the same

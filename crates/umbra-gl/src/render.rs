@@ -47,6 +47,13 @@ pub struct Renderer {
     pub timer_queries: bool,
 }
 
+impl Renderer {
+    /// Whether glPolygonOffsetClamp[EXT] was loaded.
+    pub fn has_offset_clamp(&self) -> bool {
+        self.ctx.polygon_offset_clamp.is_some()
+    }
+}
+
 fn gl_err(stage: &str, message: impl Into<String>) -> BackendError {
     BackendError::Api {
         stage: stage.into(),
@@ -372,20 +379,33 @@ impl Renderer {
             } else {
                 units
             };
+            let clamp = s.bias.polygon_offset_clamp;
             if es2 {
-                // Applied in the shader (see shaders::shadow_fragment).
+                // Applied in the shader (see shaders::shadow_fragment), clamp included.
                 let sign = conv.toward_far();
                 let r = s.format.offset_unit(0.0);
-                gl.uniform_2_f32(
+                gl.uniform_3_f32(
                     gl.get_uniform_location(shadow_program, "u_offset").as_ref(),
                     sign * factor,
                     sign * r * units,
+                    sign * clamp,
                 );
                 gl.disable(glow::POLYGON_OFFSET_FILL);
             } else if factor != 0.0 || units != 0.0 {
                 let sign = conv.toward_far();
                 gl.enable(glow::POLYGON_OFFSET_FILL);
-                gl.polygon_offset(sign * factor, sign * units);
+                match (clamp != 0.0, self.ctx.polygon_offset_clamp) {
+                    // SAFETY: the entry point of an advertised extension, on the current
+                    // context, with the GL signature (factor, units, clamp).
+                    (true, Some(f)) => f(sign * factor, sign * units, sign * clamp),
+                    (true, None) => {
+                        return Err(gl_err(
+                            "shadow pass",
+                            "a polygon-offset clamp without glPolygonOffsetClamp (supports() should have refused it)",
+                        ));
+                    }
+                    (false, _) => gl.polygon_offset(sign * factor, sign * units),
+                }
             } else {
                 gl.disable(glow::POLYGON_OFFSET_FILL);
             }
@@ -533,6 +553,7 @@ impl Renderer {
             bias_matrix: s.bias_matrix,
             order: s.depth_order,
             slope: s.bias.slope.is_some(),
+            n_dot_l: s.bias.n_dot_l.is_some(),
             model: case.shading.model,
             fault,
         };
@@ -638,6 +659,9 @@ impl Renderer {
             let (scale, max) = s.bias.slope.map_or((0.0, 0.0), |sl| (sl.scale, sl.max));
             gl.uniform_1_f32(loc("u_slope_scale").as_ref(), scale);
             gl.uniform_1_f32(loc("u_slope_max").as_ref(), max);
+            let (ndl_scale, ndl_min) = s.bias.n_dot_l.map_or((0.0, 0.0), |b| (b.scale, b.min));
+            gl.uniform_1_f32(loc("u_ndl_scale").as_ref(), ndl_scale);
+            gl.uniform_1_f32(loc("u_ndl_min").as_ref(), ndl_min);
             gl.uniform_1_f32(loc("u_normal_offset").as_ref(), s.bias.normal_offset);
             gl.uniform_1_i32(loc("u_map").as_ref(), 0);
             gl.active_texture(glow::TEXTURE0);

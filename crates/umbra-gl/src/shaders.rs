@@ -49,6 +49,8 @@ pub struct Key {
     pub order: DepthOrder,
     /// Slope bias present.
     pub slope: bool,
+    /// N·L bias present.
+    pub n_dot_l: bool,
     /// Shading model.
     pub model: ShadingModel,
     /// An injected fault (self-test only).
@@ -96,8 +98,8 @@ pub fn shadow_vertex(api: Api) -> String {
 /// GLES 2 packs `gl_FragCoord.z`, and whether that value carries the fixed-function polygon
 /// offset differs between drivers (the GLSL ES 1.00 wording is loose), so the GLES 2 path
 /// applies the case's offset itself with the spec's formula, o = m·factor + r·units with
-/// m = max(|∂z/∂x|, |∂z/∂y|) from screen-space derivatives (OES_standard_derivatives), and
-/// leaves glPolygonOffset off. The offset depth is also written to `gl_FragDepthEXT`
+/// m = max(|∂z/∂x|, |∂z/∂y|) from screen-space derivatives (OES_standard_derivatives),
+/// limited by the case's clamp as glPolygonOffsetClamp does, and leaves glPolygonOffset off. The offset depth is also written to `gl_FragDepthEXT`
 /// (EXT_frag_depth), so the shadow pass's depth test compares offset depths as the
 /// fixed-function offset would: otherwise another surface can win near contacts.
 pub fn shadow_fragment(api: Api, with_color: bool) -> String {
@@ -120,11 +122,16 @@ pub fn shadow_fragment(api: Api, with_color: bool) -> String {
                    k.z = floor(x); x = (x - k.z) * 255.0;\n\
                    k.w = floor(x);\n\
                    return (k + 0.25) / 255.0;\n}\n\
-                 uniform vec2 u_offset; // (factor, r * units), signed away from the light\n\
+                 // (factor, r * units, clamp), signed away from the light; clamp 0 is none,\n\
+                 // otherwise the offset is limited to it as glPolygonOffsetClamp does.\n\
+                 uniform vec3 u_offset;\n\
                  void main() {\n\
                    float z = gl_FragCoord.z;\n\
                    float m = max(abs(dFdx(z)), abs(dFdy(z)));\n\
-                   z = clamp(z + u_offset.x * m + u_offset.y, 0.0, 1.0);\n\
+                   float o = u_offset.x * m + u_offset.y;\n\
+                   if (u_offset.z > 0.0) o = min(o, u_offset.z);\n\
+                   if (u_offset.z < 0.0) o = max(o, u_offset.z);\n\
+                   z = clamp(z + o, 0.0, 1.0);\n\
                    gl_FragDepthEXT = z;\n\
                    gl_FragColor = z >= 1.0 ? vec4(1.0) : pack_depth(z);\n}\n",
             )
@@ -166,7 +173,7 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
         "uniform mat4 u_light[{faces}];\nuniform mat4 u_tex[{faces}];"
     );
     s.push_str("uniform vec3 u_light_pos;\nuniform vec3 u_towards;\nuniform vec3 u_eye;\nuniform vec2 u_size;\n");
-    s.push_str("uniform float u_constant;\nuniform float u_slope_scale;\nuniform float u_slope_max;\nuniform float u_normal_offset;\n");
+    s.push_str("uniform float u_constant;\nuniform float u_slope_scale;\nuniform float u_slope_max;\nuniform float u_normal_offset;\nuniform float u_ndl_scale;\nuniform float u_ndl_min;\n");
     s.push_str("uniform float u_output;\n"); // GLES 2: 0 colour, 1 visibility + face
     let sampler = match (k.cube, manual, es2) {
         (false, false, _) => "sampler2DShadow",
@@ -331,6 +338,10 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
             s,
             "  float cosine = dot(n, to_light(p));\n  if (cosine > 0.0) bias += clamp({scale} * sqrt(max(1.0 - cosine * cosine, 0.0)) / cosine, 0.0, u_slope_max);"
         );
+    }
+    if k.n_dot_l {
+        // LearnOpenGL's max(s·(1 − N·L), min), N·L unclamped (umbra_ref::lookup, step 6).
+        s.push_str("  bias += max(u_ndl_scale * (1.0 - dot(n, to_light(p))), u_ndl_min);\n");
     }
     s.push_str("  float r = c.z - TOWARD_FAR * bias;\n");
     if manual && k.clamp_reference && f != Some(Fault::NoClamp) {

@@ -5,12 +5,13 @@
 //! 3. Coordinate: (u, v, depth, w) with the bias matrix before or after the divide.
 //! 4. Guard: w ≤ 0 (behind a perspective light) reads lit when the guard is on.
 //! 5. Outside: `lit` reads lit when (u, v) leaves [0,1]² (cube faces never do: they clamp).
-//! 6. Reference: depth − (constant + slope bias) away from the light; clamped to [0,1] for a
+//! 6. Reference: depth − (constant + slope bias + N·L bias) away from the light; clamped to [0,1] for a
 //!    hardware compare on a fixed-point format (GL 3.3 §3.8.16, Vulkan "Depth Compare"),
 //!    never for a manual compare or a float format. The slope bias is
 //!    min(s · tan θ, max) with tan θ = sqrt(1 − c²)/c, c = N·L > 0 (0 where c ≤ 0), the
 //!    algebraic form of tan(acos(c)): the same number, without acos and tan, whose GLSL and
-//!    SPIR-V precision (4096 ULP, absolute 2⁻¹¹) would allow several D24 steps of bias.
+//!    SPIR-V precision (4096 ULP, absolute 2⁻¹¹) would allow several D24 steps of bias. The
+//!    N·L bias is max(s · (1 − c), min), LearnOpenGL's form, c unclamped.
 //! 7. Filter: NEAREST texel floor(u·size); LINEAR = 2x2 at floor(u·size − ½) with bilinear
 //!    weights of the compare results (never of depths); PCF N = N×N NEAREST compares at
 //!    offsets (k − (N−1)/2) texels, averaged.
@@ -272,7 +273,7 @@ impl Lookup<'_> {
         let p = p + n * s.bias.normal_offset;
         let face = self.light.face_for(p);
         let c = self.matrices[face].coord(self.conv, s.bias_matrix, p);
-        let bias = s.bias.constant + self.slope_bias(p, n);
+        let bias = s.bias.constant + self.slope_bias(p, n) + self.n_dot_l_bias(p, n);
         (face, c, c.depth - self.conv.toward_far() * bias)
     }
 
@@ -306,6 +307,16 @@ impl Lookup<'_> {
         } else {
             0.0
         }
+    }
+
+    /// The N·L bias max(s·(1 − c), min) for c = N·L (LearnOpenGL's form; c is not clamped,
+    /// so faces away from the light get up to 2s).
+    fn n_dot_l_bias(&self, p: Vec3, n: Vec3) -> f32 {
+        let Some(b) = self.shadow.bias.n_dot_l else {
+            return 0.0;
+        };
+        let c = n.dot(self.light.to_light(p));
+        (b.scale * (1.0 - c)).max(b.min)
     }
 
     fn filter_value(&self, st: &Setup) -> f32 {
@@ -762,7 +773,7 @@ impl Lookup<'_> {
     /// - the coordinate: each of t.z and t.w is a 4-term f32 dot product of the same uploaded
     ///   matrix row with (p, 1), rounded within γ₄·Σ|mᵢ·pᵢ| by either side, so twice that,
     ///   then a division (2.5 ULP, GLSL 4.60 §4.7.1, SPIR-V) and our own rounding;
-    /// - the bias: the constant is exact; the slope bias moves with c = N·L, whose error is
+    /// - the bias: the constant is exact; the slope and N·L biases move with c = N·L, whose error is
     ///   the normal's interpolation and normalisation (≈ 12u), the light direction's (4u, plus
     ///   the position freedom over the light's distance for a positional light) and the dot
     ///   product's (3u); then sqrt, a division and a product (8u relative);
@@ -800,7 +811,8 @@ impl Lookup<'_> {
         }
         let depth = f64::from(st.c.depth);
         let (mut b_lo, mut b_hi) = (f64::from(s.bias.constant), f64::from(s.bias.constant));
-        if let Some(slope) = s.bias.slope {
+        // c = N·L as the shader computes it, and how far it may be off.
+        let cosine = || {
             let to_light = self.light.to_light(q);
             let c = f64::from(n.dot(to_light));
             let dist = match self.light.kind {
@@ -809,7 +821,20 @@ impl Lookup<'_> {
                     f64::from((position - q).length())
                 }
             };
-            let dc = 19.0 * U + f64::from(position_freedom(p, self.reach)) / dist;
+            (
+                c,
+                19.0 * U + f64::from(position_freedom(p, self.reach)) / dist,
+            )
+        };
+        if let Some(nl) = s.bias.n_dot_l {
+            // max(s·(1 − c), min) decreases in c; a product, a sum and a max (3u relative).
+            let (c, dc) = cosine();
+            let f = |c: f64| (f64::from(nl.scale) * (1.0 - c)).max(f64::from(nl.min));
+            b_lo += f(c + dc) * (1.0 - 3.0 * U);
+            b_hi += f(c - dc) * (1.0 + 3.0 * U);
+        }
+        if let Some(slope) = s.bias.slope {
+            let (c, dc) = cosine();
             let tan = |c: f64| {
                 if c > 0.0 {
                     (1.0 - c * c).max(0.0).sqrt() / c

@@ -82,6 +82,9 @@ impl Backend for WgpuBackend {
         {
             return Support::Unsupported("clamp-to-border needs wgpu's ADDRESS_MODE_CLAMP_TO_BORDER feature, which this adapter lacks".into());
         }
+        if needs.polygon_offset_clamp && !self.gpu.depth_bias_clamp {
+            return Support::Unsupported("a polygon-offset clamp needs wgpu's DEPTH_BIAS_CLAMP downlevel capability, which this adapter lacks (wgpu's GL backend does not offer it)".into());
+        }
         Support::Supported
     }
 

@@ -102,10 +102,9 @@ pub fn open(kind: Kind) -> Result<Gpu, Unavailable> {
     } else {
         wgpu::TextureFormat::Rgba8Unorm
     };
-    let depth_copies = adapter
-        .get_downlevel_capabilities()
-        .flags
-        .contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
+    let downlevel = adapter.get_downlevel_capabilities().flags;
+    let depth_copies = downlevel.contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
+    let depth_bias_clamp = downlevel.contains(wgpu::DownlevelFlags::DEPTH_BIAS_CLAMP);
     Ok(Gpu {
         device,
         queue,
@@ -114,5 +113,6 @@ pub fn open(kind: Kind) -> Result<Gpu, Unavailable> {
         uncaptured,
         vis_format,
         depth_copies,
+        depth_bias_clamp,
     })
 }

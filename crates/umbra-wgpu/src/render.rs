@@ -35,6 +35,9 @@ pub struct Gpu {
     pub vis_format: wgpu::TextureFormat,
     /// Whether depth textures can be copied to buffers (not on wgpu's GL backend).
     pub depth_copies: bool,
+    /// Whether a depth bias clamp is allowed (DownlevelFlags::DEPTH_BIAS_CLAMP; wgpu's GL
+    /// backend has no glPolygonOffsetClamp path).
+    pub depth_bias_clamp: bool,
 }
 
 fn err(stage: &str, message: impl Into<String>) -> BackendError {
@@ -353,6 +356,7 @@ impl Gpu {
             bias_matrix: s.bias_matrix,
             order: s.depth_order,
             slope: s.bias.slope.is_some(),
+            n_dot_l: s.bias.n_dot_l.is_some(),
             model: case.shading.model,
             fault,
         };
@@ -474,6 +478,7 @@ impl Gpu {
         let eye = run.camera.eye;
         let b = &s.bias;
         let (slope_scale, slope_max) = b.slope.map_or((0.0, 0.0), |sl| (sl.scale, sl.max));
+        let (ndl_scale, ndl_min) = b.n_dot_l.map_or((0.0, 0.0), |nl| (nl.scale, nl.min));
         let ub = uniform_buffer(
             d,
             &self.queue,
@@ -483,7 +488,7 @@ impl Gpu {
             [pos.x, pos.y, pos.z, 0.0],
             [towards.x, towards.y, towards.z, 0.0],
             [eye.x, eye.y, eye.z, 0.0],
-            [mw as f32, mh as f32, 0.0, 0.0],
+            [mw as f32, mh as f32, ndl_scale, ndl_min],
             [b.constant, slope_scale, slope_max, b.normal_offset],
         );
         let map_view = map.create_view(&wgpu::TextureViewDescriptor {

@@ -42,6 +42,8 @@ pub struct Key {
     pub order: DepthOrder,
     /// Slope bias present.
     pub slope: bool,
+    /// N·L bias present (its scale and min ride in `u.size.zw`).
+    pub n_dot_l: bool,
     /// Shading model.
     pub model: ShadingModel,
     /// An injected fault (self-test only).
@@ -206,6 +208,10 @@ pub fn lit(k: &Key, shading: &Shading) -> String {
             s,
             "  let cosine = dot(n, to_light(p));\n  if (cosine > 0.0) {{ bias += clamp({scale} * sqrt(max(1.0 - cosine * cosine, 0.0)) / cosine, 0.0, u.bias.z); }}"
         );
+    }
+    if k.n_dot_l {
+        // LearnOpenGL's max(s·(1 − N·L), min), N·L unclamped (umbra_ref::lookup, step 6).
+        s.push_str("  bias += max(u.size.z * (1.0 - dot(n, to_light(p))), u.size.w);\n");
     }
     s.push_str("  var r = c.z - TOWARD_FAR * bias;\n");
     if !manual && !k.clamp_reference && k.fault == Some(Fault::ClampFloat) {
