@@ -355,6 +355,7 @@ pub fn main(argv: &[String]) -> i32 {
     let queue = Mutex::new(groups.into_iter().collect::<VecDeque<_>>());
     let done = Mutex::new(Collected {
         results,
+        progress: crate::progress::Progress::new(total),
         ..Default::default()
     });
     std::thread::scope(|s| {
@@ -375,6 +376,7 @@ pub fn main(argv: &[String]) -> i32 {
         mut driver_rows,
         refused,
         unavailable_runs,
+        progress,
         ..
     } = match done.into_inner() {
         Ok(d) => d,
@@ -383,6 +385,7 @@ pub fn main(argv: &[String]) -> i32 {
             return 125;
         }
     };
+    progress.close();
     driver_rows.sort_by(|a, b| a["backend"].as_str().cmp(&b["backend"].as_str()));
     let drivers = format!(
         "Mesa: {}\n{drivers}",
@@ -620,6 +623,8 @@ struct Collected {
     refused: Vec<String>,
     unavailable_runs: usize,
     finished: usize,
+    /// What the terminal shows while the run goes on.
+    progress: crate::progress::Progress,
 }
 
 type Done = Mutex<Collected>;
@@ -813,7 +818,8 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
             if !matches!(r.status, Status::Pass) && !r.reason.is_empty() {
                 let _ = write!(line, ": {}", first_line(&r.reason));
             }
-            println!("{line}");
+            let status = r.status.name();
+            d.progress.finished(status, &line);
             if settings.verbose && !r.details.is_empty() {
                 println!("{}", r.details);
             }

@@ -21,6 +21,7 @@ pub mod memory_limit;
 pub mod mesa_build;
 pub mod pareto_plot;
 pub mod pool;
+pub mod progress;
 pub mod reduce;
 pub mod registry;
 pub mod render_cmd;

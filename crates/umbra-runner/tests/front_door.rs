@@ -1,4 +1,5 @@
-//! The command line at the front door: a closed pipe is not a crash.
+//! The command line at the front door: a closed pipe is not a crash, and a terminal gets a
+//! progress line (plain lines everywhere else: the other tests read those).
 
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -25,4 +26,34 @@ fn a_closed_stdout_ends_umbra_quietly() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{err}");
     assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn at_a_terminal_progress_is_one_line_with_a_tally_and_an_eta() {
+    // A pseudo-terminal through util-linux's `script` (bsdutils, essential on Debian).
+    let out = std::env::temp_dir().join(format!("umbra-pty-{}", std::process::id()));
+    let cmd = format!(
+        "{} conformance --backend ref --filter 'square*' --golden none --out {}",
+        env!("CARGO_BIN_EXE_umbra"),
+        out.display()
+    );
+    let o = Command::new("script")
+        .args(["-qec", &cmd, "/dev/null"])
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
+        .env_remove("CI")
+        .env("TERM", "xterm")
+        .output()
+        .expect("run script(1)");
+    let t = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(
+        t.contains("\r\x1b[2K[1/1] ") && t.contains("pass 1 fail 0 skip 0") && t.contains("ETA"),
+        "{t}"
+    );
+    // A passing run does not stay on screen as a line of its own; the summary does.
+    assert!(!t.contains("[1/1] Pass ref/square-occluder"), "{t}");
+    assert!(
+        t.contains("conformance: 1 passed, 0 failed, 0 skipped"),
+        "{t}"
+    );
 }
