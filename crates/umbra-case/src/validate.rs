@@ -67,6 +67,17 @@ impl Validator<'_> {
         false
     }
 
+    /// A shader bias term: finite and ≥ 0 (a distance away from the light).
+    fn bias_distance(&mut self, path: &str, x: f32) {
+        if self.finite(path, x) && x < 0.0 {
+            self.err(
+                path,
+                format!("must be ≥ 0, got {x}"),
+                "bias distances point away from the light: use a positive number",
+            );
+        }
+    }
+
     fn finite3(&mut self, path: &str, v: V3) -> bool {
         let mut ok = true;
         for (i, x) in v.iter().enumerate() {
@@ -528,28 +539,12 @@ impl Validator<'_> {
             );
         }
         if let Some(sl) = b.slope {
-            for (n, x) in [("scale", sl.scale), ("max", sl.max)] {
-                let sp = format!("shadow.bias.slope.{n}");
-                if self.finite(&sp, x) && x < 0.0 {
-                    self.err(
-                        sp,
-                        format!("must be ≥ 0, got {x}"),
-                        "bias distances point away from the light: use a positive number",
-                    );
-                }
-            }
+            self.bias_distance("shadow.bias.slope.scale", sl.scale);
+            self.bias_distance("shadow.bias.slope.max", sl.max);
         }
         if let Some(nl) = b.n_dot_l {
-            for (n, x) in [("scale", nl.scale), ("min", nl.min)] {
-                let sp = format!("shadow.bias.n_dot_l.{n}");
-                if self.finite(&sp, x) && x < 0.0 {
-                    self.err(
-                        sp,
-                        format!("must be ≥ 0, got {x}"),
-                        "bias distances point away from the light: use a positive number",
-                    );
-                }
-            }
+            self.bias_distance("shadow.bias.n_dot_l.scale", nl.scale);
+            self.bias_distance("shadow.bias.n_dot_l.min", nl.min);
         }
         self.finite("shadow.bias.normal_offset", b.normal_offset);
     }

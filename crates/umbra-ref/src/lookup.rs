@@ -577,15 +577,21 @@ impl Lookup<'_> {
     /// this point may lie from ours: like the reference value's depth, each of t.x, t.y and
     /// t.w is a 4-term f32 dot product of the same uploaded matrix row with (p, 1), rounded
     /// within γ₄·Σ|mᵢ·pᵢ| on either side, then divided (2.5 ULP); then scaled by the size.
+    /// The point a lookup transforms (after the normal offset), as f64 (p, 1), and the
+    /// matrix it goes through on `face` (texture matrix, or light matrix when the bias matrix
+    /// comes after the divide): what the error bounds below are computed from.
+    fn lookup_point(&self, p: Vec3, n: Vec3, face: usize) -> (Vec3, glam::DVec4, glam::DMat4) {
+        let q = p + n * self.shadow.bias.normal_offset;
+        let m = match self.shadow.bias_matrix {
+            BiasMatrix::BeforeDivide => self.matrices[face].texture,
+            BiasMatrix::AfterDivide => self.matrices[face].light,
+        };
+        (q, q.as_dvec3().extend(1.0), m.as_dmat4())
+    }
+
     fn coord_error(&self, p: Vec3, n: Vec3, st: &Setup) -> (f64, f64) {
         let s = self.shadow;
-        let q = p + n * s.bias.normal_offset;
-        let p4 = q.as_dvec3().extend(1.0);
-        let m = match s.bias_matrix {
-            BiasMatrix::BeforeDivide => self.matrices[st.face].texture,
-            BiasMatrix::AfterDivide => self.matrices[st.face].light,
-        }
-        .as_dmat4();
+        let (_, p4, m) = self.lookup_point(p, n, st.face);
         let row_abs = |r: usize| -> f64 { (0..4).map(|k| (m.col(k)[r] * p4[k]).abs()).sum() };
         let row = |r: usize| -> f64 { (0..4).map(|k| m.col(k)[r] * p4[k]).sum() };
         let wv = row(3).abs().max(1e-30);
@@ -784,13 +790,7 @@ impl Lookup<'_> {
     ///   (`referenceBits`), umbra only the texture's own codes.
     fn reference_range(&self, p: Vec3, n: Vec3, st: &Setup, extra: f64) -> (f64, f64) {
         let s = self.shadow;
-        let q = p + n * s.bias.normal_offset;
-        let p4 = q.as_dvec3().extend(1.0);
-        let m = match s.bias_matrix {
-            BiasMatrix::BeforeDivide => self.matrices[st.face].texture,
-            BiasMatrix::AfterDivide => self.matrices[st.face].light,
-        }
-        .as_dmat4();
+        let (q, p4, m) = self.lookup_point(p, n, st.face);
         let row = |r: usize| -> f64 { (0..4).map(|k| (m.col(k)[r] * p4[k]).abs()).sum() };
         let (sz, sw) = (row(2), row(3));
         let wv = (0..4)
