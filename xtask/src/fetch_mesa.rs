@@ -51,23 +51,8 @@ fn mirror() -> String {
 }
 
 /// Runs the command; returns the exit code.
-pub fn main(args: &[String], root: &Path) -> i32 {
-    let mut suite = "bookworm-backports".to_string();
-    let mut dir: Option<PathBuf> = None;
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--suite" => suite = it.next().cloned().unwrap_or(suite),
-            "--dir" => dir = it.next().map(PathBuf::from),
-            other => {
-                eprintln!(
-                    "error: fetch-mesa: unknown argument {other:?}\nusage: cargo xtask fetch-mesa [--dir DIR] [--suite SUITE]"
-                );
-                return 2;
-            }
-        }
-    }
-    let dir = dir.unwrap_or_else(|| root.join("target").join("mesa").join(&suite));
+pub fn main(suite: &str, dir: Option<PathBuf>, root: &Path) -> i32 {
+    let dir = dir.unwrap_or_else(|| root.join("target").join("mesa").join(suite));
     let apt = dir.join(".apt");
     let debs = apt.join("debs");
     for d in [

@@ -1,4 +1,6 @@
-//! umbra's developer commands, rust-analyzer style: one module per command, no dependencies.
+//! umbra's developer commands, rust-analyzer style: one module per command; clap parses the
+//! command line (the only dependency), and the commands that run `umbra` pass their arguments
+//! through untouched, so `cargo xtask conformance --help` is `umbra conformance --help`.
 //!
 //! - `cargo xtask conformance [ARGS]`: installs the Mesa packages when missing and allowed,
 //!   then runs `umbra conformance ARGS` and passes its exit code through (0 as expected,
@@ -21,42 +23,117 @@
 mod fetch_mesa;
 mod mesa;
 
+use std::path::PathBuf;
 use std::process::{Command, ExitCode};
 
+use clap::Arg;
+
+/// The `umbra` commands xtask runs after the set-up (Mesa packages), with their help.
+const PASS_THROUGH: &[(&str, &str)] = &[
+    (
+        "conformance",
+        "Install the Mesa packages when missing and allowed, then `umbra conformance ARGS` (exit code passed through: 0 as expected, 1 regressions, 125 could not run)",
+    ),
+    (
+        "selftest",
+        "The same set-up, then `umbra selftest ARGS`: every injected fault on every backend it applies to",
+    ),
+    (
+        "sweep",
+        "The same set-up, then `umbra sweep ARGS`: speed against error (CSV, Pareto plot, HTML)",
+    ),
+    (
+        "drivers",
+        "The same set-up, then `umbra drivers ARGS`: the catalogue on two Mesa builds, every change",
+    ),
+    (
+        "bisect",
+        "The same set-up, then `umbra bisect ARGS`: the first Mesa commit that breaks the chosen points",
+    ),
+    (
+        "reduce",
+        "The same set-up, then `umbra reduce ARGS`: a failing point shrunk to a minimal case",
+    ),
+];
+
+fn command() -> clap::Command {
+    let rest = || {
+        Arg::new("args")
+            .value_name("ARGS")
+            .num_args(0..)
+            .trailing_var_arg(true)
+            .allow_hyphen_values(true)
+    };
+    let mut c = clap::Command::new("cargo xtask")
+        .bin_name("cargo xtask")
+        .about("umbra's developer commands")
+        .subcommand_required(true)
+        .arg_required_else_help(true);
+    for (name, about) in PASS_THROUGH {
+        c = c.subcommand(
+            clap::Command::new(*name)
+                .about(*about)
+                .after_help(format!(
+                    "ARGS are umbra's: see `cargo xtask {name} --help`."
+                ))
+                .disable_help_flag(true)
+                .arg(rest().help("arguments for `umbra`, including --help")),
+        );
+    }
+    c.subcommand(
+        clap::Command::new("test")
+            .about("The set-up, the whole test suite (cargo test --workspace ARGS), then conformance and selftest as CI runs them")
+            .arg(rest().help("extra arguments for cargo test")),
+    )
+    .subcommand(
+        clap::Command::new("bless")
+            .about("A conformance run that accepts every changed or new golden, then lists what changed under golden/ for review (refused under CI=true)")
+            .disable_help_flag(true)
+            .arg(rest().help("arguments for `umbra conformance` (e.g. --filter, --backend)")),
+    )
+    .subcommand(
+        clap::Command::new("fetch-mesa")
+            .about("Download a second Mesa (Debian packages) and unpack it without touching the system, for --mesa DIR")
+            .arg(Arg::new("dir").long("dir").value_name("DIR").help("where to unpack [default: target/mesa/SUITE]"))
+            .arg(
+                Arg::new("suite")
+                    .long("suite")
+                    .value_name("SUITE")
+                    .default_value("bookworm-backports")
+                    .help("Debian suite to take Mesa from"),
+            ),
+    )
+}
+
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let code = match args.first().map(String::as_str) {
-        Some("conformance") => {
-            mesa::ensure();
-            umbra(&["conformance"], &args[1..])
+    let m = match command().try_get_matches() {
+        Ok(m) => m,
+        Err(e) => {
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { 2 } else { 0 });
         }
-        Some("test") => test(&args[1..]),
-        Some("bless") => bless(&args[1..]),
-        Some("selftest") => {
+    };
+    let (name, sub) = m.subcommand().unwrap_or(("", &m));
+    let args: Vec<String> = sub
+        .try_get_many::<String>("args")
+        .ok()
+        .flatten()
+        .into_iter()
+        .flatten()
+        .cloned()
+        .collect();
+    let code = match name {
+        "test" => test(&args),
+        "bless" => bless(&args),
+        "fetch-mesa" => fetch_mesa::main(
+            sub.get_one::<String>("suite")
+                .map_or("bookworm-backports", String::as_str),
+            sub.get_one::<String>("dir").map(PathBuf::from),
+            &workspace_root(),
+        ),
+        cmd => {
             mesa::ensure();
-            umbra(&["selftest"], &args[1..])
-        }
-        Some("sweep") => {
-            mesa::ensure();
-            umbra(&["sweep"], &args[1..])
-        }
-        Some(cmd @ ("drivers" | "bisect" | "reduce")) => {
-            mesa::ensure();
-            umbra(&[cmd], &args[1..])
-        }
-        Some("fetch-mesa") => fetch_mesa::main(&args[1..], &workspace_root()),
-        _ => {
-            eprintln!(
-                "usage:\n  cargo xtask conformance [--filter GLOB] [--backend ID]... [--verbose]\n  \
-                 cargo xtask test [-- CARGO TEST ARGS]\n  \
-                 cargo xtask sweep [--scene CASE.json] [--point ID] [--backend ID|all]... [--repeat N]\n  \
-                 cargo xtask bless [--filter GLOB] [--backend ID]...\n  \
-                 cargo xtask fetch-mesa [--dir DIR] [--suite SUITE]\n  \
-                 cargo xtask drivers --baseline PREFIX|system --candidate PREFIX|system [--filter GLOB] [--backend ID]...\n  \
-                 cargo xtask bisect --mesa-src DIR --good REV --bad REV [--filter GLOB] [--backend ID]...\n  \
-                 cargo xtask reduce CASE.json --point ID --backend ID [-o OUT.json]"
-            );
-            2
+            umbra(&[cmd], &args)
         }
     };
     ExitCode::from(code.clamp(0, 255) as u8)

@@ -14,7 +14,7 @@
 use std::path::Path;
 use std::time::Duration;
 
-use umbra_runner::sweep::{DEFAULT_SCENE, measure_backends};
+use umbra_runner::commands::sweep::{DEFAULT_SCENE, measure_backends};
 
 fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
@@ -27,7 +27,7 @@ fn main() {
         .expect("the standard point");
     // Every backend, each in a worker with its driver's environment (a backend whose driver is
     // missing says so in its row).
-    let backends: Vec<String> = umbra_runner::registry::known();
+    let backends: Vec<String> = umbra_runner::harness::registry::known();
     println!(
         "{} on every backend, median of 9 after a warm-up:",
         DEFAULT_SCENE.1

@@ -1,5 +1,6 @@
-//! A small argument parser: `--flag value`, `--switch`, positionals. Enough for the `umbra`
-//! commands without a parser dependency; errors name the flag and what it wants.
+//! A parsed command line as the commands read it: positionals, and each flag's values by its
+//! long name. Filled by [`crate::cli::parse`] from clap's matches, so commands stay free of
+//! parser types and tests can build one directly.
 
 use std::collections::BTreeMap;
 
@@ -12,50 +13,9 @@ pub struct Args {
 }
 
 impl Args {
-    /// Parses `argv` (without the program and command), knowing which flags take a value.
-    pub fn parse(argv: &[String], valued: &[&str], switches: &[&str]) -> Result<Args, String> {
-        let mut a = Args::default();
-        let mut it = argv.iter();
-        while let Some(s) = it.next() {
-            if let Some(flag) = s
-                .strip_prefix("--")
-                .or_else(|| s.strip_prefix('-').filter(|f| f.len() == 1))
-            {
-                let (name, inline) = match flag.split_once('=') {
-                    Some((n, v)) => (n, Some(v.to_string())),
-                    None => (flag, None),
-                };
-                if valued.contains(&name) {
-                    let v = match inline {
-                        Some(v) => v,
-                        None => it
-                            .next()
-                            .cloned()
-                            .ok_or_else(|| format!("--{name} needs a value"))?,
-                    };
-                    a.flags.entry(name.to_string()).or_default().push(v);
-                } else if switches.contains(&name) && inline.is_none() {
-                    a.flags
-                        .entry(name.to_string())
-                        .or_default()
-                        .push(String::new());
-                } else {
-                    let mut known: Vec<String> = valued
-                        .iter()
-                        .chain(switches)
-                        .map(|f| format!("--{f}"))
-                        .collect();
-                    known.sort();
-                    return Err(format!(
-                        "unknown option --{name}; known: {}",
-                        known.join(", ")
-                    ));
-                }
-            } else {
-                a.positional.push(s.clone());
-            }
-        }
-        Ok(a)
+    /// Adds a value of flag `name` (an empty string for a switch).
+    pub fn set(&mut self, name: &str, value: String) {
+        self.flags.entry(name.to_string()).or_default().push(value);
     }
 
     /// The last value of a valued flag.

@@ -6,27 +6,8 @@
 //! report set come with the conformance runner.
 
 pub mod args;
-pub mod bisect;
-pub mod child;
-pub mod conformance;
-pub mod drivers;
-pub mod error_curves;
-pub mod fake;
+pub mod cli;
+pub mod commands;
 pub mod glob;
-pub mod golden;
-pub mod html;
-pub mod judge_cache;
-pub mod measure;
-pub mod memory_limit;
-pub mod mesa_build;
-pub mod pareto_plot;
-pub mod pool;
-pub mod progress;
-pub mod reduce;
-pub mod registry;
-pub mod render_cmd;
-pub mod run;
-pub mod selftest;
-pub mod status;
-pub mod sweep;
-pub mod worker;
+pub mod harness;
+pub mod judge;

@@ -1,46 +1,37 @@
-//! The `umbra` binary: `umbra render` for one case at a desk, `umbra conformance` for CI.
+//! The `umbra` binary: `umbra render` for one case at a desk, `umbra conformance` for CI, and
+//! the tools around them. The command line is parsed in [`umbra_runner::cli`]; each command is
+//! a library function of [`umbra_runner::commands`] (the worker, of the harness).
 
 use std::process::ExitCode;
 
-use umbra_runner::{conformance, render_cmd};
+use umbra_runner::commands::{bisect, conformance, drivers, reduce, render, selftest, sweep};
+use umbra_runner::{cli, harness};
 
 fn main() -> ExitCode {
     quiet_on_closed_pipe();
-    let argv: Vec<String> = std::env::args().skip(1).collect();
-    let code = match argv.first().map(String::as_str) {
-        Some("render") => render_cmd::main(&argv[1..]),
-        Some("conformance") => conformance::main(&argv[1..]),
-        Some("worker") => umbra_runner::worker::main(&argv[1..]),
-        Some("selftest") => umbra_runner::selftest::main(&argv[1..]),
-        Some("sweep") => umbra_runner::sweep::main(&argv[1..]),
-        Some("drivers") => umbra_runner::drivers::main(&argv[1..]),
-        Some("bisect") => umbra_runner::bisect::main(&argv[1..]),
-        Some("bisect-step") => umbra_runner::bisect::step(&argv[1..]),
-        Some("reduce") => umbra_runner::reduce::main(&argv[1..]),
-        Some("-h" | "--help" | "help") => {
-            println!(
-                "usage:\n  {}\n  {}\n  {}\n  {}\n  {}\n  {}\n  {}",
-                render_cmd::USAGE,
-                conformance::USAGE,
-                umbra_runner::selftest::USAGE,
-                umbra_runner::sweep::USAGE,
-                umbra_runner::drivers::USAGE,
-                umbra_runner::bisect::USAGE,
-                umbra_runner::reduce::USAGE
-            );
-            0
+    let argv: Vec<String> = std::env::args().collect();
+    let code = match cli::parse(&argv) {
+        Err(e) => {
+            let usage_error = e.use_stderr();
+            let _ = e.print();
+            if usage_error { 125 } else { 0 }
         }
-        other => {
-            eprintln!(
-                "error: {}\nusage:\n  {}\n  {}",
-                other.map_or("no command given".to_string(), |c| format!(
-                    "unknown command {c:?}"
-                )),
-                render_cmd::USAGE,
-                conformance::USAGE
-            );
-            2
-        }
+        Ok((name, args)) => match name.as_str() {
+            "render" => render::main(&args),
+            "conformance" => conformance::main(&args),
+            "selftest" => selftest::main(&args),
+            "sweep" => sweep::main(&args),
+            "drivers" => drivers::main(&args),
+            "bisect" => bisect::main(&args),
+            "reduce" => reduce::main(&args),
+            "worker" => harness::worker::main(&args),
+            "bisect-step" => bisect::step(&args),
+            "completions" => cli::completions(args.positional.first().map_or("", String::as_str)),
+            other => {
+                eprintln!("error: command {other:?} is in the command table but not dispatched");
+                125
+            }
+        },
     };
     ExitCode::from(code.clamp(0, 255) as u8)
 }

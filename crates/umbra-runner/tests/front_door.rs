@@ -1,4 +1,5 @@
-//! The command line at the front door: a closed pipe is not a crash, and a terminal gets a
+//! The command line at the front door: `--help` on every command, a mistyped flag named, shell
+//! completions, a closed pipe that is not a crash, and a terminal that gets a
 //! progress line (plain lines everywhere else: the other tests read those).
 
 use std::path::Path;
@@ -56,4 +57,51 @@ fn at_a_terminal_progress_is_one_line_with_a_tally_and_an_eta() {
         t.contains("conformance: 1 passed, 0 failed, 0 skipped"),
         "{t}"
     );
+}
+
+fn umbra(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_umbra"))
+        .args(args)
+        .output()
+        .expect("run umbra")
+}
+
+#[test]
+fn every_command_answers_help_with_its_flags() {
+    for (command, flag) in [
+        ("render", "--backend"),
+        ("conformance", "--shard"),
+        ("selftest", "--fault"),
+        ("sweep", "--repeat"),
+        ("drivers", "--candidate"),
+        ("bisect", "--mesa-src"),
+        ("reduce", "--check"),
+        ("completions", "<SHELL>"),
+    ] {
+        let o = umbra(&[command, "--help"]);
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert_eq!(o.status.code(), Some(0), "umbra {command} --help: {text}");
+        assert!(
+            text.contains(&format!("Usage: umbra {command}")) && text.contains(flag),
+            "umbra {command} --help lacks {flag}: {text}"
+        );
+    }
+}
+
+#[test]
+fn a_mistyped_flag_is_named_with_the_near_miss_and_cannot_run() {
+    let o = umbra(&["conformance", "--filtre", "x"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(125), "{err}");
+    assert!(err.contains("'--filtre'") && err.contains("'--filter'"), "{err}");
+}
+
+#[test]
+fn completions_cover_the_commands_and_their_flags() {
+    let o = umbra(&["completions", "bash"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0));
+    for word in ["conformance", "render", "--max-memory", "--mesa"] {
+        assert!(text.contains(word), "bash completion lacks {word}");
+    }
 }

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use umbra_runner::run::{Outcome, run_point};
+use umbra_runner::judge::run::{Outcome, run_point};
 
 fn point(rel: &str, index: usize) -> umbra_case::CasePoint {
     let file = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -13,7 +13,7 @@ fn point(rel: &str, index: usize) -> umbra_case::CasePoint {
         .remove(index)
 }
 
-fn judged(p: umbra_case::CasePoint) -> Box<umbra_runner::run::Judged> {
+fn judged(p: umbra_case::CasePoint) -> Box<umbra_runner::judge::run::Judged> {
     match run_point(&mut umbra_ref::RefBackend, p, true) {
         Outcome::Done(j) => j,
         Outcome::Skip(s) | Outcome::Error(s) => panic!("{s}"),

@@ -10,11 +10,13 @@ use umbra_case::{ClipDepth, Prepared};
 #[test]
 fn wgpu_agrees_with_gl_on_every_starter_case() {
     let cases = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases");
-    let mut gl = umbra_runner::registry::create("gl33/llvmpipe")
+    let mut gl = umbra_runner::harness::registry::create("gl33/llvmpipe")
         .unwrap_or_else(|e| panic!("{e} (`cargo xtask test` installs the Mesa packages)"));
     let mut backends: Vec<_> = ["wgpu-vk/lavapipe", "wgpu-gl/llvmpipe"]
         .iter()
-        .map(|id| umbra_runner::registry::create(id).unwrap_or_else(|e| panic!("{id}: {e}")))
+        .map(|id| {
+            umbra_runner::harness::registry::create(id).unwrap_or_else(|e| panic!("{id}: {e}"))
+        })
         .collect();
     let mut compared = 0;
     for dir in ["basics", "lights", "packed-cubes"] {

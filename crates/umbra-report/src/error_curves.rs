@@ -12,9 +12,8 @@ use std::fmt::Write as _;
 
 use serde_json::Value;
 
-use crate::html::esc;
-
-use crate::conformance::RunResult;
+use crate::escape::esc;
+use crate::model::RunResult;
 
 /// One run on a curve: (x, error %, frame ms, point id, false shadow %, false light %).
 type Point = (f64, f64, f64, String, f64, f64);

@@ -29,10 +29,7 @@ use std::process::{Command, Stdio};
 use serde_json::Value;
 
 use crate::args::Args;
-use crate::html::{base64, esc};
-
-/// Usage line.
-pub const USAGE: &str = "umbra drivers --baseline PREFIX|system --candidate PREFIX|system [--filter GLOB] [--backend ID]... [--cases DIR] [--expectations DIR] [--out DIR] [--pictures N] [--jobs N]";
+use umbra_report::escape::{base64, esc};
 
 /// One run's raw verdict.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -255,26 +252,7 @@ fn opt(v: Option<u64>) -> String {
 }
 
 /// Runs the command; returns the exit code.
-pub fn main(argv: &[String]) -> i32 {
-    let args = match Args::parse(
-        argv,
-        &[
-            "baseline",
-            "candidate",
-            "filter",
-            "backend",
-            "cases",
-            "expectations",
-            "out",
-            "pictures",
-            "jobs",
-            "timeout",
-        ],
-        &[],
-    ) {
-        Ok(a) => a,
-        Err(e) => return usage(&e),
-    };
+pub fn main(args: &Args) -> i32 {
     let (Some(base), Some(cand)) = (args.value("baseline"), args.value("candidate")) else {
         return usage(
             "give both --baseline and --candidate (a Mesa prefix or build directory, or `system`)",
@@ -282,7 +260,7 @@ pub fn main(argv: &[String]) -> i32 {
     };
     for (flag, v) in [("--baseline", base), ("--candidate", cand)] {
         if v != "system" {
-            if let Err(e) = crate::mesa_build::MesaBuild::open(Path::new(v)) {
+            if let Err(e) = crate::harness::mesa_build::MesaBuild::open(Path::new(v)) {
                 eprintln!("error: {flag} {v}: {e}");
                 return 125;
             }
@@ -318,7 +296,7 @@ pub fn main(argv: &[String]) -> i32 {
             eprintln!("error: cannot write {}", log.display());
             return 125;
         };
-        cmd.env_remove(crate::mesa_build::ENV)
+        cmd.env_remove(crate::harness::mesa_build::ENV)
             .stdout(Stdio::from(file));
         println!(
             "drivers: running the {side} ({mesa}); log in {}",
@@ -445,13 +423,14 @@ pub fn main(argv: &[String]) -> i32 {
 }
 
 fn usage(msg: &str) -> i32 {
-    eprintln!("error: {msg}\nusage: {USAGE}");
+    eprintln!("error: {msg}\nusage: {}", crate::cli::usage("drivers"));
     125
 }
 
 /// The directory of one change's pictures.
 fn picture_dir(out: &Path, c: &Change) -> PathBuf {
-    out.join("pictures").join(crate::golden::stem(&c.name))
+    out.join("pictures")
+        .join(crate::judge::golden::stem(&c.name))
 }
 
 /// Renders a changed point on both builds and on the reference, and the difference.
@@ -481,7 +460,7 @@ fn render_pictures(
                 "-o",
             ])
             .arg(dir.join(side))
-            .env_remove(crate::mesa_build::ENV)
+            .env_remove(crate::harness::mesa_build::ENV)
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .status();
@@ -643,7 +622,7 @@ fn write_outputs(
             h,
             "<tr><td class=\"{cls}\">{}</td><td><a href=\"#{}\">{}</a></td><td>{}</td><td>{}</td><td>{}</td></tr>",
             c.kind,
-            esc(&crate::golden::stem(&c.name)),
+            esc(&crate::judge::golden::stem(&c.name)),
             esc(&c.name),
             esc(&c.baseline.to_string()),
             esc(&c.candidate.to_string()),
@@ -659,7 +638,7 @@ fn write_outputs(
         let _ = write!(
             h,
             "<h3 id=\"{}\">{} <small>({}: {} → {})</small></h3>",
-            esc(&crate::golden::stem(&c.name)),
+            esc(&crate::judge::golden::stem(&c.name)),
             esc(&c.name),
             c.kind,
             esc(&c.baseline.to_string()),

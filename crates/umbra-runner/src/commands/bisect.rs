@@ -29,9 +29,6 @@ use std::time::Instant;
 
 use crate::args::Args;
 
-/// Usage line.
-pub const USAGE: &str = "umbra bisect --mesa-src DIR --good REV --bad REV [--filter GLOB] [--backend ID]... [--work DIR] [--build-script PATH] [--meson-option OPT]... [--cases DIR] [--expectations DIR] [--no-check-ends]";
-
 /// The one-time configuration: the smallest Mesa that holds every driver umbra runs.
 pub const MESON_OPTIONS: &[&str] = &[
     "--prefix=/usr",
@@ -105,26 +102,7 @@ const STEP_KEYS: &[&str] = &[
 
 /// Runs the command; returns the exit code (0: a first bad commit was found; 1: not found
 /// or ambiguous; 125: bad input or set-up).
-pub fn main(argv: &[String]) -> i32 {
-    let args = match Args::parse(
-        argv,
-        &[
-            "mesa-src",
-            "good",
-            "bad",
-            "filter",
-            "backend",
-            "work",
-            "build-script",
-            "meson-option",
-            "cases",
-            "expectations",
-        ],
-        &["no-check-ends"],
-    ) {
-        Ok(a) => a,
-        Err(e) => return usage(&e),
-    };
+pub fn main(args: &Args) -> i32 {
     let (Some(src), Some(good), Some(bad)) = (
         args.value("mesa-src"),
         args.value("good"),
@@ -392,22 +370,15 @@ fn check_ends(
 }
 
 fn usage(msg: &str) -> i32 {
-    eprintln!("error: {msg}\nusage: {USAGE}");
+    eprintln!("error: {msg}\nusage: {}", crate::cli::usage("bisect"));
     125
 }
 
 /// `umbra bisect-step`: one commit (HEAD of the source tree): build, install into its own
 /// prefix, test. Exit 0 good, 1 bad, 125 skip (did not build, or could not be tested).
-pub fn step(argv: &[String]) -> i32 {
+pub fn step(args: &Args) -> i32 {
     let mut valued: Vec<&str> = STEP_KEYS.to_vec();
     valued.push("backend");
-    let args = match Args::parse(argv, &valued, &[]) {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("error: bisect-step: {e}");
-            return 125;
-        }
-    };
     let (Some(src), Some(work)) = (args.value("src"), args.value("work")) else {
         eprintln!("error: bisect-step needs --src and --work");
         return 125;
@@ -497,7 +468,7 @@ pub fn step(argv: &[String]) -> i32 {
         cmd.stdout(Stdio::from(f));
     }
     let code = cmd
-        .env_remove(crate::mesa_build::ENV)
+        .env_remove(crate::harness::mesa_build::ENV)
         .status()
         .ok()
         .and_then(|s| s.code());

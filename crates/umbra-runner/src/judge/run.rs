@@ -5,12 +5,12 @@
 
 use std::time::{Duration, Instant};
 
-use serde::{Deserialize, Serialize};
 use umbra_case::format::{InteriorError, TwinAgree};
 use umbra_case::{Backend, CasePoint, Frame, Needs, Prepared, Support};
 use umbra_compare::TruthError;
 use umbra_compare::reference::RefAgreement;
 use umbra_ref::truth::{Truth, ground_truth};
+use umbra_report::{FailedCheck, TwinMetric};
 
 /// One judged run.
 pub struct Judged {
@@ -34,7 +34,7 @@ pub struct Judged {
     /// (empty for the reference itself, whose goldens are held exactly).
     pub legal: Vec<bool>,
     /// The checks that failed, each with how many pixels (or 1) failed it: the signature an
-    /// expectation matches ([`crate::status::Expectation`]).
+    /// expectation matches ([`crate::judge::expectations::Expectation`]).
     pub failed: Vec<FailedCheck>,
     /// Time spent judging (truth, reference, error, agreement), twins excluded.
     pub judge_time: Duration,
@@ -44,40 +44,6 @@ pub struct Judged {
     pub twins: Vec<TwinMetric>,
     /// Problems with the result (empty = as expected).
     pub problems: Vec<String>,
-}
-
-/// One failed check of a run: its name and how many pixels failed it.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct FailedCheck {
-    /// `value`, `nan`, `coverage`, `colour`, `map`, `interior`, `twin:NAME`, `golden`,
-    /// `falls-along`.
-    pub check: String,
-    /// Pixels that failed it (1 for checks that are not counted in pixels).
-    pub count: u64,
-}
-
-/// How one metamorphic twin ([`umbra_case::twin`]) compared with its case on one backend.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub struct TwinMetric {
-    /// The twin's name.
-    pub name: String,
-    /// `identical`, `legal`, `no_worse` or `reported`.
-    pub agree: String,
-    /// Why the backend could not render the twin (the twin is then not judged).
-    #[serde(default)]
-    pub skipped: Option<String>,
-    /// The comparison with the case's frame, by the reference judge's classes (for
-    /// `identical`: every pixel whose visibility value differs at all counts as illegal).
-    #[serde(flatten)]
-    pub pair: RefAgreement,
-    /// The case's false shadow + false light away from edges.
-    pub interior_error: u64,
-    /// The twin's, against its own truth (for `no_worse` and `reported`).
-    pub twin_interior_error: Option<u64>,
-    /// The twin's render time, ms (same clock as the case's).
-    pub render_ms: f64,
-    /// Whether the relation held.
-    pub ok: bool,
 }
 
 /// The outcome of trying to run a point on a backend.
@@ -116,8 +82,8 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint, twins: bool) -> Ou
     // The truth, and the reference's judged render for this backend's profile (which also
     // judges the twins, so even the reference needs it): computed once per point and profile
     // in a conformance run.
-    let crate::judge_cache::Basis { truth, judged } =
-        crate::judge_cache::basis(&prepared, backend.profile());
+    let crate::judge::judge_cache::Basis { truth, judged } =
+        crate::judge::judge_cache::basis(&prepared, backend.profile());
     let error = umbra_compare::truth_error(&frame, &truth);
     let mut problems = Vec::new();
     let mut failed = Vec::new();

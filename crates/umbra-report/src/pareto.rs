@@ -9,7 +9,17 @@ use std::sync::Once;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::sweep::Row;
+/// One point of the plot: a backend's measurement of one technique (none: skipped or
+/// failed, which still puts the backend in the legend) and whether it is on its front.
+#[derive(Clone, Debug)]
+pub struct ParetoPoint {
+    /// Backend id.
+    pub backend: String,
+    /// (frame time ms, error % of judged pixels), when measured.
+    pub measured: Option<(f64, f64)>,
+    /// On the backend's Pareto front.
+    pub front: bool,
+}
 
 const SIZE: (u32, u32) = (960, 600);
 const FONT: &[u8] = include_bytes!("../assets/DejaVuSansMono.ttf");
@@ -31,24 +41,24 @@ fn register_font() {
 }
 
 /// The plot as SVG text.
-pub fn svg(rows: &[Row], front: &[bool], title: &str) -> Result<String, String> {
+pub fn svg(rows: &[ParetoPoint], title: &str) -> Result<String, String> {
     register_font();
     let mut text = String::new();
     {
         let root = SVGBackend::with_string(&mut text, SIZE).into_drawing_area();
-        draw(&root, rows, front, title)?;
+        draw(&root, rows, title)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(text)
 }
 
 /// The plot as PNG bytes.
-pub fn png(rows: &[Row], front: &[bool], title: &str) -> Result<Vec<u8>, String> {
+pub fn png(rows: &[ParetoPoint], title: &str) -> Result<Vec<u8>, String> {
     register_font();
     let mut rgb = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
-        draw(&root, rows, front, title)?;
+        draw(&root, rows, title)?;
         root.present().map_err(|e| e.to_string())?;
     }
     let mut png = Vec::new();
@@ -61,8 +71,7 @@ pub fn png(rows: &[Row], front: &[bool], title: &str) -> Result<Vec<u8>, String>
 
 fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
-    rows: &[Row],
-    front: &[bool],
+    rows: &[ParetoPoint],
     title: &str,
 ) -> Result<(), String>
 where
@@ -74,8 +83,8 @@ where
         .iter()
         .enumerate()
         .filter_map(|(i, r)| {
-            let m = r.result.as_ref().ok()?;
-            Some((i, m.frame_ms.max(1e-3), r.error_pct()?))
+            let (ms, error) = r.measured?;
+            Some((i, ms.max(1e-3), error))
         })
         .collect();
     let (mut tmin, mut tmax) = (f64::INFINITY, 0.0f64);
@@ -134,7 +143,7 @@ where
             .map_err(err)?;
         let mut on: Vec<(f64, f64)> = mine
             .iter()
-            .filter(|(i, _, _)| front[*i])
+            .filter(|(i, _, _)| rows[*i].front)
             .map(|(_, t, e)| (*t, *e))
             .collect();
         on.sort_by(|a, b| a.0.total_cmp(&b.0));

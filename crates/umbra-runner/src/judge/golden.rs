@@ -64,14 +64,7 @@ pub fn stem(name: &str) -> String {
             }
         })
         .collect();
-    format!("{plain}-{:08x}", fnv1a(name))
-}
-
-/// 32-bit FNV-1a of a name: a stable short tag for file names.
-pub fn fnv1a(name: &str) -> u32 {
-    name.bytes().fold(0x811c_9dc5u32, |h, b| {
-        (h ^ u32::from(b)).wrapping_mul(0x0100_0193)
-    })
+    format!("{plain}-{:08x}", umbra_report::names::fnv1a(name))
 }
 
 /// Checks `frame` against golden `name` in `dir`; `legal[i]` marks pixels where a shadow
@@ -196,5 +189,5 @@ pub fn record_blessed(dir: &Path, entries: &[(String, String)]) -> std::io::Resu
 /// Whether two Mesa versions are the same release for goldens (numeric parts only, so a
 /// distribution's packaging suffix does not matter).
 pub fn same_release(a: &str, b: &str) -> bool {
-    crate::status::version_parts(a) == crate::status::version_parts(b)
+    crate::judge::expectations::version_parts(a) == crate::judge::expectations::version_parts(b)
 }

@@ -33,11 +33,8 @@ use std::time::Duration;
 use serde_json::Value;
 
 use crate::args::Args;
-use crate::pool::{Reply, Worker};
-use crate::worker::Request;
-
-/// Usage line.
-pub const USAGE: &str = "umbra reduce CASE.json --point ID --backend ID [--check CHECK]... [-o OUT.json] [--timeout SECS] [--mesa PREFIX|BUILD_DIR|system] [--verbose]";
+use crate::harness::pool::{Reply, Worker};
+use crate::harness::worker::Request;
 
 /// How a run ended, in the terms "fails the same way" compares.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -134,7 +131,7 @@ impl Judge {
             &mut self.worker
         };
         if slot.is_none() {
-            let env = crate::registry::worker_env(&id);
+            let env = crate::harness::registry::worker_env(&id);
             match Worker::start(&id, &env, self.timeout) {
                 Ok(w) => {
                     if let Some(u) = w.hello.get("unavailable").or(w.hello.get("refused")) {
@@ -208,29 +205,21 @@ impl Judge {
 
 /// Runs the command; returns the exit code (0: reduced, 1: the point does not fail as
 /// required, 125: bad input).
-pub fn main(argv: &[String]) -> i32 {
-    let args = match Args::parse(
-        argv,
-        &["point", "backend", "o", "out", "timeout", "mesa", "check"],
-        &["verbose"],
-    ) {
-        Ok(a) => a,
-        Err(e) => return usage(&e),
-    };
+pub fn main(args: &Args) -> i32 {
     let [file] = args.positional.as_slice() else {
         return usage("give exactly one case file");
     };
     let (Some(point_id), Some(backend)) = (args.value("point"), args.value("backend")) else {
         return usage("give --point ID and --backend ID");
     };
-    if let Err(e) = crate::mesa_build::select(args.value("mesa")) {
+    if let Err(e) = crate::harness::mesa_build::select(args.value("mesa")) {
         eprintln!("error: {e}");
         return 125;
     }
-    if !crate::registry::is_known(backend) || backend == "ref" {
+    if !crate::harness::registry::is_known(backend) || backend == "ref" {
         eprintln!(
             "error: --backend {backend:?}: give a backend other than ref; this build has: {}",
-            crate::registry::known().join(", ")
+            crate::harness::registry::known().join(", ")
         );
         return 125;
     }
@@ -606,7 +595,7 @@ fn case_text(v: &Value, depth: usize) -> String {
 }
 
 fn usage(msg: &str) -> i32 {
-    eprintln!("error: {msg}\nusage: {USAGE}");
+    eprintln!("error: {msg}\nusage: {}", crate::cli::usage("reduce"));
     125
 }
 

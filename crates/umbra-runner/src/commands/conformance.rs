@@ -1,5 +1,5 @@
 //! `umbra conformance`: every case point on every selected backend, each backend in worker
-//! processes of its own ([`crate::pool`]), judged, with expectations applied, and reported.
+//! processes of its own ([`crate::harness::pool`]), judged, with expectations applied, and reported.
 //!
 //! - Plan: case points (`cases/**/*.json`, `--filter GLOB` on the point id or the full run
 //!   name `backend/id`) × backends (`--backend ID`, default every known one), in a fixed
@@ -9,7 +9,7 @@
 //!   worker that dies costs its run (Crash), one that exceeds `--timeout` seconds costs its run
 //!   (Timeout); a fresh worker takes the rest. Every failure is rerun once; a changed result
 //!   is a Flake.
-//! - Statuses and expectations: [`crate::status`]. A case file that cannot be loaded fails the
+//! - Statuses and expectations: [`crate::judge::expectations`]. A case file that cannot be loaded fails the
 //!   run under its own name.
 //! - Reports in `OUT/latest/` and `OUT/runs/<unix time>/`: `results.csv` and `failures.csv`
 //!   (deqp-runner's formats), `junit.xml`, `report.json`, `report.html` (self-contained),
@@ -25,15 +25,11 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use serde::Serialize;
-
 use crate::args::Args;
-use crate::pool::{Reply, Worker};
-use crate::status::{Expectations, Status};
-use crate::worker::{Metrics, Request, RunReport};
-
-/// Usage line.
-pub const USAGE: &str = "umbra conformance [--cases DIR] [--filter GLOB] [--backend ID]... [--shard I/N] [--jobs N] [--timeout SECS] [--expectations DIR] [--golden DIR|none] [--out DIR] [--mesa PREFIX|BUILD_DIR|system] [--max-memory SIZE] [--verbose]";
+use crate::harness::pool::{Reply, Worker};
+use crate::harness::worker::{Request, RunReport};
+use crate::judge::expectations::Expectations;
+use umbra_report::{Metrics, RunResult, Status, TimeBudget};
 
 /// A point's swept values, `(path, value)` in axis order.
 type SweepValues = Vec<(String, serde_json::Value)>;
@@ -42,87 +38,6 @@ type SweepValues = Vec<(String, serde_json::Value)>;
 /// every worker of the run, in µs: part of the harness overhead the summary reports.
 static WORKER_START_US: AtomicU64 = AtomicU64::new(0);
 static CONTEXT_US: AtomicU64 = AtomicU64::new(0);
-
-/// Where a conformance run's time went, summed over its runs (worker time, not wall).
-#[derive(Clone, Debug, Default, Serialize)]
-pub struct TimeBudget {
-    /// Wall time of the whole run, s.
-    pub wall_s: f64,
-    /// Σ per-run time measured by the parent (request to answer, retries included), s.
-    pub runs_s: f64,
-    /// Σ the backends' own frame time (both passes and readback), s.
-    pub render_s: f64,
-    /// Σ the metamorphic twins (their renders and comparisons), s.
-    pub twins_s: f64,
-    /// Σ judging: truth, reference with its ambiguity, error, agreement, s.
-    pub judge_s: f64,
-    /// Σ golden checks: PNG encoding and comparison, s.
-    pub golden_s: f64,
-    /// Σ worker start-up (spawn to hello), context creation included, s.
-    pub worker_start_s: f64,
-    /// Of that, context or device creation, s.
-    pub context_s: f64,
-    /// The rest of the per-run time: case loading, tessellation, protocol, retries, s.
-    pub other_s: f64,
-}
-
-impl TimeBudget {
-    /// Sums the budget of `results`.
-    pub fn of(results: &[RunResult], wall: Duration) -> TimeBudget {
-        let mut b = TimeBudget {
-            wall_s: wall.as_secs_f64(),
-            worker_start_s: WORKER_START_US.load(Ordering::Relaxed) as f64 / 1e6,
-            context_s: CONTEXT_US.load(Ordering::Relaxed) as f64 / 1e6,
-            ..Default::default()
-        };
-        for r in results {
-            b.runs_s += r.time_s;
-            if let Some(m) = &r.metrics {
-                b.render_s += m.total_ms / 1e3;
-                b.twins_s += m.twins_ms / 1e3;
-                b.judge_s += m.judge_ms / 1e3;
-                b.golden_s += m.golden_ms / 1e3;
-            }
-        }
-        b.other_s = (b.runs_s - b.render_s - b.twins_s - b.judge_s - b.golden_s).max(0.0);
-        b
-    }
-
-    /// Worker start, context creation, judging and PNG encoding, as a share of all worker time.
-    pub fn overhead_share(&self) -> f64 {
-        let total = self.runs_s + self.worker_start_s;
-        if total == 0.0 {
-            0.0
-        } else {
-            (self.worker_start_s + self.judge_s + self.golden_s) / total
-        }
-    }
-
-    /// One line for the terminal and the report.
-    pub fn line(&self) -> String {
-        let total = (self.runs_s + self.worker_start_s).max(1e-9);
-        let pct = |x: f64| 100.0 * x / total;
-        format!(
-            "time: {:.1} s of worker time in {:.1} s wall: rendering {:.1} s ({:.0}%), twins {:.1} s ({:.0}%), judging {:.1} s ({:.0}%), goldens/PNG {:.1} s ({:.0}%), worker start {:.1} s ({:.0}%, context creation {:.1} s), other {:.1} s ({:.0}%); harness overhead (start, context, judging, PNG) {:.0}%",
-            total,
-            self.wall_s,
-            self.render_s,
-            pct(self.render_s),
-            self.twins_s,
-            pct(self.twins_s),
-            self.judge_s,
-            pct(self.judge_s),
-            self.golden_s,
-            pct(self.golden_s),
-            self.worker_start_s,
-            pct(self.worker_start_s),
-            self.context_s,
-            self.other_s,
-            pct(self.other_s),
-            100.0 * self.overhead_share()
-        )
-    }
-}
 
 /// One planned run.
 #[derive(Clone, Debug)]
@@ -140,40 +55,8 @@ impl Planned {
     }
 }
 
-/// One finished run, as reported.
-#[derive(Clone, Debug, Serialize)]
-pub struct RunResult {
-    /// `backend/case@sweep`.
-    pub name: String,
-    /// The backend id.
-    pub backend: String,
-    /// The case point id.
-    pub case: String,
-    /// The case file.
-    pub file: String,
-    /// The point's swept values, `(path, value)` in axis order.
-    pub values: Vec<(String, serde_json::Value)>,
-    /// Final status.
-    pub status: Status,
-    /// Why (failure problems, skip reason, crash status, expectation reason).
-    pub reason: String,
-    /// Figures of the judged run, when it was judged.
-    pub metrics: Option<Metrics>,
-    /// The checks a failing run failed (its signature).
-    pub failed: Vec<crate::run::FailedCheck>,
-    /// What became of its golden: `unchanged`, `written`, `changed`, or
-    /// `changed-other-driver` (differs, and was blessed on another Mesa version: failed, with both versions named).
-    pub golden: Option<String>,
-    /// Wall time of the run including retries, seconds.
-    pub time_s: f64,
-    /// The command that reproduces this run alone.
-    pub reproduce: String,
-    #[serde(skip)]
-    details: String,
-}
-
 struct Settings {
-    /// Directory of the shared judging basis ([`crate::judge_cache`]).
+    /// Directory of the shared judging basis ([`crate::judge::judge_cache`]).
     judge_cache: String,
     timeout: Duration,
     golden: Option<PathBuf>,
@@ -183,28 +66,8 @@ struct Settings {
 }
 
 /// Runs the command; returns the process exit code.
-pub fn main(argv: &[String]) -> i32 {
-    let args = match Args::parse(
-        argv,
-        &[
-            "cases",
-            "filter",
-            "backend",
-            "out",
-            "shard",
-            "jobs",
-            "timeout",
-            "expectations",
-            "golden",
-            "mesa",
-            "max-memory",
-        ],
-        &["verbose"],
-    ) {
-        Ok(a) => a,
-        Err(e) => return usage(&e),
-    };
-    let build = match crate::mesa_build::select(args.value("mesa")) {
+pub fn main(args: &Args) -> i32 {
+    let build = match crate::harness::mesa_build::select(args.value("mesa")) {
         Ok(b) => b,
         Err(e) => {
             eprintln!("error: {e}");
@@ -214,14 +77,16 @@ pub fn main(argv: &[String]) -> i32 {
     let cases_dir = PathBuf::from(args.value("cases").unwrap_or("cases"));
     let out = PathBuf::from(args.value("out").unwrap_or("target/umbra"));
     let filter = args.value("filter").unwrap_or("*").to_string();
-    let backends =
-        match crate::registry::selected(&args.values("backend"), crate::registry::known()) {
-            Ok(b) => b,
-            Err(e) => {
-                eprintln!("error: {e}");
-                return 125;
-            }
-        };
+    let backends = match crate::harness::registry::selected(
+        &args.values("backend"),
+        crate::harness::registry::known(),
+    ) {
+        Ok(b) => b,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 125;
+        }
+    };
     let shard = match args.value("shard").map(parse_shard).transpose() {
         Ok(s) => s.unwrap_or((0, 1)),
         Err(e) => return usage(&e),
@@ -236,7 +101,7 @@ pub fn main(argv: &[String]) -> i32 {
         Ok(t) => Duration::from_secs(t.unwrap_or(300)),
         Err(_) => return usage("--timeout takes whole seconds"),
     };
-    if let Err(e) = crate::memory_limit::select(args.value("max-memory"), jobs) {
+    if let Err(e) = crate::harness::memory_limit::select(args.value("max-memory"), jobs) {
         return usage(&e);
     }
     let expectations = match Expectations::load(Path::new(
@@ -355,7 +220,7 @@ pub fn main(argv: &[String]) -> i32 {
     let queue = Mutex::new(groups.into_iter().collect::<VecDeque<_>>());
     let done = Mutex::new(Collected {
         results,
-        progress: crate::progress::Progress::new(total),
+        progress: crate::harness::progress::Progress::new(total),
         ..Default::default()
     });
     std::thread::scope(|s| {
@@ -397,12 +262,24 @@ pub fn main(argv: &[String]) -> i32 {
     }
 
     // Report.
-    let budget = TimeBudget::of(&results, started.elapsed());
+    let budget = TimeBudget::of(
+        &results,
+        started.elapsed(),
+        Duration::from_micros(WORKER_START_US.load(Ordering::Relaxed)),
+        Duration::from_micros(CONTEXT_US.load(Ordering::Relaxed)),
+    );
     let header = serde_json::json!({
         "mesa_build": build,
         "drivers": driver_rows,
     });
-    if let Err(e) = write_reports(&out, &results, &drivers, &header, &budget) {
+    if let Err(e) = umbra_report::write_conformance(
+        &out,
+        &out.join("latest").join("failures"),
+        &results,
+        &drivers,
+        &header,
+        &budget,
+    ) {
         eprintln!("error: cannot write reports under {}: {e}", out.display());
         return 125;
     }
@@ -427,15 +304,15 @@ pub fn main(argv: &[String]) -> i32 {
     }
     let passed = count("Pass") + count("ExpectedFail") + count("Flake");
     println!("{}", budget.line());
-    if let Some((median, max, above, runs)) = crate::html::blind_stats(&results) {
+    if let Some((median, max, above, runs)) = umbra_report::html::blind_stats(&results) {
         println!(
             "check strength: blind area median {:.3}%, max {:.2}%, {above} of {runs} judged runs above {:.0}% (report.html, Check strength)",
             100.0 * median,
             100.0 * max,
-            100.0 * crate::html::BLIND_FLAG
+            100.0 * umbra_report::html::BLIND_FLAG
         );
     }
-    println!("statuses: {}", breakdown(&results));
+    println!("statuses: {}", umbra_report::model::breakdown(&results));
     let foreign = results
         .iter()
         .filter(|r| r.golden.as_deref() == Some("changed-other-driver"))
@@ -443,7 +320,7 @@ pub fn main(argv: &[String]) -> i32 {
     if foreign > 0 {
         println!(
             "goldens: {foreign} differ and were blessed on another driver version (golden/{}); each run's reason names both versions",
-            crate::golden::MANIFEST
+            crate::judge::golden::MANIFEST
         );
     }
     // Blessing (`cargo xtask bless`): record the driver each backend's goldens now match.
@@ -468,15 +345,15 @@ pub fn main(argv: &[String]) -> i32 {
                 // A golden gets its own entry only where its version differs from what the
                 // manifest already says for it (its backend's, usually).
                 if r.golden.as_deref() == Some("written")
-                    && crate::golden::blessed_on(dir, &r.backend, &r.name).as_deref()
+                    && crate::judge::golden::blessed_on(dir, &r.backend, &r.name).as_deref()
                         != Some(v.as_str())
                 {
-                    entries.push((crate::golden::stem(&r.name), v));
+                    entries.push((crate::judge::golden::stem(&r.name), v));
                 }
             }
             if entries.is_empty() {
                 // Nothing Mesa-backed was blessed: the manifest stays as it is.
-            } else if let Err(e) = crate::golden::record_blessed(dir, &entries) {
+            } else if let Err(e) = crate::judge::golden::record_blessed(dir, &entries) {
                 eprintln!(
                     "error: cannot record the blessed drivers in {}: {e}",
                     dir.display()
@@ -558,7 +435,7 @@ impl Monotone {
                     if let Some((prev_id, prev)) = &previous {
                         if e > *prev && !r.status.is_regression() {
                             r.status = Status::Fail;
-                            r.failed.push(crate::run::FailedCheck {
+                            r.failed.push(umbra_report::FailedCheck {
                                 check: "falls-along".into(),
                                 count: 1,
                             });
@@ -575,24 +452,8 @@ impl Monotone {
     }
 }
 
-/// How many runs ended in each status, in one line (the terminal summary and report.html).
-pub fn breakdown(results: &[RunResult]) -> String {
-    let count = |n: &str| results.iter().filter(|r| r.status.name() == n).count();
-    format!(
-        "pass {}, expected fail {}, flake {}, skip {}; fail {}, crash {}, timeout {}, unexpected pass {}",
-        count("Pass"),
-        count("ExpectedFail"),
-        count("Flake"),
-        count("Skip"),
-        count("Fail"),
-        count("Crash"),
-        count("Timeout"),
-        count("UnexpectedPass"),
-    )
-}
-
 fn usage(msg: &str) -> i32 {
-    eprintln!("error: {msg}\nusage: {USAGE}");
+    eprintln!("error: {msg}\nusage: {}", crate::cli::usage("conformance"));
     125
 }
 
@@ -624,18 +485,21 @@ struct Collected {
     unavailable_runs: usize,
     finished: usize,
     /// What the terminal shows while the run goes on.
-    progress: crate::progress::Progress,
+    progress: crate::harness::progress::Progress,
 }
 
 type Done = Mutex<Collected>;
 
 /// Runs one backend's runs in its workers.
 fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done, total: usize) {
-    let mut env = crate::registry::worker_env(backend);
-    if crate::fake::enabled() {
+    let mut env = crate::harness::registry::worker_env(backend);
+    if crate::harness::fake::enabled() {
         env.push(("UMBRA_FAKE_BACKENDS".into(), "1".into()));
     }
-    env.push((crate::judge_cache::ENV.into(), settings.judge_cache.clone()));
+    env.push((
+        crate::judge::judge_cache::ENV.into(),
+        settings.judge_cache.clone(),
+    ));
     let start_worker = || {
         let t = Instant::now();
         let w = Worker::start(backend, &env, settings.timeout);
@@ -662,7 +526,7 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
         .and_then(|u| u.as_str())
         .map(str::to_string);
     // Expectations for this backend's driver (`@applies`), and which files they come from.
-    let facts = crate::status::DriverFacts::from_hello(&hello["ready"]);
+    let facts = crate::judge::expectations::DriverFacts::from_hello(&hello["ready"]);
     let expectations = settings.expectations.for_driver(&facts);
     let files: Vec<String> = expectations
         .files()
@@ -837,7 +701,7 @@ struct Attempt {
     reason: String,
     metrics: Option<Metrics>,
     details: String,
-    failed: Vec<crate::run::FailedCheck>,
+    failed: Vec<umbra_report::FailedCheck>,
     golden: Option<String>,
 }
 
@@ -895,7 +759,11 @@ fn from_report(r: RunReport) -> Attempt {
     };
     let mut reason = r.reason;
     if status == Status::Fail && !r.failed.is_empty() {
-        let _ = write!(reason, " [failed: {}]", crate::status::signature(&r.failed));
+        let _ = write!(
+            reason,
+            " [failed: {}]",
+            crate::judge::expectations::signature(&r.failed)
+        );
     }
     Attempt {
         status,
@@ -905,233 +773,4 @@ fn from_report(r: RunReport) -> Attempt {
         failed: r.failed,
         golden: r.golden,
     }
-}
-
-fn opt(v: Option<u64>) -> String {
-    v.map(|v| v.to_string()).unwrap_or_default()
-}
-
-fn write_reports(
-    out: &Path,
-    results: &[RunResult],
-    drivers: &str,
-    header: &serde_json::Value,
-    budget: &TimeBudget,
-) -> std::io::Result<()> {
-    let wall = Duration::from_secs_f64(budget.wall_s);
-    let mut csv = String::new();
-    let mut failures = String::new();
-    let mut errors = String::from(
-        "test,status,judged,false_shadow,false_light,interior_judged,interior_false_shadow,interior_false_light,edge_px,silhouette,faces_away,outside,agreement,illegal,compared,blind,blind_pct,value_checked,value_margin,illegal_value,illegal_nan,illegal_coverage,illegal_colour,profile,shadow_ms,lit_ms,total_ms,clock\n",
-    );
-    let mut twins = String::from(
-        "test,twin,agree,skipped,differ,legal_tie,legal_coverage,legal_texel,legal_filter,legal_position,legal_surface,blind,illegal,illegal_value,illegal_coverage,illegal_colour,interior_error,twin_interior_error,render_ms,ok\n",
-    );
-    for r in results {
-        for t in r.metrics.iter().flat_map(|m| &m.twins) {
-            let _ = writeln!(
-                twins,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{}",
-                csv_field(&r.name),
-                t.name,
-                t.agree,
-                t.skipped.is_some(),
-                t.pair.differ,
-                t.pair.legal_tie,
-                t.pair.legal_coverage,
-                t.pair.legal_texel,
-                t.pair.legal_filter,
-                t.pair.legal_position,
-                t.pair.legal_surface,
-                t.pair.blind,
-                t.pair.illegal,
-                t.pair.illegal_value,
-                t.pair.illegal_coverage,
-                t.pair.illegal_colour,
-                t.interior_error,
-                t.twin_interior_error
-                    .map(|e| e.to_string())
-                    .unwrap_or_default(),
-                t.render_ms,
-                t.ok
-            );
-        }
-    }
-    for r in results {
-        let _ = writeln!(csv, "{},{},{:.3}", csv_field(&r.name), r.status, r.time_s);
-        if r.status.is_regression() {
-            let _ = writeln!(failures, "{},{}", csv_field(&r.name), r.status);
-        }
-        if let Some(m) = &r.metrics {
-            let _ = writeln!(
-                errors,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{}",
-                csv_field(&r.name),
-                r.status,
-                m.judged,
-                m.false_shadow,
-                m.false_light,
-                m.interior_judged,
-                m.interior_false_shadow,
-                m.interior_false_light,
-                m.edge_px,
-                m.silhouette,
-                m.faces_away,
-                m.outside,
-                m.agreement.map(|a| format!("{a:.6}")).unwrap_or_default(),
-                m.illegal.map(|a| a.to_string()).unwrap_or_default(),
-                opt(m.reference.as_ref().map(|a| a.compared)),
-                opt(m.reference.as_ref().map(|a| a.blind)),
-                m.reference
-                    .as_ref()
-                    .map(|a| format!("{:.4}", 100.0 * a.blind_share()))
-                    .unwrap_or_default(),
-                opt(m.reference.as_ref().map(|a| a.value_checked)),
-                m.reference
-                    .as_ref()
-                    .and_then(|a| a.value_margin)
-                    .map(|v| format!("{v:.5}"))
-                    .unwrap_or_default(),
-                opt(m.reference.as_ref().map(|a| a.illegal_value)),
-                opt(m.reference.as_ref().map(|a| a.illegal_nan)),
-                opt(m.reference.as_ref().map(|a| a.illegal_coverage)),
-                opt(m.reference.as_ref().map(|a| a.illegal_colour)),
-                m.profile,
-                m.shadow_ms,
-                m.lit_ms,
-                m.total_ms,
-                m.clock
-            );
-        }
-    }
-    // Per run, the fields the README's schema promises at top level, then everything else.
-    let runs: Vec<serde_json::Value> = results
-        .iter()
-        .map(|r| {
-            let m = r.metrics.as_ref();
-            let rate = |n: fn(&Metrics) -> u64| {
-                m.map(|m| {
-                    if m.judged == 0 {
-                        0.0
-                    } else {
-                        n(m) as f64 / m.judged as f64
-                    }
-                })
-            };
-            serde_json::json!({
-                "case": r.case,
-                "file": r.file,
-                "backend": r.backend,
-                "golden": r.golden,
-                "status": r.status.name(),
-                "reason": r.reason,
-                "false_shadow": rate(|m| m.false_shadow),
-                "false_light": rate(|m| m.false_light),
-                "agreement": m.and_then(|m| m.agreement),
-                "ssim": m.and_then(|m| m.ssim),
-                "ssim_golden": m.and_then(|m| m.ssim_golden),
-                "time_ms": r.time_s * 1e3,
-                "name": r.name,
-                "metrics": r.metrics,
-                "failed": r.failed,
-                "reproduce": r.reproduce,
-            })
-        })
-        .collect();
-    let report = serde_json::json!({
-        "schema": 1,
-        "wall_s": wall.as_secs_f64(),
-        "time_budget": budget,
-        "harness_overhead_share": budget.overhead_share(),
-        "command": std::env::args().collect::<Vec<_>>().join(" "),
-        "mesa_build": header["mesa_build"],
-        "drivers": header["drivers"],
-        "runs": runs,
-    });
-    let junit = junit(results);
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
-    let html = crate::html::report(
-        results,
-        drivers,
-        &out.join("latest").join("failures"),
-        &command,
-        wall.as_secs_f64(),
-        &budget.line(),
-    );
-    let stamp = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_secs())
-        .unwrap_or(0);
-    for dir in [out.join("latest"), out.join("runs").join(stamp.to_string())] {
-        std::fs::create_dir_all(&dir)?;
-        std::fs::write(dir.join("results.csv"), &csv)?;
-        std::fs::write(dir.join("failures.csv"), &failures)?;
-        std::fs::write(dir.join("errors.csv"), &errors)?;
-        std::fs::write(dir.join("twins.csv"), &twins)?;
-        std::fs::write(dir.join("drivers.txt"), drivers)?;
-        std::fs::write(
-            dir.join("report.json"),
-            serde_json::to_string_pretty(&report).unwrap_or_default(),
-        )?;
-        std::fs::write(dir.join("junit.xml"), &junit)?;
-        std::fs::write(dir.join("report.html"), &html)?;
-    }
-    Ok(())
-}
-
-/// A CSV field, quoted (RFC 4180) when it holds a comma, a quote or a line break: point ids
-/// of multi-axis sweeps hold commas.
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
-fn xml(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
-fn junit(results: &[RunResult]) -> String {
-    let failures = results.iter().filter(|r| r.status.is_regression()).count();
-    let skipped = results
-        .iter()
-        .filter(|r| matches!(r.status, Status::Skip(_)))
-        .count();
-    let time: f64 = results.iter().map(|r| r.time_s).sum();
-    let mut s = format!(
-        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites>\n<testsuite name=\"umbra conformance\" tests=\"{}\" failures=\"{failures}\" skipped=\"{skipped}\" time=\"{time:.3}\">\n",
-        results.len()
-    );
-    for r in results {
-        let _ = write!(
-            s,
-            "  <testcase classname=\"{}\" name=\"{}\" time=\"{:.3}\">",
-            xml(&r.backend),
-            xml(&r.case),
-            r.time_s
-        );
-        match &r.status {
-            st if st.is_regression() => {
-                let _ = write!(
-                    s,
-                    "<failure type=\"{}\" message=\"{}\">{}</failure>",
-                    st,
-                    xml(first_line(&r.reason)),
-                    xml(&r.reproduce)
-                );
-            }
-            Status::Skip(why) => {
-                let _ = write!(s, "<skipped message=\"{}\"/>", xml(why));
-            }
-            _ => {}
-        }
-        s.push_str("</testcase>\n");
-    }
-    s.push_str("</testsuite>\n</testsuites>\n");
-    s
 }

@@ -24,10 +24,6 @@ use serde::Serialize;
 /// The environment variable equivalent of `--mesa` (also how a worker learns its build).
 pub const ENV: &str = "UMBRA_MESA";
 
-/// A marker file that makes a directory a fake Mesa build, for the runner's own tests (only
-/// with fake backends enabled): `{"version": "...", "fault": "invert" | null}`.
-pub const FAKE_MARKER: &str = "umbra-fake-mesa.json";
-
 /// A Mesa build found on disk.
 #[derive(Clone, Debug, Serialize)]
 pub struct MesaBuild {
@@ -87,15 +83,13 @@ impl MesaBuild {
         })?;
         let generated = std::env::temp_dir().join(format!(
             "umbra-mesa-{:08x}",
-            crate::golden::fnv1a(&root.to_string_lossy())
+            umbra_report::names::fnv1a(&root.to_string_lossy())
         ));
-        if crate::fake::enabled() && root.join(FAKE_MARKER).is_file() {
-            let fake: serde_json::Value = std::fs::read_to_string(root.join(FAKE_MARKER))
-                .ok()
-                .and_then(|t| serde_json::from_str(&t).ok())
-                .ok_or_else(|| format!("{FAKE_MARKER} is not JSON"))?;
+        if let Some(fake) =
+            crate::harness::fake::marker(&root).filter(|_| crate::harness::fake::enabled())
+        {
             return Ok(MesaBuild {
-                version: fake["version"].as_str().map(str::to_string),
+                version: Some(fake?.0),
                 root,
                 layout: "fake (tests)",
                 egl: None,
@@ -255,7 +249,7 @@ impl MesaBuild {
 pub fn is_mesa_backed(id: &str) -> bool {
     umbra_gl::parse_id(id).is_some()
         || umbra_wgpu::Kind::parse(id).is_some()
-        || id == crate::fake::MESA
+        || id == crate::harness::fake::MESA
 }
 
 #[derive(Default)]
@@ -418,39 +412,9 @@ pub fn check_loaded(root: &Path, libs: &[PathBuf]) -> Result<(), String> {
     Ok(())
 }
 
-/// The Mesa version a driver reports ("4.5 (Core Profile) Mesa 25.0.7-2~bpo12+1" →
-/// "25.0.7-2~bpo12+1"), from any of the strings given.
-pub fn reported_version<'a>(strings: impl IntoIterator<Item = &'a str>) -> Option<String> {
-    strings.into_iter().find_map(|s| {
-        let i = s.find("Mesa ")?;
-        let v: String = s[i + 5..]
-            .chars()
-            .take_while(|c| !c.is_whitespace() && *c != ')' && *c != ',')
-            .collect();
-        v.chars().next().filter(char::is_ascii_digit).map(|_| v)
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn versions_are_read_from_driver_strings() {
-        assert_eq!(
-            reported_version(["4.5 (Core Profile) Mesa 25.0.7-2~bpo12+1"]).as_deref(),
-            Some("25.0.7-2~bpo12+1")
-        );
-        assert_eq!(
-            reported_version([
-                "llvmpipe (LLVM 15.0.6, 256 bits)",
-                "Mesa 22.3.6 (LLVM 15.0.6)"
-            ])
-            .as_deref(),
-            Some("22.3.6")
-        );
-        assert_eq!(reported_version(["OpenGL ES 3.2 NVIDIA 550.1"]), None);
-    }
 
     #[test]
     fn a_library_outside_the_build_is_refused_by_path() {

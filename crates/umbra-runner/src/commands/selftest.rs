@@ -22,12 +22,9 @@ use std::time::Duration;
 use umbra_case::fault::Fault;
 
 use crate::args::Args;
-use crate::pool::{Reply, Worker};
-use crate::status::Expectations;
-use crate::worker::Request;
-
-/// Usage line.
-pub const USAGE: &str = "umbra selftest [--backend ID]... [--fault NAME]... [--cases DIR] [--expectations DIR] [--timeout SECS] [--jobs N] [--mesa PREFIX|BUILD_DIR|system] [--max-memory SIZE] [--verbose]";
+use crate::harness::pool::{Reply, Worker};
+use crate::harness::worker::Request;
+use crate::judge::expectations::Expectations;
 
 /// How many exercising points each fault × backend pair runs at least.
 pub const SAMPLE: usize = 6;
@@ -132,28 +129,8 @@ impl Hunt {
 }
 
 /// Runs the command; returns the exit code.
-pub fn main(argv: &[String]) -> i32 {
-    let args = match Args::parse(
-        argv,
-        &[
-            "backend",
-            "fault",
-            "cases",
-            "expectations",
-            "timeout",
-            "jobs",
-            "mesa",
-            "max-memory",
-        ],
-        &["verbose"],
-    ) {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("error: {e}\nusage: {USAGE}");
-            return 125;
-        }
-    };
-    if let Err(e) = crate::mesa_build::select(args.value("mesa")) {
+pub fn main(args: &Args) -> i32 {
+    if let Err(e) = crate::harness::mesa_build::select(args.value("mesa")) {
         eprintln!("error: {e}");
         return 125;
     }
@@ -168,8 +145,8 @@ pub fn main(argv: &[String]) -> i32 {
         .and_then(|j| j.parse().ok())
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
         .max(1);
-    if let Err(e) = crate::memory_limit::select(args.value("max-memory"), jobs) {
-        eprintln!("error: {e}\nusage: {USAGE}");
+    if let Err(e) = crate::harness::memory_limit::select(args.value("max-memory"), jobs) {
+        eprintln!("error: {e}\nusage: {}", crate::cli::usage("selftest"));
         return 125;
     }
     let expectations = match Expectations::load(Path::new(
@@ -187,7 +164,7 @@ pub fn main(argv: &[String]) -> i32 {
         .map(|s| s.to_string())
         .collect();
     if backends.is_empty() {
-        backends = crate::registry::known()
+        backends = crate::harness::registry::known()
             .into_iter()
             .filter(|b| b != "ref")
             .collect();
@@ -359,12 +336,12 @@ fn hunt(
     verbose: bool,
 ) -> Hunt {
     let mut h = Hunt::default();
-    let mut env = crate::registry::worker_env(backend);
+    let mut env = crate::harness::registry::worker_env(backend);
     let cache = cache.to_string_lossy().into_owned();
     env.extend([
         ("UMBRA_SELFTEST".into(), "1".into()),
         ("UMBRA_FAULT".into(), fault.name().into()),
-        (crate::judge_cache::ENV.into(), cache),
+        (crate::judge::judge_cache::ENV.into(), cache),
     ]);
     let mut worker = match Worker::start(backend, &env, timeout) {
         Ok(w) => w,
@@ -382,9 +359,9 @@ fn hunt(
         h.refused = true;
         return h;
     }
-    let expectations = expectations.for_driver(&crate::status::DriverFacts::from_hello(
-        &worker.hello["ready"],
-    ));
+    let expectations = expectations.for_driver(
+        &crate::judge::expectations::DriverFacts::from_hello(&worker.hello["ready"]),
+    );
     let candidates: Vec<&(PathBuf, usize, umbra_case::CasePoint)> = points
         .iter()
         .filter(|(_, _, p)| exercises(fault, &p.case, backend))
@@ -437,8 +414,8 @@ fn hunt(
         let name = format!("{backend}/{}", point.id());
         match worker.run(&req, timeout) {
             Reply::Report(r) if r.outcome == "fail" => {
-                let (status, _) = expectations.apply(&name, crate::status::Status::Fail, &r.failed);
-                let checks = crate::status::signature(&r.failed);
+                let (status, _) = expectations.apply(&name, umbra_report::Status::Fail, &r.failed);
+                let checks = crate::judge::expectations::signature(&r.failed);
                 if verbose {
                     println!("  {} {name}: {status:?} [{checks}]", fault.name());
                 }
@@ -496,7 +473,9 @@ mod tests {
         // Every fault applies somewhere, on GL, GLES 2 or wgpu.
         for f in Fault::ALL {
             assert!(
-                crate::registry::known().iter().any(|b| applies(f, b)),
+                crate::harness::registry::known()
+                    .iter()
+                    .any(|b| applies(f, b)),
                 "{} applies nowhere",
                 f.name()
             );

@@ -1,7 +1,7 @@
 //! Fake backends that misbehave on purpose, for the runner's own tests: `fake/crash` aborts
 //! the process, `fake/hang` never returns, `fake/flaky` renders wrong on its first call and
 //! right afterwards, `fake/wrong` inverts every shadow, and `fake/mesa` stands in for a Mesa
-//! driver build (`--mesa DIR` with a [`crate::mesa_build::FAKE_MARKER`] file: it reports that
+//! driver build (`--mesa DIR` with a [`MARKER`] file: it reports that
 //! file's version, and inverts every shadow when the file says `"fault": "invert"`), so the
 //! bisect driver and per-driver expectations are tested without building Mesa; `fake/hog`
 //! is a runaway that keeps allocating (64 MiB every 20 ms, up to 16 GiB), for the memory
@@ -33,16 +33,31 @@ pub const IDS: [&str; 6] = [
 /// The fake that runs on a fake Mesa build.
 pub const MESA: &str = "fake/mesa";
 
-/// The fake build's marker file, when this process runs on one: (version, fault).
+/// A marker file that makes a directory a fake Mesa build, for the runner's own tests (only
+/// with fake backends enabled): `{"version": "...", "fault": "invert" | null}`.
+pub const MARKER: &str = "umbra-fake-mesa.json";
+
+/// The marker of the fake build in `root`, if it is one: (version, fault), or why the marker
+/// cannot be read.
+pub fn marker(root: &Path) -> Option<Result<(String, Option<String>), String>> {
+    let text = std::fs::read_to_string(root.join(MARKER)).ok()?;
+    Some(
+        serde_json::from_str::<serde_json::Value>(&text)
+            .map(|v| {
+                (
+                    v["version"].as_str().unwrap_or("0.0.0").to_string(),
+                    v["fault"].as_str().map(str::to_string),
+                )
+            })
+            .map_err(|_| format!("{MARKER} is not JSON")),
+    )
+}
+
+/// The fake build this process runs on, if any: `UMBRA_MESA` (set by the orchestrator for
+/// every worker on a selected build) names it.
 fn fake_build() -> Option<(String, Option<String>)> {
-    let root = std::env::var(crate::mesa_build::ENV).ok()?;
-    let text =
-        std::fs::read_to_string(Path::new(&root).join(crate::mesa_build::FAKE_MARKER)).ok()?;
-    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    Some((
-        v["version"].as_str().unwrap_or("0.0.0").to_string(),
-        v["fault"].as_str().map(str::to_string),
-    ))
+    let root = std::env::var_os("UMBRA_MESA")?;
+    marker(Path::new(&root))?.ok()
 }
 
 /// A misbehaving backend around the reference.

@@ -3,14 +3,14 @@
 //!
 //! A Mesa driver is chosen by environment before EGL loads, so a process hosts one driver.
 //! [`driver_env`] says which environment an id needs; the commands run ids whose driver this
-//! process did not load in a child process of their own ([`crate::child`]).
+//! process did not load in a child process of their own ([`crate::harness::child`]).
 
 use umbra_case::Backend;
 
 /// Whether `id` names a backend of this build (fake ones only where enabled).
 pub fn is_known(id: &str) -> bool {
     known().iter().any(|k| k == id)
-        || (crate::fake::enabled() && crate::fake::Fake::new(id).is_some())
+        || (crate::harness::fake::enabled() && crate::harness::fake::Fake::new(id).is_some())
 }
 
 /// The backends a command was asked for: the `--backend` values, `default` when there are
@@ -53,7 +53,7 @@ pub fn driver_env(id: &str) -> Option<Vec<(&'static str, &'static str)>> {
 }
 
 /// Everything a worker process for `id` needs in its environment: the driver's variables,
-/// and, when a Mesa build is selected ([`crate::mesa_build`]) and the backend runs on Mesa,
+/// and, when a Mesa build is selected ([`crate::harness::mesa_build`]) and the backend runs on Mesa,
 /// the build's loader variables.
 pub fn worker_env(id: &str) -> Vec<(String, String)> {
     let mut env: Vec<(String, String)> = driver_env(id)
@@ -61,14 +61,14 @@ pub fn worker_env(id: &str) -> Vec<(String, String)> {
         .into_iter()
         .map(|(k, v)| (k.to_string(), v.to_string()))
         .collect();
-    if let Some(build) = crate::mesa_build::selected() {
-        if crate::mesa_build::is_mesa_backed(id) {
+    if let Some(build) = crate::harness::mesa_build::selected() {
+        if crate::harness::mesa_build::is_mesa_backed(id) {
             env.extend(build.env());
         }
     }
     env.push((
-        crate::memory_limit::ENV.to_string(),
-        crate::memory_limit::budget().to_string(),
+        crate::harness::memory_limit::ENV.to_string(),
+        crate::harness::memory_limit::budget().to_string(),
     ));
     // insta's own mismatch summary repeats what the run's reason says; unless asked for.
     if std::env::var_os("INSTA_OUTPUT").is_none() {
@@ -80,9 +80,9 @@ pub fn worker_env(id: &str) -> Vec<(String, String)> {
 /// Whether this process can host the id (its driver environment is in place, and the
 /// selected Mesa build's, which only a fresh process can load).
 pub fn hostable_here(id: &str) -> bool {
-    if let Some(build) = crate::mesa_build::selected() {
-        let here = std::env::var(crate::mesa_build::ENV).ok();
-        if crate::mesa_build::is_mesa_backed(id)
+    if let Some(build) = crate::harness::mesa_build::selected() {
+        let here = std::env::var(crate::harness::mesa_build::ENV).ok();
+        if crate::harness::mesa_build::is_mesa_backed(id)
             && (here.as_deref() != Some(&*build.root.to_string_lossy())
                 || std::env::var_os("LIBGL_DRIVERS_PATH").as_deref()
                     != build.dri.as_deref().map(|d| d.as_os_str()))
@@ -106,8 +106,8 @@ pub fn create(id: &str) -> Result<Box<dyn Backend>, CreateError> {
     if id == "ref" {
         return Ok(Box::new(umbra_ref::RefBackend));
     }
-    if crate::fake::enabled() {
-        if let Some(f) = crate::fake::Fake::new(id) {
+    if crate::harness::fake::enabled() {
+        if let Some(f) = crate::harness::fake::Fake::new(id) {
             return Ok(Box::new(f));
         }
     }

@@ -4,29 +4,16 @@
 
 use std::path::{Path, PathBuf};
 
-use umbra_compare::heatmap;
-
 use crate::args::Args;
-use crate::run::{Outcome, describe, run_point};
-
-/// Usage line.
-pub const USAGE: &str = "umbra render CASE.json [--backend ref|gl33/llvmpipe|gles2/zink|...] [-o DIR] [--point GLOB] [--mesa PREFIX|BUILD_DIR|system] [--max-memory SIZE]";
+use crate::judge::run::{Outcome, describe, run_point};
 
 /// Runs the command; returns the process exit code.
-pub fn main(argv: &[String]) -> i32 {
-    let args = match Args::parse(
-        argv,
-        &["backend", "o", "out", "point", "mesa", "max-memory"],
-        &[],
-    ) {
-        Ok(a) => a,
-        Err(e) => return usage_error(&e),
-    };
-    let budget = match crate::memory_limit::select(args.value("max-memory"), 1) {
+pub fn main(args: &Args) -> i32 {
+    let budget = match crate::harness::memory_limit::select(args.value("max-memory"), 1) {
         Ok(b) => b,
         Err(e) => return usage_error(&e),
     };
-    let build = match crate::mesa_build::select(args.value("mesa")) {
+    let build = match crate::harness::mesa_build::select(args.value("mesa")) {
         Ok(b) => b,
         Err(e) => {
             eprintln!("error: {e}");
@@ -37,25 +24,21 @@ pub fn main(argv: &[String]) -> i32 {
         return usage_error("give exactly one case file");
     };
     let backend_id = args.value("backend").unwrap_or("ref");
-    let out = PathBuf::from(
-        args.value("o")
-            .or(args.value("out"))
-            .unwrap_or("target/umbra/render"),
-    );
-    if !crate::registry::hostable_here(backend_id) {
-        let env = crate::registry::worker_env(backend_id);
-        let mut again = vec!["render".to_string()];
-        again.extend(argv.iter().cloned());
-        return crate::child::rerun(&again, &env);
+    let out = PathBuf::from(args.value("out").unwrap_or("target/umbra/render"));
+    if !crate::harness::registry::hostable_here(backend_id) {
+        let env = crate::harness::registry::worker_env(backend_id);
+        // The same command line, in a process with the backend's environment.
+        let again: Vec<String> = std::env::args().skip(1).collect();
+        return crate::harness::child::rerun(&again, &env);
     }
-    let on_build = build.filter(|_| crate::mesa_build::is_mesa_backed(backend_id));
+    let on_build = build.filter(|_| crate::harness::mesa_build::is_mesa_backed(backend_id));
     if let Some(why) = on_build.and_then(|b| b.lacks(backend_id)) {
         println!("skip {backend_id}: {why}");
         return 0;
     }
-    let mut backend = match crate::registry::create(backend_id) {
+    let mut backend = match crate::harness::registry::create(backend_id) {
         Ok(b) => b,
-        Err(crate::registry::CreateError::Unknown(e)) => return usage_error(&e),
+        Err(crate::harness::registry::CreateError::Unknown(e)) => return usage_error(&e),
         Err(e) if on_build.is_some() => {
             eprintln!("error: {backend_id}: the driver of the Mesa build did not load: {e}");
             return 125;
@@ -66,8 +49,10 @@ pub fn main(argv: &[String]) -> i32 {
         }
     };
     if let Some(b) = on_build.filter(|b| b.layout != "fake (tests)") {
-        if let Err(e) = crate::mesa_build::check_loaded(&b.root, &crate::mesa_build::loaded_libs())
-        {
+        if let Err(e) = crate::harness::mesa_build::check_loaded(
+            &b.root,
+            &crate::harness::mesa_build::loaded_libs(),
+        ) {
             eprintln!("error: {backend_id}: {e}");
             return 125;
         }
@@ -105,7 +90,7 @@ pub fn main(argv: &[String]) -> i32 {
         }
         estimated = estimated.max(e.total());
     }
-    crate::memory_limit::watch_self(budget);
+    crate::harness::memory_limit::watch_self(budget);
     let many = selected.len() > 1;
     let mut code = 0;
     for point in selected {
@@ -124,11 +109,11 @@ pub fn main(argv: &[String]) -> i32 {
                     code = 1;
                 }
                 let dir = if many {
-                    out.join(file_name(&id))
+                    out.join(umbra_report::names::file_name(&id))
                 } else {
                     out.clone()
                 };
-                match write_images(&dir, &j) {
+                match crate::judge::pictures::write_images(&dir, &j) {
                     Ok(()) => println!(
                         "  wrote {}/{{color,visibility,truth,error,shadow_map}}.png",
                         dir.display()
@@ -141,7 +126,7 @@ pub fn main(argv: &[String]) -> i32 {
             }
         }
     }
-    if let Some(peak) = crate::memory_limit::peak_self() {
+    if let Some(peak) = crate::harness::memory_limit::peak_self() {
         println!(
             "memory: peak resident {} (estimate {}, budget {})",
             umbra_case::memory::gib(peak),
@@ -153,58 +138,6 @@ pub fn main(argv: &[String]) -> i32 {
 }
 
 fn usage_error(msg: &str) -> i32 {
-    eprintln!("error: {msg}\nusage: {USAGE}");
+    eprintln!("error: {msg}\nusage: {}", crate::cli::usage("render"));
     2
-}
-
-/// A run id as a file name (`/` and other awkward characters replaced).
-pub fn file_name(id: &str) -> String {
-    let plain: String = id
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || "-_.=@,".contains(c) {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    // File systems stop at 255 bytes; long sweep ids (JSON values) keep a prefix and a hash.
-    if plain.len() <= 120 {
-        plain
-    } else {
-        format!("{}-{:08x}", &plain[..100], crate::golden::fnv1a(id))
-    }
-}
-
-/// Writes the images of a judged run into `dir`.
-pub fn write_images(dir: &Path, j: &crate::run::Judged) -> Result<(), Box<dyn std::error::Error>> {
-    std::fs::create_dir_all(dir)?;
-    let f = &j.frame;
-    image::save_buffer(
-        dir.join("color.png"),
-        &f.color,
-        f.width,
-        f.height,
-        image::ColorType::Rgba8,
-    )?;
-    heatmap::visibility_map(&f.visibility, f.width, f.height)
-        .save_png(&dir.join("visibility.png"))?;
-    heatmap::truth_map(&j.truth).save_png(&dir.join("truth.png"))?;
-    heatmap::truth_error_map(&j.error, &j.truth).save_png(&dir.join("error.png"))?;
-    if let Some(r) = &j.reference {
-        image::save_buffer(
-            dir.join("reference.png"),
-            &r.color,
-            r.width,
-            r.height,
-            image::ColorType::Rgba8,
-        )?;
-    }
-    if let Some(m) = &f.shadow_map {
-        // Layers stacked top to bottom (cube faces +x, −x, +y, −y, +z, −z).
-        heatmap::depth_map(&m.values, m.width, m.height * m.layers)
-            .save_png(&dir.join("shadow_map.png"))?;
-    }
-    Ok(())
 }

@@ -1,14 +1,14 @@
 //! The parent's side of the workers: one worker process per backend (with the driver's
 //! environment), fed one run at a time; a per-run timeout; a dead or hung worker costs its
 //! run (Crash or Timeout) and a fresh worker takes the rest; so does one whose resident
-//! memory goes over the budget ([`crate::memory_limit`]).
+//! memory goes over the budget ([`crate::harness::memory_limit`]).
 
 use std::io::{BufRead, BufReader, Write};
 use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
 use std::time::{Duration, Instant};
 
-use crate::worker::{Request, RunReport};
+use crate::harness::worker::{Request, RunReport};
 
 /// What a worker answered for one run.
 pub enum Reply {
@@ -102,10 +102,10 @@ impl Worker {
         }
         // Wait in short ticks, watching the worker's resident memory against the budget.
         let deadline = Instant::now() + limit;
-        let budget = crate::memory_limit::budget();
+        let budget = crate::harness::memory_limit::budget();
         loop {
-            let tick =
-                crate::memory_limit::POLL.min(deadline.saturating_duration_since(Instant::now()));
+            let tick = crate::harness::memory_limit::POLL
+                .min(deadline.saturating_duration_since(Instant::now()));
             match self.lines.recv_timeout(tick) {
                 Ok(line) => {
                     return match serde_json::from_str(&line) {
@@ -118,7 +118,7 @@ impl Worker {
                     return Reply::TimedOut;
                 }
                 Err(RecvTimeoutError::Timeout) => {
-                    if let Some(why) = crate::memory_limit::over(self.child.id(), budget) {
+                    if let Some(why) = crate::harness::memory_limit::over(self.child.id(), budget) {
                         let _ = self.child.kill();
                         let _ = self.child.wait();
                         return Reply::Crashed(why);

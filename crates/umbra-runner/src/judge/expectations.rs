@@ -30,64 +30,7 @@
 use std::fmt;
 use std::path::Path;
 
-use serde::Serialize;
-
-/// The status of one run.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
-#[serde(tag = "status", content = "reason")]
-pub enum Status {
-    /// Rendered and judged as expected.
-    Pass,
-    /// Rendered and judged wrong, or the backend reported an error.
-    Fail,
-    /// The worker died during the run.
-    Crash,
-    /// The run did not finish within the per-run time limit.
-    Timeout,
-    /// The backend cannot run it; the reason says why.
-    Skip(String),
-    /// Failed as an expectation says it will.
-    ExpectedFail,
-    /// Passed although an expectation says it fails: update the baseline.
-    UnexpectedPass,
-    /// Failed, then passed on its rerun.
-    Flake,
-}
-
-impl Status {
-    /// The name deqp-runner's CSV uses.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Status::Pass => "Pass",
-            Status::Fail => "Fail",
-            Status::Crash => "Crash",
-            Status::Timeout => "Timeout",
-            Status::Skip(_) => "Skip",
-            Status::ExpectedFail => "ExpectedFail",
-            Status::UnexpectedPass => "UnexpectedPass",
-            Status::Flake => "Flake",
-        }
-    }
-
-    /// Whether the status makes the run a regression (exit code 1).
-    pub fn is_regression(&self) -> bool {
-        matches!(
-            self,
-            Status::Fail | Status::Crash | Status::Timeout | Status::UnexpectedPass
-        )
-    }
-
-    /// Whether the raw outcome is a failure of some kind (worth a rerun).
-    pub fn is_failure(&self) -> bool {
-        matches!(self, Status::Fail | Status::Crash | Status::Timeout)
-    }
-}
-
-impl fmt::Display for Status {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
+use umbra_report::Status;
 
 /// What an expectation expects of a run.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -196,7 +139,7 @@ impl fmt::Display for Expected {
 }
 
 /// A failing run's signature, as an expectation would spell it with exact bounds.
-pub fn signature(failed: &[crate::run::FailedCheck]) -> String {
+pub fn signature(failed: &[umbra_report::FailedCheck]) -> String {
     failed
         .iter()
         .map(|c| format!("{}={}", c.check, c.count))
@@ -241,7 +184,7 @@ impl DriverFacts {
             .map(|a| a.iter().filter_map(|e| e.as_str()).collect())
             .unwrap_or_default();
         DriverFacts {
-            mesa: crate::mesa_build::reported_version(
+            mesa: reported_version(
                 [version.as_str(), renderer.as_str()]
                     .into_iter()
                     .chain(notes.iter().copied()),
@@ -443,7 +386,7 @@ impl Expectations {
         &self,
         name: &str,
         raw: Status,
-        failed: &[crate::run::FailedCheck],
+        failed: &[umbra_report::FailedCheck],
     ) -> (Status, Option<String>) {
         let Some(e) = self.find(name) else {
             return (raw, None);
@@ -486,14 +429,44 @@ impl Expectations {
     }
 }
 
+/// The Mesa version a driver reports ("4.5 (Core Profile) Mesa 25.0.7-2~bpo12+1" →
+/// "25.0.7-2~bpo12+1"), from any of the strings given.
+pub fn reported_version<'a>(strings: impl IntoIterator<Item = &'a str>) -> Option<String> {
+    strings.into_iter().find_map(|s| {
+        let i = s.find("Mesa ")?;
+        let v: String = s[i + 5..]
+            .chars()
+            .take_while(|c| !c.is_whitespace() && *c != ')' && *c != ',')
+            .collect();
+        v.chars().next().filter(char::is_ascii_digit).map(|_| v)
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn failed(checks: &[(&str, u64)]) -> Vec<crate::run::FailedCheck> {
+    #[test]
+    fn versions_are_read_from_driver_strings() {
+        assert_eq!(
+            reported_version(["4.5 (Core Profile) Mesa 25.0.7-2~bpo12+1"]).as_deref(),
+            Some("25.0.7-2~bpo12+1")
+        );
+        assert_eq!(
+            reported_version([
+                "llvmpipe (LLVM 15.0.6, 256 bits)",
+                "Mesa 22.3.6 (LLVM 15.0.6)"
+            ])
+            .as_deref(),
+            Some("22.3.6")
+        );
+        assert_eq!(reported_version(["OpenGL ES 3.2 NVIDIA 550.1"]), None);
+    }
+
+    fn failed(checks: &[(&str, u64)]) -> Vec<umbra_report::FailedCheck> {
         checks
             .iter()
-            .map(|(c, n)| crate::run::FailedCheck {
+            .map(|(c, n)| umbra_report::FailedCheck {
                 check: c.to_string(),
                 count: *n,
             })
@@ -621,7 +594,7 @@ mod tests {
         .expect("write");
         let all = Expectations::load(&dir).expect("load");
         let facts = |v: &str, r: &str| DriverFacts {
-            mesa: crate::mesa_build::reported_version([v]),
+            mesa: reported_version([v]),
             renderer: r.into(),
         };
         let names = |e: &Expectations| e.0.iter().map(|x| x.pattern.clone()).collect::<Vec<_>>();

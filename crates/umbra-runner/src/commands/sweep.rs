@@ -22,13 +22,10 @@ use std::time::{Duration, Instant};
 use serde_json::{Value, json};
 
 use crate::args::Args;
-use crate::html::esc;
-use crate::measure::Measured;
-use crate::pool::{Reply, Worker};
-use crate::worker::Request;
-
-/// Usage line.
-pub const USAGE: &str = "umbra sweep [--scene CASE.json] [--point ID] [--backend ID|all]... [--repeat N] [--timeout SECS] [--out DIR] [--mesa PREFIX|BUILD_DIR|system] [--max-memory SIZE]";
+use crate::harness::measure::Measured;
+use crate::harness::pool::{Reply, Worker};
+use crate::harness::worker::Request;
+use umbra_report::escape::esc;
 
 /// Backends swept when none is named: the reference and one of each GPU API family.
 pub const DEFAULT_BACKENDS: [&str; 3] = ["ref", "gl33/llvmpipe", "wgpu-vk/lavapipe"];
@@ -249,53 +246,39 @@ fn write_case(
 }
 
 /// Runs the command; returns the process exit code.
-pub fn main(argv: &[String]) -> i32 {
-    let args = match Args::parse(
-        argv,
-        &[
-            "scene",
-            "point",
-            "backend",
-            "repeat",
-            "timeout",
-            "out",
-            "mesa",
-            "max-memory",
-        ],
-        &[],
-    ) {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("error: {e}\nusage: {USAGE}");
-            return 2;
-        }
-    };
-    if let Err(e) = crate::mesa_build::select(args.value("mesa")) {
+pub fn main(args: &Args) -> i32 {
+    if let Err(e) = crate::harness::mesa_build::select(args.value("mesa")) {
         eprintln!("error: {e}");
         return 125;
     }
-    if let Err(e) = crate::memory_limit::select(args.value("max-memory"), 1) {
-        eprintln!("error: {e}\nusage: {USAGE}");
+    if let Err(e) = crate::harness::memory_limit::select(args.value("max-memory"), 1) {
+        eprintln!("error: {e}\nusage: {}", crate::cli::usage("sweep"));
         return 2;
     }
     let scene = PathBuf::from(args.value("scene").unwrap_or(DEFAULT_SCENE.0));
     let repeat = match args.value("repeat").map(str::parse::<u32>).transpose() {
         Ok(r) => r.unwrap_or(5).max(1),
         Err(_) => {
-            eprintln!("error: --repeat takes a positive number\nusage: {USAGE}");
+            eprintln!(
+                "error: --repeat takes a positive number\nusage: {}",
+                crate::cli::usage("sweep")
+            );
             return 2;
         }
     };
     let timeout = match args.value("timeout").map(str::parse::<u64>).transpose() {
         Ok(t) => Duration::from_secs(t.unwrap_or(600)),
         Err(_) => {
-            eprintln!("error: --timeout takes whole seconds\nusage: {USAGE}");
+            eprintln!(
+                "error: --timeout takes whole seconds\nusage: {}",
+                crate::cli::usage("sweep")
+            );
             return 2;
         }
     };
     let out = PathBuf::from(args.value("out").unwrap_or("target/umbra/sweep"));
     let default = DEFAULT_BACKENDS.iter().map(|s| s.to_string()).collect();
-    let backends = match crate::registry::selected(&args.values("backend"), default) {
+    let backends = match crate::harness::registry::selected(&args.values("backend"), default) {
         Ok(b) => b,
         Err(e) => {
             eprintln!("error: {e}");
@@ -341,7 +324,7 @@ pub fn main(argv: &[String]) -> i32 {
     let mut rows: Vec<Row> = Vec::new();
     let mut done = 0;
     for backend in &backends {
-        let env = crate::registry::worker_env(backend);
+        let env = crate::harness::registry::worker_env(backend);
         let start = || Worker::start(backend, &env, timeout);
         let mut worker = start();
         for (index, t) in plan.iter().enumerate() {
@@ -415,7 +398,10 @@ pub fn main(argv: &[String]) -> i32 {
         }
     }
     let wall = started.elapsed();
-    let command = format!("umbra sweep {}", argv.join(" "));
+    let command = format!(
+        "umbra {}",
+        std::env::args().skip(1).collect::<Vec<_>>().join(" ")
+    );
     if let Err(e) = write_outputs(&out, &rows, &point.id(), &command, wall) {
         eprintln!(
             "error: cannot write the sweep's outputs under {}: {e}",
@@ -452,7 +438,7 @@ pub fn measure_backends(
     backends
         .iter()
         .map(|b| {
-            let env = crate::registry::worker_env(b);
+            let env = crate::harness::registry::worker_env(b);
             let result = Worker::start_exe(exe, b, &env, timeout).and_then(|mut w| {
                 if let Some(why) = w.hello.get("unavailable").and_then(Value::as_str) {
                     return Err(format!("unavailable: {why}"));
@@ -557,13 +543,27 @@ fn write_outputs(
     std::fs::create_dir_all(out)?;
     std::fs::write(out.join("sweep.csv"), csv)?;
     let title = format!("{scene}: frame time vs error");
+    let plotted: Vec<umbra_report::pareto::ParetoPoint> = rows
+        .iter()
+        .zip(&front)
+        .map(|(r, on)| umbra_report::pareto::ParetoPoint {
+            backend: r.backend.clone(),
+            measured: r
+                .result
+                .as_ref()
+                .ok()
+                .zip(r.error_pct())
+                .map(|(m, e)| (m.frame_ms, e)),
+            front: *on,
+        })
+        .collect();
     std::fs::write(
         out.join("pareto.svg"),
-        crate::pareto_plot::svg(rows, &front, &title).map_err(std::io::Error::other)?,
+        umbra_report::pareto::svg(&plotted, &title).map_err(std::io::Error::other)?,
     )?;
     std::fs::write(
         out.join("pareto.png"),
-        crate::pareto_plot::png(rows, &front, &title).map_err(std::io::Error::other)?,
+        umbra_report::pareto::png(&plotted, &title).map_err(std::io::Error::other)?,
     )?;
     let section = section(rows, &front, scene, command, wall, out);
     std::fs::write(out.join("section.html"), &section)?;

@@ -6,35 +6,8 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use crate::conformance::RunResult;
-use crate::status::Status;
-
-/// Escapes text for HTML (element content and quoted attributes).
-pub fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
-/// Standard base64 (RFC 4648) of `bytes`.
-pub fn base64(bytes: &[u8]) -> String {
-    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for c in bytes.chunks(3) {
-        let n = (u32::from(c[0]) << 16)
-            | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
-            | u32::from(*c.get(2).unwrap_or(&0));
-        for k in 0..4 {
-            if k <= c.len() {
-                out.push(T[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
-}
+use crate::escape::{base64, esc};
+use crate::model::{Metrics, RunResult, Status, TimeBudget};
 
 fn img(dir: &Path, file: &str, caption: &str) -> String {
     match std::fs::read(dir.join(file)) {
@@ -54,9 +27,9 @@ pub fn report(
     drivers: &str,
     failures_dir: &Path,
     command: &str,
-    wall_s: f64,
-    timing: &str,
+    budget: &TimeBudget,
 ) -> String {
+    let (wall_s, timing) = (budget.wall_s, budget.line());
     let mut s = String::from(
         "<!doctype html><html><head><meta charset=\"utf-8\"><title>umbra conformance</title><style>\
          body{font:14px system-ui,sans-serif;margin:24px;color:#222}h1{margin:0 0 8px}code{background:#f3f3f3;padding:1px 4px}\
@@ -69,9 +42,9 @@ pub fn report(
         s,
         "<h1>umbra conformance</h1><p>{} runs in {wall_s:.1} s: <b>{}</b></p><p>command: <code>{}</code></p><p>{}</p>",
         results.len(),
-        crate::conformance::breakdown(results),
+        crate::model::breakdown(results),
         esc(command),
-        esc(timing)
+        esc(&timing)
     );
     s.push_str("<h2>Drivers</h2><table><tr><th>backend</th><th>vendor | renderer | version | extensions</th></tr>");
     for line in drivers.lines() {
@@ -92,7 +65,7 @@ pub fn report(
         s.push_str("<p>None.</p>");
     }
     for r in failing {
-        let dir = failures_dir.join(crate::render_cmd::file_name(&r.name));
+        let dir = failures_dir.join(crate::names::file_name(&r.name));
         let _ = write!(
             s,
             "<div class=\"failure\"><h3><span class=\"{}\">{}</span> {}</h3><p>{}</p><p>reproduce: <code>{}</code></p>{}{}{}{}{}</div>",
@@ -177,7 +150,7 @@ pub fn report(
 }
 
 fn reference(
-    m: Option<&crate::worker::Metrics>,
+    m: Option<&Metrics>,
     f: impl Fn(&umbra_compare::reference::RefAgreement) -> String,
 ) -> String {
     m.and_then(|m| m.reference.as_ref())
@@ -388,22 +361,4 @@ fn twins_section(results: &[RunResult]) -> String {
     }
     s.push_str("</table>");
     s
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn base64_matches_rfc_4648_vectors() {
-        for (i, o) in [
-            ("", ""),
-            ("f", "Zg=="),
-            ("fo", "Zm8="),
-            ("foo", "Zm9v"),
-            ("foob", "Zm9vYg=="),
-            ("fooba", "Zm9vYmE="),
-            ("foobar", "Zm9vYmFy"),
-        ] {
-            assert_eq!(super::base64(i.as_bytes()), o);
-        }
-    }
 }

@@ -14,7 +14,9 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-use crate::run::{Outcome, describe, run_point};
+use crate::args::Args;
+use crate::judge::run::{Outcome, describe, run_point};
+use umbra_report::Metrics;
 
 /// A request for one run.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -51,81 +53,10 @@ pub struct RunReport {
     pub golden: Option<String>,
     /// A sweep measurement (requests with `repeat`).
     #[serde(default)]
-    pub measured: Option<crate::measure::Measured>,
+    pub measured: Option<crate::harness::measure::Measured>,
     /// The checks a failing run failed, with their pixel counts (what expectations match).
     #[serde(default)]
-    pub failed: Vec<crate::run::FailedCheck>,
-}
-
-/// The figures of one judged run.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-pub struct Metrics {
-    /// Judged pixels.
-    pub judged: u64,
-    /// False shadow, all judged pixels.
-    pub false_shadow: u64,
-    /// False light, all judged pixels.
-    pub false_light: u64,
-    /// Judged pixels away from edges.
-    pub interior_judged: u64,
-    /// False shadow away from edges.
-    pub interior_false_shadow: u64,
-    /// False light away from edges.
-    pub interior_false_light: u64,
-    /// Edge pixels.
-    pub edge_px: u64,
-    /// Silhouette pixels.
-    pub silhouette: u64,
-    /// Pixels facing away from the light.
-    pub faces_away: u64,
-    /// Pixels outside the light's frustum.
-    pub outside: u64,
-    /// Agreement with the reference: share of compared pixels with the same answer.
-    pub agreement: Option<f64>,
-    /// Illegal pixels against the reference (every check).
-    pub illegal: Option<u64>,
-    /// Every count of the comparison with the reference: compared pixels, each legal class,
-    /// blind pixels, checked values and their closest margin, each illegal check.
-    #[serde(default)]
-    pub reference: Option<umbra_compare::reference::RefAgreement>,
-    /// The profile the run was judged for (`gl`, `gles3`, `gles2-packed`, `vulkan`).
-    #[serde(default)]
-    pub profile: String,
-    /// The backend's visibility target (`f32`, `unorm8`).
-    #[serde(default)]
-    pub visibility_storage: String,
-    /// SSIM of the colour against the reference's.
-    pub ssim: Option<f64>,
-    /// SSIM of the colour against its golden, where one exists.
-    pub ssim_golden: Option<f64>,
-    /// Shadow pass, ms.
-    pub shadow_ms: f64,
-    /// Lit pass, ms.
-    pub lit_ms: f64,
-    /// Whole render, ms.
-    pub total_ms: f64,
-    /// `gpu` or `cpu-wall`.
-    pub clock: String,
-    /// The metamorphic twins (the built-in bias-order twin first).
-    #[serde(default)]
-    pub twins: Vec<crate::run::TwinMetric>,
-    /// Harness time of the run, ms: judging (truth, reference, agreement), the twins (their
-    /// renders and judging), and the golden check (PNG encoding and comparison).
-    #[serde(default)]
-    pub judge_ms: f64,
-    /// See `judge_ms`.
-    #[serde(default)]
-    pub twins_ms: f64,
-    /// See `judge_ms`.
-    #[serde(default)]
-    pub golden_ms: f64,
-    /// 64-bit FNV-1a of the frame's colour bytes: two builds' frames are the same picture
-    /// exactly when these match (`umbra drivers`).
-    #[serde(default)]
-    pub color_hash: String,
-    /// The same over the visibility values' bits.
-    #[serde(default)]
-    pub visibility_hash: String,
+    pub failed: Vec<umbra_report::FailedCheck>,
 }
 
 /// 64-bit FNV-1a, as 16 hex digits.
@@ -137,14 +68,7 @@ pub fn fnv64(bytes: impl IntoIterator<Item = u8>) -> String {
 }
 
 /// Runs the worker loop; returns the exit code.
-pub fn main(argv: &[String]) -> i32 {
-    let args = match crate::args::Args::parse(argv, &["backend"], &[]) {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 2;
-        }
-    };
+pub fn main(args: &Args) -> i32 {
     let Some(id) = args.value("backend") else {
         eprintln!("error: umbra worker needs --backend ID");
         return 2;
@@ -155,10 +79,10 @@ pub fn main(argv: &[String]) -> i32 {
     // On a Mesa build (`--mesa`), a backend whose driver the build lacks is a skip, and one
     // whose driver does not load, or loads from elsewhere, is refused: never a silent run
     // on the system's Mesa.
-    let build = std::env::var(crate::mesa_build::ENV)
+    let build = std::env::var(crate::harness::mesa_build::ENV)
         .ok()
-        .filter(|_| crate::mesa_build::is_mesa_backed(id))
-        .map(|root| crate::mesa_build::MesaBuild::open(std::path::Path::new(&root)));
+        .filter(|_| crate::harness::mesa_build::is_mesa_backed(id))
+        .map(|root| crate::harness::mesa_build::MesaBuild::open(std::path::Path::new(&root)));
     let say = |out: &mut std::io::StdoutLock, v: serde_json::Value| {
         let _ = writeln!(out, "{v}");
         let _ = out.flush();
@@ -180,14 +104,14 @@ pub fn main(argv: &[String]) -> i32 {
         }
         None => None,
     };
-    let mut backend = match crate::registry::create(id) {
+    let mut backend = match crate::harness::registry::create(id) {
         Ok(b) => {
             let i = b.info();
             let create_ms = created.elapsed().as_secs_f64() * 1e3;
-            let libs = crate::mesa_build::loaded_libs();
+            let libs = crate::harness::mesa_build::loaded_libs();
             if let Some(build) = &build {
                 if build.layout != "fake (tests)" {
-                    if let Err(e) = crate::mesa_build::check_loaded(&build.root, &libs) {
+                    if let Err(e) = crate::harness::mesa_build::check_loaded(&build.root, &libs) {
                         say(
                             &mut out,
                             serde_json::json!({ "refused": format!("{id}: {e}") }),
@@ -259,8 +183,8 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
     let name = format!("{}/{}", backend.id(), point.id());
     // Refuse, before rendering, a run whose case cannot fit in the memory budget.
     let triangles = umbra_case::tessellate(&point.case.scene).triangles.len();
-    if let Some(why) =
-        umbra_case::memory::estimate(&point.case, triangles).refuse(crate::memory_limit::budget())
+    if let Some(why) = umbra_case::memory::estimate(&point.case, triangles)
+        .refuse(crate::harness::memory_limit::budget())
     {
         return RunReport {
             outcome: "fail".into(),
@@ -269,7 +193,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 req.file.display(),
                 point.id()
             ),
-            failed: vec![crate::run::FailedCheck {
+            failed: vec![umbra_report::FailedCheck {
                 check: "memory".into(),
                 count: 1,
             }],
@@ -277,7 +201,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
         };
     }
     if let Some(n) = req.repeat {
-        use crate::measure::{Measurement, measure};
+        use crate::harness::measure::{Measurement, measure};
         return match measure(backend, point, n) {
             Measurement::Done(m) => RunReport {
                 outcome: "pass".into(),
@@ -359,29 +283,29 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             let mut metrics = metrics;
             let golden_start = std::time::Instant::now();
             let golden = req.golden.as_ref().map(|dir| {
-                let (g, msg, ssim) = crate::golden::check(dir, &name, &j.frame, &j.legal);
+                let (g, msg, ssim) = crate::judge::golden::check(dir, &name, &j.frame, &j.legal);
                 metrics.ssim_golden = ssim;
                 // A golden blessed on another driver version still fails; the reason says so.
                 let info = backend.info();
-                let here = crate::mesa_build::reported_version(
+                let here = crate::judge::expectations::reported_version(
                     [info.version.as_str(), info.renderer.as_str()]
                         .into_iter()
                         .chain(info.extensions.iter().map(String::as_str)),
                 );
-                let blessed = crate::golden::blessed_on(dir, &backend.id().0, &name);
+                let blessed = crate::judge::golden::blessed_on(dir, &backend.id().0, &name);
                 let foreign = match (&here, &blessed) {
-                    (Some(h), Some(b)) => (!crate::golden::same_release(h, b)).then_some((h, b)),
+                    (Some(h), Some(b)) => (!crate::judge::golden::same_release(h, b)).then_some((h, b)),
                     _ => None,
                 };
                 match (g, foreign) {
-                    (crate::golden::Golden::Changed, foreign) => {
+                    (crate::judge::golden::Golden::Changed, foreign) => {
                         problems.push(match foreign {
                             Some((h, b)) => format!(
                                 "{msg}; this golden was blessed on Mesa {b} and this driver is Mesa {h}: the difference may be the driver's change between them (compare the two with `cargo xtask drivers`, and bless on this version only after review)"
                             ),
                             None => msg,
                         });
-                        failed.push(crate::run::FailedCheck {
+                        failed.push(umbra_report::FailedCheck {
                             check: "golden".into(),
                             count: 1,
                         });
@@ -398,8 +322,8 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             let failing = !problems.is_empty();
             if failing {
                 if let Some(dir) = &req.failures {
-                    let _ = crate::render_cmd::write_images(
-                        &dir.join(crate::render_cmd::file_name(&name)),
+                    let _ = crate::judge::pictures::write_images(
+                        &dir.join(umbra_report::names::file_name(&name)),
                         &j,
                     );
                 }

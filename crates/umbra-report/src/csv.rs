@@ -1,0 +1,129 @@
+//! The CSV files of a conformance run, in deqp-runner's spirit: `results.csv` (`test,status,
+//! time`), `failures.csv` (the regressions only), `errors.csv` (every judged figure of a run)
+//! and `twins.csv` (one row per metamorphic twin). One row per run, one header line naming
+//! every column; fields quoted per RFC 4180 where they need it.
+
+use std::fmt::Write as _;
+
+use crate::model::RunResult;
+
+/// The four tables, as file contents.
+pub struct Tables {
+    /// `results.csv`.
+    pub results: String,
+    /// `failures.csv`.
+    pub failures: String,
+    /// `errors.csv`.
+    pub errors: String,
+    /// `twins.csv`.
+    pub twins: String,
+}
+
+/// Writes the tables of `results`.
+pub fn tables(results: &[RunResult]) -> Tables {
+    let mut csv = String::new();
+    let mut failures = String::new();
+    let mut errors = String::from(
+        "test,status,judged,false_shadow,false_light,interior_judged,interior_false_shadow,interior_false_light,edge_px,silhouette,faces_away,outside,agreement,illegal,compared,blind,blind_pct,value_checked,value_margin,illegal_value,illegal_nan,illegal_coverage,illegal_colour,profile,shadow_ms,lit_ms,total_ms,clock\n",
+    );
+    let mut twins = String::from(
+        "test,twin,agree,skipped,differ,legal_tie,legal_coverage,legal_texel,legal_filter,legal_position,legal_surface,blind,illegal,illegal_value,illegal_coverage,illegal_colour,interior_error,twin_interior_error,render_ms,ok\n",
+    );
+    for r in results {
+        for t in r.metrics.iter().flat_map(|m| &m.twins) {
+            let _ = writeln!(
+                twins,
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{}",
+                csv_field(&r.name),
+                t.name,
+                t.agree,
+                t.skipped.is_some(),
+                t.pair.differ,
+                t.pair.legal_tie,
+                t.pair.legal_coverage,
+                t.pair.legal_texel,
+                t.pair.legal_filter,
+                t.pair.legal_position,
+                t.pair.legal_surface,
+                t.pair.blind,
+                t.pair.illegal,
+                t.pair.illegal_value,
+                t.pair.illegal_coverage,
+                t.pair.illegal_colour,
+                t.interior_error,
+                t.twin_interior_error
+                    .map(|e| e.to_string())
+                    .unwrap_or_default(),
+                t.render_ms,
+                t.ok
+            );
+        }
+    }
+    for r in results {
+        let _ = writeln!(csv, "{},{},{:.3}", csv_field(&r.name), r.status, r.time_s);
+        if r.status.is_regression() {
+            let _ = writeln!(failures, "{},{}", csv_field(&r.name), r.status);
+        }
+        if let Some(m) = &r.metrics {
+            let _ = writeln!(
+                errors,
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{}",
+                csv_field(&r.name),
+                r.status,
+                m.judged,
+                m.false_shadow,
+                m.false_light,
+                m.interior_judged,
+                m.interior_false_shadow,
+                m.interior_false_light,
+                m.edge_px,
+                m.silhouette,
+                m.faces_away,
+                m.outside,
+                m.agreement.map(|a| format!("{a:.6}")).unwrap_or_default(),
+                m.illegal.map(|a| a.to_string()).unwrap_or_default(),
+                opt(m.reference.as_ref().map(|a| a.compared)),
+                opt(m.reference.as_ref().map(|a| a.blind)),
+                m.reference
+                    .as_ref()
+                    .map(|a| format!("{:.4}", 100.0 * a.blind_share()))
+                    .unwrap_or_default(),
+                opt(m.reference.as_ref().map(|a| a.value_checked)),
+                m.reference
+                    .as_ref()
+                    .and_then(|a| a.value_margin)
+                    .map(|v| format!("{v:.5}"))
+                    .unwrap_or_default(),
+                opt(m.reference.as_ref().map(|a| a.illegal_value)),
+                opt(m.reference.as_ref().map(|a| a.illegal_nan)),
+                opt(m.reference.as_ref().map(|a| a.illegal_coverage)),
+                opt(m.reference.as_ref().map(|a| a.illegal_colour)),
+                m.profile,
+                m.shadow_ms,
+                m.lit_ms,
+                m.total_ms,
+                m.clock
+            );
+        }
+    }
+    Tables {
+        results: csv,
+        failures,
+        errors,
+        twins,
+    }
+}
+
+fn opt(v: Option<u64>) -> String {
+    v.map(|v| v.to_string()).unwrap_or_default()
+}
+
+/// A CSV field, quoted (RFC 4180) when it holds a comma, a quote or a line break: point ids
+/// of multi-axis sweeps hold commas.
+pub fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}

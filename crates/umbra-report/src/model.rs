@@ -1,0 +1,309 @@
+//! The results model every writer reads: one [`RunResult`] per run with its [`Status`], the
+//! judged [`Metrics`] (with each [`TwinMetric`] and the [`FailedCheck`]s that make its
+//! signature), and the [`TimeBudget`] of a whole run. Workers send these as JSON, the
+//! orchestrator completes them with expectations, and the writers turn them into files; none of
+//! the three needs to know how the others work.
+
+use std::fmt;
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+use umbra_compare::reference::RefAgreement;
+
+/// The status of one run.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[serde(tag = "status", content = "reason")]
+pub enum Status {
+    /// Rendered and judged as expected.
+    Pass,
+    /// Rendered and judged wrong, or the backend reported an error.
+    Fail,
+    /// The worker died during the run.
+    Crash,
+    /// The run did not finish within the per-run time limit.
+    Timeout,
+    /// The backend cannot run it; the reason says why.
+    Skip(String),
+    /// Failed as an expectation says it will.
+    ExpectedFail,
+    /// Passed although an expectation says it fails: update the baseline.
+    UnexpectedPass,
+    /// Failed, then passed on its rerun.
+    Flake,
+}
+
+impl Status {
+    /// The name deqp-runner's CSV uses.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Status::Pass => "Pass",
+            Status::Fail => "Fail",
+            Status::Crash => "Crash",
+            Status::Timeout => "Timeout",
+            Status::Skip(_) => "Skip",
+            Status::ExpectedFail => "ExpectedFail",
+            Status::UnexpectedPass => "UnexpectedPass",
+            Status::Flake => "Flake",
+        }
+    }
+
+    /// Whether the status makes the run a regression (exit code 1).
+    pub fn is_regression(&self) -> bool {
+        matches!(
+            self,
+            Status::Fail | Status::Crash | Status::Timeout | Status::UnexpectedPass
+        )
+    }
+
+    /// Whether the raw outcome is a failure of some kind (worth a rerun).
+    pub fn is_failure(&self) -> bool {
+        matches!(self, Status::Fail | Status::Crash | Status::Timeout)
+    }
+}
+
+impl fmt::Display for Status {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// One failed check of a run: its name and how many pixels failed it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FailedCheck {
+    /// `value`, `nan`, `coverage`, `colour`, `map`, `interior`, `twin:NAME`, `golden`,
+    /// `falls-along`.
+    pub check: String,
+    /// Pixels that failed it (1 for checks that are not counted in pixels).
+    pub count: u64,
+}
+
+/// How one metamorphic twin ([`umbra_case::twin`]) compared with its case on one backend.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct TwinMetric {
+    /// The twin's name.
+    pub name: String,
+    /// `identical`, `legal`, `no_worse` or `reported`.
+    pub agree: String,
+    /// Why the backend could not render the twin (the twin is then not judged).
+    #[serde(default)]
+    pub skipped: Option<String>,
+    /// The comparison with the case's frame, by the reference judge's classes (for
+    /// `identical`: every pixel whose visibility value differs at all counts as illegal).
+    #[serde(flatten)]
+    pub pair: RefAgreement,
+    /// The case's false shadow + false light away from edges.
+    pub interior_error: u64,
+    /// The twin's, against its own truth (for `no_worse` and `reported`).
+    pub twin_interior_error: Option<u64>,
+    /// The twin's render time, ms (same clock as the case's).
+    pub render_ms: f64,
+    /// Whether the relation held.
+    pub ok: bool,
+}
+
+/// The figures of one judged run.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Metrics {
+    /// Judged pixels.
+    pub judged: u64,
+    /// False shadow, all judged pixels.
+    pub false_shadow: u64,
+    /// False light, all judged pixels.
+    pub false_light: u64,
+    /// Judged pixels away from edges.
+    pub interior_judged: u64,
+    /// False shadow away from edges.
+    pub interior_false_shadow: u64,
+    /// False light away from edges.
+    pub interior_false_light: u64,
+    /// Edge pixels.
+    pub edge_px: u64,
+    /// Silhouette pixels.
+    pub silhouette: u64,
+    /// Pixels facing away from the light.
+    pub faces_away: u64,
+    /// Pixels outside the light's frustum.
+    pub outside: u64,
+    /// Agreement with the reference: share of compared pixels with the same answer.
+    pub agreement: Option<f64>,
+    /// Illegal pixels against the reference (every check).
+    pub illegal: Option<u64>,
+    /// Every count of the comparison with the reference: compared pixels, each legal class,
+    /// blind pixels, checked values and their closest margin, each illegal check.
+    #[serde(default)]
+    pub reference: Option<umbra_compare::reference::RefAgreement>,
+    /// The profile the run was judged for (`gl`, `gles3`, `gles2-packed`, `vulkan`).
+    #[serde(default)]
+    pub profile: String,
+    /// The backend's visibility target (`f32`, `unorm8`).
+    #[serde(default)]
+    pub visibility_storage: String,
+    /// SSIM of the colour against the reference's.
+    pub ssim: Option<f64>,
+    /// SSIM of the colour against its golden, where one exists.
+    pub ssim_golden: Option<f64>,
+    /// Shadow pass, ms.
+    pub shadow_ms: f64,
+    /// Lit pass, ms.
+    pub lit_ms: f64,
+    /// Whole render, ms.
+    pub total_ms: f64,
+    /// `gpu` or `cpu-wall`.
+    pub clock: String,
+    /// The metamorphic twins (the built-in bias-order twin first).
+    #[serde(default)]
+    pub twins: Vec<TwinMetric>,
+    /// Harness time of the run, ms: judging (truth, reference, agreement), the twins (their
+    /// renders and judging), and the golden check (PNG encoding and comparison).
+    #[serde(default)]
+    pub judge_ms: f64,
+    /// See `judge_ms`.
+    #[serde(default)]
+    pub twins_ms: f64,
+    /// See `judge_ms`.
+    #[serde(default)]
+    pub golden_ms: f64,
+    /// 64-bit FNV-1a of the frame's colour bytes: two builds' frames are the same picture
+    /// exactly when these match (`umbra drivers`).
+    #[serde(default)]
+    pub color_hash: String,
+    /// The same over the visibility values' bits.
+    #[serde(default)]
+    pub visibility_hash: String,
+}
+
+/// One finished run, as reported.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunResult {
+    /// `backend/case@sweep`.
+    pub name: String,
+    /// The backend id.
+    pub backend: String,
+    /// The case point id.
+    pub case: String,
+    /// The case file.
+    pub file: String,
+    /// The point's swept values, `(path, value)` in axis order.
+    pub values: Vec<(String, serde_json::Value)>,
+    /// Final status.
+    pub status: Status,
+    /// Why (failure problems, skip reason, crash status, expectation reason).
+    pub reason: String,
+    /// Figures of the judged run, when it was judged.
+    pub metrics: Option<Metrics>,
+    /// The checks a failing run failed (its signature).
+    pub failed: Vec<FailedCheck>,
+    /// What became of its golden: `unchanged`, `written`, `changed`, or
+    /// `changed-other-driver` (differs, and was blessed on another Mesa version: failed, with both versions named).
+    pub golden: Option<String>,
+    /// Wall time of the run including retries, seconds.
+    pub time_s: f64,
+    /// The command that reproduces this run alone.
+    pub reproduce: String,
+    /// The multi-line description of a judged run (terminal and logs only).
+    #[serde(skip)]
+    pub details: String,
+}
+
+/// Where a conformance run's time went, summed over its runs (worker time, not wall).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct TimeBudget {
+    /// Wall time of the whole run, s.
+    pub wall_s: f64,
+    /// Σ per-run time measured by the parent (request to answer, retries included), s.
+    pub runs_s: f64,
+    /// Σ the backends' own frame time (both passes and readback), s.
+    pub render_s: f64,
+    /// Σ the metamorphic twins (their renders and comparisons), s.
+    pub twins_s: f64,
+    /// Σ judging: truth, reference with its ambiguity, error, agreement, s.
+    pub judge_s: f64,
+    /// Σ golden checks: PNG encoding and comparison, s.
+    pub golden_s: f64,
+    /// Σ worker start-up (spawn to hello), context creation included, s.
+    pub worker_start_s: f64,
+    /// Of that, context or device creation, s.
+    pub context_s: f64,
+    /// The rest of the per-run time: case loading, tessellation, protocol, retries, s.
+    pub other_s: f64,
+}
+
+impl TimeBudget {
+    /// Sums the budget of `results`.
+    /// `worker_start` and `context` are the orchestrator's sums over every worker it started.
+    pub fn of(
+        results: &[RunResult],
+        wall: Duration,
+        worker_start: Duration,
+        context: Duration,
+    ) -> TimeBudget {
+        let mut b = TimeBudget {
+            wall_s: wall.as_secs_f64(),
+            worker_start_s: worker_start.as_secs_f64(),
+            context_s: context.as_secs_f64(),
+            ..Default::default()
+        };
+        for r in results {
+            b.runs_s += r.time_s;
+            if let Some(m) = &r.metrics {
+                b.render_s += m.total_ms / 1e3;
+                b.twins_s += m.twins_ms / 1e3;
+                b.judge_s += m.judge_ms / 1e3;
+                b.golden_s += m.golden_ms / 1e3;
+            }
+        }
+        b.other_s = (b.runs_s - b.render_s - b.twins_s - b.judge_s - b.golden_s).max(0.0);
+        b
+    }
+
+    /// Worker start, context creation, judging and PNG encoding, as a share of all worker time.
+    pub fn overhead_share(&self) -> f64 {
+        let total = self.runs_s + self.worker_start_s;
+        if total == 0.0 {
+            0.0
+        } else {
+            (self.worker_start_s + self.judge_s + self.golden_s) / total
+        }
+    }
+
+    /// One line for the terminal and the report.
+    pub fn line(&self) -> String {
+        let total = (self.runs_s + self.worker_start_s).max(1e-9);
+        let pct = |x: f64| 100.0 * x / total;
+        format!(
+            "time: {:.1} s of worker time in {:.1} s wall: rendering {:.1} s ({:.0}%), twins {:.1} s ({:.0}%), judging {:.1} s ({:.0}%), goldens/PNG {:.1} s ({:.0}%), worker start {:.1} s ({:.0}%, context creation {:.1} s), other {:.1} s ({:.0}%); harness overhead (start, context, judging, PNG) {:.0}%",
+            total,
+            self.wall_s,
+            self.render_s,
+            pct(self.render_s),
+            self.twins_s,
+            pct(self.twins_s),
+            self.judge_s,
+            pct(self.judge_s),
+            self.golden_s,
+            pct(self.golden_s),
+            self.worker_start_s,
+            pct(self.worker_start_s),
+            self.context_s,
+            self.other_s,
+            pct(self.other_s),
+            100.0 * self.overhead_share()
+        )
+    }
+}
+
+/// How many runs ended in each status, in one line (the terminal summary and report.html).
+pub fn breakdown(results: &[RunResult]) -> String {
+    let count = |n: &str| results.iter().filter(|r| r.status.name() == n).count();
+    format!(
+        "pass {}, expected fail {}, flake {}, skip {}; fail {}, crash {}, timeout {}, unexpected pass {}",
+        count("Pass"),
+        count("ExpectedFail"),
+        count("Flake"),
+        count("Skip"),
+        count("Fail"),
+        count("Crash"),
+        count("Timeout"),
+        count("UnexpectedPass"),
+    )
+}

@@ -1,0 +1,10 @@
+//! The `umbra` subcommands, one module each: each takes its parsed options (the command line is
+//! parsed in `cli`) and calls into the harness, the judge and `umbra_report`.
+
+pub mod bisect;
+pub mod conformance;
+pub mod drivers;
+pub mod reduce;
+pub mod render;
+pub mod selftest;
+pub mod sweep;

@@ -1,0 +1,14 @@
+//! Orchestration: backends by id ([`registry`], with the test doubles in [`fake`]), the Mesa
+//! build a worker runs on ([`mesa_build`]), one process per backend ([`worker`], [`child`]) kept
+//! in a [`pool`] under a memory limit ([`memory_limit`]), sweep timings ([`measure`]) and the
+//! terminal's progress line ([`progress`]). Uses the judge; knows no command.
+
+pub mod child;
+pub mod fake;
+pub mod measure;
+pub mod memory_limit;
+pub mod mesa_build;
+pub mod pool;
+pub mod progress;
+pub mod registry;
+pub mod worker;
