@@ -141,6 +141,7 @@ fn main() -> ExitCode {
 
 fn test(extra: &[String]) -> i32 {
     mesa::ensure();
+    mesa::ensure_test_tools();
     let mut cmd = cargo();
     cmd.args(["test", "--workspace"]);
     cmd.args(extra);

@@ -16,15 +16,34 @@ pub const PACKAGES: &[&str] = &[
     "libvulkan1",
 ];
 
-/// Installs what is missing, when allowed; never fails the caller.
+/// What the test suite needs beyond the backends: a real browser for report.html's test
+/// (`umbra-report/tests/gallery_browser.rs`).
+pub const TEST_PACKAGES: &[&str] = &["chromium"];
+
+/// Installs the Mesa packages that are missing, when allowed; never fails the caller.
 pub fn ensure() {
+    ensure_packages(PACKAGES, "Mesa packages", "GPU backends will be skipped");
+}
+
+/// Installs the packages the tests need that are missing, when allowed.
+pub fn ensure_test_tools() {
+    ensure_packages(
+        TEST_PACKAGES,
+        "test packages",
+        "the report's browser test will fail until they are installed",
+    );
+}
+
+/// Installs what is missing of `packages`, when allowed; never fails the caller. `what` names
+/// them and `otherwise` says what happens without them.
+fn ensure_packages(packages: &[&str], what: &str, otherwise: &str) {
     if std::env::var_os("UMBRA_SKIP_APT").is_some() {
         return;
     }
-    let Some(missing) = missing() else {
+    let Some(missing) = missing(packages) else {
         eprintln!(
             "note: dpkg-query is not available; install the equivalents of {} yourself",
-            PACKAGES.join(" ")
+            packages.join(" ")
         );
         return;
     };
@@ -44,26 +63,24 @@ pub fn ensure() {
     };
     let Some(prefix) = prefix else {
         eprintln!(
-            "note: missing Mesa packages ({}); GPU backends will be skipped. Install them with:\n  sudo apt-get update && sudo {install}",
+            "note: missing {what} ({}); {otherwise}. Install them with:\n  sudo apt-get update && sudo {install}",
             missing.join(", ")
         );
         return;
     };
-    eprintln!("installing missing Mesa packages: {}", missing.join(" "));
+    eprintln!("installing missing {what}: {}", missing.join(" "));
     let script =
         format!("{prefix}apt-get update -qq && DEBIAN_FRONTEND=noninteractive {prefix}{install}");
     match Command::new("sh").args(["-c", &script]).status() {
         Ok(s) if s.success() => {}
-        Ok(s) => eprintln!(
-            "warning: `{script}` exited with {s}; GPU backends needing these packages will be skipped"
-        ),
+        Ok(s) => eprintln!("warning: `{script}` exited with {s}; {otherwise}"),
         Err(e) => eprintln!("warning: cannot run `{script}`: {e}"),
     }
 }
 
-fn missing() -> Option<Vec<&'static str>> {
+fn missing<'a>(packages: &[&'a str]) -> Option<Vec<&'a str>> {
     let mut out = Vec::new();
-    for p in PACKAGES {
+    for p in packages {
         let o = Command::new("dpkg-query")
             .args(["-W", "-f=${Status}", p])
             .stderr(Stdio::null())

@@ -1,7 +1,9 @@
 //! `report.html`: one self-contained page (images inlined as data URIs) for a person at a
 //! desk or a CI artifact viewer: the summary, the drivers, every failure with its reference |
-//! backend | truth | heat-map pictures side by side and the command that reproduces it, and a
-//! table of every run with its error, agreement, SSIM and time.
+//! backend | truth | heat-map pictures side by side and the command that reproduces it, the
+//! gallery of every run ([`crate::gallery`]), and a table of every run with its error,
+//! agreement, SSIM and time. Script errors are recorded on the root element
+//! (`data-script-errors`) as well as in the console, so a headless browser test can read them.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -26,6 +28,7 @@ pub fn report(
     results: &[RunResult],
     drivers: &str,
     failures_dir: &Path,
+    pictures: &Path,
     command: &str,
     budget: &TimeBudget,
 ) -> String {
@@ -36,7 +39,12 @@ pub fn report(
          table{border-collapse:collapse}td,th{border:1px solid #ddd;padding:3px 6px;text-align:right}td:first-child{text-align:left}\
          .Pass,.ExpectedFail{color:#176b1c}.Fail,.Crash,.Timeout,.UnexpectedPass{color:#b00020;font-weight:bold}.Skip{color:#777}.Flake{color:#b26a00}\
          figure{display:inline-block;margin:4px}figure img{image-rendering:pixelated;max-width:320px;border:1px solid #ccc}\
-         .failure{border:1px solid #e0b4b4;background:#fff6f6;padding:8px;margin:12px 0}</style></head><body>",
+         .failure{border:1px solid #e0b4b4;background:#fff6f6;padding:8px;margin:12px 0}",
+    );
+    s.push_str(crate::gallery::STYLE);
+    s.push_str(
+        "</style><script>window.addEventListener('error',function(e){var d=document.documentElement;\
+         d.dataset.scriptErrors=(d.dataset.scriptErrors||'')+e.message+';';});</script></head><body>",
     );
     let _ = write!(
         s,
@@ -46,6 +54,7 @@ pub fn report(
         esc(command),
         esc(&timing)
     );
+    s.push_str(&crate::gallery::section(results, pictures));
     s.push_str("<h2>Drivers</h2><table><tr><th>backend</th><th>vendor | renderer | version | extensions</th></tr>");
     for line in drivers.lines() {
         let (b, rest) = line.split_once(": ").unwrap_or((line, ""));

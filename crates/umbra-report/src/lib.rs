@@ -18,6 +18,7 @@ use std::path::Path;
 pub mod csv;
 pub mod error_curves;
 pub mod escape;
+pub mod gallery;
 pub mod html;
 pub mod json;
 pub mod junit;
@@ -29,9 +30,11 @@ pub use model::{FailedCheck, Metrics, RunResult, Status, TimeBudget, TwinMetric}
 
 /// Writes a conformance run's reports into `out/latest` and `out/runs/STAMP`: results.csv,
 /// failures.csv, errors.csv, twins.csv, drivers.txt, report.json, junit.xml, report.html.
-/// `pictures` is where the workers wrote each run's pictures (one directory per run).
+/// `failures` is where the workers wrote each failing run's pictures, `pictures` every judged
+/// run's gallery pictures (one directory per run in each).
 pub fn write_conformance(
     out: &Path,
+    failures: &Path,
     pictures: &Path,
     results: &[RunResult],
     drivers: &str,
@@ -42,7 +45,7 @@ pub fn write_conformance(
     let report = json::report(results, header, budget);
     let junit = junit::junit(results);
     let command = std::env::args().collect::<Vec<_>>().join(" ");
-    let html = html::report(results, drivers, pictures, &command, budget);
+    let html = html::report(results, drivers, failures, pictures, &command, budget);
     let stamp = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_secs())

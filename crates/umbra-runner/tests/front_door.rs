@@ -93,7 +93,10 @@ fn a_mistyped_flag_is_named_with_the_near_miss_and_cannot_run() {
     let o = umbra(&["conformance", "--filtre", "x"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(125), "{err}");
-    assert!(err.contains("'--filtre'") && err.contains("'--filter'"), "{err}");
+    assert!(
+        err.contains("'--filtre'") && err.contains("'--filter'"),
+        "{err}"
+    );
 }
 
 #[test]

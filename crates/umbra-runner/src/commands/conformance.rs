@@ -61,6 +61,8 @@ struct Settings {
     timeout: Duration,
     golden: Option<PathBuf>,
     failures: PathBuf,
+    /// Every judged run's gallery pictures (report.html's gallery reads them).
+    gallery: PathBuf,
     expectations: Expectations,
     verbose: bool,
 }
@@ -208,10 +210,12 @@ pub fn main(args: &Args) -> i32 {
         timeout,
         golden,
         failures: out.join("latest").join("failures"),
+        gallery: out.join("latest").join("pictures"),
         expectations,
         verbose: args.has("verbose"),
     };
     let _ = std::fs::remove_dir_all(&settings.failures);
+    let _ = std::fs::remove_dir_all(&settings.gallery);
     let mut groups: BTreeMap<String, Vec<Planned>> = BTreeMap::new();
     for p in plan {
         groups.entry(p.backend.clone()).or_default().push(p);
@@ -275,6 +279,7 @@ pub fn main(args: &Args) -> i32 {
     if let Err(e) = umbra_report::write_conformance(
         &out,
         &out.join("latest").join("failures"),
+        &out.join("latest").join("pictures"),
         &results,
         &drivers,
         &header,
@@ -610,6 +615,7 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
                     golden: settings.golden.clone(),
                     repeat: None,
                     no_twins: false,
+                    gallery: Some(settings.gallery.clone()),
                 };
                 let first = attempt(&mut worker, &start_worker, &req, settings.timeout);
                 if first.status.is_failure() {

@@ -152,6 +152,7 @@ impl Judge {
             golden: None,
             repeat: None,
             no_twins: true,
+            gallery: None,
         };
         let v = match w.run(&req, self.timeout) {
             Reply::Report(r) => match r.outcome.as_str() {

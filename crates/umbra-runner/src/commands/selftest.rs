@@ -409,6 +409,7 @@ fn hunt(
             golden: None,
             repeat: None,
             no_twins: true,
+            gallery: None,
         };
         h.tried += 1;
         let name = format!("{backend}/{}", point.id());

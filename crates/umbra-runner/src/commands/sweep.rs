@@ -362,6 +362,7 @@ pub fn main(args: &Args) -> i32 {
                 golden: None,
                 repeat: Some(repeat),
                 no_twins: false,
+                gallery: None,
             };
             let (result, skipped) = match w.run(&req, timeout) {
                 Reply::Report(r) => match (r.outcome.as_str(), r.measured) {
@@ -453,6 +454,7 @@ pub fn measure_backends(
                     golden: None,
                     repeat: Some(repeat),
                     no_twins: false,
+                    gallery: None,
                 };
                 match w.run(&req, timeout) {
                     Reply::Report(r) => r.measured.ok_or(r.reason),

@@ -36,6 +36,10 @@ pub struct Request {
     /// Skip the metamorphic twins (the self-test judges the frame alone).
     #[serde(default)]
     pub no_twins: bool,
+    /// Where to write every judged run's gallery pictures (thumbnail, colour, heat map,
+    /// reference, truth, golden; none: do not write).
+    #[serde(default)]
+    pub gallery: Option<PathBuf>,
 }
 
 /// What one run produced (the raw outcome; expectations are the parent's business).
@@ -318,6 +322,21 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                     (g, _) => format!("{g:?}").to_lowercase(),
                 }
             });
+            if let Some(dir) = &req.gallery {
+                let golden = req.golden.as_ref().map(|g| {
+                    let stem = crate::judge::golden::stem(&name);
+                    (
+                        g.join(format!("{stem}.snap.png")),
+                        g.join(format!("{stem}.snap.new.png")),
+                    )
+                });
+                let _ = crate::judge::pictures::write_gallery(
+                    &dir.join(umbra_report::names::file_name(&name)),
+                    &j,
+                    golden.as_ref().map(|(a, b)| (a.as_path(), b.as_path())),
+                );
+            }
+            // Goldens and pictures: the PNG share of the time budget.
             metrics.golden_ms = golden_start.elapsed().as_secs_f64() * 1e3;
             let failing = !problems.is_empty();
             if failing {

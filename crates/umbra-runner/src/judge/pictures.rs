@@ -1,6 +1,7 @@
 //! The pictures of a judged run, written where a person or the report will look: the
 //! backend's colour and visibility, the reference, the truth, the error heat map and the shadow
-//! map (names the report reads back, see `umbra_report::html`).
+//! map (names the report reads back, see `umbra_report::html`), and for every judged run of a
+//! conformance run the gallery's set (see `umbra_report::gallery`).
 
 use std::path::Path;
 
@@ -37,6 +38,54 @@ pub fn write_images(
         // Layers stacked top to bottom (cube faces +x, −x, +y, −y, +z, −z).
         heatmap::depth_map(&m.values, m.width, m.height * m.layers)
             .save_png(&dir.join("shadow_map.png"))?;
+    }
+    Ok(())
+}
+
+/// Thumbnails fit in this many pixels on their long side (the gallery's cell).
+pub const THUMB: u32 = 96;
+
+/// Writes the gallery pictures of a judged run into `dir`: `thumb.png` (the backend's colour
+/// shrunk to [`THUMB`] pixels by a box filter), `color.png`, `error.png` (heat map),
+/// `reference.png`, `truth.png`, and the golden and pending golden when `golden` names files
+/// that exist (`golden.png`, `pending.png`).
+pub fn write_gallery(
+    dir: &Path,
+    j: &crate::judge::run::Judged,
+    golden: Option<(&Path, &Path)>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    std::fs::create_dir_all(dir)?;
+    let f = &j.frame;
+    let colour = image::RgbaImage::from_raw(f.width, f.height, f.color.clone())
+        .ok_or("frame size does not match its colour buffer")?;
+    let scale = f64::from(THUMB) / f64::from(f.width.max(f.height).max(1));
+    let (tw, th) = if scale < 1.0 {
+        (
+            ((f64::from(f.width) * scale).round() as u32).max(1),
+            ((f64::from(f.height) * scale).round() as u32).max(1),
+        )
+    } else {
+        (f.width, f.height)
+    };
+    image::imageops::thumbnail(&colour, tw, th).save(dir.join("thumb.png"))?;
+    colour.save(dir.join("color.png"))?;
+    heatmap::truth_error_map(&j.error, &j.truth).save_png(&dir.join("error.png"))?;
+    heatmap::truth_map(&j.truth).save_png(&dir.join("truth.png"))?;
+    if let Some(r) = &j.reference {
+        image::save_buffer(
+            dir.join("reference.png"),
+            &r.color,
+            r.width,
+            r.height,
+            image::ColorType::Rgba8,
+        )?;
+    }
+    if let Some((blessed, pending)) = golden {
+        for (from, to) in [(blessed, "golden.png"), (pending, "pending.png")] {
+            if from.is_file() {
+                std::fs::copy(from, dir.join(to))?;
+            }
+        }
     }
     Ok(())
 }

@@ -1,0 +1,172 @@
+//! report.html in a real browser: Debian's chromium, headless, loads a report of synthetic runs
+//! (every status, with and without pictures, a pending golden) and its DOM after the scripts ran
+//! is read back (`--dump-dom`). The page must run without a script error (the page records
+//! them on the root element, and chromium's console log is checked too), the gallery must hold
+//! one cell per run, and a `#run=NAME` link must open that run's detail view with its pictures.
+//!
+//! chromium is part of the test set-up (`cargo xtask test` installs it, as `.ci/run` does).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use umbra_report::{RunResult, Status, TimeBudget};
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("umbra-gallery-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("scratch dir");
+    d
+}
+
+fn png(path: &Path, w: u32, h: u32, shade: u8) {
+    image::RgbaImage::from_fn(w, h, |x, y| {
+        image::Rgba([shade, (x * 255 / w) as u8, (y * 255 / h) as u8, 255])
+    })
+    .save(path)
+    .expect("write png");
+}
+
+fn run(backend: &str, case: &str, status: Status) -> RunResult {
+    RunResult {
+        name: format!("{backend}/{case}"),
+        backend: backend.into(),
+        case: case.into(),
+        file: format!("cases/{case}.json"),
+        values: Vec::new(),
+        reason: match &status {
+            Status::Skip(why) => why.clone(),
+            Status::Fail => "value: 12 px outside their legal interval".into(),
+            _ => String::new(),
+        },
+        status,
+        metrics: None,
+        failed: Vec::new(),
+        golden: Some("unchanged".into()),
+        time_s: 0.1,
+        reproduce: format!("cargo run --bin umbra -- render cases/{case}.json --backend {backend}"),
+        details: String::new(),
+    }
+}
+
+/// chromium's DOM after load, and its log.
+fn dump(page: &Path, fragment: &str) -> (String, String) {
+    let url = format!("file://{}{fragment}", page.display());
+    let o = Command::new("chromium")
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--enable-logging=stderr",
+            "--v=0",
+            "--virtual-time-budget=5000",
+            "--dump-dom",
+            &url,
+        ])
+        .output()
+        .unwrap_or_else(|e| {
+            panic!("cannot run chromium ({e}); install it: apt-get install chromium (cargo xtask test does)")
+        });
+    assert!(
+        o.status.success(),
+        "chromium failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    (
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+fn attribute<'a>(dom: &'a str, name: &str) -> Option<&'a str> {
+    let at = dom.find(&format!("{name}=\""))? + name.len() + 2;
+    dom[at..].split('"').next()
+}
+
+#[test]
+fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
+    let dir = scratch("page");
+    let pictures = dir.join("pictures");
+    let mut results = Vec::new();
+    let statuses = [
+        Status::Pass,
+        Status::Fail,
+        Status::ExpectedFail,
+        Status::Skip("no GL_EXT_texture_border_clamp".into()),
+        Status::Crash,
+    ];
+    for (b, backend) in ["ref", "gl33/llvmpipe", "gles2/zink"].iter().enumerate() {
+        for (c, case) in ["square-occluder", "packed-cubes@light.azimuth_deg=45"]
+            .iter()
+            .enumerate()
+        {
+            let status = statuses[(b * 2 + c) % statuses.len()].clone();
+            let r = run(backend, case, status.clone());
+            if matches!(status, Status::Pass | Status::Fail | Status::ExpectedFail) {
+                let d = pictures.join(umbra_report::names::file_name(&r.name));
+                std::fs::create_dir_all(&d).expect("run dir");
+                png(&d.join("thumb.png"), 48, 36, 10 * b as u8);
+                for (i, f) in [
+                    "color.png",
+                    "reference.png",
+                    "truth.png",
+                    "error.png",
+                    "golden.png",
+                ]
+                .iter()
+                .enumerate()
+                {
+                    png(&d.join(f), 160, 120, 40 * i as u8);
+                }
+                if status == Status::Fail {
+                    png(&d.join("pending.png"), 160, 120, 200);
+                }
+            }
+            results.push(r);
+        }
+    }
+    let html = umbra_report::html::report(
+        &results,
+        "ref: umbra | CPU reference",
+        &dir.join("failures"),
+        &pictures,
+        "umbra conformance",
+        &TimeBudget::default(),
+    );
+    let page = dir.join("report.html");
+    std::fs::write(&page, html).expect("write page");
+
+    let (dom, log) = dump(&page, "");
+    assert_eq!(attribute(&dom, "data-script-errors"), None, "script errors");
+    assert!(!log.contains("Uncaught"), "console: {log}");
+    assert_eq!(
+        attribute(&dom, "data-gallery-cells"),
+        Some(results.len().to_string().as_str()),
+        "one gallery cell per run"
+    );
+    assert_eq!(dom.matches("class=\"cell ").count(), results.len());
+    assert!(
+        dom.contains("<div id=\"g-detail\" hidden=\"\">"),
+        "the detail view starts closed"
+    );
+
+    // A failing run with a pending golden: all six pictures side by side.
+    let failing = results
+        .iter()
+        .find(|r| r.status == Status::Fail)
+        .expect("a failing run");
+    let (dom, _) = dump(&page, &format!("#run={}", failing.name));
+    assert!(
+        dom.contains("<div id=\"g-detail\">"),
+        "the link opens the detail view"
+    );
+    let detail = &dom[dom.find("id=\"g-pictures\"").expect("pictures box")..];
+    assert_eq!(detail.matches("<figure>").count(), 6, "{detail}");
+    assert!(detail.contains("pending golden"));
+    assert!(
+        dom.contains(&format!(
+            "<code id=\"g-reproduce\">{}</code>",
+            failing.reproduce
+        )),
+        "the detail view shows the reproduce command"
+    );
+}
