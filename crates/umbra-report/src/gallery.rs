@@ -1,7 +1,8 @@
 //! The gallery of report.html: every case point × backend as a thumbnail with its status
 //! colour, filterable by case, backend and status; a click opens reference | backend | truth |
 //! heat map | golden (and the pending golden when insta left one) side by side at full size,
-//! with the reason and the command that reproduces the run (`report.html#run=NAME` links to one).
+//! with the reason and the command that reproduces the run (`report.html#run=NAME` links to one;
+//! `#status=Fail&backend=gles2/zink` presets the filters).
 //!
 //! The page stays one self-contained file, sized for the full catalogue:
 //! - the grid is built by the page's script from one JSON block, so the HTML itself stays small
@@ -138,6 +139,7 @@ pub const STYLE: &str = "#g-grid{display:flex;flex-wrap:wrap;gap:4px;margin:8px 
 
 /// The page's script: builds the grid, lazy-loads thumbnails, filters, opens the detail view.
 const SCRIPT: &str = r#"(function () {
+  var started = performance.now();
   var data = JSON.parse(document.getElementById('g-data').textContent);
   var grid = document.getElementById('g-grid');
   var uri = function (i) { return 'data:image/png;base64,' + data.pics[i]; };
@@ -207,9 +209,18 @@ const SCRIPT: &str = r#"(function () {
   document.getElementById('g-close').addEventListener('click', close);
   detail.addEventListener('click', function (e) { if (e.target === detail) { close(); } });
   document.addEventListener('keydown', function (e) { if (e.key === 'Escape') { close(); } });
+  // Links: report.html#run=NAME opens one run; #status=Fail&backend=gles2/zink sets filters.
+  var hash = location.hash.replace(/^#/, '');
+  if (hash.indexOf('run=') === 0) {
+    var wanted = decodeURIComponent(hash.slice(4));
+    data.runs.forEach(function (r, k) { if (r.n === wanted) { open(k); } });
+  } else {
+    hash.split('&').forEach(function (kv) {
+      var p = kv.split('='), f = p[0], v = decodeURIComponent(p.slice(1).join('='));
+      if (pick[f]) { pick[f].value = v; }
+    });
+  }
   filter();
-  // A link to one run: report.html#run=NAME opens its detail view.
-  var wanted = decodeURIComponent(location.hash.replace(/^#run=/, ''));
-  data.runs.forEach(function (r, k) { if (location.hash.indexOf('#run=') === 0 && r.n === wanted) { open(k); } });
   document.body.dataset.galleryCells = grid.children.length;
+  document.body.dataset.galleryMs = Math.round(performance.now() - started);
 })();"#;

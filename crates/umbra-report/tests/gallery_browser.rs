@@ -2,7 +2,7 @@
 //! (every status, with and without pictures, a pending golden) and its DOM after the scripts ran
 //! is read back (`--dump-dom`). The page must run without a script error (the page records
 //! them on the root element, and chromium's console log is checked too), the gallery must hold
-//! one cell per run, and a `#run=NAME` link must open that run's detail view with its pictures.
+//! one cell per run, a `#status=…` link must filter, and a `#run=NAME` link must open that run's detail view with its pictures.
 //!
 //! chromium is part of the test set-up (`cargo xtask test` installs it, as `.ci/run` does).
 
@@ -147,6 +147,15 @@ fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
     assert!(
         dom.contains("<div id=\"g-detail\" hidden=\"\">"),
         "the detail view starts closed"
+    );
+
+    // A filter link shows just the runs of that status.
+    let (dom, _) = dump(&page, "#status=Pass");
+    let passing = results.iter().filter(|r| r.status == Status::Pass).count();
+    assert_eq!(
+        attribute(&dom, "data-gallery-shown"),
+        Some(passing.to_string().as_str()),
+        "#status=Pass shows the passing runs only"
     );
 
     // A failing run with a pending golden: all six pictures side by side.
