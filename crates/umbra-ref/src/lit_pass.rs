@@ -11,7 +11,7 @@
 //! depth within both planes' freedom (the camera's depth buffer: f32, or 24-bit on the GLES 2
 //! path). There the lookups of two frames are not of the same point and are not compared.
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 use umbra_case::format::Cull;
 use umbra_case::{Convention, Geometry, Prepared, Profile};
@@ -24,14 +24,21 @@ use crate::shadow_pass::{SNAP_PX, setup_all};
 
 const NONE: u32 = u32::MAX;
 
+/// The depth test's survivor at a pixel. Only the depth and the winner are kept (8 bytes a
+/// pixel): the winner's fragment, weights and slopes are recomputed for it alone, with the
+/// same integer edge functions ([`Tri::fragment_at`]) and the same arithmetic, so nothing a
+/// pixel shows changes, while the pass no longer writes (and page-faults in) 40 bytes a pixel.
 #[derive(Clone, Copy)]
 struct Nearest {
     depth: f32,
     /// Index into the set-up triangles (not the source triangle).
     tri: u32,
-    weights: DVec3,
-    /// |∂z/∂x| + |∂z/∂y| of the winning plane (judged renders).
-    slope: f32,
+}
+
+/// |∂z/∂x| + |∂z/∂y| of a triangle's plane, as the judge's depth tolerance reads it.
+fn slope_sum(t: &Tri) -> f32 {
+    let (dx, dy) = t.depth_slopes();
+    (dx.abs() + dy.abs()) as f32
 }
 
 /// What a judged pixel allows (see [`crate::Judged`]).
@@ -92,8 +99,6 @@ pub fn render(
         Nearest {
             depth: 1.0,
             tri: NONE,
-            weights: DVec3::ZERO,
-            slope: 0.0,
         };
         (w * h) as usize
     ];
@@ -105,8 +110,6 @@ pub fn render(
         false,
         |rows, band, touching| {
             for (index, t) in touching {
-                let (dx, dy) = t.depth_slopes();
-                let slope = (dx.abs() + dy.abs()) as f32;
                 t.scan(rows.clone(), |x, y, frag| {
                     let z = t.depth(frag).clamp(0.0, 1.0);
                     let i = (y - rows.start) as usize * w as usize + x as usize;
@@ -114,8 +117,6 @@ pub fn render(
                         band[i] = Nearest {
                             depth: z,
                             tri: index as u32,
-                            weights: t.source_weights(frag),
-                            slope,
                         };
                     }
                 });
@@ -148,7 +149,8 @@ pub fn render(
                     .normalize_or_zero(),
             )
         };
-        let (p, n) = at(px.weights.as_vec3());
+        let (x, y) = ((i % w as usize) as i32, (i / w as usize) as i32);
+        let (p, n) = at(tri.source_weights(tri.fragment_at(x, y)).as_vec3());
         let albedo: Vec3 = geo.albedo[geo.object[t] as usize];
         let to_light = run.light.to_light(p);
         let to_eye = (eye - p).normalize_or_zero();
@@ -157,7 +159,7 @@ pub fn render(
                 // Vertex snapping (4 sub-pixel bits) moves the triangle under the pixel
                 // centre by up to SNAP_PX along x and y: the interpolated position (and
                 // normal) are those of a point up to that far away on the surface.
-                let (x, y) = ((i % w as usize) as f64 + 0.5, (i / w as usize) as f64 + 0.5);
+                let (x, y) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
                 let (px_, nx) = at(tri.source_weights_at(x + 1.0, y).as_vec3());
                 let (py_, ny) = at(tri.source_weights_at(x, y + 1.0).as_vec3());
                 let snap = SNAP_PX as f32;
@@ -194,38 +196,54 @@ pub fn render(
         let color = shade(&case.shading, albedo, n, to_light, to_eye, vis);
         (color, vis, geo.face[t] + 1, legal)
     };
+    // Shade row by row straight into the outputs (each pixel on its own: the result does
+    // not depend on the thread count); what a pixel allows only for judged renders.
     let trace = std::sync::Mutex::new(String::new());
-    let pixels: Vec<([u8; 4], f32, u32, PixelLegal)> = nearest
-        .par_iter()
-        .enumerate()
-        .map(|(i, px)| {
-            if explain == Some(i) {
-                let (out, t) = crate::lookup::explaining(|| shade_pixel(i, px));
-                if let Ok(mut s) = trace.lock() {
-                    *s = t;
-                }
-                return out;
-            }
-            shade_pixel(i, px)
-        })
-        .collect();
-    let n = pixels.len();
-    let mut out = LitImage {
-        color: Vec::with_capacity(n * 4),
-        visibility: Vec::with_capacity(n),
-        surface: Vec::with_capacity(n),
-        legal: Vec::with_capacity(if judged.is_some() { n } else { 0 }),
-        trace: trace.into_inner().unwrap_or_default(),
+    let n = nearest.len();
+    let (wu, hu) = (w as usize, h as usize);
+    let mut color = vec![0u8; n * 4];
+    let mut visibility = vec![0f32; n];
+    let mut surface = vec![0u32; n];
+    let mut legal = vec![PixelLegal::default(); if judged.is_some() { n } else { 0 }];
+    let legal_rows: Vec<&mut [PixelLegal]> = if judged.is_some() {
+        legal.chunks_mut(wu).collect()
+    } else {
+        (0..hu).map(|_| <&mut [PixelLegal]>::default()).collect()
     };
-    for (c, v, s, l) in pixels {
-        out.color.extend_from_slice(&c);
-        out.visibility.push(v);
-        out.surface.push(s);
-        if judged.is_some() {
-            out.legal.push(l);
-        }
+    color
+        .par_chunks_mut(wu * 4)
+        .zip(visibility.par_chunks_mut(wu))
+        .zip(surface.par_chunks_mut(wu))
+        .zip(legal_rows)
+        .enumerate()
+        .for_each(|(y, (((c_row, v_row), s_row), l_row))| {
+            for x in 0..wu {
+                let i = y * wu + x;
+                let px = &nearest[i];
+                let (c, v, s, l) = if explain == Some(i) {
+                    let (out, t) = crate::lookup::explaining(|| shade_pixel(i, px));
+                    if let Ok(mut s) = trace.lock() {
+                        *s = t;
+                    }
+                    out
+                } else {
+                    shade_pixel(i, px)
+                };
+                c_row[4 * x..4 * x + 4].copy_from_slice(&c);
+                v_row[x] = v;
+                s_row[x] = s;
+                if let Some(slot) = l_row.get_mut(x) {
+                    *slot = l;
+                }
+            }
+        });
+    LitImage {
+        color,
+        visibility,
+        surface,
+        legal,
+        trace: trace.into_inner().unwrap_or_default(),
     }
-    out
 }
 
 /// Per pixel, [`ambiguity::SURFACE`] where another implementation may show another surface
@@ -291,7 +309,7 @@ fn surface_freedom(
                         let z = t.depth_at(e);
                         let zw = f64::from(win.depth);
                         z - tol(slope, z, t.weight_norm(e))
-                            <= zw + tol(f64::from(win.slope), zw, 1.0)
+                            <= zw + tol(f64::from(slope_sum(&tris[win.tri as usize])), zw, 1.0)
                     };
                     if flag {
                         band[i] |= ambiguity::SURFACE;

@@ -96,6 +96,21 @@ impl Tri {
         [f.e[0] as f64 / a, f.e[1] as f64 / a, f.e[2] as f64 / a]
     }
 
+    /// The fragment at pixel (x, y): the edge functions at its centre, exactly as [`Tri::scan`]
+    /// steps to them (integer arithmetic), so that a pass may keep only which triangle won a
+    /// pixel and recompute the rest for the winner alone.
+    pub fn fragment_at(&self, x: i32, y: i32) -> Fragment {
+        let (px, py) = (i64::from(x) * ONE + HALF, i64::from(y) * ONE + HALF);
+        let mut e = [0i64; 3];
+        for (i, ei) in e.iter_mut().enumerate() {
+            let (a, b) = ((i + 1) % 3, (i + 2) % 3);
+            let dx = self.x[b] - self.x[a];
+            let dy = self.y[b] - self.y[a];
+            *ei = dx * (py - self.y[a]) - dy * (px - self.x[a]);
+        }
+        Fragment { e }
+    }
+
     /// Window depth at a fragment (linear in screen space), rounded once to f32.
     pub fn depth(&self, f: Fragment) -> f32 {
         let b = self.screen_bary(f);
