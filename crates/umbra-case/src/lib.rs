@@ -11,6 +11,9 @@
 //! - [`depth`]: storage per depth format and the polygon-offset unit.
 //! - [`frame`] and [`backend`]: what a backend returns and the trait it implements.
 //! - [`profile`]: what an API lets an implementation do differently (the judge's input).
+//! - [`technique`] and [`lit_shader`]: the lit pass's technique read from a run once, the
+//!   self-test's faults resolved on it, and the lookup's steps written once for any shading
+//!   language (GL and wgpu supply only their language).
 //!
 //! Design decision: the `Backend` trait and `Frame` live here rather than in the runner,
 //! because every backend crate implements them and none may depend on the runner (which
@@ -24,12 +27,14 @@ pub mod fault;
 pub mod format;
 pub mod frame;
 pub mod light;
+pub mod lit_shader;
 pub mod load;
 pub mod memory;
 pub mod offset;
 pub mod prepare;
 pub mod profile;
 pub mod scene;
+pub mod technique;
 pub mod twin;
 pub mod validate;
 
@@ -43,3 +48,4 @@ pub use load::{CasePoint, case_files, load_file, load_str};
 pub use prepare::Prepared;
 pub use profile::{Profile, Spec};
 pub use scene::{Geometry, tessellate};
+pub use technique::Technique;

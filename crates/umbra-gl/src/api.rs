@@ -1,5 +1,7 @@
 //! The three GL flavours and what each can do, decided here once.
 
+use umbra_case::Technique;
+
 /// A GL API and version.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Api {
@@ -35,6 +37,16 @@ impl Api {
             Api::Gl33 => (3, 3),
             Api::Gles3 => (3, 0),
             Api::Gles2 => (2, 0),
+        }
+    }
+
+    /// A case's technique as this API runs it: GLES 2 has no shadow samplers, so it always
+    /// compares in the shader (a hardware case keeps its semantics there).
+    pub fn technique(self, t: Technique) -> Technique {
+        if self == Api::Gles2 {
+            t.with_manual_compare()
+        } else {
+            t
         }
     }
 

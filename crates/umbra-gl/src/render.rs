@@ -23,15 +23,16 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use glow::HasContext;
-use umbra_case::format::{Attachments, Compare, Cull, DepthFormat, DepthOrder, Filter, Outside};
+use umbra_case::format::{Attachments, Cull, DepthFormat, DepthOrder, Filter, Outside};
+use umbra_case::technique::CompareOp;
 use umbra_case::{
-    BackendError, Clock, Convention, DepthMap, Frame, LightKind, LookupMatrices, Prepared, Timings,
-    VisibilityStorage,
+    BackendError, Clock, Convention, DepthMap, Frame, LightKind, LookupMatrices, Prepared,
+    Technique, Timings, VisibilityStorage,
 };
 
 use crate::api::Api;
 use crate::context::{GlContext, Unavailable};
-use crate::shaders::{self, Key};
+use crate::shaders;
 
 /// Floats per vertex of `Geometry::interleaved`.
 const STRIDE: usize = umbra_case::Geometry::VERTEX_FLOATS;
@@ -541,25 +542,10 @@ impl Renderer {
         };
 
         // Lit pass.
-        let key = Key {
-            api,
-            cube,
-            directional: matches!(run.light.kind, LightKind::Directional { .. }),
-            filter: s.filter,
-            compare: if es2 { Compare::Manual } else { s.compare },
-            clamp_reference: s.compare == Compare::Hardware && s.format.is_fixed(),
-            outside: s.outside,
-            guard: s.guard_behind_light,
-            bias_matrix: s.bias_matrix,
-            order: s.depth_order,
-            slope: s.bias.slope.is_some(),
-            n_dot_l: s.bias.n_dot_l.is_some(),
-            model: case.shading.model,
-            fault,
-        };
+        let technique = api.technique(Technique::new(run, fault));
         let lit_program = self.program(
             shaders::lit_vertex(api),
-            shaders::lit_fragment(&key, &case.shading),
+            shaders::lit_fragment(api, &technique),
         )?;
         let gl = &self.ctx.gl;
         let [w, h] = run.camera.size;
@@ -567,7 +553,7 @@ impl Renderer {
         if let Some(t) = &timer {
             t.begin(gl, 1);
         }
-        let manual = es2 || s.compare == Compare::Manual;
+        let manual = technique.manual();
         // SAFETY: as above.
         let (color, vis) = unsafe {
             gl.bind_texture(target, Some(map));
@@ -587,25 +573,17 @@ impl Renderer {
                         glow::TEXTURE_COMPARE_MODE,
                         glow::COMPARE_REF_TO_TEXTURE as i32,
                     );
-                    let forward = s.depth_order == DepthOrder::Forward;
-                    let func = match fault {
-                        Some(umbra_case::fault::Fault::CompareFlipped) if forward => glow::GREATER,
-                        Some(umbra_case::fault::Fault::CompareFlipped) => glow::LESS,
-                        Some(umbra_case::fault::Fault::CompareStrict) if forward => glow::LESS,
-                        Some(umbra_case::fault::Fault::CompareStrict) => glow::GREATER,
-                        _ if forward => glow::LEQUAL,
-                        _ => glow::GEQUAL,
+                    let func = match technique.compare_op() {
+                        CompareOp::LessEqual => glow::LEQUAL,
+                        CompareOp::GreaterEqual => glow::GEQUAL,
+                        CompareOp::Less => glow::LESS,
+                        CompareOp::Greater => glow::GREATER,
                     };
                     gl.tex_parameter_i32(target, glow::TEXTURE_COMPARE_FUNC, func as i32);
                 }
             }
             if !cube && !manual {
-                let outside = if is(umbra_case::fault::Fault::Repeat) {
-                    Outside::Repeat
-                } else {
-                    s.outside
-                };
-                let wrap = match outside {
+                let wrap = match technique.texel_wrap() {
                     Outside::Lit | Outside::ClampToEdge => glow::CLAMP_TO_EDGE,
                     Outside::Repeat => glow::REPEAT,
                     Outside::Border => {

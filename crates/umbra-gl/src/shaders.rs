@@ -1,7 +1,9 @@
-//! GLSL for both passes, generated per API and technique. The lit-pass lookup mirrors
-//! `umbra_ref::lookup` step by step (normal offset, face, coordinate with the bias matrix
-//! before or after the divide, guard, outside test, bias, the compare's clamp, filter), so a
-//! difference from the reference is a driver's, not a transcription's.
+//! GLSL for both passes, generated per API and technique. The lit pass is
+//! [`umbra_case::lit_shader`]'s: it decides the lookup's steps (mirroring `umbra_ref::lookup`:
+//! normal offset, face, coordinate with the bias matrix before or after the divide, guard,
+//! outside test, bias, the compare's clamp, filter) and the self-test faults' effect on them,
+//! the same for WGSL; this file supplies only GLSL (`Glsl`, one [`Dialect`] per API
+//! flavour). The shadow pass and the lit pass's vertex stage are GLSL-only and written here.
 //!
 //! - GL 3.3 (`#version 330 core`) and GLES 3.0 (`#version 300 es`): hardware compare through
 //!   `sampler2DShadow`/`samplerCubeShadow` (`textureProj` when the bias matrix is applied
@@ -19,43 +21,12 @@
 
 use std::fmt::Write as _;
 
-use umbra_case::fault::Fault;
-use umbra_case::format::{BiasMatrix, Compare, DepthOrder, Filter, Outside, Shading, ShadingModel};
+use umbra_case::Technique;
+use umbra_case::format::{BiasMatrix, Outside, Shading};
+use umbra_case::lit_shader::{self, Dialect, Uniform};
+use umbra_case::technique::{CompareOp, Coordinate, CoordinateStep};
 
 use crate::api::Api;
-
-/// Everything that changes the generated source.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Key {
-    /// API flavour.
-    pub api: Api,
-    /// A cube map (point light).
-    pub cube: bool,
-    /// Directional light (parallel rays).
-    pub directional: bool,
-    /// Filter.
-    pub filter: Filter,
-    /// Compare mechanism (GLES 2 is always manual).
-    pub compare: Compare,
-    /// Clamp the reference to [0,1] (hardware semantics on a fixed-point format).
-    pub clamp_reference: bool,
-    /// Outside policy.
-    pub outside: Outside,
-    /// w > 0 guard.
-    pub guard: bool,
-    /// Bias matrix order.
-    pub bias_matrix: BiasMatrix,
-    /// Depth order.
-    pub order: DepthOrder,
-    /// Slope bias present.
-    pub slope: bool,
-    /// N·L bias present.
-    pub n_dot_l: bool,
-    /// Shading model.
-    pub model: ShadingModel,
-    /// An injected fault (self-test only).
-    pub fault: Option<Fault>,
-}
 
 fn header(api: Api, fragment: bool) -> String {
     let mut s = String::new();
@@ -157,116 +128,113 @@ pub fn lit_vertex(api: Api) -> String {
     s
 }
 
-/// Fragment shader of the lit pass.
-pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
-    let api = k.api;
-    let es2 = api == Api::Gles2;
-    let mut s = header(api, true);
-    let manual = es2 || k.compare == Compare::Manual;
-    let faces = if k.cube { 6 } else { 1 };
-    let _ = writeln!(
-        s,
-        "IN vec3 v_pos;\nIN vec3 v_normal;\nIN vec3 v_albedo;\nFLAT IN float v_face;"
+/// Fragment shader of the lit pass: the shared lookup and shading
+/// ([`umbra_case::lit_shader`]) in this API's GLSL. `t` is the technique as this API runs it
+/// ([`Api::technique`]).
+pub fn lit_fragment(api: Api, t: &Technique) -> String {
+    debug_assert!(
+        api != Api::Gles2 || t.manual(),
+        "GLES 2 compares in the shader: pass Api::technique's technique"
     );
-    let _ = writeln!(
-        s,
-        "uniform mat4 u_light[{faces}];\nuniform mat4 u_tex[{faces}];"
-    );
-    s.push_str("uniform vec3 u_light_pos;\nuniform vec3 u_towards;\nuniform vec3 u_eye;\nuniform vec2 u_size;\n");
-    s.push_str("uniform float u_constant;\nuniform float u_slope_scale;\nuniform float u_slope_max;\nuniform float u_normal_offset;\nuniform float u_ndl_scale;\nuniform float u_ndl_min;\n");
-    s.push_str("uniform float u_output;\n"); // GLES 2: 0 colour, 1 visibility + face
-    let sampler = match (k.cube, manual, es2) {
-        (false, false, _) => "sampler2DShadow",
-        (true, false, _) => "samplerCubeShadow",
-        (false, true, _) => "sampler2D",
-        (true, true, _) => "samplerCube",
-    };
-    let _ = writeln!(s, "uniform {sampler} u_map;");
-    if !es2 {
-        s.push_str(
-            "layout(location = 0) out vec4 o_color;\nlayout(location = 1) out vec4 o_vis;\n",
+    lit_shader::lit_fragment(&Glsl { api }, t)
+}
+
+/// GLSL in one API's flavour.
+struct Glsl {
+    api: Api,
+}
+
+impl Dialect for Glsl {
+    fn declarations(&self, t: &Technique) -> String {
+        let es2 = self.api == Api::Gles2;
+        let mut s = header(self.api, true);
+        let faces = if t.cube { 6 } else { 1 };
+        let _ = writeln!(
+            s,
+            "IN vec3 v_pos;\nIN vec3 v_normal;\nIN vec3 v_albedo;\nFLAT IN float v_face;"
         );
-    }
-    let far = if k.order == DepthOrder::Forward {
-        "1.0"
-    } else {
-        "-1.0"
-    };
-    let clear = if k.order == DepthOrder::Forward {
-        "1.0"
-    } else {
-        "0.0"
-    };
-    let cmp = match (k.order == DepthOrder::Forward, k.fault) {
-        (true, Some(Fault::CompareFlipped)) => ">",
-        (false, Some(Fault::CompareFlipped)) => "<",
-        (true, Some(Fault::CompareStrict)) => "<",
-        (false, Some(Fault::CompareStrict)) => ">",
-        (true, _) => "<=",
-        (false, _) => ">=",
-    };
-    let _ = writeln!(
-        s,
-        "const float TOWARD_FAR = {far};\nconst float CLEAR = {clear};"
-    );
-    // Light direction.
-    if k.directional {
-        s.push_str("vec3 to_light(vec3 p) { return u_towards; }\n");
-    } else {
-        s.push_str("vec3 to_light(vec3 p) { return normalize(u_light_pos - p); }\n");
-    }
-    // Matrices per face (if-chain: GLSL ES 1.00 only promises constant indexing in fragments).
-    s.push_str("mat4 light_m(int f) {\n");
-    for f in 0..faces {
-        let _ = writeln!(s, "  if (f == {f}) return u_light[{f}];");
-    }
-    s.push_str("  return u_light[0];\n}\nmat4 tex_m(int f) {\n");
-    for f in 0..faces {
-        let _ = writeln!(s, "  if (f == {f}) return u_tex[{f}];");
-    }
-    s.push_str("  return u_tex[0];\n}\n");
-    if k.cube {
-        s.push_str(
-            "int cube_face(vec3 d) {\n  vec3 a = abs(d);\n\
-               if (a.x >= a.y && a.x >= a.z) return d.x < 0.0 ? 1 : 0;\n\
-               if (a.y >= a.z) return d.y < 0.0 ? 3 : 2;\n  return d.z < 0.0 ? 5 : 4;\n}\n\
-             // Direction of the centre of texel (i, j) of face f: the GL cube-map table inverted.\n\
-             vec3 texel_dir(int f, float i, float j) {\n\
-               float sc = 2.0 * (i + 0.5) / u_size.x - 1.0;\n  float tc = 2.0 * (j + 0.5) / u_size.y - 1.0;\n\
-               if (f == 0) return vec3(1.0, -tc, -sc);\n  if (f == 1) return vec3(-1.0, -tc, sc);\n\
-               if (f == 2) return vec3(sc, 1.0, tc);\n  if (f == 3) return vec3(sc, -1.0, -tc);\n\
-               if (f == 4) return vec3(sc, -tc, 1.0);\n  return vec3(-sc, -tc, -1.0);\n}\n",
+        let _ = writeln!(
+            s,
+            "uniform mat4 u_light[{faces}];\nuniform mat4 u_tex[{faces}];"
         );
-    }
-    if es2 {
-        s.push_str(
-            "float unpack_depth(vec4 c) {\n  vec4 k = floor(c * 255.0 + 0.5);\n\
-               if (k.x >= 255.0) return 1.0; // the cleared far plane\n\
-               return dot(k, vec4(1.0 / 255.0, 1.0 / 65025.0, 1.0 / 16581375.0, 1.0 / 4228250625.0));\n}\n",
-        );
-    }
-    // Texel fetch with the wrap policy, returning the stored depth (manual compare only: the
-    // hardware path's taps go through the sampler, whose wrap mode is the policy).
-    if manual {
-        let outside = if k.fault == Some(Fault::Repeat) {
-            Outside::Repeat
-        } else if k.cube {
-            Outside::ClampToEdge
-        } else {
-            k.outside
+        s.push_str("uniform vec3 u_light_pos;\nuniform vec3 u_towards;\nuniform vec3 u_eye;\nuniform vec2 u_size;\n");
+        s.push_str("uniform float u_constant;\nuniform float u_slope_scale;\nuniform float u_slope_max;\nuniform float u_normal_offset;\nuniform float u_ndl_scale;\nuniform float u_ndl_min;\n");
+        s.push_str("uniform float u_output;\n"); // GLES 2: 0 colour, 1 visibility + face
+        let sampler = match (t.cube, t.manual()) {
+            (false, false) => "sampler2DShadow",
+            (true, false) => "samplerCubeShadow",
+            (false, true) => "sampler2D",
+            (true, true) => "samplerCube",
         };
-        s.push_str("float fetch(int f, float i, float j) {\n");
-        match outside {
-            Outside::Border => s.push_str(
-                "  if (i < 0.0 || j < 0.0 || i >= u_size.x || j >= u_size.y) return CLEAR;\n",
-            ),
-            Outside::Repeat => s.push_str("  i = mod(i, u_size.x);\n  j = mod(j, u_size.y);\n"),
-            Outside::Lit | Outside::ClampToEdge => s.push_str(
-                "  i = clamp(i, 0.0, u_size.x - 1.0);\n  j = clamp(j, 0.0, u_size.y - 1.0);\n",
-            ),
+        let _ = writeln!(s, "uniform {sampler} u_map;");
+        if !es2 {
+            s.push_str(
+                "layout(location = 0) out vec4 o_color;\nlayout(location = 1) out vec4 o_vis;\n",
+            );
         }
-        let wrong = k.fault == Some(Fault::WrongComponent);
-        let read = match (k.cube, es2, wrong) {
+        s
+    }
+
+    fn constant(&self, name: &str, value: &str) -> String {
+        format!("const float {name} = {value};\n")
+    }
+
+    fn to_light(&self, directional: bool) -> &'static str {
+        if directional {
+            "vec3 to_light(vec3 p) { return u_towards; }\n"
+        } else {
+            "vec3 to_light(vec3 p) { return normalize(u_light_pos - p); }\n"
+        }
+    }
+
+    /// An if-chain: GLSL ES 1.00 only promises constant indexing in fragments.
+    fn face_matrices(&self, faces: usize) -> String {
+        let mut s = String::from("mat4 light_m(int f) {\n");
+        for f in 0..faces {
+            let _ = writeln!(s, "  if (f == {f}) return u_light[{f}];");
+        }
+        s.push_str("  return u_light[0];\n}\nmat4 tex_m(int f) {\n");
+        for f in 0..faces {
+            let _ = writeln!(s, "  if (f == {f}) return u_tex[{f}];");
+        }
+        s.push_str("  return u_tex[0];\n}\n");
+        s
+    }
+
+    fn cube_helpers(&self) -> &'static str {
+        "int cube_face(vec3 d) {\n  vec3 a = abs(d);\n\
+           if (a.x >= a.y && a.x >= a.z) return d.x < 0.0 ? 1 : 0;\n\
+           if (a.y >= a.z) return d.y < 0.0 ? 3 : 2;\n  return d.z < 0.0 ? 5 : 4;\n}\n\
+         // Direction of the centre of texel (i, j) of face f: the GL cube-map table inverted.\n\
+         vec3 texel_dir(int f, float i, float j) {\n\
+           float sc = 2.0 * (i + 0.5) / u_size.x - 1.0;\n  float tc = 2.0 * (j + 0.5) / u_size.y - 1.0;\n\
+           if (f == 0) return vec3(1.0, -tc, -sc);\n  if (f == 1) return vec3(-1.0, -tc, sc);\n\
+           if (f == 2) return vec3(sc, 1.0, tc);\n  if (f == 3) return vec3(sc, -1.0, -tc);\n\
+           if (f == 4) return vec3(sc, -tc, 1.0);\n  return vec3(-sc, -tc, -1.0);\n}\n"
+    }
+
+    fn depth_decoder(&self) -> &'static str {
+        if self.api != Api::Gles2 {
+            return "";
+        }
+        "float unpack_depth(vec4 c) {\n  vec4 k = floor(c * 255.0 + 0.5);\n\
+           if (k.x >= 255.0) return 1.0; // the cleared far plane\n\
+           return dot(k, vec4(1.0 / 255.0, 1.0 / 65025.0, 1.0 / 16581375.0, 1.0 / 4228250625.0));\n}\n"
+    }
+
+    fn fetch(&self, cube: bool, wrap: Outside, wrong_component: bool) -> String {
+        let mut s = String::from("float fetch(int f, float i, float j) {\n");
+        s.push_str(match wrap {
+            Outside::Border => {
+                "  if (i < 0.0 || j < 0.0 || i >= u_size.x || j >= u_size.y) return CLEAR;\n"
+            }
+            Outside::Repeat => "  i = mod(i, u_size.x);\n  j = mod(j, u_size.y);\n",
+            Outside::Lit | Outside::ClampToEdge => {
+                "  i = clamp(i, 0.0, u_size.x - 1.0);\n  j = clamp(j, 0.0, u_size.y - 1.0);\n"
+            }
+        });
+        // Never `.z`: a core depth read returns (d, 0, 0, 1); GLES 2 unpacks RGBA8.
+        let read = match (cube, self.api == Api::Gles2, wrong_component) {
             (false, false, false) => "texelFetch(u_map, ivec2(int(i), int(j)), 0).r",
             (false, false, true) => "texelFetch(u_map, ivec2(int(i), int(j)), 0).g",
             (false, true, false) => "unpack_depth(texture2D(u_map, (vec2(i, j) + 0.5) / u_size))",
@@ -279,181 +247,178 @@ pub fn lit_fragment(k: &Key, shading: &Shading) -> String {
             (true, true, true) => "unpack_depth(textureCube(u_map, texel_dir(f, i, j)).gbar)",
         };
         let _ = writeln!(s, "  return {read};\n}}");
+        s
     }
-    // One compare at texel (i, j).
-    if manual {
-        let _ = writeln!(
-            s,
-            "float tap(int f, float i, float j, float r) {{ return r {cmp} fetch(f, i, j) ? 1.0 : 0.0; }}"
-        );
-    } else if k.cube {
-        s.push_str("float tap(int f, float i, float j, float r) { return texture(u_map, vec4(texel_dir(f, i, j), r)); }\n");
-    } else {
-        s.push_str("float tap(int f, float i, float j, float r) { return texture(u_map, vec3((vec2(i, j) + 0.5) / u_size, r)); }\n");
+
+    fn tap(&self, manual: bool, cube: bool, op: CompareOp) -> String {
+        let head = "float tap(int f, float i, float j, float r)";
+        match (manual, cube) {
+            (true, _) => format!(
+                "{head} {{ return r {} fetch(f, i, j) ? 1.0 : 0.0; }}\n",
+                op.symbol()
+            ),
+            (false, true) => {
+                format!("{head} {{ return texture(u_map, vec4(texel_dir(f, i, j), r)); }}\n")
+            }
+            (false, false) => format!(
+                "{head} {{ return texture(u_map, vec3((vec2(i, j) + 0.5) / u_size, r)); }}\n"
+            ),
+        }
     }
-    // The lookup.
-    if k.fault == Some(Fault::NormalOffsetShort) {
-        s.push_str("float visibility(vec3 p, vec3 n) {\n  p = p + n * (0.75 * u_normal_offset);\n");
-    } else {
-        s.push_str("float visibility(vec3 p, vec3 n) {\n  p = p + n * u_normal_offset;\n");
+
+    fn uniform(&self, u: Uniform) -> &'static str {
+        match u {
+            Uniform::MapWidth => "u_size.x",
+            Uniform::MapHeight => "u_size.y",
+            Uniform::NormalOffset => "u_normal_offset",
+            Uniform::SlopeScale => "u_slope_scale",
+            Uniform::NdotLScale => "u_ndl_scale",
+            Uniform::NdotLMin => "u_ndl_min",
+        }
     }
-    if k.cube {
-        s.push_str("  int f = cube_face(p - u_light_pos);\n");
-    } else {
-        s.push_str("  int f = 0;\n");
+
+    fn lookup_start(&self, offset: &str) -> String {
+        format!("float visibility(vec3 p, vec3 n) {{\n  p = p + n * {offset};\n")
     }
-    let f = k.fault;
-    match (k.bias_matrix, f) {
-        (BiasMatrix::BeforeDivide, Some(Fault::NoDivide)) => s.push_str("  vec4 t = tex_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(t.xyz, t.w);\n"),
-        (BiasMatrix::BeforeDivide, Some(Fault::NoBias)) => s.push_str("  vec4 t = light_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(t.xyz / t.w, t.w);\n"),
-        (BiasMatrix::BeforeDivide, _) => s.push_str("  vec4 t = tex_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(t.xyz / t.w, t.w);\n"),
-        (BiasMatrix::AfterDivide, Some(Fault::NoDivide)) => s.push_str("  vec4 l = light_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(0.5 * l.xyz + 0.5, l.w);\n"),
-        (BiasMatrix::AfterDivide, Some(Fault::NoBias)) => s.push_str("  vec4 l = light_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(l.xyz / l.w, l.w);\n"),
-        (BiasMatrix::AfterDivide, _) => s.push_str(
-            "  vec4 l = light_m(f) * vec4(p, 1.0);\n  vec3 ndc = vec3(l.x / l.w, l.y / l.w, l.z / l.w);\n\
-               vec4 c = vec4(0.5 * ndc + 0.5, l.w);\n",
-        ),
-    }
-    if f == Some(Fault::BiasTwice) {
-        s.push_str("  c.xyz = 0.5 * c.xyz + 0.5;\n");
-    }
-    if f == Some(Fault::QuarterTexel) {
-        s.push_str("  c.x += 0.25 / u_size.x;\n");
-    }
-    if k.guard && f != Some(Fault::NoGuard) {
-        s.push_str("  if (c.w <= 0.0) return 1.0;\n");
-    }
-    if !k.cube && k.outside == Outside::Lit {
-        s.push_str("  if (c.x < 0.0 || c.x > 1.0 || c.y < 0.0 || c.y > 1.0) return 1.0;\n");
-    }
-    s.push_str("  float bias = u_constant;\n");
-    if k.slope {
-        // tan(acos(c)) in its algebraic form (umbra_ref::lookup, step 6).
-        let scale = if f == Some(Fault::SlopeShort) {
-            "0.8 * u_slope_scale"
+
+    fn face(&self, cube: bool) -> &'static str {
+        if cube {
+            "  int f = cube_face(p - u_light_pos);\n"
         } else {
-            "u_slope_scale"
-        };
-        let _ = writeln!(
-            s,
-            "  float cosine = dot(n, to_light(p));\n  if (cosine > 0.0) bias += clamp({scale} * sqrt(max(1.0 - cosine * cosine, 0.0)) / cosine, 0.0, u_slope_max);"
-        );
-    }
-    if k.n_dot_l {
-        // LearnOpenGL's max(s·(1 − N·L), min), N·L unclamped (umbra_ref::lookup, step 6).
-        s.push_str("  bias += max(u_ndl_scale * (1.0 - dot(n, to_light(p))), u_ndl_min);\n");
-    }
-    s.push_str("  float r = c.z - TOWARD_FAR * bias;\n");
-    if manual && k.clamp_reference && f != Some(Fault::NoClamp) {
-        s.push_str("  r = clamp(r, 0.0, 1.0);\n"); // hardware semantics emulated (GLES 2)
-    }
-    if !manual && !k.clamp_reference && f == Some(Fault::ClampFloat) {
-        s.push_str("  r = clamp(r, 0.0, 1.0);\n"); // a float format clamped like a fixed one
-    }
-    let hw_direct = !manual && !matches!(k.filter, Filter::Pcf(_));
-    match k.filter {
-        _ if hw_direct && k.cube => {
-            s.push_str("  return texture(u_map, vec4(p - u_light_pos, r));\n")
+            "  int f = 0;\n"
         }
-        _ if hw_direct && k.bias_matrix == BiasMatrix::BeforeDivide && f.is_none() => {
-            s.push_str("  return textureProj(u_map, vec4(t.xy, t.w * r, t.w));\n")
-        }
-        _ if hw_direct => s.push_str("  return texture(u_map, vec3(c.xy, r));\n"),
-        Filter::Nearest => {
-            s.push_str("  return tap(f, floor(c.x * u_size.x), floor(c.y * u_size.y), r);\n")
-        }
-        Filter::Linear => {
-            s.push_str(
-                "  vec2 x = c.xy * u_size - 0.5;\n  vec2 i0 = floor(x);\n  vec2 a = x - i0;\n",
-            );
-            if f == Some(Fault::BilinearCoarse) {
-                s.push_str("  a = floor(a * 4.0) / 4.0;\n");
+    }
+
+    fn coordinate(&self, c: &Coordinate) -> &'static str {
+        use CoordinateStep::{Bias, Divide};
+        match (c.bias_matrix, c.left_out) {
+            (BiasMatrix::BeforeDivide, Some(Divide)) => {
+                "  vec4 t = tex_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(t.xyz, t.w);\n"
             }
-            s.push_str(
-                "  return (1.0 - a.x) * (1.0 - a.y) * tap(f, i0.x, i0.y, r) + a.x * (1.0 - a.y) * tap(f, i0.x + 1.0, i0.y, r)\n\
-                    + (1.0 - a.x) * a.y * tap(f, i0.x, i0.y + 1.0, r) + a.x * a.y * tap(f, i0.x + 1.0, i0.y + 1.0, r);\n",
-            );
-        }
-        Filter::Pcf(n) => {
-            let centre = if f == Some(Fault::PcfOffCentre) {
-                format!("{n}.0 * 0.5")
-            } else {
-                format!("({n}.0 - 1.0) * 0.5")
-            };
-            let _ = writeln!(
-                s,
-                "  float sum = 0.0;\n  float h = {centre};\n\
-                   for (int dy = 0; dy < {n}; dy++) {{\n    for (int dx = 0; dx < {n}; dx++) {{\n\
-                       vec2 uv = c.xy + (vec2(float(dx), float(dy)) - h) / u_size;\n\
-                       sum += tap(f, floor(uv.x * u_size.x), floor(uv.y * u_size.y), r);\n    }}\n  }}"
-            );
-            if f == Some(Fault::PcfDoubleCentre) {
-                s.push_str(
-                    "  vec2 uv0 = c.xy + (vec2(0.0) - h) / u_size;\n\
-                       sum += tap(f, floor(c.x * u_size.x), floor(c.y * u_size.y), r) - tap(f, floor(uv0.x * u_size.x), floor(uv0.y * u_size.y), r);\n",
-                );
+            (BiasMatrix::BeforeDivide, Some(Bias)) => {
+                "  vec4 t = light_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(t.xyz / t.w, t.w);\n"
             }
-            let _ = writeln!(s, "  return sum / float({n} * {n});");
+            (BiasMatrix::BeforeDivide, None) => {
+                "  vec4 t = tex_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(t.xyz / t.w, t.w);\n"
+            }
+            (BiasMatrix::AfterDivide, Some(Divide)) => {
+                "  vec4 l = light_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(0.5 * l.xyz + 0.5, l.w);\n"
+            }
+            (BiasMatrix::AfterDivide, Some(Bias)) => {
+                "  vec4 l = light_m(f) * vec4(p, 1.0);\n  vec4 c = vec4(l.xyz / l.w, l.w);\n"
+            }
+            (BiasMatrix::AfterDivide, None) => {
+                "  vec4 l = light_m(f) * vec4(p, 1.0);\n  vec3 ndc = vec3(l.x / l.w, l.y / l.w, l.z / l.w);\n\
+               vec4 c = vec4(0.5 * ndc + 0.5, l.w);\n"
+            }
         }
     }
-    s.push_str("}\n");
-    // Shading (umbra_ref::shading).
-    let _ = writeln!(
-        s,
-        "vec3 shade(vec3 albedo, vec3 n, vec3 l, vec3 e, float vis) {{\n  float ndl = dot(n, l);\n  float diffuse = max(ndl, 0.0);"
-    );
-    match k.model {
-        ShadingModel::Dimmed => {
-            let kept = if k.fault == Some(Fault::DimmingOff) {
-                "vis".to_string()
-            } else {
-                format!("{d:.9} + (1.0 - {d:.9}) * vis", d = shading.dimming)
-            };
-            let lit_spec = if k.fault == Some(Fault::SpecularUnshadowed) {
-                "spec"
-            } else {
-                "vis * spec"
-            };
-            let _ = writeln!(
-                s,
-                "  float kept = {kept};\n  float spec = 0.0;\n\
-                   if (ndl > 0.0) {{ vec3 hv = l + e; float len = length(hv); if (len > 0.0) spec = {ks:.9} * pow(max(dot(n, hv / len), 0.0), {sh:.9}); }}\n\
-                   return ({a:.9} + kept * diffuse) * albedo + vec3({lit_spec});",
-                ks = shading.specular,
-                sh = shading.shininess,
-                a = shading.ambient
-            );
-        }
-        ShadingModel::Classic => {
-            let _ = writeln!(
-                s,
-                "  return ({a:.9} + diffuse) * albedo * ({f:.9} + (1.0 - {f:.9}) * vis);",
-                a = shading.ambient,
-                f = shading.shadowed_factor
-            );
-        }
+
+    fn bias_again(&self) -> &'static str {
+        "  c.xyz = 0.5 * c.xyz + 0.5;\n"
     }
-    s.push_str("}\n");
-    // Outputs: colour; visibility in R and face id + 1 in G, B, A (base 256).
-    s.push_str(
+
+    fn nudge_u(&self, texels: &str) -> String {
+        format!("  c.x += {texels} / u_size.x;\n")
+    }
+
+    fn guard(&self) -> &'static str {
+        "  if (c.w <= 0.0) return 1.0;\n"
+    }
+
+    fn outside_test(&self) -> &'static str {
+        "  if (c.x < 0.0 || c.x > 1.0 || c.y < 0.0 || c.y > 1.0) return 1.0;\n"
+    }
+
+    /// GL's face images hold rows as the cube-map table addresses them.
+    fn cube_rows(&self) -> &'static str {
+        ""
+    }
+
+    fn bias_start(&self) -> &'static str {
+        "  float bias = u_constant;\n"
+    }
+
+    fn slope_bias(&self, scale: &str) -> String {
+        format!(
+            "  float cosine = dot(n, to_light(p));\n  if (cosine > 0.0) bias += clamp({scale} * sqrt(max(1.0 - cosine * cosine, 0.0)) / cosine, 0.0, u_slope_max);\n"
+        )
+    }
+
+    fn reference(&self) -> &'static str {
+        "  float r = c.z - TOWARD_FAR * bias;\n"
+    }
+
+    fn sample_cube(&self) -> &'static str {
+        "  return texture(u_map, vec4(p - u_light_pos, r));\n"
+    }
+
+    fn sample_projective(&self) -> &'static str {
+        "  return textureProj(u_map, vec4(t.xy, t.w * r, t.w));\n"
+    }
+
+    fn sample(&self) -> &'static str {
+        "  return texture(u_map, vec3(c.xy, r));\n"
+    }
+
+    fn bilinear_start(&self) -> &'static str {
+        "  vec2 x = c.xy * u_size - 0.5;\n  vec2 i0 = floor(x);\n  vec2 a = x - i0;\n"
+    }
+
+    fn float_of(&self, n: u32) -> String {
+        format!("{n}.0")
+    }
+
+    fn pcf_sum(&self, n: u32, centre: &str) -> String {
+        format!(
+            "  float sum = 0.0;\n  float h = {centre};\n\
+               for (int dy = 0; dy < {n}; dy++) {{\n    for (int dx = 0; dx < {n}; dx++) {{\n\
+                   vec2 uv = c.xy + (vec2(float(dx), float(dy)) - h) / u_size;\n\
+                   sum += tap(f, floor(uv.x * u_size.x), floor(uv.y * u_size.y), r);\n    }}\n  }}\n"
+        )
+    }
+
+    fn pcf_double_centre(&self) -> &'static str {
+        "  vec2 uv0 = c.xy + (vec2(0.0) - h) / u_size;\n\
+           sum += tap(f, floor(c.x * u_size.x), floor(c.y * u_size.y), r) - tap(f, floor(uv0.x * u_size.x), floor(uv0.y * u_size.y), r);\n"
+    }
+
+    fn pcf_mean(&self, n: u32) -> String {
+        format!("  return sum / float({n} * {n});\n")
+    }
+
+    fn shade_start(&self) -> &'static str {
+        "vec3 shade(vec3 albedo, vec3 n, vec3 l, vec3 e, float vis) {\n  float ndl = dot(n, l);\n  float diffuse = max(ndl, 0.0);\n"
+    }
+
+    fn dimmed(&self, kept: &str, lit_spec: &str, shading: &Shading) -> String {
+        format!(
+            "  float kept = {kept};\n  float spec = 0.0;\n\
+               if (ndl > 0.0) {{ vec3 hv = l + e; float len = length(hv); if (len > 0.0) spec = {ks:.9} * pow(max(dot(n, hv / len), 0.0), {sh:.9}); }}\n\
+               return ({a:.9} + kept * diffuse) * albedo + vec3({lit_spec});\n",
+            ks = shading.specular,
+            sh = shading.shininess,
+            a = shading.ambient
+        )
+    }
+
+    /// Outputs: colour; visibility in R and face id + 1 in G, B, A (base 256).
+    fn main_start(&self) -> &'static str {
         "vec4 encode(float vis, float face) {\n  float id = face + 1.0;\n\
            return vec4(vis, mod(id, 256.0) / 255.0, mod(floor(id / 256.0), 256.0) / 255.0, floor(id / 65536.0) / 255.0);\n}\n\
-         void main() {\n  vec3 n = normalize(v_normal);\n  float vis = visibility(v_pos, n);\n",
-    );
-    if k.fault == Some(Fault::Vis4Bit) {
-        s.push_str("  vis = floor(vis * 16.0 + 0.5) / 16.0;\n");
+         void main() {\n  vec3 n = normalize(v_normal);\n  float vis = visibility(v_pos, n);\n"
     }
-    s.push_str(
+
+    fn main_colour(&self) -> &'static str {
         "  vec3 e = normalize(u_eye - v_pos);\n  vec3 col = clamp(shade(v_albedo, n, to_light(v_pos), e, vis), 0.0, 1.0);\n\
-           float face = floor(v_face + 0.5);\n",
-    );
-    if k.fault == Some(Fault::ColourGamma) {
-        s.push_str("  col = sqrt(col);\n");
+           float face = floor(v_face + 0.5);\n"
     }
-    if es2 {
-        s.push_str("  gl_FragColor = u_output < 0.5 ? vec4(col, 1.0) : encode(vis, face);\n}\n");
-    } else {
-        s.push_str("  o_color = vec4(col, 1.0);\n  o_vis = encode(vis, face);\n}\n");
+
+    fn main_end(&self) -> &'static str {
+        if self.api == Api::Gles2 {
+            "  gl_FragColor = u_output < 0.5 ? vec4(col, 1.0) : encode(vis, face);\n}\n"
+        } else {
+            "  o_color = vec4(col, 1.0);\n  o_vis = encode(vis, face);\n}\n"
+        }
     }
-    s
 }

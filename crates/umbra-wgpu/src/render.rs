@@ -8,12 +8,14 @@
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use umbra_case::format::{Attachments, Compare, Cull, DepthFormat, DepthOrder, Filter, Outside};
+use umbra_case::format::{Attachments, Cull, DepthFormat, DepthOrder, Filter, Outside};
+use umbra_case::technique::CompareOp;
 use umbra_case::{
     BackendError, Clock, Convention, DepthMap, Frame, LightKind, LookupMatrices, Prepared,
+    Technique,
 };
 
-use crate::shaders::{self, Key, UNIFORM_SIZE};
+use crate::shaders::{self, UNIFORM_SIZE};
 
 /// Bytes per vertex of `Geometry::interleaved`.
 const STRIDE: u64 = 4 * umbra_case::Geometry::VERTEX_FLOATS as u64;
@@ -344,25 +346,11 @@ impl Gpu {
         let shadow_wall = shadow_start.elapsed();
 
         // Lit pass.
-        let manual = s.compare == Compare::Manual;
-        let key = Key {
-            cube,
-            directional: matches!(run.light.kind, LightKind::Directional { .. }),
-            filter: s.filter,
-            compare: s.compare,
-            clamp_reference: s.compare == Compare::Hardware && s.format.is_fixed(),
-            outside: s.outside,
-            guard: s.guard_behind_light,
-            bias_matrix: s.bias_matrix,
-            order: s.depth_order,
-            slope: s.bias.slope.is_some(),
-            n_dot_l: s.bias.n_dot_l.is_some(),
-            model: case.shading.model,
-            fault,
-        };
+        let technique = Technique::new(run, fault);
+        let manual = technique.manual();
         let lit_module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lit"),
-            source: wgpu::ShaderSource::Wgsl(shaders::lit(&key, &case.shading).into()),
+            source: wgpu::ShaderSource::Wgsl(shaders::lit(&technique).into()),
         });
         let view_dimension = match (cube, manual) {
             (false, _) => wgpu::TextureViewDimension::D2,
@@ -495,28 +483,12 @@ impl Gpu {
             dimension: Some(view_dimension),
             ..Default::default()
         });
-        let outside = if is(umbra_case::fault::Fault::Repeat) {
-            Outside::Repeat
-        } else {
-            s.outside
-        };
-        let order = if is(umbra_case::fault::Fault::CompareFlipped) {
-            // The sampler's compare runs the other way (GREATER for LEQUAL and back).
-            match s.depth_order {
-                DepthOrder::Forward => DepthOrder::Reversed,
-                DepthOrder::Reversed => DepthOrder::Forward,
-            }
-        } else {
-            s.depth_order
-        };
         let sampler = (!manual).then(|| {
             self.sampler(
                 s.filter,
-                outside,
-                order,
+                technique.texel_wrap(),
+                technique.compare_op(),
                 cube,
-                is(umbra_case::fault::Fault::CompareFlipped)
-                    || is(umbra_case::fault::Fault::CompareStrict),
             )
         });
         let mut group_entries = vec![
@@ -747,22 +719,18 @@ impl Gpu {
         })
     }
 
-    fn sampler(
-        &self,
-        filter: Filter,
-        outside: Outside,
-        order: DepthOrder,
-        cube: bool,
-        strict: bool,
-    ) -> wgpu::Sampler {
-        let (address, border) = match (cube, outside) {
+    /// The compare sampler. A border reads as far for the compare in use (1 for `<=`, 0 for
+    /// `>=`); a cube map clamps to the edge whatever the wrap.
+    fn sampler(&self, filter: Filter, wrap: Outside, op: CompareOp, cube: bool) -> wgpu::Sampler {
+        let far_is_one = matches!(op, CompareOp::LessEqual | CompareOp::Less);
+        let (address, border) = match (cube, wrap) {
             (true, _) | (false, Outside::Lit | Outside::ClampToEdge) => {
                 (wgpu::AddressMode::ClampToEdge, None)
             }
             (false, Outside::Repeat) => (wgpu::AddressMode::Repeat, None),
             (false, Outside::Border) => (
                 wgpu::AddressMode::ClampToBorder,
-                Some(if order == DepthOrder::Forward {
+                Some(if far_is_one {
                     wgpu::SamplerBorderColor::OpaqueWhite
                 } else {
                     wgpu::SamplerBorderColor::TransparentBlack
@@ -781,11 +749,11 @@ impl Gpu {
             address_mode_w: address,
             mag_filter: f,
             min_filter: f,
-            compare: Some(match (order == DepthOrder::Forward, strict) {
-                (true, false) => wgpu::CompareFunction::LessEqual,
-                (false, false) => wgpu::CompareFunction::GreaterEqual,
-                (true, true) => wgpu::CompareFunction::Less,
-                (false, true) => wgpu::CompareFunction::Greater,
+            compare: Some(match op {
+                CompareOp::LessEqual => wgpu::CompareFunction::LessEqual,
+                CompareOp::GreaterEqual => wgpu::CompareFunction::GreaterEqual,
+                CompareOp::Less => wgpu::CompareFunction::Less,
+                CompareOp::Greater => wgpu::CompareFunction::Greater,
             }),
             border_color: border,
             ..Default::default()

@@ -1,5 +1,7 @@
-//! WGSL for both passes, generated per technique. The lookup mirrors `umbra_ref::lookup` step
-//! by step, in the zero-to-one convention: the bias matrix maps v = 0.5 − 0.5·y (texture rows
+//! WGSL for both passes, generated per technique. The lit pass is [`umbra_case::lit_shader`]'s:
+//! it decides the lookup's steps (mirroring `umbra_ref::lookup`) and the self-test faults'
+//! effect on them, the same for GLSL; this file supplies only WGSL (`Wgsl`, a [`Dialect`]),
+//! in the zero-to-one convention: the bias matrix maps v = 0.5 − 0.5·y (texture rows
 //! run down, as wgpu's framebuffer rows do), depth is clip z / w with no remapping.
 //!
 //! - Hardware compare: `textureSampleCompareLevel` with a comparison sampler (the `Level`
@@ -15,40 +17,10 @@
 
 use std::fmt::Write as _;
 
-use umbra_case::fault::Fault;
-use umbra_case::format::{BiasMatrix, Compare, DepthOrder, Filter, Outside, Shading, ShadingModel};
-
-/// Everything that changes the generated source.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Key {
-    /// A cube map (point light).
-    pub cube: bool,
-    /// Directional light.
-    pub directional: bool,
-    /// Filter.
-    pub filter: Filter,
-    /// Compare mechanism.
-    pub compare: Compare,
-    /// The sampler clamps the reference to [0,1] (hardware compare on a fixed-point format).
-    pub clamp_reference: bool,
-    /// What a lookup outside [0,1]² returns (the sampler's address mode for hardware
-    /// compare; the shader's wrap for manual compare).
-    pub outside: Outside,
-    /// w > 0 guard.
-    pub guard: bool,
-    /// Bias matrix order.
-    pub bias_matrix: BiasMatrix,
-    /// Depth order.
-    pub order: DepthOrder,
-    /// Slope bias present.
-    pub slope: bool,
-    /// N·L bias present (its scale and min ride in `u.size.zw`).
-    pub n_dot_l: bool,
-    /// Shading model.
-    pub model: ShadingModel,
-    /// An injected fault (self-test only).
-    pub fault: Option<Fault>,
-}
+use umbra_case::Technique;
+use umbra_case::format::{BiasMatrix, Outside, Shading};
+use umbra_case::lit_shader::{self, Dialect, Uniform};
+use umbra_case::technique::{CompareOp, Coordinate, CoordinateStep};
 
 /// The uniform block shared by both passes (std140-compatible layout, 16-byte vectors).
 pub const UNIFORMS: &str = "struct U {\n  view_proj: mat4x4<f32>,\n  light: array<mat4x4<f32>, 6>,\n  tex: array<mat4x4<f32>, 6>,\n  light_pos: vec4<f32>,\n  towards: vec4<f32>,\n  eye: vec4<f32>,\n  size: vec4<f32>,\n  bias: vec4<f32>,\n}\n@group(0) @binding(0) var<uniform> u: U;\n";
@@ -66,254 +38,255 @@ pub fn shadow(with_color: bool) -> String {
     s
 }
 
-/// The lit pass.
-pub fn lit(k: &Key, shading: &Shading) -> String {
-    let manual = k.compare == Compare::Manual;
-    let mut s = String::from(UNIFORMS);
-    let texture = match (k.cube, manual) {
-        (false, _) => "texture_depth_2d",
-        (true, false) => "texture_depth_cube",
-        (true, true) => "texture_depth_2d_array",
-    };
-    let _ = writeln!(s, "@group(0) @binding(1) var map: {texture};");
-    if !manual {
-        s.push_str("@group(0) @binding(2) var samp: sampler_comparison;\n");
-    }
-    s.push_str(
-        "struct VOut {\n  @builtin(position) clip: vec4<f32>,\n  @location(0) pos: vec3<f32>,\n  @location(1) normal: vec3<f32>,\n\
-           @location(2) albedo: vec3<f32>,\n  @location(3) @interpolate(flat) face: f32,\n}\n\
-         @vertex fn vs(@location(0) pos: vec3<f32>, @location(1) normal: vec3<f32>, @location(2) albedo: vec3<f32>, @location(3) face: f32) -> VOut {\n\
-           var o: VOut;\n  o.clip = u.view_proj * vec4<f32>(pos, 1.0);\n  o.pos = pos;\n  o.normal = normal;\n  o.albedo = albedo;\n  o.face = face;\n  return o;\n}\n",
-    );
-    let far = if k.order == DepthOrder::Forward {
-        "1.0"
-    } else {
-        "-1.0"
-    };
-    let clear = if k.order == DepthOrder::Forward {
-        "1.0"
-    } else {
-        "0.0"
-    };
-    let cmp = match (k.order == DepthOrder::Forward, k.fault) {
-        (true, Some(Fault::CompareFlipped)) => ">",
-        (false, Some(Fault::CompareFlipped)) => "<",
-        (true, Some(Fault::CompareStrict)) => "<",
-        (false, Some(Fault::CompareStrict)) => ">",
-        (true, _) => "<=",
-        (false, _) => ">=",
-    };
-    let _ = writeln!(
-        s,
-        "const TOWARD_FAR: f32 = {far};\nconst CLEAR: f32 = {clear};"
-    );
-    if k.directional {
-        s.push_str("fn to_light(p: vec3<f32>) -> vec3<f32> { return u.towards.xyz; }\n");
-    } else {
-        s.push_str(
-            "fn to_light(p: vec3<f32>) -> vec3<f32> { return normalize(u.light_pos.xyz - p); }\n",
-        );
-    }
-    if k.cube {
-        s.push_str(
-            "fn cube_face(d: vec3<f32>) -> i32 {\n  let a = abs(d);\n\
-               if (a.x >= a.y && a.x >= a.z) { return select(0, 1, d.x < 0.0); }\n\
-               if (a.y >= a.z) { return select(2, 3, d.y < 0.0); }\n  return select(4, 5, d.z < 0.0);\n}\n\
-             fn texel_dir(f: i32, i: f32, j: f32) -> vec3<f32> {\n\
-               let sc = 2.0 * (i + 0.5) / u.size.x - 1.0;\n  let tc = 2.0 * (j + 0.5) / u.size.y - 1.0;\n\
-               if (f == 0) { return vec3<f32>(1.0, -tc, -sc); }\n  if (f == 1) { return vec3<f32>(-1.0, -tc, sc); }\n\
-               if (f == 2) { return vec3<f32>(sc, 1.0, tc); }\n  if (f == 3) { return vec3<f32>(sc, -1.0, -tc); }\n\
-               if (f == 4) { return vec3<f32>(sc, -tc, 1.0); }\n  return vec3<f32>(-sc, -tc, -1.0);\n}\n",
-        );
-    }
-    if manual {
-        let outside = if k.fault == Some(Fault::Repeat) {
-            Outside::Repeat
-        } else if k.cube {
-            Outside::ClampToEdge
-        } else {
-            k.outside
+/// The lit pass: its vertex stage and the shared lookup and shading
+/// ([`umbra_case::lit_shader`]) in WGSL.
+pub fn lit(t: &Technique) -> String {
+    lit_shader::lit_fragment(&Wgsl, t)
+}
+
+/// WGSL, in the zero-to-one convention.
+struct Wgsl;
+
+impl Dialect for Wgsl {
+    fn declarations(&self, t: &Technique) -> String {
+        let mut s = String::from(UNIFORMS);
+        let texture = match (t.cube, t.manual()) {
+            (false, _) => "texture_depth_2d",
+            (true, false) => "texture_depth_cube",
+            (true, true) => "texture_depth_2d_array",
         };
+        let _ = writeln!(s, "@group(0) @binding(1) var map: {texture};");
+        if !t.manual() {
+            s.push_str("@group(0) @binding(2) var samp: sampler_comparison;\n");
+        }
         s.push_str(
+            "struct VOut {\n  @builtin(position) clip: vec4<f32>,\n  @location(0) pos: vec3<f32>,\n  @location(1) normal: vec3<f32>,\n\
+               @location(2) albedo: vec3<f32>,\n  @location(3) @interpolate(flat) face: f32,\n}\n\
+             @vertex fn vs(@location(0) pos: vec3<f32>, @location(1) normal: vec3<f32>, @location(2) albedo: vec3<f32>, @location(3) face: f32) -> VOut {\n\
+               var o: VOut;\n  o.clip = u.view_proj * vec4<f32>(pos, 1.0);\n  o.pos = pos;\n  o.normal = normal;\n  o.albedo = albedo;\n  o.face = face;\n  return o;\n}\n",
+        );
+        s
+    }
+
+    fn constant(&self, name: &str, value: &str) -> String {
+        format!("const {name}: f32 = {value};\n")
+    }
+
+    fn to_light(&self, directional: bool) -> &'static str {
+        if directional {
+            "fn to_light(p: vec3<f32>) -> vec3<f32> { return u.towards.xyz; }\n"
+        } else {
+            "fn to_light(p: vec3<f32>) -> vec3<f32> { return normalize(u.light_pos.xyz - p); }\n"
+        }
+    }
+
+    /// WGSL indexes `u.light` and `u.tex` with `f` directly.
+    fn face_matrices(&self, _faces: usize) -> String {
+        String::new()
+    }
+
+    fn cube_helpers(&self) -> &'static str {
+        "fn cube_face(d: vec3<f32>) -> i32 {\n  let a = abs(d);\n\
+           if (a.x >= a.y && a.x >= a.z) { return select(0, 1, d.x < 0.0); }\n\
+           if (a.y >= a.z) { return select(2, 3, d.y < 0.0); }\n  return select(4, 5, d.z < 0.0);\n}\n\
+         fn texel_dir(f: i32, i: f32, j: f32) -> vec3<f32> {\n\
+           let sc = 2.0 * (i + 0.5) / u.size.x - 1.0;\n  let tc = 2.0 * (j + 0.5) / u.size.y - 1.0;\n\
+           if (f == 0) { return vec3<f32>(1.0, -tc, -sc); }\n  if (f == 1) { return vec3<f32>(-1.0, -tc, sc); }\n\
+           if (f == 2) { return vec3<f32>(sc, 1.0, tc); }\n  if (f == 3) { return vec3<f32>(sc, -1.0, -tc); }\n\
+           if (f == 4) { return vec3<f32>(sc, -tc, 1.0); }\n  return vec3<f32>(-sc, -tc, -1.0);\n}\n"
+    }
+
+    /// The map is always a depth texture.
+    fn depth_decoder(&self) -> &'static str {
+        ""
+    }
+
+    /// A depth texture's `textureLoad` returns one value: there is no wrong component to read.
+    fn fetch(&self, cube: bool, wrap: Outside, _wrong_component: bool) -> String {
+        let mut s = String::from(
             "fn fetch(f: i32, i_in: f32, j_in: f32) -> f32 {\n  var i = i_in;\n  var j = j_in;\n",
         );
-        match outside {
-            Outside::Border => s.push_str("  if (i < 0.0 || j < 0.0 || i >= u.size.x || j >= u.size.y) { return CLEAR; }\n"),
-            Outside::Repeat => s.push_str("  i = i - u.size.x * floor(i / u.size.x);\n  j = j - u.size.y * floor(j / u.size.y);\n"),
-            Outside::Lit | Outside::ClampToEdge => s.push_str("  i = clamp(i, 0.0, u.size.x - 1.0);\n  j = clamp(j, 0.0, u.size.y - 1.0);\n"),
-        }
-        if k.cube {
+        s.push_str(match wrap {
+            Outside::Border => "  if (i < 0.0 || j < 0.0 || i >= u.size.x || j >= u.size.y) { return CLEAR; }\n",
+            Outside::Repeat => "  i = i - u.size.x * floor(i / u.size.x);\n  j = j - u.size.y * floor(j / u.size.y);\n",
+            Outside::Lit | Outside::ClampToEdge => "  i = clamp(i, 0.0, u.size.x - 1.0);\n  j = clamp(j, 0.0, u.size.y - 1.0);\n",
+        });
+        if cube {
             s.push_str("  return textureLoad(map, vec2<i32>(i32(i), i32(j)), f, 0);\n}\n");
         } else {
             s.push_str("  return textureLoad(map, vec2<i32>(i32(i), i32(j)), 0);\n}\n");
         }
-        let _ = writeln!(
-            s,
-            "fn tap(f: i32, i: f32, j: f32, r: f32) -> f32 {{ return select(0.0, 1.0, r {cmp} fetch(f, i, j)); }}"
-        );
-    } else if k.cube {
-        s.push_str("fn tap(f: i32, i: f32, j: f32, r: f32) -> f32 { return textureSampleCompareLevel(map, samp, texel_dir(f, i, j), r); }\n");
-    } else {
-        s.push_str("fn tap(f: i32, i: f32, j: f32, r: f32) -> f32 { return textureSampleCompareLevel(map, samp, (vec2<f32>(i, j) + 0.5) / u.size.xy, r); }\n");
+        s
     }
-    if k.fault == Some(Fault::NormalOffsetShort) {
-        s.push_str("fn visibility(p_in: vec3<f32>, n: vec3<f32>) -> f32 {\n  let p = p_in + n * (0.75 * u.bias.w);\n");
-    } else {
-        s.push_str(
-            "fn visibility(p_in: vec3<f32>, n: vec3<f32>) -> f32 {\n  let p = p_in + n * u.bias.w;\n",
-        );
+
+    fn tap(&self, manual: bool, cube: bool, op: CompareOp) -> String {
+        let head = "fn tap(f: i32, i: f32, j: f32, r: f32) -> f32";
+        match (manual, cube) {
+            (true, _) => format!(
+                "{head} {{ return select(0.0, 1.0, r {} fetch(f, i, j)); }}\n",
+                op.symbol()
+            ),
+            (false, true) => format!(
+                "{head} {{ return textureSampleCompareLevel(map, samp, texel_dir(f, i, j), r); }}\n"
+            ),
+            (false, false) => format!(
+                "{head} {{ return textureSampleCompareLevel(map, samp, (vec2<f32>(i, j) + 0.5) / u.size.xy, r); }}\n"
+            ),
+        }
     }
-    if k.cube {
-        s.push_str("  let f = cube_face(p - u.light_pos.xyz);\n");
-    } else {
-        s.push_str("  let f = 0;\n");
+
+    fn uniform(&self, u: Uniform) -> &'static str {
+        match u {
+            Uniform::MapWidth => "u.size.x",
+            Uniform::MapHeight => "u.size.y",
+            Uniform::NormalOffset => "u.bias.w",
+            Uniform::SlopeScale => "u.bias.y",
+            Uniform::NdotLScale => "u.size.z",
+            Uniform::NdotLMin => "u.size.w",
+        }
     }
-    match (k.bias_matrix, k.fault) {
-        (BiasMatrix::BeforeDivide, Some(Fault::NoDivide)) => s.push_str("  let t = u.tex[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(t.xyz, t.w);\n"),
-        (BiasMatrix::BeforeDivide, Some(Fault::NoBias)) => s.push_str("  let t = u.light[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(t.xyz / t.w, t.w);\n"),
-        (BiasMatrix::BeforeDivide, _) => s.push_str("  let t = u.tex[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(t.xyz / t.w, t.w);\n"),
-        (BiasMatrix::AfterDivide, Some(Fault::NoDivide)) => s.push_str(
-            "  let l = u.light[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(0.5 * l.x + 0.5, 0.5 - 0.5 * l.y, l.z, l.w);\n",
-        ),
-        (BiasMatrix::AfterDivide, Some(Fault::NoBias)) => s.push_str("  let l = u.light[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(l.xyz / l.w, l.w);\n"),
-        (BiasMatrix::AfterDivide, _) => s.push_str(
-            "  let l = u.light[f] * vec4<f32>(p, 1.0);\n  let ndc = l.xyz / l.w;\n\
-               var c = vec4<f32>(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y, ndc.z, l.w);\n",
-        ),
+
+    fn lookup_start(&self, offset: &str) -> String {
+        format!(
+            "fn visibility(p_in: vec3<f32>, n: vec3<f32>) -> f32 {{\n  let p = p_in + n * {offset};\n"
+        )
     }
-    if k.fault == Some(Fault::BiasTwice) {
-        s.push_str("  c = vec4<f32>(0.5 * c.x + 0.5, 0.5 - 0.5 * c.y, c.z, c.w);\n");
-    }
-    if k.fault == Some(Fault::QuarterTexel) {
-        s.push_str("  c.x = c.x + 0.25 / u.size.x;\n");
-    }
-    if k.guard && k.fault != Some(Fault::NoGuard) {
-        s.push_str("  if (c.w <= 0.0) { return 1.0; }\n");
-    }
-    if !k.cube && k.outside == Outside::Lit {
-        s.push_str("  if (c.x < 0.0 || c.x > 1.0 || c.y < 0.0 || c.y > 1.0) { return 1.0; }\n");
-    }
-    if k.cube {
-        s.push_str("  c.y = 1.0 - c.y; // face rows run with the cube table's t\n");
-    }
-    s.push_str("  var bias = u.bias.x;\n");
-    if k.slope {
-        // tan(acos(c)) in its algebraic form (umbra_ref::lookup, step 6).
-        let scale = if k.fault == Some(Fault::SlopeShort) {
-            "0.8 * u.bias.y"
+
+    fn face(&self, cube: bool) -> &'static str {
+        if cube {
+            "  let f = cube_face(p - u.light_pos.xyz);\n"
         } else {
-            "u.bias.y"
-        };
-        let _ = writeln!(
-            s,
-            "  let cosine = dot(n, to_light(p));\n  if (cosine > 0.0) {{ bias += clamp({scale} * sqrt(max(1.0 - cosine * cosine, 0.0)) / cosine, 0.0, u.bias.z); }}"
-        );
-    }
-    if k.n_dot_l {
-        // LearnOpenGL's max(s·(1 − N·L), min), N·L unclamped (umbra_ref::lookup, step 6).
-        s.push_str("  bias += max(u.size.z * (1.0 - dot(n, to_light(p))), u.size.w);\n");
-    }
-    s.push_str("  var r = c.z - TOWARD_FAR * bias;\n");
-    if !manual && !k.clamp_reference && k.fault == Some(Fault::ClampFloat) {
-        s.push_str("  r = clamp(r, 0.0, 1.0);\n"); // a float format clamped like a fixed one
-    }
-    let hw_direct = !manual && !matches!(k.filter, Filter::Pcf(_));
-    match k.filter {
-        _ if hw_direct && k.cube => {
-            s.push_str("  return textureSampleCompareLevel(map, samp, p - u.light_pos.xyz, r);\n")
+            "  let f = 0;\n"
         }
-        _ if hw_direct => s.push_str("  return textureSampleCompareLevel(map, samp, c.xy, r);\n"),
-        Filter::Nearest => {
-            s.push_str("  return tap(f, floor(c.x * u.size.x), floor(c.y * u.size.y), r);\n")
-        }
-        Filter::Linear => {
-            s.push_str(
-                "  let x = c.xy * u.size.xy - 0.5;\n  let i0 = floor(x);\n  var a = x - i0;\n",
-            );
-            if k.fault == Some(Fault::BilinearCoarse) {
-                s.push_str("  a = floor(a * 4.0) / 4.0;\n");
+    }
+
+    /// The bias matrix maps v = 0.5 − 0.5·y and leaves depth alone (zero-to-one).
+    fn coordinate(&self, c: &Coordinate) -> &'static str {
+        use CoordinateStep::{Bias, Divide};
+        match (c.bias_matrix, c.left_out) {
+            (BiasMatrix::BeforeDivide, Some(Divide)) => {
+                "  let t = u.tex[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(t.xyz, t.w);\n"
             }
-            s.push_str(
-                "  return (1.0 - a.x) * (1.0 - a.y) * tap(f, i0.x, i0.y, r) + a.x * (1.0 - a.y) * tap(f, i0.x + 1.0, i0.y, r)\n\
-                    + (1.0 - a.x) * a.y * tap(f, i0.x, i0.y + 1.0, r) + a.x * a.y * tap(f, i0.x + 1.0, i0.y + 1.0, r);\n",
-            );
-        }
-        Filter::Pcf(n) => {
-            let centre = if k.fault == Some(Fault::PcfOffCentre) {
-                format!("f32({n}) * 0.5")
-            } else {
-                format!("(f32({n}) - 1.0) * 0.5")
-            };
-            let _ = writeln!(
-                s,
-                "  var sum = 0.0;\n  let h = {centre};\n\
-                   for (var dy = 0; dy < {n}; dy++) {{\n    for (var dx = 0; dx < {n}; dx++) {{\n\
-                       let uv = c.xy + (vec2<f32>(f32(dx), f32(dy)) - h) / u.size.xy;\n\
-                       sum += tap(f, floor(uv.x * u.size.x), floor(uv.y * u.size.y), r);\n    }}\n  }}"
-            );
-            if k.fault == Some(Fault::PcfDoubleCentre) {
-                s.push_str(
-                    "  let uv0 = c.xy + (vec2<f32>(0.0) - h) / u.size.xy;\n\
-                       sum += tap(f, floor(c.x * u.size.x), floor(c.y * u.size.y), r) - tap(f, floor(uv0.x * u.size.x), floor(uv0.y * u.size.y), r);\n",
-                );
+            (BiasMatrix::BeforeDivide, Some(Bias)) => {
+                "  let t = u.light[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(t.xyz / t.w, t.w);\n"
             }
-            let _ = writeln!(s, "  return sum / f32({n} * {n});");
+            (BiasMatrix::BeforeDivide, None) => {
+                "  let t = u.tex[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(t.xyz / t.w, t.w);\n"
+            }
+            (BiasMatrix::AfterDivide, Some(Divide)) => {
+                "  let l = u.light[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(0.5 * l.x + 0.5, 0.5 - 0.5 * l.y, l.z, l.w);\n"
+            }
+            (BiasMatrix::AfterDivide, Some(Bias)) => {
+                "  let l = u.light[f] * vec4<f32>(p, 1.0);\n  var c = vec4<f32>(l.xyz / l.w, l.w);\n"
+            }
+            (BiasMatrix::AfterDivide, None) => {
+                "  let l = u.light[f] * vec4<f32>(p, 1.0);\n  let ndc = l.xyz / l.w;\n\
+               var c = vec4<f32>(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y, ndc.z, l.w);\n"
+            }
         }
     }
-    s.push_str("}\n");
-    let _ = writeln!(
-        s,
-        "fn shade(albedo: vec3<f32>, n: vec3<f32>, l: vec3<f32>, e: vec3<f32>, vis: f32) -> vec3<f32> {{\n  let ndl = dot(n, l);\n  let diffuse = max(ndl, 0.0);"
-    );
-    match k.model {
-        ShadingModel::Dimmed => {
-            let kept = if k.fault == Some(Fault::DimmingOff) {
-                "vis".to_string()
-            } else {
-                format!("{d:.9} + (1.0 - {d:.9}) * vis", d = shading.dimming)
-            };
-            let lit_spec = if k.fault == Some(Fault::SpecularUnshadowed) {
-                "spec"
-            } else {
-                "vis * spec"
-            };
-            let _ = writeln!(
-                s,
-                "  let kept = {kept};\n  var spec = 0.0;\n\
-                   if (ndl > 0.0) {{ let hv = l + e; let len = length(hv); if (len > 0.0) {{ spec = {ks:.9} * pow(max(dot(n, hv / len), 0.0), {sh:.9}); }} }}\n\
-                   return ({a:.9} + kept * diffuse) * albedo + vec3<f32>({lit_spec});",
-                ks = shading.specular,
-                sh = shading.shininess,
-                a = shading.ambient
-            );
-        }
-        ShadingModel::Classic => {
-            let _ = writeln!(
-                s,
-                "  return ({a:.9} + diffuse) * albedo * ({f:.9} + (1.0 - {f:.9}) * vis);",
-                a = shading.ambient,
-                f = shading.shadowed_factor
-            );
-        }
+
+    fn bias_again(&self) -> &'static str {
+        "  c = vec4<f32>(0.5 * c.x + 0.5, 0.5 - 0.5 * c.y, c.z, c.w);\n"
     }
-    s.push_str("}\n");
-    s.push_str(
+
+    fn nudge_u(&self, texels: &str) -> String {
+        format!("  c.x = c.x + {texels} / u.size.x;\n")
+    }
+
+    fn guard(&self) -> &'static str {
+        "  if (c.w <= 0.0) { return 1.0; }\n"
+    }
+
+    fn outside_test(&self) -> &'static str {
+        "  if (c.x < 0.0 || c.x > 1.0 || c.y < 0.0 || c.y > 1.0) { return 1.0; }\n"
+    }
+
+    /// Faces are rendered with y flipped, so texel rows run with the cube table's t = 1 − v.
+    fn cube_rows(&self) -> &'static str {
+        "  c.y = 1.0 - c.y; // face rows run with the cube table's t\n"
+    }
+
+    fn bias_start(&self) -> &'static str {
+        "  var bias = u.bias.x;\n"
+    }
+
+    fn slope_bias(&self, scale: &str) -> String {
+        format!(
+            "  let cosine = dot(n, to_light(p));\n  if (cosine > 0.0) {{ bias += clamp({scale} * sqrt(max(1.0 - cosine * cosine, 0.0)) / cosine, 0.0, u.bias.z); }}\n"
+        )
+    }
+
+    fn reference(&self) -> &'static str {
+        "  var r = c.z - TOWARD_FAR * bias;\n"
+    }
+
+    fn sample_cube(&self) -> &'static str {
+        "  return textureSampleCompareLevel(map, samp, p - u.light_pos.xyz, r);\n"
+    }
+
+    /// WGSL has no projective compare: c is already divided, so the ordinary one.
+    fn sample_projective(&self) -> &'static str {
+        self.sample()
+    }
+
+    fn sample(&self) -> &'static str {
+        "  return textureSampleCompareLevel(map, samp, c.xy, r);\n"
+    }
+
+    fn bilinear_start(&self) -> &'static str {
+        "  let x = c.xy * u.size.xy - 0.5;\n  let i0 = floor(x);\n  var a = x - i0;\n"
+    }
+
+    fn float_of(&self, n: u32) -> String {
+        format!("f32({n})")
+    }
+
+    fn pcf_sum(&self, n: u32, centre: &str) -> String {
+        format!(
+            "  var sum = 0.0;\n  let h = {centre};\n\
+               for (var dy = 0; dy < {n}; dy++) {{\n    for (var dx = 0; dx < {n}; dx++) {{\n\
+                   let uv = c.xy + (vec2<f32>(f32(dx), f32(dy)) - h) / u.size.xy;\n\
+                   sum += tap(f, floor(uv.x * u.size.x), floor(uv.y * u.size.y), r);\n    }}\n  }}\n"
+        )
+    }
+
+    fn pcf_double_centre(&self) -> &'static str {
+        "  let uv0 = c.xy + (vec2<f32>(0.0) - h) / u.size.xy;\n\
+           sum += tap(f, floor(c.x * u.size.x), floor(c.y * u.size.y), r) - tap(f, floor(uv0.x * u.size.x), floor(uv0.y * u.size.y), r);\n"
+    }
+
+    fn pcf_mean(&self, n: u32) -> String {
+        format!("  return sum / f32({n} * {n});\n")
+    }
+
+    fn shade_start(&self) -> &'static str {
+        "fn shade(albedo: vec3<f32>, n: vec3<f32>, l: vec3<f32>, e: vec3<f32>, vis: f32) -> vec3<f32> {\n  let ndl = dot(n, l);\n  let diffuse = max(ndl, 0.0);\n"
+    }
+
+    fn dimmed(&self, kept: &str, lit_spec: &str, shading: &Shading) -> String {
+        format!(
+            "  let kept = {kept};\n  var spec = 0.0;\n\
+               if (ndl > 0.0) {{ let hv = l + e; let len = length(hv); if (len > 0.0) {{ spec = {ks:.9} * pow(max(dot(n, hv / len), 0.0), {sh:.9}); }} }}\n\
+               return ({a:.9} + kept * diffuse) * albedo + vec3<f32>({lit_spec});\n",
+            ks = shading.specular,
+            sh = shading.shininess,
+            a = shading.ambient
+        )
+    }
+
+    fn main_start(&self) -> &'static str {
         "struct FOut {\n  @location(0) color: vec4<f32>,\n  @location(1) vis: vec4<f32>,\n  @location(2) face: u32,\n}\n\
-         @fragment fn fs(v: VOut) -> FOut {\n  let n = normalize(v.normal);\n  var vis = visibility(v.pos, n);\n",
-    );
-    if k.fault == Some(Fault::Vis4Bit) {
-        s.push_str("  vis = floor(vis * 16.0 + 0.5) / 16.0;\n");
+         @fragment fn fs(v: VOut) -> FOut {\n  let n = normalize(v.normal);\n  var vis = visibility(v.pos, n);\n"
     }
-    s.push_str(
+
+    fn main_colour(&self) -> &'static str {
         "  let e = normalize(u.eye.xyz - v.pos);\n  var o: FOut;\n\
-           var col = clamp(shade(v.albedo, n, to_light(v.pos), e, vis), vec3<f32>(0.0), vec3<f32>(1.0));\n",
-    );
-    if k.fault == Some(Fault::ColourGamma) {
-        s.push_str("  col = sqrt(col);\n");
+           var col = clamp(shade(v.albedo, n, to_light(v.pos), e, vis), vec3<f32>(0.0), vec3<f32>(1.0));\n"
     }
-    s.push_str(
+
+    fn main_end(&self) -> &'static str {
         "  o.color = vec4<f32>(col, 1.0);\n\
-           o.vis = vec4<f32>(vis, 0.0, 0.0, 1.0);\n  o.face = u32(floor(v.face + 0.5)) + 1u;\n  return o;\n}\n",
-    );
-    s
+           o.vis = vec4<f32>(vis, 0.0, 0.0, 1.0);\n  o.face = u32(floor(v.face + 0.5)) + 1u;\n  return o;\n}\n"
+    }
 }

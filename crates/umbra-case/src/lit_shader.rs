@@ -1,0 +1,257 @@
+//! The lit pass's fragment shader, written once for every shading language.
+//!
+//! Why it exists: the lookup must be the same steps in GLSL and in WGSL, in the same order,
+//! with the self-test's faults acting on the same steps, or a difference between backends is
+//! the generators' and not the drivers'. [`lit_fragment`] is the only place that decides which
+//! steps a [`Technique`] takes and in what order; a [`Dialect`] supplies the language: types,
+//! declarations, texture calls, uniform names and entry points. A line that reads the same in
+//! both languages but for a uniform's name is written here, with the name from
+//! [`Dialect::uniform`]; anything else comes from the dialect.
+//!
+//! A trait rather than a list of steps that each language prints: each dialect method is one
+//! piece of one language, documented once here, so an emitter is a flat list of short
+//! snippets with no decisions in it. A method a language does not need (GLSL's accessors for
+//! the face matrices, WGSL's cube rows) returns an empty string there.
+
+use crate::format::{DepthOrder, Outside, Shading, ShadingModel};
+use crate::technique::{CompareOp, Coordinate, Taps, Technique};
+
+/// Uniforms that lines written here read, by role.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Uniform {
+    /// The map's width in texels (a float).
+    MapWidth,
+    /// The map's height in texels.
+    MapHeight,
+    /// The world-space normal offset.
+    NormalOffset,
+    /// The slope bias's scale.
+    SlopeScale,
+    /// The N·L bias's scale.
+    NdotLScale,
+    /// The N·L bias's least value.
+    NdotLMin,
+}
+
+/// One shading language's pieces of the lit pass. Each method returns source text, whole
+/// lines ending in `\n`; the functions named are those every dialect defines (`to_light`,
+/// `cube_face`, `texel_dir`, `fetch`, `tap`, `visibility`, `shade`) and the locals are those
+/// of `umbra_ref::lookup` (`p`, `n`, `f`, `c`, `bias`, `r`).
+pub trait Dialect {
+    /// Everything before the constants: version, inputs, uniforms, the map's binding, outputs
+    /// (and the vertex stage where the language keeps both in one module).
+    fn declarations(&self, t: &Technique) -> String;
+    /// One float constant.
+    fn constant(&self, name: &str, value: &str) -> String;
+    /// `to_light(p)`: the unit vector from `p` towards the light.
+    fn to_light(&self, directional: bool) -> &'static str;
+    /// Accessors for the `faces` light and texture matrices, where the language cannot index
+    /// them directly.
+    fn face_matrices(&self, faces: usize) -> String;
+    /// `cube_face(d)` and `texel_dir(f, i, j)` (the GL cube-map face table and its inverse).
+    fn cube_helpers(&self) -> &'static str;
+    /// Decoding of depth stored in colour, where the map is not a depth texture.
+    fn depth_decoder(&self) -> &'static str;
+    /// `fetch(f, i, j)`: the stored depth of texel (i, j) of face f, out-of-range texels
+    /// addressed by `wrap`, read from the wrong component if `wrong_component`.
+    fn fetch(&self, cube: bool, wrap: Outside, wrong_component: bool) -> String;
+    /// `tap(f, i, j, r)`: one compare of reference `r` at texel (i, j) of face f, by the
+    /// shader with `op` (`manual`) or by the sampler.
+    fn tap(&self, manual: bool, cube: bool, op: CompareOp) -> String;
+    /// A uniform's name (with its component where the language packs it in a vector).
+    fn uniform(&self, u: Uniform) -> &'static str;
+    /// Opens `visibility(p, n)` and moves `p` by `offset` along `n`.
+    fn lookup_start(&self, offset: &str) -> String;
+    /// `f`: the face (`cube_face` of the direction from the light, or 0).
+    fn face(&self, cube: bool) -> &'static str;
+    /// `c` = (u, v, depth, w) from `p` (reads `bias_matrix` and `left_out`).
+    fn coordinate(&self, c: &Coordinate) -> &'static str;
+    /// The bias matrix applied to `c` again.
+    fn bias_again(&self) -> &'static str;
+    /// `u` moved by `texels` texels.
+    fn nudge_u(&self, texels: &str) -> String;
+    /// Returns lit where w ≤ 0.
+    fn guard(&self) -> &'static str;
+    /// Returns lit outside [0,1]².
+    fn outside_test(&self) -> &'static str;
+    /// On a cube map, after the tests: rows as the backend's face images hold them.
+    fn cube_rows(&self) -> &'static str;
+    /// `bias`, starting with the constant bias.
+    fn bias_start(&self) -> &'static str;
+    /// Adds the slope bias, `scale` · tan(θ) capped.
+    fn slope_bias(&self, scale: &str) -> String;
+    /// `r`, the reference: `c.z` moved by `bias` towards the light.
+    fn reference(&self) -> &'static str;
+    /// Returns the sampler's compare at the direction from the light ([`Taps::HardwareCube`]).
+    fn sample_cube(&self) -> &'static str;
+    /// Returns the sampler's projective compare ([`Taps::HardwareProjective`]).
+    fn sample_projective(&self) -> &'static str;
+    /// Returns the sampler's compare at `c` ([`Taps::Hardware`]).
+    fn sample(&self) -> &'static str;
+    /// The bilinear position: `i0`, the first texel, and `a`, the weights.
+    fn bilinear_start(&self) -> &'static str;
+    /// `n` as a float.
+    fn float_of(&self, n: u32) -> String;
+    /// `sum` of the N × N taps with offsets k − `centre`, `h` = `centre`.
+    fn pcf_sum(&self, n: u32, centre: &str) -> String;
+    /// Replaces the first corner's tap in `sum` by the centre's.
+    fn pcf_double_centre(&self) -> &'static str;
+    /// Returns `sum` over N².
+    fn pcf_mean(&self, n: u32) -> String;
+    /// Opens `shade(albedo, n, l, e, vis)`: `ndl` and `diffuse`.
+    fn shade_start(&self) -> &'static str;
+    /// The dimmed model: `kept` of diffuse in shadow, `lit_spec` the specular term.
+    fn dimmed(&self, kept: &str, lit_spec: &str, shading: &Shading) -> String;
+    /// Opens the entry point, up to `vis`.
+    fn main_start(&self) -> &'static str;
+    /// The shaded colour `col` (and the face id) from `vis`.
+    fn main_colour(&self) -> &'static str;
+    /// Writes the outputs and closes the entry point.
+    fn main_end(&self) -> &'static str;
+}
+
+/// The lit pass's fragment shader for `t` in dialect `d`: the lookup mirrors
+/// `umbra_ref::lookup` step by step, the shading `umbra_ref::shading`.
+pub fn lit_fragment(d: &impl Dialect, t: &Technique) -> String {
+    let mut s = d.declarations(t);
+    let forward = t.order == DepthOrder::Forward;
+    s += &d.constant("TOWARD_FAR", if forward { "1.0" } else { "-1.0" });
+    s += &d.constant("CLEAR", if forward { "1.0" } else { "0.0" });
+    s += d.to_light(t.directional);
+    s += &d.face_matrices(if t.cube { 6 } else { 1 });
+    if t.cube {
+        s += d.cube_helpers();
+    }
+    s += d.depth_decoder();
+    if t.manual() {
+        s += &d.fetch(t.cube, t.texel_wrap(), t.reads_wrong_component());
+    }
+    s += &d.tap(t.manual(), t.cube, t.compare_op());
+    lookup(&mut s, d, t);
+    shade(&mut s, d, t);
+    s += d.main_start();
+    if let Some(steps) = t.visibility_steps() {
+        s += &format!("  vis = floor(vis * {steps}.0 + 0.5) / {steps}.0;\n");
+    }
+    s += d.main_colour();
+    if t.encodes_gamma() {
+        s += "  col = sqrt(col);\n";
+    }
+    s += d.main_end();
+    s
+}
+
+/// `visibility(p, n)`: normal offset, face, coordinate, guard, outside test, bias,
+/// reference, taps.
+fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
+    let offset = d.uniform(Uniform::NormalOffset);
+    let offset = match t.normal_offset_scale() {
+        1.0 => offset.to_string(),
+        k => format!("({k} * {offset})"),
+    };
+    *s += &d.lookup_start(&offset);
+    *s += d.face(t.cube);
+    let c = t.coordinate();
+    *s += d.coordinate(&c);
+    if c.bias_again {
+        *s += d.bias_again();
+    }
+    if c.u_nudge_texels != 0.0 {
+        *s += &d.nudge_u(&c.u_nudge_texels.to_string());
+    }
+    if t.guards() {
+        *s += d.guard();
+    }
+    if t.tests_outside() {
+        *s += d.outside_test();
+    }
+    if t.cube {
+        *s += d.cube_rows();
+    }
+    *s += d.bias_start();
+    if let Some(k) = t.slope_scale() {
+        // tan(acos(c)) in its algebraic form (umbra_ref::lookup, step 6).
+        let scale = d.uniform(Uniform::SlopeScale);
+        let scale = match k {
+            1.0 => scale.to_string(),
+            k => format!("{k} * {scale}"),
+        };
+        *s += &d.slope_bias(&scale);
+    }
+    if t.n_dot_l {
+        // LearnOpenGL's max(s·(1 − N·L), min), N·L unclamped (umbra_ref::lookup, step 6).
+        *s += &format!(
+            "  bias += max({} * (1.0 - dot(n, to_light(p))), {});\n",
+            d.uniform(Uniform::NdotLScale),
+            d.uniform(Uniform::NdotLMin)
+        );
+    }
+    *s += d.reference();
+    if t.shader_clamps_reference() {
+        *s += "  r = clamp(r, 0.0, 1.0);\n";
+    }
+    let (w, h) = (d.uniform(Uniform::MapWidth), d.uniform(Uniform::MapHeight));
+    match t.taps() {
+        Taps::HardwareCube => *s += d.sample_cube(),
+        Taps::HardwareProjective => *s += d.sample_projective(),
+        Taps::Hardware => *s += d.sample(),
+        Taps::Nearest => {
+            *s += &format!("  return tap(f, floor(c.x * {w}), floor(c.y * {h}), r);\n")
+        }
+        Taps::Bilinear { coarse_weights } => {
+            *s += d.bilinear_start();
+            if coarse_weights {
+                *s += "  a = floor(a * 4.0) / 4.0;\n";
+            }
+            *s += "  return (1.0 - a.x) * (1.0 - a.y) * tap(f, i0.x, i0.y, r) + a.x * (1.0 - a.y) * tap(f, i0.x + 1.0, i0.y, r)\n\
+                    + (1.0 - a.x) * a.y * tap(f, i0.x, i0.y + 1.0, r) + a.x * a.y * tap(f, i0.x + 1.0, i0.y + 1.0, r);\n";
+        }
+        Taps::Pcf {
+            n,
+            off_centre,
+            double_centre,
+        } => {
+            let size = d.float_of(n);
+            let centre = if off_centre {
+                format!("{size} * 0.5")
+            } else {
+                format!("({size} - 1.0) * 0.5")
+            };
+            *s += &d.pcf_sum(n, &centre);
+            if double_centre {
+                *s += d.pcf_double_centre();
+            }
+            *s += &d.pcf_mean(n);
+        }
+    }
+    *s += "}\n";
+}
+
+/// `shade(albedo, n, l, e, vis)` (umbra_ref::shading).
+fn shade(s: &mut String, d: &impl Dialect, t: &Technique) {
+    let shading = &t.shading;
+    *s += d.shade_start();
+    match shading.model {
+        ShadingModel::Dimmed => {
+            let kept = if t.keeps_diffuse_in_shadow() {
+                format!("{k:.9} + (1.0 - {k:.9}) * vis", k = shading.dimming)
+            } else {
+                "vis".to_string()
+            };
+            let lit_spec = if t.shadows_specular() {
+                "vis * spec"
+            } else {
+                "spec"
+            };
+            *s += &d.dimmed(&kept, lit_spec, shading);
+        }
+        ShadingModel::Classic => {
+            *s += &format!(
+                "  return ({a:.9} + diffuse) * albedo * ({f:.9} + (1.0 - {f:.9}) * vis);\n",
+                a = shading.ambient,
+                f = shading.shadowed_factor
+            );
+        }
+    }
+    *s += "}\n";
+}

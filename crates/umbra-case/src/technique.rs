@@ -1,0 +1,360 @@
+//! The technique a lit pass implements, described once for every GPU backend.
+//!
+//! Why it exists: GL and wgpu each generate their lit pass (GLSL, WGSL) from the prepared
+//! run. Each used to copy the case into its own key field by field and to decide on its own
+//! how a self-test fault bends the lookup, so the two could drift apart without any test
+//! noticing. Here [`Technique::new`] reads the run once, and every fault that acts on the lit
+//! pass is resolved in this file only, into plain values: a compare operator, a scale, a wrap
+//! policy, which filter taps. [`crate::lit_shader`] writes the lookup from them in whichever
+//! language, and the renderers set their samplers from the same values.
+//!
+//! What a backend does differently is an explicit adjustment of the technique, not a second
+//! derivation: GLES 2 has no shadow samplers, so GL applies
+//! [`Technique::with_manual_compare`] there.
+//!
+//! The steps mirror `umbra_ref::lookup`: normal offset, cube face, coordinate (bias matrix
+//! before or after the divide), w > 0 guard, outside test, bias, the reference's clamp, filter.
+
+use crate::fault::Fault;
+use crate::format::{BiasMatrix, Compare, DepthOrder, Filter, Outside, Shading};
+use crate::light::LightKind;
+use crate::prepare::Prepared;
+
+/// Everything that shapes a lit pass's lookup and shading.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Technique {
+    /// A cube map (point light): six faces, the face chosen by direction.
+    pub cube: bool,
+    /// Parallel rays (directional light): the direction to the light is the same everywhere.
+    pub directional: bool,
+    /// The case's filter.
+    pub filter: Filter,
+    /// Who compares: the sampler or the shader (see [`Technique::with_manual_compare`]).
+    pub compare: Compare,
+    /// The reference is clamped to [0,1]: a hardware compare on a fixed-point format. Kept
+    /// when a backend compares in the shader in the sampler's place.
+    pub clamp_reference: bool,
+    /// The case's outside policy (the lit test; the wrap is [`Technique::texel_wrap`]).
+    pub outside: Outside,
+    /// The case's w > 0 guard (the lookup's is [`Technique::guards`]).
+    pub guard: bool,
+    /// Where the bias matrix is applied relative to the perspective divide.
+    pub bias_matrix: BiasMatrix,
+    /// Depth order.
+    pub order: DepthOrder,
+    /// A slope bias is present (its scale and cap are uniforms).
+    pub slope: bool,
+    /// An N·L bias is present (its scale and least value are uniforms).
+    pub n_dot_l: bool,
+    /// The illumination model and its constants (written into the shader).
+    pub shading: Shading,
+    /// The self-test's fault: read by the methods below and nowhere else.
+    fault: Option<Fault>,
+}
+
+/// A depth compare, `reference OP stored` (true is lit).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CompareOp {
+    /// `<=` (forward depth).
+    LessEqual,
+    /// `>=` (reversed depth).
+    GreaterEqual,
+    /// `<`.
+    Less,
+    /// `>`.
+    Greater,
+}
+
+impl CompareOp {
+    /// The operator as GLSL and WGSL both write it.
+    pub fn symbol(self) -> &'static str {
+        match self {
+            CompareOp::LessEqual => "<=",
+            CompareOp::GreaterEqual => ">=",
+            CompareOp::Less => "<",
+            CompareOp::Greater => ">",
+        }
+    }
+}
+
+/// How the lookup coordinate c = (u, v, depth, w) is computed from the light matrices.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coordinate {
+    /// Where the bias matrix goes relative to the divide.
+    pub bias_matrix: BiasMatrix,
+    /// A step left out (the self-test's NoDivide, NoBias).
+    pub left_out: Option<CoordinateStep>,
+    /// The bias matrix is applied a second time, after the rest.
+    pub bias_again: bool,
+    /// Texels added to u at the end.
+    pub u_nudge_texels: f32,
+}
+
+/// A step of the lookup coordinate that a fault can leave out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CoordinateStep {
+    /// The divide by w.
+    Divide,
+    /// The bias matrix (NDC to [0,1]).
+    Bias,
+}
+
+/// How the lookup reads the map once the reference is known.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Taps {
+    /// The sampler compares once, at the direction from the light (cube map).
+    HardwareCube,
+    /// The sampler compares once at the undivided coordinate and divides itself
+    /// (`textureProj`, the classic code's form). A language without it samples
+    /// [`Taps::Hardware`].
+    HardwareProjective,
+    /// The sampler compares (and filters, NEAREST or LINEAR) once at c.
+    Hardware,
+    /// One tap at texel floor(c · size).
+    Nearest,
+    /// Four taps with bilinear weights.
+    Bilinear {
+        /// The weights are quantised to quarters.
+        coarse_weights: bool,
+    },
+    /// N × N nearest taps around c, averaged.
+    Pcf {
+        /// N.
+        n: u32,
+        /// The kernel's offsets are k − N/2 instead of k − (N − 1)/2.
+        off_centre: bool,
+        /// The first corner's tap is replaced by the centre's.
+        double_centre: bool,
+    },
+}
+
+impl Technique {
+    /// The technique of `run`, with the self-test's `fault` (`Fault::active()`, or `None`).
+    pub fn new(run: &Prepared, fault: Option<Fault>) -> Self {
+        let case = run.case();
+        let s = &case.shadow;
+        Technique {
+            cube: matches!(run.light.kind, LightKind::Point { .. }),
+            directional: matches!(run.light.kind, LightKind::Directional { .. }),
+            filter: s.filter,
+            compare: s.compare,
+            clamp_reference: s.compare == Compare::Hardware && s.format.is_fixed(),
+            outside: s.outside,
+            guard: s.guard_behind_light,
+            bias_matrix: s.bias_matrix,
+            order: s.depth_order,
+            slope: s.bias.slope.is_some(),
+            n_dot_l: s.bias.n_dot_l.is_some(),
+            shading: case.shading.clone(),
+            fault,
+        }
+    }
+
+    /// The same technique with the compare in the shader, for a backend without shadow
+    /// samplers: a hardware case keeps its semantics (the reference is still clamped to [0,1]
+    /// for a fixed-point format); only the mechanism changes.
+    pub fn with_manual_compare(self) -> Self {
+        Technique {
+            compare: Compare::Manual,
+            ..self
+        }
+    }
+
+    fn is(&self, fault: Fault) -> bool {
+        self.fault == Some(fault)
+    }
+
+    /// The shader compares (it reads depths itself).
+    pub fn manual(&self) -> bool {
+        self.compare == Compare::Manual
+    }
+
+    /// The compare, in the shader or the sampler: `<=` forward, `>=` reversed
+    /// (CompareFlipped turns it round, CompareStrict makes it strict).
+    pub fn compare_op(&self) -> CompareOp {
+        let forward = self.order == DepthOrder::Forward;
+        match (forward, self.fault) {
+            (true, Some(Fault::CompareFlipped)) => CompareOp::Greater,
+            (false, Some(Fault::CompareFlipped)) => CompareOp::Less,
+            (true, Some(Fault::CompareStrict)) => CompareOp::Less,
+            (false, Some(Fault::CompareStrict)) => CompareOp::Greater,
+            (true, _) => CompareOp::LessEqual,
+            (false, _) => CompareOp::GreaterEqual,
+        }
+    }
+
+    /// How texels outside the map are addressed (a sampler's wrap mode, or the shader's for
+    /// texels it fetches itself): the case's policy, clamped to the edge on a cube map
+    /// (Repeat repeats everywhere).
+    pub fn texel_wrap(&self) -> Outside {
+        if self.is(Fault::Repeat) {
+            Outside::Repeat
+        } else if self.cube {
+            Outside::ClampToEdge
+        } else {
+            self.outside
+        }
+    }
+
+    /// A fetched depth texel is read from the wrong component (WrongComponent).
+    pub fn reads_wrong_component(&self) -> bool {
+        self.is(Fault::WrongComponent)
+    }
+
+    /// The share of the case's normal offset applied (NormalOffsetShort: 0.75).
+    pub fn normal_offset_scale(&self) -> f32 {
+        if self.is(Fault::NormalOffsetShort) {
+            0.75
+        } else {
+            1.0
+        }
+    }
+
+    /// The lookup coordinate (NoDivide, NoBias, BiasTwice, QuarterTexel).
+    pub fn coordinate(&self) -> Coordinate {
+        Coordinate {
+            bias_matrix: self.bias_matrix,
+            left_out: match self.fault {
+                Some(Fault::NoDivide) => Some(CoordinateStep::Divide),
+                Some(Fault::NoBias) => Some(CoordinateStep::Bias),
+                _ => None,
+            },
+            bias_again: self.is(Fault::BiasTwice),
+            u_nudge_texels: if self.is(Fault::QuarterTexel) {
+                0.25
+            } else {
+                0.0
+            },
+        }
+    }
+
+    /// The lookup reads lit where w ≤ 0 (NoGuard drops it).
+    pub fn guards(&self) -> bool {
+        self.guard && !self.is(Fault::NoGuard)
+    }
+
+    /// The lookup reads lit outside [0,1]² (the `lit` policy; a cube map has no outside).
+    pub fn tests_outside(&self) -> bool {
+        !self.cube && self.outside == Outside::Lit
+    }
+
+    /// The share of the case's slope-bias scale applied, if there is a slope bias
+    /// (SlopeShort: 0.8).
+    pub fn slope_scale(&self) -> Option<f32> {
+        let scale = if self.is(Fault::SlopeShort) { 0.8 } else { 1.0 };
+        self.slope.then_some(scale)
+    }
+
+    /// The shader clamps the reference to [0,1]: when it compares in place of a sampler that
+    /// would (NoClamp forgets), or, under ClampFloat, where a sampler would not.
+    pub fn shader_clamps_reference(&self) -> bool {
+        if self.manual() {
+            self.clamp_reference && !self.is(Fault::NoClamp)
+        } else {
+            !self.clamp_reference && self.is(Fault::ClampFloat)
+        }
+    }
+
+    /// How the map is read (BilinearCoarse, PcfOffCentre, PcfDoubleCentre). The projective
+    /// form needs the coordinate untouched, so any fault samples c instead.
+    pub fn taps(&self) -> Taps {
+        let sampler_filters = !self.manual() && !matches!(self.filter, Filter::Pcf(_));
+        match self.filter {
+            _ if sampler_filters && self.cube => Taps::HardwareCube,
+            _ if sampler_filters
+                && self.bias_matrix == BiasMatrix::BeforeDivide
+                && self.fault.is_none() =>
+            {
+                Taps::HardwareProjective
+            }
+            _ if sampler_filters => Taps::Hardware,
+            Filter::Nearest => Taps::Nearest,
+            Filter::Linear => Taps::Bilinear {
+                coarse_weights: self.is(Fault::BilinearCoarse),
+            },
+            Filter::Pcf(n) => Taps::Pcf {
+                n,
+                off_centre: self.is(Fault::PcfOffCentre),
+                double_centre: self.is(Fault::PcfDoubleCentre),
+            },
+        }
+    }
+
+    /// The dimmed model keeps its share of diffuse in shadow (DimmingOff keeps none).
+    pub fn keeps_diffuse_in_shadow(&self) -> bool {
+        !self.is(Fault::DimmingOff)
+    }
+
+    /// The specular term is shadowed (SpecularUnshadowed forgets).
+    pub fn shadows_specular(&self) -> bool {
+        !self.is(Fault::SpecularUnshadowed)
+    }
+
+    /// The visibility is rounded to this many steps before it is used (Vis4Bit: 16).
+    pub fn visibility_steps(&self) -> Option<u32> {
+        self.is(Fault::Vis4Bit).then_some(16)
+    }
+
+    /// The colour is written gamma-encoded (ColourGamma).
+    pub fn encodes_gamma(&self) -> bool {
+        self.is(Fault::ColourGamma)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::format::DepthFormat;
+
+    fn spot(edit: impl FnOnce(&mut crate::format::Shadow)) -> Prepared {
+        let text = r#"{ "name": "t", "about": "a technique",
+            "scene": { "objects": [ { "plane": { "point": [0, 0, 0], "half_extent": 4 } } ] },
+            "camera": { "eye": [0, 5, 5], "target": [0, 0, 0], "size": [8, 8] },
+            "light": { "spot": { "position": [2, 6, 0], "target": [0, 0, 0], "fov_y_deg": 60, "near": 1, "far": 20 } } }"#;
+        let mut point = crate::load_str(text, std::path::Path::new("t.json"))
+            .expect("a valid case")
+            .remove(0);
+        edit(&mut point.case.shadow);
+        Prepared::new(point)
+    }
+
+    #[test]
+    fn a_manual_compare_in_the_samplers_place_keeps_the_clamp() {
+        let run = spot(|s| s.format = DepthFormat::Depth16);
+        let hardware = Technique::new(&run, None);
+        assert!(hardware.clamp_reference && !hardware.shader_clamps_reference());
+        assert!(
+            hardware
+                .clone()
+                .with_manual_compare()
+                .shader_clamps_reference()
+        );
+        let forgetful = Technique::new(&run, Some(Fault::NoClamp)).with_manual_compare();
+        assert!(!forgetful.shader_clamps_reference());
+        let float = spot(|s| s.format = DepthFormat::Depth32f);
+        assert!(!Technique::new(&float, None).shader_clamps_reference());
+        assert!(Technique::new(&float, Some(Fault::ClampFloat)).shader_clamps_reference());
+    }
+
+    #[test]
+    fn faults_resolve_into_the_lookups_values() {
+        let run = spot(|s| s.depth_order = DepthOrder::Reversed);
+        let op = |f| Technique::new(&run, f).compare_op();
+        assert_eq!(op(None), CompareOp::GreaterEqual);
+        assert_eq!(op(Some(Fault::CompareFlipped)), CompareOp::Less);
+        assert_eq!(op(Some(Fault::CompareStrict)), CompareOp::Greater);
+        let run = spot(|_| {});
+        assert_eq!(Technique::new(&run, None).taps(), Taps::HardwareProjective);
+        // Any fault samples the (possibly faulted) coordinate rather than textureProj's.
+        assert_eq!(
+            Technique::new(&run, Some(Fault::ColourGamma)).taps(),
+            Taps::Hardware
+        );
+        let t = Technique::new(&run, Some(Fault::NoDivide));
+        assert_eq!(t.coordinate().left_out, Some(CoordinateStep::Divide));
+        assert_eq!(
+            Technique::new(&run, Some(Fault::Repeat)).texel_wrap(),
+            Outside::Repeat
+        );
+    }
+}
