@@ -109,4 +109,12 @@ pub trait Backend {
     fn supports(&self, needs: &Needs) -> Support;
     /// Renders one run. Per-run GPU state is created and destroyed inside.
     fn render(&mut self, run: &Prepared) -> Result<Frame, BackendError>;
+
+    /// Whether `a` and `b` render identically on this backend *by construction*: they differ
+    /// only in settings it never reads, so a metamorphic twin between them would be the same
+    /// render twice and is not rendered (the report says so). By default only equal cases do;
+    /// a backend that overrides this must never read the settings it lets differ.
+    fn renders_identically(&self, a: &Case, b: &Case) -> bool {
+        a == b
+    }
 }

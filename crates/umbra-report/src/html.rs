@@ -286,6 +286,7 @@ fn twins_section(results: &[RunResult]) -> String {
     struct Row {
         runs: u64,
         skipped: u64,
+        by_construction: u64,
         failed: u64,
         differ: u64,
         tie: u64,
@@ -308,6 +309,10 @@ fn twins_section(results: &[RunResult]) -> String {
                 .or_default();
             if t.skipped.is_some() && t.ok {
                 row.skipped += 1;
+                continue;
+            }
+            if t.by_construction {
+                row.by_construction += 1;
                 continue;
             }
             row.runs += 1;
@@ -337,7 +342,7 @@ fn twins_section(results: &[RunResult]) -> String {
          (<code>bias-order</code>, the other bias-matrix order, is built into every case; the others are each case's \
          <code>expect.twins</code>). <i>identical</i>: bit-identical visibility; <i>legal</i>: the twin's frame passes the \
          same judge as a backend's frame against the case's reference; <i>no_worse</i>: the twin's interior error is not larger. Pixel counts are summed \
-         over runs.</p><table><tr><th>twin</th><th>agree</th><th>backend</th><th>runs</th><th>not run</th><th>failed</th>\
+         over runs.</p><table><tr><th>twin</th><th>agree</th><th>backend</th><th>runs</th><th>not run</th><th>same render by construction</th><th>failed</th>\
          <th>px differ</th><th>ties</th><th>texel/filter/position</th><th>map coverage</th><th>other surface</th><th>illegal</th>\
          <th>interior error: case → twin</th><th>twin ms / case ms</th><th>first failing run</th></tr>",
     );
@@ -350,12 +355,13 @@ fn twins_section(results: &[RunResult]) -> String {
         };
         let _ = write!(
             s,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"{class}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} → {}</td><td>{ratio:.2}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"{class}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} → {}</td><td>{ratio:.2}</td><td>{}</td></tr>",
             esc(name),
             esc(agree),
             esc(backend),
             r.runs,
             r.skipped,
+            r.by_construction,
             r.failed,
             r.differ,
             r.tie,

@@ -97,6 +97,10 @@ pub struct TwinMetric {
     pub twin_interior_error: Option<u64>,
     /// The twin's render time, ms (same clock as the case's).
     pub render_ms: f64,
+    /// Not rendered: on this backend the twin is the case's own render by construction (it
+    /// differs only in settings the backend never reads), so it holds trivially.
+    #[serde(default)]
+    pub by_construction: bool,
     /// Whether the relation held.
     pub ok: bool,
 }

@@ -454,7 +454,11 @@ pub fn step(args: &Args) -> i32 {
         .arg("--mesa")
         .arg(&prefix)
         .args(["--golden", "none", "--out"])
-        .arg(&report);
+        .arg(&report)
+        // One judging cache for every step: umbra stays fixed while Mesa changes, so the
+        // truth and reference of each point are computed at the first step only.
+        .arg("--judge-cache")
+        .arg(work.join("cache").join("judge"));
     for k in ["filter", "cases", "expectations"] {
         if let Some(v) = args.value(k) {
             cmd.arg(format!("--{k}")).arg(v);

@@ -198,12 +198,12 @@ pub fn main(args: &Args) -> i32 {
     // Absolute, because workers may run with another working directory one day.
     let golden = golden.map(|g| std::fs::canonicalize(&g).unwrap_or(g));
     // The judging basis (truth and reference) of each point, shared by every backend's worker
-    // through the cache; emptied so that nothing from an older build is read.
-    let judge_cache = std::fs::canonicalize(&out)
-        .unwrap_or(out.clone())
-        .join("cache")
-        .join("judge");
-    let _ = std::fs::remove_dir_all(&judge_cache);
+    // and kept for the next run of this build (content-addressed, see judge_cache).
+    let judge_cache = crate::judge::judge_cache::prepare(
+        &args
+            .value("judge-cache")
+            .map_or_else(|| out.join("cache").join("judge"), PathBuf::from),
+    );
     let judge_cache = judge_cache.to_string_lossy().into_owned();
     let settings = Settings {
         judge_cache,

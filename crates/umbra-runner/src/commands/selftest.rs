@@ -201,13 +201,13 @@ pub fn main(args: &Args) -> i32 {
         eprintln!("error: no case under {}", cases.display());
         return 125;
     }
-    // One judging cache for the whole self-test (the same points serve many faults), fresh
-    // so that nothing from an older build is read.
-    let cache = PathBuf::from("target/umbra/cache/selftest");
-    let _ = std::fs::remove_dir_all(&cache);
-    let cache = std::fs::canonicalize(".")
-        .map(|d| d.join(&cache))
-        .unwrap_or(cache);
+    // The judging basis of each point does not depend on the fault: the self-test shares
+    // conformance's content-addressed cache (judge_cache), and so reads what a conformance run
+    // of this build computed.
+    let cache = crate::judge::judge_cache::prepare(std::path::Path::new(
+        args.value("judge-cache")
+            .unwrap_or(crate::judge::judge_cache::DEFAULT_ROOT),
+    ));
     let pairs: Vec<(String, Fault)> = backends
         .iter()
         .flat_map(|b| {

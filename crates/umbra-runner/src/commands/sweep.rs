@@ -323,8 +323,17 @@ pub fn main(args: &Args) -> i32 {
     let total = plan.iter().flatten().count() * backends.len();
     let mut rows: Vec<Row> = Vec::new();
     let mut done = 0;
+    // The truth of each technique point is cached per build of umbra, as conformance's is.
+    let judge_cache = crate::judge::judge_cache::prepare(Path::new(
+        args.value("judge-cache")
+            .unwrap_or(crate::judge::judge_cache::DEFAULT_ROOT),
+    ));
     for backend in &backends {
-        let env = crate::harness::registry::worker_env(backend);
+        let mut env = crate::harness::registry::worker_env(backend);
+        env.push((
+            crate::judge::judge_cache::ENV.into(),
+            judge_cache.to_string_lossy().into_owned(),
+        ));
         let start = || Worker::start(backend, &env, timeout);
         let mut worker = start();
         for (index, t) in plan.iter().enumerate() {

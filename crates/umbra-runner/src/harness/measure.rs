@@ -82,7 +82,7 @@ pub fn measure(backend: &mut dyn Backend, point: CasePoint, repeat: u32) -> Meas
         "mixed"
     };
     let frame = &timed[timed.len() - 1];
-    let truth = umbra_ref::truth::ground_truth(&prepared);
+    let truth = crate::judge::judge_cache::truth(&prepared);
     let error = umbra_compare::truth_error(frame, &truth);
     let edges = umbra_compare::edges::edge_displacement(frame, &truth);
     Measurement::Done(Measured {

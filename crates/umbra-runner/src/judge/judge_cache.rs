@@ -3,12 +3,20 @@
 //! point and *effective* profile, [`umbra_case::Profile::effective_for`], so that backends
 //! whose profiles differ only in freedoms the case cannot exercise share one).
 //!
-//! Both depend on the case point only, never on the backend's output, yet each backend's
-//! worker used to recompute them. A conformance run names a cache directory in
-//! `UMBRA_JUDGE_CACHE` (it empties it first, so nothing survives a rebuild); the first worker
-//! to need an entry writes it there (to a temporary name, then renamed, so a reader never sees
-//! half a file) and the others read it. Without the variable (`umbra render`, tests, the
-//! self-test) everything is computed in place.
+//! Both depend on the case point and on umbra's own code only, never on the backend's output,
+//! so they are content-addressed by both: an entry's file name is a hash of the resolved case
+//! point (and the profile), and it lives in a directory named for this build of umbra
+//! ([`build_id`], a hash of the executable's bytes: any change to umbra's code, committed or
+//! not, is a new directory, so nothing computed by another build is ever read). The cache
+//! outlives the run: a second conformance run, the self-test, a sweep and every step of a
+//! Mesa bisection (which keeps umbra fixed and changes only the driver) read what the first
+//! computed, so re-running a point costs the backend's frame and the comparison. [`prepare`]
+//! removes the directories of other builds, so the cache holds one build's entries.
+//!
+//! Commands name the build's directory in `UMBRA_JUDGE_CACHE`; the first worker to need an
+//! entry writes it there (to a temporary name, then renamed, so a reader never sees half a
+//! file) and the others read it. Without the variable (`umbra render`, tests) everything is
+//! computed in place. The twins' truths are cached the same way (keyed by the twin's point).
 //!
 //! Formats, little-endian, each starting with a magic, width and height (u32) and a u64 key
 //! check (FNV-1a of the resolved case point, and of the profile's name for a judged render):
@@ -42,19 +50,73 @@ pub struct Basis {
     pub judged: Judged,
 }
 
-/// The basis of `prepared` for a backend of `profile`: from the cache when the run has one,
-/// else computed.
-pub fn basis(prepared: &Prepared, profile: Profile) -> Basis {
-    let profile = profile.effective_for(prepared.case());
+/// The default cache root of the commands, beside their default output (`target/umbra`).
+pub const DEFAULT_ROOT: &str = "target/umbra/cache/judge";
+
+/// This build of umbra, as the cache keys it: 64-bit FNV-1a over the executable's bytes, taken
+/// eight at a time (about 20 ms for the debug binary, once per process that asks).
+pub fn build_id() -> &'static str {
+    static ID: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    ID.get_or_init(|| {
+        let bytes = std::env::current_exe()
+            .and_then(std::fs::read)
+            .unwrap_or_default();
+        let mut h = 0xcbf2_9ce4_8422_2325u64;
+        for chunk in bytes.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            h = (h ^ u64::from_le_bytes(word)).wrapping_mul(0x0100_0000_01b3);
+        }
+        format!("{:016x}-{}", h, bytes.len())
+    })
+}
+
+/// The directory of this build's entries under `root` (created), after removing the entries
+/// of any other build there. Workers get it in [`ENV`].
+pub fn prepare(root: &Path) -> PathBuf {
+    let root = std::fs::canonicalize(root).unwrap_or_else(|_| root.to_path_buf());
+    if let Ok(entries) = std::fs::read_dir(&root) {
+        for e in entries.flatten() {
+            let name = e.file_name();
+            let name = name.to_string_lossy();
+            // Only what this module writes: `HASH-LEN` directories, and the entries of the
+            // layout before builds had directories (`truth-KEY.bin`, `judged-KEY.bin`).
+            let ours = name.len() > 17
+                && name.as_bytes()[16] == b'-'
+                && name[..16].bytes().all(|b| b.is_ascii_hexdigit());
+            let unversioned = (name.starts_with("truth-") || name.starts_with("judged-"))
+                && name.ends_with(".bin");
+            if ours && name != build_id() {
+                let _ = std::fs::remove_dir_all(e.path());
+            } else if unversioned {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
+    let dir = root.join(build_id());
+    let _ = std::fs::create_dir_all(&dir);
+    dir
+}
+
+/// The exact truth of `prepared`: from the cache when the process has one, else computed.
+pub fn truth(prepared: &Prepared) -> Truth {
     let dir = std::env::var_os(ENV).map(PathBuf::from);
-    let truth = cached(
+    cached(
         dir.as_deref(),
         "truth",
         key(prepared, ""),
         write_truth,
         read_truth,
         || ground_truth(prepared),
-    );
+    )
+}
+
+/// The basis of `prepared` for a backend of `profile`: from the cache when the run has one,
+/// else computed.
+pub fn basis(prepared: &Prepared, profile: Profile) -> Basis {
+    let profile = profile.effective_for(prepared.case());
+    let dir = std::env::var_os(ENV).map(PathBuf::from);
+    let truth = truth(prepared);
     let judged = cached(
         dir.as_deref(),
         "judged",
@@ -339,5 +401,30 @@ mod tests {
         assert!(read_judged(&bytes, kj ^ 1, profile).is_none());
         assert!(read_judged(&bytes[..bytes.len() - 1], kj, profile).is_none());
         assert!(read_truth(&write_truth(&truth, kt)[1..], kt).is_none());
+    }
+
+    #[test]
+    fn a_build_keeps_its_own_entries_and_drops_other_builds() {
+        let root = std::env::temp_dir().join(format!("umbra-judge-cache-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let other = root.join("0123456789abcdef-42");
+        let unrelated = root.join("notes");
+        for d in [&other, &unrelated] {
+            std::fs::create_dir_all(d).expect("dir");
+        }
+        let unversioned = root.join("truth-0123.bin");
+        std::fs::write(&unversioned, b"x").expect("old entry");
+        let mine = prepare(&root);
+        assert!(mine.ends_with(build_id()) && mine.is_dir());
+        assert!(!other.exists(), "another build's entries are removed");
+        assert!(unrelated.exists(), "nothing else is touched");
+        assert!(!unversioned.exists(), "entries of the unversioned layout are removed");
+        std::fs::write(mine.join("truth-1.bin"), b"x").expect("entry");
+        assert_eq!(prepare(&root), mine);
+        assert!(
+            mine.join("truth-1.bin").exists(),
+            "this build's entries survive"
+        );
+        let _ = std::fs::remove_dir_all(&root);
     }
 }

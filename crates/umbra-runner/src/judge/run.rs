@@ -9,7 +9,7 @@ use umbra_case::format::{InteriorError, TwinAgree};
 use umbra_case::{Backend, CasePoint, Frame, Needs, Prepared, Support};
 use umbra_compare::TruthError;
 use umbra_compare::reference::RefAgreement;
-use umbra_ref::truth::{Truth, ground_truth};
+use umbra_ref::truth::Truth;
 use umbra_report::{FailedCheck, TwinMetric};
 
 /// One judged run.
@@ -244,6 +244,16 @@ fn run_twins(
                 m.skipped = Some(why);
                 return m;
             }
+            if backend.renders_identically(&as_written.case, &point.case) {
+                // The same render twice: its frame would be the case's own, bit for bit.
+                m.by_construction = true;
+                m.twin_interior_error = Some(m.interior_error);
+                m.pair = RefAgreement {
+                    compared: error.all.judged,
+                    ..Default::default()
+                };
+                return m;
+            }
             let twin_prepared = Prepared::new(point);
             let twin = match backend.render(&twin_prepared) {
                 // A twin may change the shadow pass on purpose (another frustum, a moved
@@ -265,7 +275,8 @@ fn run_twins(
                 return m;
             }
             if matches!(plan.agree, TwinAgree::NoWorse | TwinAgree::Reported) {
-                let twin_truth = ground_truth(&twin_prepared);
+                // Cached like the case's own: the same twin on every backend is one truth.
+                let twin_truth = crate::judge::judge_cache::truth(&twin_prepared);
                 m.twin_interior_error =
                     Some(interior(&umbra_compare::truth_error(&twin, &twin_truth)));
             }
