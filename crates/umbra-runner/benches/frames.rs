@@ -5,9 +5,10 @@
 //! one run, so the ratios between them are measured side by side. The clock column says
 //! whether a time comes from GPU timer queries or CPU wall.
 //!
-//! Then the harness overhead of the latest conformance run in this target directory
+//! Then the reference's own passes on 1 thread and on every core (Mpixels/s of the map and of
+//! the view), and the per-stage share of the latest conformance run in this target directory
 //! (target/umbra/latest/report.json), when there is one: `cargo xtask conformance` measures
-//! it on every run (worker start, context creation, judging, PNG encoding).
+//! it on every run (frames, twins, judging, PNG encoding, worker start).
 //!
 //! `cargo bench -p umbra-runner --bench frames`
 
@@ -32,7 +33,15 @@ fn main() {
         "{} on every backend, median of 9 after a warm-up:",
         DEFAULT_SCENE.1
     );
-    let results = measure_backends(exe, &file, index, &backends, 9, Duration::from_secs(600));
+    let results = measure_backends(
+        exe,
+        &file,
+        index,
+        &backends,
+        9,
+        Duration::from_secs(600),
+        &[],
+    );
     let total = |b: &str| {
         results
             .iter()
@@ -73,16 +82,67 @@ fn main() {
             r / l
         );
     }
+    // The reference's passes per thread count, in the same run: its worker inherits
+    // RAYON_NUM_THREADS (the judged variant is not timed here: see judging in the time budget).
+    let view = {
+        let [w, h] = points[index].case.camera.size;
+        f64::from(w * h)
+    };
+    let map = {
+        let [w, h] = points[index].case.shadow.size;
+        f64::from(w * h)
+    };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    for threads in [1, cores] {
+        let env = [("RAYON_NUM_THREADS".to_string(), threads.to_string())];
+        let r = measure_backends(
+            exe,
+            &file,
+            index,
+            &["ref".to_string()],
+            9,
+            Duration::from_secs(600),
+            &env,
+        );
+        match r.first().map(|(_, r)| r) {
+            Some(Ok(m)) => println!(
+                "reference on {threads} thread(s): shadow pass {:.2} ms = {:.0} Mpixels/s, lit pass {:.2} ms = {:.1} Mpixels/s, frame {:.2} ms",
+                m.shadow_ms,
+                map / m.shadow_ms / 1e3,
+                m.lit_ms,
+                view / m.lit_ms / 1e3,
+                m.frame_ms
+            ),
+            Some(Err(e)) => println!("reference on {threads} thread(s): not measured: {e}"),
+            None => {}
+        }
+    }
     match std::fs::read_to_string(root.join("target/umbra/latest/report.json")) {
         Ok(text) => {
             let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
             match v.get("harness_overhead_share").and_then(|x| x.as_f64()) {
-                Some(share) => println!(
-                    "harness overhead of the latest conformance run ({}): {:.1}% ({})",
-                    v["command"].as_str().unwrap_or(""),
-                    100.0 * share,
-                    v["time_budget"]
-                ),
+                Some(share) => {
+                    let b = &v["time_budget"];
+                    let f = |k: &str| b[k].as_f64().unwrap_or(0.0);
+                    let total = (f("runs_s") + f("worker_start_s")).max(1e-9);
+                    println!(
+                        "latest conformance run ({}): {} runs, {:.1} s wall, {:.1} s of worker time",
+                        v["command"].as_str().unwrap_or(""),
+                        v["runs"].as_array().map_or(0, Vec::len),
+                        f("wall_s"),
+                        total
+                    );
+                    println!(
+                        "  per stage: frames {:.0}%, twins {:.0}%, judging {:.0}%, goldens/PNG {:.0}%, worker start {:.0}%, other {:.0}%; harness overhead (start, context, judging, PNG) {:.1}%",
+                        100.0 * f("render_s") / total,
+                        100.0 * f("twins_s") / total,
+                        100.0 * f("judge_s") / total,
+                        100.0 * f("golden_s") / total,
+                        100.0 * f("worker_start_s") / total,
+                        100.0 * f("other_s") / total,
+                        100.0 * share
+                    );
+                }
                 None => println!("the latest conformance report predates the time budget"),
             }
         }

@@ -444,11 +444,13 @@ pub fn measure_backends(
     backends: &[String],
     repeat: u32,
     timeout: Duration,
+    extra_env: &[(String, String)],
 ) -> Vec<(String, Result<Measured, String>)> {
     backends
         .iter()
         .map(|b| {
-            let env = crate::harness::registry::worker_env(b);
+            let mut env = crate::harness::registry::worker_env(b);
+            env.extend(extra_env.iter().cloned());
             let result = Worker::start_exe(exe, b, &env, timeout).and_then(|mut w| {
                 if let Some(why) = w.hello.get("unavailable").and_then(Value::as_str) {
                     return Err(format!("unavailable: {why}"));

@@ -418,7 +418,10 @@ mod tests {
         assert!(mine.ends_with(build_id()) && mine.is_dir());
         assert!(!other.exists(), "another build's entries are removed");
         assert!(unrelated.exists(), "nothing else is touched");
-        assert!(!unversioned.exists(), "entries of the unversioned layout are removed");
+        assert!(
+            !unversioned.exists(),
+            "entries of the unversioned layout are removed"
+        );
         std::fs::write(mine.join("truth-1.bin"), b"x").expect("entry");
         assert_eq!(prepare(&root), mine);
         assert!(

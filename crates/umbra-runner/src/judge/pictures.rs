@@ -23,17 +23,7 @@ pub fn write_images(
     )?;
     heatmap::visibility_map(&f.visibility, f.width, f.height)
         .save_png(&dir.join("visibility.png"))?;
-    heatmap::truth_map(&j.truth).save_png(&dir.join("truth.png"))?;
-    heatmap::truth_error_map(&j.error, &j.truth).save_png(&dir.join("error.png"))?;
-    if let Some(r) = &j.reference {
-        image::save_buffer(
-            dir.join("reference.png"),
-            &r.color,
-            r.width,
-            r.height,
-            image::ColorType::Rgba8,
-        )?;
-    }
+    judging_pictures(dir, j)?;
     if let Some(m) = &f.shadow_map {
         // Layers stacked top to bottom (cube faces +x, −x, +y, −y, +z, −z).
         heatmap::depth_map(&m.values, m.width, m.height * m.layers)
@@ -69,8 +59,25 @@ pub fn write_gallery(
     };
     image::imageops::thumbnail(&colour, tw, th).save(dir.join("thumb.png"))?;
     colour.save(dir.join("color.png"))?;
-    heatmap::truth_error_map(&j.error, &j.truth).save_png(&dir.join("error.png"))?;
+    judging_pictures(dir, j)?;
+    if let Some((blessed, pending)) = golden {
+        for (from, to) in [(blessed, "golden.png"), (pending, "pending.png")] {
+            if from.is_file() {
+                std::fs::copy(from, dir.join(to))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// What the judge saw, beside any backend's frame: the truth, the error heat map and the
+/// reference's colour.
+fn judging_pictures(
+    dir: &Path,
+    j: &crate::judge::run::Judged,
+) -> Result<(), Box<dyn std::error::Error>> {
     heatmap::truth_map(&j.truth).save_png(&dir.join("truth.png"))?;
+    heatmap::truth_error_map(&j.error, &j.truth).save_png(&dir.join("error.png"))?;
     if let Some(r) = &j.reference {
         image::save_buffer(
             dir.join("reference.png"),
@@ -79,13 +86,6 @@ pub fn write_gallery(
             r.height,
             image::ColorType::Rgba8,
         )?;
-    }
-    if let Some((blessed, pending)) = golden {
-        for (from, to) in [(blessed, "golden.png"), (pending, "pending.png")] {
-            if from.is_file() {
-                std::fs::copy(from, dir.join(to))?;
-            }
-        }
     }
     Ok(())
 }
