@@ -132,7 +132,7 @@ pub const STYLE: &str = "#g-grid{display:flex;flex-wrap:wrap;gap:4px;margin:8px 
 .cell{width:104px;height:112px;border:3px solid #999;box-sizing:border-box;cursor:pointer;display:flex;flex-direction:column;align-items:center;justify-content:center;font-size:10px;overflow:hidden;background:#fafafa}\
 .cell img{max-width:94px;max-height:78px;image-rendering:pixelated}.cell span{white-space:nowrap;overflow:hidden;max-width:94px}\
 .cell.Pass{border-color:#2e7d32}.cell.ExpectedFail{border-color:#8bc34a}.cell.Fail,.cell.Crash,.cell.Timeout,.cell.UnexpectedPass{border-color:#c62828}\
-.cell.Skip{border-color:#bbb;color:#777}.cell.Flake{border-color:#ef6c00}\
+.cell[hidden]{display:none}.cell.Skip{border-color:#bbb;color:#777}.cell.Flake{border-color:#ef6c00}\
 #g-detail{position:fixed;inset:0;background:rgba(0,0,0,.55);overflow:auto;z-index:10}\
 .g-box{background:#fff;margin:24px;padding:12px;border-radius:4px}.g-box figure img{max-width:none}\
 .g-filters label{margin-right:12px}";
@@ -182,6 +182,10 @@ const SCRIPT: &str = r#"(function () {
     });
     count.textContent = shown + ' of ' + grid.children.length + ' runs shown';
     document.body.dataset.galleryShown = shown;
+    // What the page really lays out (a style that overrides `hidden` would show them all).
+    document.body.dataset.galleryVisible = Array.prototype.filter.call(grid.children, function (c) {
+      return c.getClientRects().length > 0;
+    }).length;
   }
   Object.keys(pick).forEach(function (f) { pick[f].addEventListener('change', filter); });
   var detail = document.getElementById('g-detail');

@@ -157,6 +157,11 @@ fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
         Some(passing.to_string().as_str()),
         "#status=Pass shows the passing runs only"
     );
+    assert_eq!(
+        attribute(&dom, "data-gallery-visible"),
+        Some(passing.to_string().as_str()),
+        "the filtered-out cells are not laid out"
+    );
 
     // A failing run with a pending golden: all six pictures side by side.
     let failing = results
