@@ -264,6 +264,8 @@ fn surface_freedom(
     let tol = |slope: f64, z: f64, norm: f64| {
         slope * SNAP_PX * norm + 4.0 * f64::from(umbra_case::depth::f32_spacing(z as f32)) + storage
     };
+    // The winners' slopes, once per triangle (the loop below reads them per visited centre).
+    let slopes: Vec<f32> = tris.iter().map(slope_sum).collect();
     let mut free = vec![0u8; nearest.len()];
     for_each_band(
         &mut free,
@@ -309,7 +311,7 @@ fn surface_freedom(
                         let z = t.depth_at(e);
                         let zw = f64::from(win.depth);
                         z - tol(slope, z, t.weight_norm(e))
-                            <= zw + tol(f64::from(slope_sum(&tris[win.tri as usize])), zw, 1.0)
+                            <= zw + tol(f64::from(slopes[win.tri as usize]), zw, 1.0)
                     };
                     if flag {
                         band[i] |= ambiguity::SURFACE;

@@ -90,16 +90,6 @@ fn absolute(p: &str) -> PathBuf {
     }
 }
 
-/// The settings a step needs, passed to `umbra bisect-step` on its command line.
-const STEP_KEYS: &[&str] = &[
-    "src",
-    "work",
-    "filter",
-    "build-script",
-    "cases",
-    "expectations",
-];
-
 /// Runs the command; returns the exit code (0: a first bad commit was found; 1: not found
 /// or ambiguous; 125: bad input or set-up).
 pub fn main(args: &Args) -> i32 {
@@ -377,8 +367,6 @@ fn usage(msg: &str) -> i32 {
 /// `umbra bisect-step`: one commit (HEAD of the source tree): build, install into its own
 /// prefix, test. Exit 0 good, 1 bad, 125 skip (did not build, or could not be tested).
 pub fn step(args: &Args) -> i32 {
-    let mut valued: Vec<&str> = STEP_KEYS.to_vec();
-    valued.push("backend");
     let (Some(src), Some(work)) = (args.value("src"), args.value("work")) else {
         eprintln!("error: bisect-step needs --src and --work");
         return 125;
