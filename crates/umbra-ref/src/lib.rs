@@ -251,11 +251,11 @@ fn top_first<T: Clone>(rows: &[T], width: usize, per_pixel: usize, flip: bool) -
     if !flip {
         return rows.to_vec();
     }
-    rows.chunks(width * per_pixel)
-        .rev()
-        .flatten()
-        .cloned()
-        .collect()
+    let mut out = Vec::with_capacity(rows.len());
+    for row in rows.chunks(width * per_pixel).rev() {
+        out.extend_from_slice(row);
+    }
+    out
 }
 
 /// The reference as a [`Backend`] (id `ref`, GL clip convention).

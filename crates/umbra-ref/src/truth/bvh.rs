@@ -52,6 +52,11 @@ impl Bvh {
             count: 0,
         });
         build(&verts, &mut order, &mut nodes, 0, 0, verts.len());
+        // Pad every box once here rather than in every test.
+        for n in &mut nodes {
+            let pad = (n.hi - n.lo).max_element().max(1.0) * 1e-9;
+            (n.lo, n.hi) = (n.lo - pad, n.hi + pad);
+        }
         Bvh {
             nodes,
             order,
@@ -93,6 +98,12 @@ impl Bvh {
         found
     }
 
+    /// Visits the leaves' triangles nearest box first. Each child's entry distance is
+    /// computed once, when its parent is visited, and kept on the stack: when it is popped,
+    /// `enter` with the (possibly lowered) limit would fail exactly when that entry lies
+    /// beyond the limit (the entry is already at or before the box's exit), so the check is a
+    /// comparison. The stack is a fixed array (depth ≤ 2·log₂ of the triangle count + 2, far
+    /// below its size for any scene that fits in memory), so a walk allocates nothing.
     fn walk(
         &self,
         ray: &Ray,
@@ -103,13 +114,20 @@ impl Bvh {
         if self.verts.is_empty() {
             return;
         }
-        let mut stack = Vec::with_capacity(64);
-        stack.push(0usize);
-        while let Some(n) = stack.pop() {
-            let node = self.nodes[n];
-            if enter(ray, node.lo, node.hi, t_min, *limit).is_none() {
+        let root = &self.nodes[0];
+        let Some(t_root) = enter(ray, root.lo, root.hi, t_min, *limit) else {
+            return;
+        };
+        let mut stack = [(0usize, 0f64); 128];
+        stack[0] = (0, t_root);
+        let mut depth = 1;
+        while depth > 0 {
+            depth -= 1;
+            let (n, t_entry) = stack[depth];
+            if t_entry > *limit {
                 continue;
             }
+            let node = self.nodes[n];
             if node.count > 0 {
                 for &tri in &self.order[node.start as usize..(node.start + node.count) as usize] {
                     let [a, b, c] = self.verts[tri as usize];
@@ -123,11 +141,21 @@ impl Bvh {
                 let (l, r) = (node.start as usize, node.start as usize + 1);
                 let dl = enter(ray, self.nodes[l].lo, self.nodes[l].hi, t_min, *limit);
                 let dr = enter(ray, self.nodes[r].lo, self.nodes[r].hi, t_min, *limit);
+                let mut push = |node: usize, t: f64| {
+                    stack[depth] = (node, t);
+                    depth += 1;
+                };
                 match (dl, dr) {
-                    (Some(a), Some(b)) if a <= b => stack.extend([r, l]),
-                    (Some(_), Some(_)) => stack.extend([l, r]),
-                    (Some(_), None) => stack.push(l),
-                    (None, Some(_)) => stack.push(r),
+                    (Some(a), Some(b)) if a <= b => {
+                        push(r, b);
+                        push(l, a);
+                    }
+                    (Some(a), Some(b)) => {
+                        push(l, a);
+                        push(r, b);
+                    }
+                    (Some(a), None) => push(l, a),
+                    (None, Some(b)) => push(r, b),
                     (None, None) => {}
                 }
             }
@@ -135,10 +163,8 @@ impl Bvh {
     }
 }
 
-/// Entry distance into a padded box, if the ray meets it within (t_min, t_max).
+/// Entry distance into a (padded) box, if the ray meets it within (t_min, t_max).
 fn enter(ray: &Ray, lo: DVec3, hi: DVec3, t_min: f64, t_max: f64) -> Option<f64> {
-    let pad = (hi - lo).max_element().max(1.0) * 1e-9;
-    let (lo, hi) = (lo - pad, hi + pad);
     let mut t0 = t_min;
     let mut t1 = t_max;
     for k in 0..3 {

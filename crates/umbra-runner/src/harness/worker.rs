@@ -63,14 +63,6 @@ pub struct RunReport {
     pub failed: Vec<umbra_report::FailedCheck>,
 }
 
-/// 64-bit FNV-1a, as 16 hex digits.
-pub fn fnv64(bytes: impl IntoIterator<Item = u8>) -> String {
-    let h = bytes.into_iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
-    });
-    format!("{h:016x}")
-}
-
 /// Runs the worker loop; returns the exit code.
 pub fn main(args: &Args) -> i32 {
     let Some(id) = args.value("backend") else {
@@ -274,8 +266,8 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 judge_ms: j.judge_time.as_secs_f64() * 1e3,
                 twins_ms: j.twins_time.as_secs_f64() * 1e3,
                 golden_ms: 0.0,
-                color_hash: fnv64(j.frame.color.iter().copied()),
-                visibility_hash: fnv64(
+                color_hash: umbra_report::names::fnv64(j.frame.color.iter().copied()),
+                visibility_hash: umbra_report::names::fnv64(
                     j.frame
                         .visibility
                         .iter()

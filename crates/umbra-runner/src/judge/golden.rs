@@ -83,6 +83,11 @@ pub fn check(
         .and_then(|bytes| image::load_from_memory(bytes).ok())
         .map(|i| i.to_rgba8());
     let ssim = decoded.as_ref().and_then(|img| {
+        // A frame identical to its golden (the usual regression run) is at SSIM 1 by
+        // definition; the windowed computation is most of a golden check's time.
+        if img.dimensions() == (frame.width, frame.height) && *img.as_raw() == frame.color {
+            return Some(1.0);
+        }
         let golden = Frame {
             width: img.width(),
             height: img.height(),

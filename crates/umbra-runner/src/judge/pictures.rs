@@ -38,7 +38,9 @@ pub const THUMB: u32 = 96;
 /// Writes the gallery pictures of a judged run into `dir`: `thumb.png` (the backend's colour
 /// shrunk to [`THUMB`] pixels by a box filter), `color.png`, `error.png` (heat map),
 /// `reference.png`, `truth.png`, and the golden and pending golden when `golden` names files
-/// that exist (`golden.png`, `pending.png`).
+/// that exist (`golden.png`, `pending.png`). The reference and the truth are the same for
+/// every backend's run of a point: each distinct picture is encoded once, into `.shared/`
+/// beside the runs' directories, and hard-linked into each run's.
 pub fn write_gallery(
     dir: &Path,
     j: &crate::judge::run::Judged,
@@ -59,13 +61,59 @@ pub fn write_gallery(
     };
     image::imageops::thumbnail(&colour, tw, th).save(dir.join("thumb.png"))?;
     colour.save(dir.join("color.png"))?;
-    judging_pictures(dir, j)?;
+    heatmap::truth_error_map(&j.error, &j.truth).save_png(&dir.join("error.png"))?;
+    let truth = heatmap::truth_map(&j.truth);
+    shared_png(dir, "truth.png", &truth.data, truth.width, truth.height)?;
+    if let Some(r) = &j.reference {
+        shared_png(dir, "reference.png", &r.color, r.width, r.height)?;
+    }
     if let Some((blessed, pending)) = golden {
         for (from, to) in [(blessed, "golden.png"), (pending, "pending.png")] {
             if from.is_file() {
                 std::fs::copy(from, dir.join(to))?;
             }
         }
+    }
+    Ok(())
+}
+
+/// `dir/name`: a hard link to `.shared/HASH.png` beside `dir`, which is encoded only if no
+/// worker has encoded the same pixels yet (written under a temporary name, then renamed, so
+/// a reader never sees half a file). Where a link cannot be made, a copy.
+fn shared_png(
+    dir: &Path,
+    name: &str,
+    rgba: &[u8],
+    width: u32,
+    height: u32,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let target = dir.join(name);
+    let Some(shared) = dir.parent().map(|p| p.join(".shared")) else {
+        return Ok(image::save_buffer(
+            &target,
+            rgba,
+            width,
+            height,
+            image::ColorType::Rgba8,
+        )?);
+    };
+    std::fs::create_dir_all(&shared)?;
+    let key = umbra_report::names::fnv64(
+        width
+            .to_le_bytes()
+            .into_iter()
+            .chain(height.to_le_bytes())
+            .chain(rgba.iter().copied()),
+    );
+    let file = shared.join(format!("{key}.png"));
+    if !file.is_file() {
+        let tmp = shared.join(format!(".{key}.{}.png", std::process::id()));
+        image::save_buffer(&tmp, rgba, width, height, image::ColorType::Rgba8)?;
+        std::fs::rename(&tmp, &file)?;
+    }
+    let _ = std::fs::remove_file(&target);
+    if std::fs::hard_link(&file, &target).is_err() {
+        std::fs::copy(&file, &target)?;
     }
     Ok(())
 }
