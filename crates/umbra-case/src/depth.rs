@@ -10,6 +10,19 @@
 
 use crate::format::DepthFormat;
 
+/// `x.round()` (half away from zero) for 0 ≤ x < 2⁵², bit for bit, without the libm call that
+/// baseline x86-64 makes for it (SSE2 has no rounding instruction): x − trunc(x) is exact in
+/// that range, so the half-way test is exact too; −0 stays −0. Other x go to `round`.
+#[inline]
+pub fn round_nonneg_f64(x: f64) -> f64 {
+    if (0.0..4_503_599_627_370_496.0).contains(&x) {
+        let t = x as i64 as f64; // truncation, exact here
+        if x - t >= 0.5 { t + 1.0 } else { t.copysign(x) }
+    } else {
+        x.round()
+    }
+}
+
 impl DepthFormat {
     /// Bits of a fixed-point format; `None` for float.
     pub fn fixed_bits(self) -> Option<u32> {
@@ -26,11 +39,12 @@ impl DepthFormat {
     }
 
     /// The value stored for window depth `z` (already clamped to [0,1] by the pass).
+    #[inline]
     pub fn store(self, z: f32) -> f32 {
         match self.fixed_bits() {
             Some(n) => {
                 let max = f64::from((1u32 << n) - 1);
-                let code = (f64::from(z.clamp(0.0, 1.0)) * max).round();
+                let code = round_nonneg_f64(f64::from(z.clamp(0.0, 1.0)) * max);
                 (code / max) as f32
             }
             None => z,
@@ -123,6 +137,29 @@ pub fn f32_spacing(z: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn integer_rounding_is_libms() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut values: Vec<f64> = (0..1_000_000)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                f64::from(f32::from_bits(state as u32 & 0x7fff_ffff)) // every f32 ≥ 0
+            })
+            .collect();
+        for k in 0..2000 {
+            let h = f64::from(k) * 0.5;
+            values.extend([h, h.next_up(), h.next_down(), -0.0, f64::NAN, f64::INFINITY]);
+        }
+        values.extend([4_503_599_627_370_495.5, 4_503_599_627_370_496.0, 1e300]);
+        for x in values {
+            for y in [x, x * 65_535.0, x * 16_777_215.0] {
+                assert_eq!(round_nonneg_f64(y).to_bits(), y.round().to_bits(), "{y:e}");
+            }
+        }
+    }
 
     #[test]
     fn fixed_point_stores_are_exact_codes_and_monotone() {

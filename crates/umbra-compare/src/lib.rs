@@ -13,6 +13,7 @@
 pub mod edges;
 pub mod heatmap;
 pub mod reference;
+pub mod ssim;
 
 use serde::Serialize;
 use umbra_case::Frame;
@@ -270,7 +271,8 @@ pub fn agreement(a: &Frame, b: &Frame, radius: u32) -> Agreement {
     g
 }
 
-/// SSIM of two frames' shaded colour (image-compare's MSSIMSimple on luma, 8x8 windows):
+/// SSIM of two frames' shaded colour (image-compare's MSSIMSimple on luma, 8x8 windows, as
+/// [`ssim::mssim`] computes it bit for bit):
 /// 1.0 means identical. NUMERICS.md: a 3-pixel shift of a shadowed scene scores about 0.96,
 /// so only values very close to 1 mean "the same picture". Reported, not thresholded here.
 pub fn ssim(a: &Frame, b: &Frame) -> Option<f64> {
@@ -282,13 +284,14 @@ pub fn ssim(a: &Frame, b: &Frame) -> Option<f64> {
                 (0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2]))
                     .round() as u8
             })
-            .collect();
-        image::GrayImage::from_raw(f.width, f.height, data)
+            .collect::<Vec<u8>>();
+        (data.len() == (f.width * f.height) as usize).then_some(data)
     };
+    if (a.width, a.height) != (b.width, b.height) {
+        return None;
+    }
     let (la, lb) = (luma(a)?, luma(b)?);
-    image_compare::gray_similarity_structure(&image_compare::Algorithm::MSSIMSimple, &la, &lb)
-        .ok()
-        .map(|s| s.score)
+    ssim::mssim(&la, &lb, a.width as usize, a.height as usize)
 }
 
 #[cfg(test)]

@@ -1,7 +1,11 @@
-//! `cargo bench -p umbra-ref`: the reference rasterizer's throughput on the packed cubes with a
-//! 1024x1024 shadow map and a 1024x1024 camera view, per pass, in Mpixels/s (pixels of the
-//! pass's target per second of wall time, median of 9 runs after one warm-up), on 1 thread and
-//! on every thread of the machine, side by side in one run.
+//! `cargo bench -p umbra-ref`: the reference rasterizer's throughput on the packed cubes, per
+//! pass, in Mpixels/s (pixels of the pass's target per second of wall time, median of 9 runs
+//! after one warm-up), on 1 thread and on every thread of the machine, side by side in one
+//! run: on the standard frame (the point the frames bench compares with llvmpipe: a 1024²
+//! map, a 384² view) and with both grown to 1024².
+//!
+//! `UMBRA_BENCH_THREADS=N` measures N threads only and reports the fastest of the 9 runs
+//! rather than the median (for A/B comparisons of two builds on a noisy, shared machine).
 
 use std::time::Duration;
 
@@ -15,43 +19,55 @@ fn median(mut v: Vec<Duration>) -> Duration {
 fn main() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../cases/packed-cubes/packed-cubes.json");
-    let mut point = umbra_case::load_file(&path)
+    let standard = umbra_case::load_file(&path)
         .expect("packed-cubes case")
         .swap_remove(2);
-    point.case.shadow.size = [1024, 1024];
-    point.case.camera.size = [1024, 1024];
-    let run = Prepared::new(point);
-    let pixels = 1024.0 * 1024.0;
+    let mut large = standard.clone();
+    large.case.shadow.size = [1024, 1024];
+    large.case.camera.size = [1024, 1024];
     let all = std::thread::available_parallelism()
         .map(|n| n.get())
         .unwrap_or(1);
-    println!(
-        "reference rasterizer, {} ({} triangles), map 1024x1024, view 1024x1024",
-        run.point.id(),
-        run.geometry.triangles.len()
-    );
-    for threads in [1, all] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("pool");
-        let (shadow, lit) = pool.install(|| {
-            umbra_ref::render(&run, ClipDepth::MinusOneToOne);
-            let frames: Vec<_> = (0..9)
-                .map(|_| umbra_ref::render(&run, ClipDepth::MinusOneToOne).timings)
-                .collect();
-            (
-                median(frames.iter().map(|t| t.shadow_pass).collect()),
-                median(frames.iter().map(|t| t.lit_pass).collect()),
-            )
-        });
-        let mps = |d: Duration| pixels / d.as_secs_f64() / 1e6;
+    type Pick = fn(Vec<Duration>) -> Duration;
+    let (threads, pick): (Vec<usize>, Pick) = match std::env::var("UMBRA_BENCH_THREADS") {
+        Ok(n) => (
+            vec![n.parse().expect("UMBRA_BENCH_THREADS: a number")],
+            |v| v.into_iter().min().unwrap_or_default(),
+        ),
+        Err(_) => (vec![1, all], median),
+    };
+    for (label, point) in [("standard frame", standard), ("1024² view", large)] {
+        let run = Prepared::new(point);
+        let [mw, mh] = run.case().shadow.size;
+        let [cw, ch] = run.camera.size;
         println!(
-            "  {threads} thread(s): shadow pass {:.2} ms = {:.1} Mpixels/s; lit pass {:.2} ms = {:.1} Mpixels/s",
-            shadow.as_secs_f64() * 1e3,
-            mps(shadow),
-            lit.as_secs_f64() * 1e3,
-            mps(lit)
+            "reference rasterizer, {label}: {} ({} triangles), map {mw}x{mh}, view {cw}x{ch}",
+            run.point.id(),
+            run.geometry.triangles.len()
         );
+        for &n in &threads {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .expect("pool");
+            let (shadow, lit) = pool.install(|| {
+                umbra_ref::render(&run, ClipDepth::MinusOneToOne);
+                let frames: Vec<_> = (0..9)
+                    .map(|_| umbra_ref::render(&run, ClipDepth::MinusOneToOne).timings)
+                    .collect();
+                (
+                    pick(frames.iter().map(|t| t.shadow_pass).collect()),
+                    pick(frames.iter().map(|t| t.lit_pass).collect()),
+                )
+            });
+            let mps = |d: Duration, px: u32| f64::from(px) / d.as_secs_f64() / 1e6;
+            println!(
+                "  {n} thread(s): shadow pass {:.2} ms = {:.1} Mpixels/s; lit pass {:.2} ms = {:.1} Mpixels/s",
+                shadow.as_secs_f64() * 1e3,
+                mps(shadow, mw * mh),
+                lit.as_secs_f64() * 1e3,
+                mps(lit, cw * ch)
+            );
+        }
     }
 }

@@ -20,6 +20,7 @@ pub mod bands;
 pub mod lit_pass;
 pub mod lookup;
 pub mod raster;
+pub mod rounding;
 pub mod shading;
 pub mod shadow_pass;
 pub mod truth;

@@ -110,14 +110,17 @@ pub fn render(
         false,
         |rows, band, touching| {
             for (index, t) in touching {
-                t.scan(rows.clone(), |x, y, frag| {
-                    let z = t.depth(frag).clamp(0.0, 1.0);
-                    let i = (y - rows.start) as usize * w as usize + x as usize;
-                    if z < band[i].depth {
-                        band[i] = Nearest {
-                            depth: z,
-                            tri: index as u32,
-                        };
+                t.scan_spans(rows.clone(), |span| {
+                    let start = (span.y - rows.start) as usize * w as usize + span.x as usize;
+                    let pixels = &mut band[start..start + span.len];
+                    for (px, frag) in pixels.iter_mut().zip(span.fragments()) {
+                        let z = t.depth(frag).clamp(0.0, 1.0);
+                        if z < px.depth {
+                            *px = Nearest {
+                                depth: z,
+                                tri: index as u32,
+                            };
+                        }
                     }
                 });
             }

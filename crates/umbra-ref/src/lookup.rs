@@ -34,6 +34,7 @@ use glam::Vec3;
 use umbra_case::format::{BiasMatrix, Compare, Filter, Outside, Shadow};
 use umbra_case::{Convention, LightKind, LightSetup, LookupMatrices, Profile, ShadowCoord, Spec};
 
+use crate::rounding::{floor_f32, floor_i64};
 use crate::shadow_pass::DepthLayer;
 
 thread_local! {
@@ -333,10 +334,10 @@ impl Lookup<'_> {
             }
         };
         match s.filter {
-            Filter::Nearest => tap((u * fw).floor() as i64, (v * fh).floor() as i64),
+            Filter::Nearest => tap(floor_i64(u * fw), floor_i64(v * fh)),
             Filter::Linear => {
                 let (x, y) = (u * fw - 0.5, v * fh - 0.5);
-                let (i0, j0) = (x.floor(), y.floor());
+                let (i0, j0) = (floor_f32(x), floor_f32(y));
                 let (a, b) = (x - i0, y - j0);
                 let (i0, j0) = (i0 as i64, j0 as i64);
                 (1.0 - a) * (1.0 - b) * tap(i0, j0)
@@ -351,7 +352,7 @@ impl Lookup<'_> {
                     for dx in 0..k {
                         let uu = u + (dx as f32 - half) / fw;
                         let vv = v + (dy as f32 - half) / fh;
-                        sum += tap((uu * fw).floor() as i64, (vv * fh).floor() as i64);
+                        sum += tap(floor_i64(uu * fw), floor_i64(vv * fh));
                     }
                 }
                 sum / (k * k) as f32

@@ -89,6 +89,35 @@ pub struct Fragment {
     pub e: [i64; 3],
 }
 
+/// The covered pixel centres of one row of a triangle: `len` centres from column `x`.
+#[derive(Clone, Copy, Debug)]
+pub struct Span {
+    /// The row.
+    pub y: i32,
+    /// The first covered column.
+    pub x: i32,
+    /// How many centres, ≥ 1.
+    pub len: usize,
+    /// The edge values at the first centre.
+    pub e: [i64; 3],
+    /// What one column to the right adds to each edge value.
+    pub step: [i64; 3],
+}
+
+impl Span {
+    /// The span's fragments, left to right.
+    pub fn fragments(&self) -> impl Iterator<Item = Fragment> + use<> {
+        let (mut e, step) = (self.e, self.step);
+        (0..self.len).map(move |_| {
+            let f = Fragment { e };
+            for i in 0..3 {
+                e[i] += step[i];
+            }
+            f
+        })
+    }
+}
+
 impl Tri {
     /// Screen-space barycentrics at a fragment.
     pub fn screen_bary(&self, f: Fragment) -> [f64; 3] {
@@ -183,8 +212,25 @@ impl Tri {
         self.z.iter().fold(0.0f32, |m, z| m.max(z.abs()))
     }
 
-    /// Calls `visit(x, y, fragment)` for every covered pixel centre in rows `rows`.
+    /// Calls `visit(x, y, fragment)` for every covered pixel centre in rows `rows`, row by
+    /// row, left to right ([`Tri::scan_spans`], one centre at a time).
     pub fn scan(&self, rows: std::ops::Range<i32>, mut visit: impl FnMut(i32, i32, Fragment)) {
+        self.scan_spans(rows, |span| {
+            for (k, f) in span.fragments().enumerate() {
+                visit(span.x + k as i32, span.y, f);
+            }
+        });
+    }
+
+    /// Calls `visit(span)` for the covered pixel centres of each row in rows `rows` that has
+    /// any, top row first.
+    ///
+    /// A centre is covered when every edge value is positive, or zero on an edge the triangle
+    /// owns ([`Tri::owns`]). Along a row each edge value is affine in x with an integer step,
+    /// so the covered centres of a row are one interval, found exactly in integers (a ceiling
+    /// or floor division per edge) rather than by testing every centre of the bounds; the
+    /// edge values a span steps through are the same integers a per-centre walk computes.
+    pub fn scan_spans(&self, rows: std::ops::Range<i32>, mut visit: impl FnMut(Span)) {
         let y_start = self.bbox[1].max(rows.start);
         let y_end = (self.bbox[3] + 1).min(rows.end);
         // Edge i runs from vertex i+1 to vertex i+2: E(p) = dx·(p.y − a.y) − dy·(p.x − a.x).
@@ -201,26 +247,54 @@ impl Tri {
             let py0 = i64::from(y_start) * ONE + HALF;
             origin[i] = dx * (py0 - self.y[a]) - dy * (px0 - self.x[a]);
         }
-        let inside = |e: i64, owns: bool| e > 0 || (e == 0 && owns);
+        // The smallest edge value that counts as inside: 0 on an owned edge, else 1.
+        let least = self.owns.map(|owns| i64::from(!owns));
+        let last = i64::from(self.bbox[2] - self.bbox[0]);
         for y in y_start..y_end {
-            let mut e = origin;
-            let mut entered = false;
-            for x in self.bbox[0]..=self.bbox[2] {
-                if inside(e[0], self.owns[0])
-                    && inside(e[1], self.owns[1])
-                    && inside(e[2], self.owns[2])
-                {
-                    entered = true;
-                    visit(x, y, Fragment { e });
-                } else if entered {
-                    break; // convex: the row's span has ended
+            // Columns k (x = bbox[0] + k) with origin + k·step ≥ least for every edge.
+            let (mut lo, mut hi) = (0i64, last);
+            for i in 0..3 {
+                let (e0, s) = (origin[i], step_x[i]);
+                let need = least[i] - e0; // k·s ≥ need
+                if s > 0 {
+                    lo = lo.max(-(-need).div_euclid(s)); // ⌈need / s⌉
+                } else if s < 0 {
+                    hi = hi.min((-need).div_euclid(-s)); // ⌊need / s⌋ for s < 0
+                } else if need > 0 {
+                    hi = -1;
                 }
-                for i in 0..3 {
-                    e[i] += step_x[i];
-                }
+            }
+            if lo <= hi {
+                visit(Span {
+                    y,
+                    x: self.bbox[0] + lo as i32,
+                    len: (hi - lo + 1) as usize,
+                    e: std::array::from_fn(|i| origin[i] + lo * step_x[i]),
+                    step: step_x,
+                });
             }
             for i in 0..3 {
                 origin[i] += step_y[i];
+            }
+        }
+    }
+
+    /// The per-centre walk [`Tri::scan`] replaces, kept to test it against.
+    #[cfg(test)]
+    fn scan_each_centre(
+        &self,
+        rows: std::ops::Range<i32>,
+        mut visit: impl FnMut(i32, i32, Fragment),
+    ) {
+        let y_start = self.bbox[1].max(rows.start);
+        let y_end = (self.bbox[3] + 1).min(rows.end);
+        for y in y_start..y_end {
+            for x in self.bbox[0]..=self.bbox[2] {
+                let f = self.fragment_at(x, y);
+                let inside = |i: usize| f.e[i] > 0 || (f.e[i] == 0 && self.owns[i]);
+                if inside(0) && inside(1) && inside(2) {
+                    visit(x, y, f);
+                }
             }
         }
     }
@@ -580,6 +654,58 @@ mod tests {
                 coverage(&r, &diag).iter().all(|&h| h == 1),
                 "{conv:?} diagonal"
             );
+        }
+    }
+
+    #[test]
+    fn the_span_scan_visits_what_the_per_centre_walk_visits() {
+        // Random triangles, some far outside the viewport, some thin, some on pixel centres:
+        // the same fragments, with the same edge values, in the same order.
+        for conv in [Convention::GL, Convention::ZERO_TO_ONE] {
+            let r = Rasterizer {
+                conv,
+                width: 64,
+                height: 48,
+                cull: Cull::None,
+            };
+            let mut state = 0x9e37_79b9_7f4a_7c15u64;
+            let mut next = move || {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                (state >> 11) as f32 / (1u64 << 53) as f32
+            };
+            let mut fragments = 0;
+            for k in 0..4000 {
+                let spread = [1.1, 3.0, 0.2][k % 3];
+                let snap = |v: f32| {
+                    if k % 5 == 0 {
+                        (v * 16.0).round() / 16.0
+                    } else {
+                        v
+                    }
+                };
+                let pts: [[f32; 2]; 3] = std::array::from_fn(|_| {
+                    [
+                        snap((next() * 2.0 - 1.0) * spread),
+                        snap((next() * 2.0 - 1.0) * spread),
+                    ]
+                });
+                for t in tri(&r, pts) {
+                    let (mut a, mut b) = (Vec::new(), Vec::new());
+                    t.scan(0..48, |x, y, f| a.push((x, y, f.e)));
+                    t.scan_each_centre(0..48, |x, y, f| b.push((x, y, f.e)));
+                    assert_eq!(a, b, "{conv:?} {pts:?}");
+                    // And band by band, as the passes call it.
+                    let mut c = Vec::new();
+                    for band in (0..48).step_by(8) {
+                        t.scan(band..band + 8, |x, y, f| c.push((x, y, f.e)));
+                    }
+                    assert_eq!(a, c);
+                    fragments += a.len();
+                }
+            }
+            assert!(fragments > 100_000, "{fragments}");
         }
     }
 

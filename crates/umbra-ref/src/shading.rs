@@ -8,6 +8,8 @@
 use glam::Vec3;
 use umbra_case::format::{Shading, ShadingModel};
 
+use crate::rounding::unorm8;
+
 /// Background colour of every backend.
 pub const BACKGROUND: [u8; 4] = [0, 0, 0, 255];
 
@@ -21,8 +23,8 @@ pub fn shade(
     visibility: f32,
 ) -> [u8; 4] {
     let c = shade_linear(s, albedo, n, to_light, to_eye, visibility);
-    let q = |x: f32| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
-    [q(c.x), q(c.y), q(c.z), 255]
+    // (x.clamp(0, 1)·255).round() as u8, without libm's roundf (crate::rounding).
+    [unorm8(c.x), unorm8(c.y), unorm8(c.z), 255]
 }
 
 /// The shading before it is clamped and stored: affine in `visibility` for both models,

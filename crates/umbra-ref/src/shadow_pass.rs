@@ -190,16 +190,20 @@ pub fn render_face(
                 } else {
                     0.0
                 };
-                t.scan(rows.clone(), |x, y, frag| {
-                    let z = (f64::from(t.depth(frag)) + f64::from(sign) * offset) as f32;
-                    let stored = if packed {
-                        z.clamp(0.0, 1.0)
-                    } else {
-                        format.store(z.clamp(0.0, 1.0))
-                    };
-                    let i = (y - rows.start) as usize * w as usize + x as usize;
-                    if conv.depth_test(stored, band[i]) {
-                        band[i] = stored;
+                let offset = f64::from(sign) * offset;
+                t.scan_spans(rows.clone(), |span| {
+                    let start = (span.y - rows.start) as usize * w as usize + span.x as usize;
+                    let texels = &mut band[start..start + span.len];
+                    for (texel, frag) in texels.iter_mut().zip(span.fragments()) {
+                        let z = (f64::from(t.depth(frag)) + offset) as f32;
+                        let stored = if packed {
+                            z.clamp(0.0, 1.0)
+                        } else {
+                            format.store(z.clamp(0.0, 1.0))
+                        };
+                        if conv.depth_test(stored, *texel) {
+                            *texel = stored;
+                        }
                     }
                 });
             }

@@ -221,6 +221,14 @@ pub fn main(args: &Args) -> i32 {
         groups.entry(p.backend.clone()).or_default().push(p);
     }
     let total = groups.values().map(Vec::len).sum::<usize>();
+    // Each backend starts at another point of the plan (its runs rotated by its share), so
+    // concurrent workers rarely reach a point whose judging basis is not cached yet at the
+    // same moment (the second would wait for the first, see judge_cache).
+    let n = groups.len().max(1);
+    for (k, runs) in groups.values_mut().enumerate() {
+        let offset = k * runs.len() / n;
+        runs.rotate_left(offset);
+    }
     let queue = Mutex::new(groups.into_iter().collect::<VecDeque<_>>());
     let done = Mutex::new(Collected {
         results,

@@ -179,14 +179,73 @@ fn cached<T>(
         return compute();
     };
     let file = dir.join(format!("{kind}-{key:016x}.bin"));
-    if let Ok(bytes) = std::fs::read(&file) {
-        if let Some(v) = reader(&bytes, key) {
+    let read = || {
+        std::fs::read(&file)
+            .ok()
+            .and_then(|bytes| reader(&bytes, key))
+    };
+    if let Some(v) = read() {
+        return v;
+    }
+    // Every backend's worker goes through the points in the same order, so two workers miss
+    // the same entry at the same moment: one computes it (holding `KEY.lock`, which names its
+    // process) and the others wait for the file, unless the holder is gone.
+    let lock = dir.join(format!("{kind}-{key:016x}.lock"));
+    let _ = std::fs::create_dir_all(dir);
+    let held = loop {
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&lock)
+        {
+            Ok(mut f) => {
+                let _ = write!(f, "{}", std::process::id());
+                break true;
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                if let Some(v) = read() {
+                    return v;
+                }
+                if holder_gone(&lock) {
+                    let _ = std::fs::remove_file(&lock);
+                    continue;
+                }
+                std::thread::sleep(Duration::from_millis(10));
+            }
+            // A directory that cannot be written: compute without the cache.
+            Err(_) => break false,
+        }
+    };
+    if held {
+        // The holder may have finished between our read and our lock.
+        if let Some(v) = read() {
+            let _ = std::fs::remove_file(&lock);
             return v;
         }
     }
     let value = compute();
     let _ = store(dir, &file, &writer(&value, key));
+    if held {
+        let _ = std::fs::remove_file(&lock);
+    }
     value
+}
+
+/// Whether the process named in `lock` has ended (killed on a timeout, crashed): its entry
+/// will never come. A lock without a process id is stale once it is 5 s old (its holder died
+/// between creating it and writing the id); younger, it is being written.
+fn holder_gone(lock: &Path) -> bool {
+    match std::fs::read_to_string(lock)
+        .ok()
+        .and_then(|t| t.trim().parse::<u32>().ok())
+    {
+        Some(pid) => !Path::new(&format!("/proc/{pid}")).exists(),
+        None => std::fs::metadata(lock)
+            .and_then(|m| m.modified())
+            .ok()
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|age| age > Duration::from_secs(5)),
+    }
 }
 
 fn store(dir: &Path, file: &Path, bytes: &[u8]) -> std::io::Result<()> {
@@ -403,6 +462,41 @@ impl<'a> Reader<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_locked_entry_is_waited_for_and_a_dead_holder_is_taken_over() {
+        let dir = std::env::temp_dir().join(format!("umbra-lock-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("dir");
+        let write = |v: &u32, _k: u64| v.to_le_bytes().to_vec();
+        let read = |b: &[u8], _k: u64| b.try_into().ok().map(u32::from_le_bytes);
+        // Held by a live process (this one): the waiter reads what the holder writes.
+        std::fs::write(
+            dir.join("t-0000000000000001.lock"),
+            std::process::id().to_string(),
+        )
+        .expect("lock");
+        let dir2 = dir.clone();
+        let holder = std::thread::spawn(move || {
+            std::thread::sleep(Duration::from_millis(100));
+            std::fs::write(dir2.join("t-0000000000000001.bin"), 7u32.to_le_bytes()).expect("entry");
+        });
+        let got = cached(Some(&dir), "t", 1, write, read, || 99u32);
+        holder.join().expect("holder");
+        assert_eq!(
+            got, 7,
+            "the waiter must read the holder's entry, not compute its own"
+        );
+        // Held by a process that is gone: taken over and computed.
+        std::fs::write(dir.join("t-0000000000000002.lock"), "4194303999").expect("lock");
+        assert_eq!(cached(Some(&dir), "t", 2, write, read, || 5u32), 5);
+        assert!(!dir.join("t-0000000000000002.lock").exists());
+        assert_eq!(
+            std::fs::read(dir.join("t-0000000000000002.bin")).expect("entry"),
+            5u32.to_le_bytes()
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     #[test]
     fn a_written_basis_reads_back_identical() {
