@@ -2,7 +2,8 @@
 //! pass, in Mpixels/s (pixels of the pass's target per second of wall time, median of 9 runs
 //! after one warm-up), on 1 thread and on every thread of the machine, side by side in one
 //! run: on the standard frame (the point the frames bench compares with llvmpipe: a 1024²
-//! map, a 384² view) and with both grown to 1024².
+//! map, a 384² view) and with both grown to 1024²; and what the judged render (ambiguity
+//! flags, legal intervals) of the standard frame costs beside the plain one (median of 5).
 //!
 //! `UMBRA_BENCH_THREADS=N` measures N threads only and reports the fastest of the 9 runs
 //! rather than the median (for A/B comparisons of two builds on a noisy, shared machine).
@@ -68,6 +69,39 @@ fn main() {
                 lit.as_secs_f64() * 1e3,
                 mps(lit, cw * ch)
             );
+            // The judged variant (what every pixel and texel allows, for the judge): what it
+            // costs beside the plain frame, on the standard frame only (it is the judge's
+            // cold-run cost, computed once per point and profile and then cached).
+            if label == "standard frame" {
+                let (plain, judged) = pool.install(|| {
+                    let time = |f: &dyn Fn()| {
+                        let t = std::time::Instant::now();
+                        f();
+                        t.elapsed()
+                    };
+                    let plain =
+                        |_| time(&|| drop(umbra_ref::render(&run, ClipDepth::MinusOneToOne)));
+                    let judged = |_| {
+                        time(&|| {
+                            drop(umbra_ref::render_judged(
+                                &run,
+                                ClipDepth::MinusOneToOne,
+                                umbra_case::Profile::GL,
+                            ))
+                        })
+                    };
+                    (
+                        pick((0..5).map(plain).collect()),
+                        pick((0..5).map(judged).collect()),
+                    )
+                });
+                println!(
+                    "  {n} thread(s): judged render (GL profile) {:.1} ms against {:.1} ms for the plain one ({:.1}x)",
+                    judged.as_secs_f64() * 1e3,
+                    plain.as_secs_f64() * 1e3,
+                    judged.as_secs_f64() / plain.as_secs_f64()
+                );
+            }
         }
     }
 }

@@ -6,17 +6,21 @@
 //! Both depend on the case point and on umbra's own code only, never on the backend's output,
 //! so they are content-addressed by both: an entry's file name is a hash of the resolved case
 //! point (and the profile), and it lives in a directory named for this build of umbra
-//! ([`build_id`], a hash of the executable's bytes: any change to umbra's code, committed or
-//! not, is a new directory, so nothing computed by another build is ever read). The cache
+//! ([`build_id`], the linker's hash of the executable's contents, or our own hash of its
+//! bytes: any change to umbra's code, committed or not, is a new directory, so nothing
+//! computed by another build is ever read). The cache
 //! outlives the run: a second conformance run, the self-test, a sweep and every step of a
 //! Mesa bisection (which keeps umbra fixed and changes only the driver) read what the first
 //! computed, so re-running a point costs the backend's frame and the comparison. [`prepare`]
 //! removes the directories of other builds, so the cache holds one build's entries.
 //!
 //! Commands name the build's directory in `UMBRA_JUDGE_CACHE`; the first worker to need an
-//! entry writes it there (to a temporary name, then renamed, so a reader never sees half a
-//! file) and the others read it. Without the variable (`umbra render`, tests) everything is
-//! computed in place. The twins' truths are cached the same way (keyed by the twin's point).
+//! entry computes it under a lock file (`KEY.lock`, naming its process; another worker that
+//! needs the entry meanwhile waits for it rather than computing it too, and takes over if
+//! that process has died) and writes it there (to a temporary name, then renamed, so a
+//! reader never sees half a file); the others read it. Without the variable (`umbra render`,
+//! tests) everything is computed in place. The twins' truths are cached the same way (keyed
+//! by the twin's point).
 //!
 //! Formats, little-endian, each starting with a magic, width and height (u32) and a u64 key
 //! check (FNV-1a of the resolved case point, and of the profile's name for a judged render):
