@@ -5,7 +5,9 @@
 //!   name `backend/id`) × backends (`--backend ID`, default every known one), in a fixed
 //!   order; `--shard I/N` keeps every N-th run starting at I (0-based), as deqp-runner's
 //!   fractions do, so N CI jobs split a run deterministically.
-//! - Execution: backend groups run in parallel up to `--jobs` (default: the core count). A
+//! - Execution: `--jobs` threads (default: the core count), each driving one worker process
+//!   at a time and taking runs one by one; a thread whose backend has no runs left moves to
+//!   the backend with the most left, sharing it once all are taken ([`Queues`]). A
 //!   worker that dies costs its run (Crash), one that exceeds `--timeout` seconds costs its run
 //!   (Timeout); a fresh worker takes the rest. Every failure is rerun once; a changed result
 //!   is a Flake.
@@ -216,11 +218,11 @@ pub fn main(args: &Args) -> i32 {
     };
     let _ = std::fs::remove_dir_all(&settings.failures);
     let _ = std::fs::remove_dir_all(&settings.gallery);
-    let mut groups: BTreeMap<String, Vec<Planned>> = BTreeMap::new();
+    let mut groups: BTreeMap<String, VecDeque<Planned>> = BTreeMap::new();
     for p in plan {
-        groups.entry(p.backend.clone()).or_default().push(p);
+        groups.entry(p.backend.clone()).or_default().push_back(p);
     }
-    let total = groups.values().map(Vec::len).sum::<usize>();
+    let total = groups.values().map(VecDeque::len).sum::<usize>();
     // Each backend starts at another point of the plan (its runs rotated by its share), so
     // concurrent workers rarely reach a point whose judging basis is not cached yet at the
     // same moment (the second would wait for the first, see judge_cache).
@@ -229,7 +231,10 @@ pub fn main(args: &Args) -> i32 {
         let offset = k * runs.len() / n;
         runs.rotate_left(offset);
     }
-    let queue = Mutex::new(groups.into_iter().collect::<VecDeque<_>>());
+    let queues = Mutex::new(Queues {
+        remaining: groups,
+        busy: BTreeMap::new(),
+    });
     let done = Mutex::new(Collected {
         results,
         progress: crate::harness::progress::Progress::new(total),
@@ -238,11 +243,14 @@ pub fn main(args: &Args) -> i32 {
     std::thread::scope(|s| {
         for _ in 0..jobs {
             s.spawn(|| {
-                // Take the next group in a function of its own, so the queue's lock is released
-                // before the group runs (a `while let` on the lock would hold it throughout).
-                let next = || queue.lock().ok().and_then(|mut q| q.pop_front());
-                while let Some((backend, runs)) = next() {
-                    run_group(&backend, runs, &settings, &done, total);
+                // Pick a backend in a function of its own, so the lock is released before its
+                // runs start (a `while let` on the lock would hold it throughout).
+                let next = || queues.lock().ok().and_then(|mut q| q.pick());
+                while let Some((backend, first)) = next() {
+                    run_group(&backend, &queues, first, &settings, &done, total);
+                    if let Ok(mut q) = queues.lock() {
+                        q.release(&backend);
+                    }
                 }
             });
         }
@@ -503,8 +511,65 @@ struct Collected {
 
 type Done = Mutex<Collected>;
 
-/// Runs one backend's runs in its workers.
-fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done, total: usize) {
+/// The runs not started yet, per backend, and how many job threads work on each backend.
+///
+/// Each job thread works on one backend at a time, in a worker of its own, taking that
+/// backend's runs one by one. A thread that runs out picks the backend with the most runs
+/// left that nobody works on; when every backend with runs left is taken, it joins the one
+/// with the most (a second worker of the same driver). So a slow driver's runs (softpipe's
+/// GLES 2 path is half the catalogue's worker time) are shared at the end instead of keeping
+/// one core busy long after the others are idle: the wall time comes within about one run of
+/// the worker time over `--jobs`.
+struct Queues {
+    remaining: BTreeMap<String, VecDeque<Planned>>,
+    busy: BTreeMap<String, usize>,
+}
+
+impl Queues {
+    /// A backend to work on, and whether this is its first worker (which reports its driver).
+    fn pick(&mut self) -> Option<(String, bool)> {
+        let left = |b: &String| self.remaining.get(b).map_or(0, VecDeque::len);
+        let free = self
+            .remaining
+            .keys()
+            .filter(|b| left(b) > 0 && self.busy.get(*b).copied().unwrap_or(0) == 0)
+            .max_by_key(|b| left(b));
+        let backend = match free {
+            Some(b) => b.clone(),
+            None => self
+                .remaining
+                .keys()
+                .filter(|b| left(b) > 0)
+                .max_by_key(|b| left(b))?
+                .clone(),
+        };
+        let first = !self.busy.contains_key(&backend);
+        *self.busy.entry(backend.clone()).or_default() += 1;
+        Some((backend, first))
+    }
+
+    /// The next run of `backend`, if any is left.
+    fn next_run(&mut self, backend: &str) -> Option<Planned> {
+        self.remaining.get_mut(backend)?.pop_front()
+    }
+
+    fn release(&mut self, backend: &str) {
+        if let Some(n) = self.busy.get_mut(backend) {
+            *n = n.saturating_sub(1);
+        }
+    }
+}
+
+/// Runs `backend`'s runs from `queues`, one by one, in a worker of this thread's own; `first`:
+/// this is the backend's first worker, whose hello goes into drivers.txt and the report.
+fn run_group(
+    backend: &str,
+    queues: &Mutex<Queues>,
+    first: bool,
+    settings: &Settings,
+    done: &Done,
+    total: usize,
+) {
     let mut env = crate::harness::registry::worker_env(backend);
     if crate::harness::fake::enabled() {
         env.push(("UMBRA_FAKE_BACKENDS".into(), "1".into()));
@@ -592,14 +657,15 @@ fn run_group(backend: &str, runs: Vec<Planned>, settings: &Settings, done: &Done
         .get("unavailable")
         .and_then(|u| u.as_str())
         .map(str::to_string);
-    if let Ok(mut d) = done.lock() {
+    if let Some(mut d) = done.lock().ok().filter(|_| first) {
         d.drivers.push_str(&driver_line);
         d.driver_rows.push(row);
         if let Some(why) = &refused {
             d.refused.push(format!("{backend}: {why}"));
         }
     }
-    for p in runs {
+    let next = || queues.lock().ok().and_then(|mut q| q.next_run(backend));
+    while let Some(p) = next() {
         let name = p.name();
         let t0 = Instant::now();
         let outcome = match (&start_error, &unavailable) {
