@@ -534,12 +534,14 @@ impl Queues {
             .keys()
             .filter(|b| left(b) > 0 && self.busy.get(*b).copied().unwrap_or(0) == 0)
             .max_by_key(|b| left(b));
+        // Joining a backend is worth a worker only if it has more runs left than workers on it.
+        let busy = |b: &String| self.busy.get(b).copied().unwrap_or(0);
         let backend = match free {
             Some(b) => b.clone(),
             None => self
                 .remaining
                 .keys()
-                .filter(|b| left(b) > 0)
+                .filter(|b| left(b) > busy(b))
                 .max_by_key(|b| left(b))?
                 .clone(),
         };

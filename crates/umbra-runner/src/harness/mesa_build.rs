@@ -135,22 +135,34 @@ impl MesaBuild {
         Ok(build)
     }
 
+    /// Every worker writes these (the same bytes for the same build) while others may be
+    /// loading them: each is written to a name of this process's own and renamed over the
+    /// file, so a loader reading it sees the whole old file or the whole new one, never a
+    /// truncated one (which made a concurrently starting worker's EGL find no vendor).
     fn write_loader_files(&self, icd_api: Option<&str>) -> Result<(), String> {
         let fail = |e: std::io::Error| format!("cannot write {}: {e}", self.generated.display());
         std::fs::create_dir_all(&self.generated).map_err(fail)?;
+        let write = |name: &str, json: serde_json::Value| {
+            let tmp = self
+                .generated
+                .join(format!(".{name}.{}.tmp", std::process::id()));
+            std::fs::write(&tmp, json.to_string())
+                .and_then(|()| std::fs::rename(&tmp, self.generated.join(name)))
+                .map_err(fail)
+        };
         if let Some(egl) = &self.egl {
             let json = serde_json::json!({
                 "file_format_version": "1.0.0",
                 "ICD": { "library_path": egl }
             });
-            std::fs::write(self.generated.join("50_mesa.json"), json.to_string()).map_err(fail)?;
+            write("50_mesa.json", json)?;
         }
         if let Some(lvp) = &self.lavapipe {
             let json = serde_json::json!({
                 "file_format_version": "1.0.0",
                 "ICD": { "library_path": lvp, "api_version": icd_api.unwrap_or("1.3.0") }
             });
-            std::fs::write(self.generated.join("lvp_icd.json"), json.to_string()).map_err(fail)?;
+            write("lvp_icd.json", json)?;
         }
         Ok(())
     }
