@@ -1,7 +1,8 @@
 //! Integer forms of the roundings the reference does per pixel (the lookup's texel index,
 //! the 8-bit colour), bit for bit what `floor` and `round` return, without the libm calls that
 //! baseline x86-64 makes for them (SSE2 has no rounding instruction). The reference is bound
-//! by the number of instructions it executes, and each call was a dozen or two.
+//! by the number of instructions it executes, and each call was a dozen or two. The depth
+//! store's `round` is `umbra_case::depth::round_nonneg_f64` (umbra-case stores depth codes).
 
 /// `x.floor()`, bit for bit (−0 included), without a libm call for |x| < 2²³ (where every
 /// f32 with a fraction lies).

@@ -6,6 +6,7 @@
 //! report set come with the conformance runner.
 
 pub mod args;
+pub mod atomic_file;
 pub mod cli;
 pub mod commands;
 pub mod glob;

@@ -529,13 +529,13 @@ impl Queues {
     /// A backend to work on, and whether this is its first worker (which reports its driver).
     fn pick(&mut self) -> Option<(String, bool)> {
         let left = |b: &String| self.remaining.get(b).map_or(0, VecDeque::len);
+        let busy = |b: &String| self.busy.get(b).copied().unwrap_or(0);
         let free = self
             .remaining
             .keys()
-            .filter(|b| left(b) > 0 && self.busy.get(*b).copied().unwrap_or(0) == 0)
+            .filter(|b| left(b) > 0 && busy(b) == 0)
             .max_by_key(|b| left(b));
         // Joining a backend is worth a worker only if it has more runs left than workers on it.
-        let busy = |b: &String| self.busy.get(b).copied().unwrap_or(0);
         let backend = match free {
             Some(b) => b.clone(),
             None => self

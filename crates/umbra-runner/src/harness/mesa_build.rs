@@ -136,18 +136,13 @@ impl MesaBuild {
     }
 
     /// Every worker writes these (the same bytes for the same build) while others may be
-    /// loading them: each is written to a name of this process's own and renamed over the
-    /// file, so a loader reading it sees the whole old file or the whole new one, never a
-    /// truncated one (which made a concurrently starting worker's EGL find no vendor).
+    /// loading them, so through [`crate::atomic_file`]: a truncated one made a concurrently
+    /// starting worker's EGL find no vendor.
     fn write_loader_files(&self, icd_api: Option<&str>) -> Result<(), String> {
         let fail = |e: std::io::Error| format!("cannot write {}: {e}", self.generated.display());
         std::fs::create_dir_all(&self.generated).map_err(fail)?;
         let write = |name: &str, json: serde_json::Value| {
-            let tmp = self
-                .generated
-                .join(format!(".{name}.{}.tmp", std::process::id()));
-            std::fs::write(&tmp, json.to_string())
-                .and_then(|()| std::fs::rename(&tmp, self.generated.join(name)))
+            crate::atomic_file::write(&self.generated.join(name), json.to_string().as_bytes())
                 .map_err(fail)
         };
         if let Some(egl) = &self.egl {

@@ -254,13 +254,7 @@ fn holder_gone(lock: &Path) -> bool {
 
 fn store(dir: &Path, file: &Path, bytes: &[u8]) -> std::io::Result<()> {
     std::fs::create_dir_all(dir)?;
-    let tmp = dir.join(format!(
-        ".{}.{}.tmp",
-        file.file_name().and_then(|n| n.to_str()).unwrap_or("entry"),
-        std::process::id()
-    ));
-    std::fs::File::create(&tmp)?.write_all(bytes)?;
-    std::fs::rename(&tmp, file)
+    crate::atomic_file::write(file, bytes)
 }
 
 /// 64-bit FNV-1a of the resolved case point and `tag` (everything an entry depends on).

@@ -23,7 +23,7 @@ pub fn write_images(
     )?;
     heatmap::visibility_map(&f.visibility, f.width, f.height)
         .save_png(&dir.join("visibility.png"))?;
-    judging_pictures(dir, j)?;
+    judging_pictures(dir, j, None)?;
     if let Some(m) = &f.shadow_map {
         // Layers stacked top to bottom (cube faces +x, −x, +y, −y, +z, −z).
         heatmap::depth_map(&m.values, m.width, m.height * m.layers)
@@ -61,12 +61,9 @@ pub fn write_gallery(
     };
     image::imageops::thumbnail(&colour, tw, th).save(dir.join("thumb.png"))?;
     colour.save(dir.join("color.png"))?;
-    heatmap::truth_error_map(&j.error, &j.truth).save_png(&dir.join("error.png"))?;
-    let truth = heatmap::truth_map(&j.truth);
-    shared_png(dir, "truth.png", &truth.data, truth.width, truth.height)?;
-    if let Some(r) = &j.reference {
-        shared_png(dir, "reference.png", &r.color, r.width, r.height)?;
-    }
+    // The gallery root is the conformance run's own (cleared at its start): its runs share
+    // `.shared/` beside their directories.
+    judging_pictures(dir, j, dir.parent().map(|p| p.join(".shared")).as_deref())?;
     if let Some((blessed, pending)) = golden {
         for (from, to) in [(blessed, "golden.png"), (pending, "pending.png")] {
             if from.is_file() {
@@ -77,27 +74,24 @@ pub fn write_gallery(
     Ok(())
 }
 
-/// `dir/name`: a hard link to `.shared/HASH.png` beside `dir`, which is encoded only if no
-/// worker has encoded the same pixels yet (written under a temporary name, then renamed, so
-/// a reader never sees half a file). Where a link cannot be made, a copy.
-fn shared_png(
+/// `dir/name`: with `shared`, a hard link to `shared/HASH.png`, which is encoded only if no
+/// worker has encoded the same pixels yet (through [`crate::atomic_file`], so a reader never
+/// sees half a file; where a link cannot be made, a copy); without, the picture itself.
+fn png(
     dir: &Path,
     name: &str,
-    rgba: &[u8],
-    width: u32,
-    height: u32,
+    (rgba, width, height): (&[u8], u32, u32),
+    shared: Option<&Path>,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    let target = dir.join(name);
-    let Some(shared) = dir.parent().map(|p| p.join(".shared")) else {
-        return Ok(image::save_buffer(
-            &target,
-            rgba,
-            width,
-            height,
-            image::ColorType::Rgba8,
-        )?);
+    let save = |path: &Path| {
+        image::save_buffer(path, rgba, width, height, image::ColorType::Rgba8)
+            .map_err(std::io::Error::other)
     };
-    std::fs::create_dir_all(&shared)?;
+    let target = dir.join(name);
+    let Some(shared) = shared else {
+        return Ok(save(&target)?);
+    };
+    std::fs::create_dir_all(shared)?;
     let key = umbra_report::names::fnv64(
         width
             .to_le_bytes()
@@ -107,9 +101,7 @@ fn shared_png(
     );
     let file = shared.join(format!("{key}.png"));
     if !file.is_file() {
-        let tmp = shared.join(format!(".{key}.{}.png", std::process::id()));
-        image::save_buffer(&tmp, rgba, width, height, image::ColorType::Rgba8)?;
-        std::fs::rename(&tmp, &file)?;
+        crate::atomic_file::replace(&file, save)?;
     }
     let _ = std::fs::remove_file(&target);
     if std::fs::hard_link(&file, &target).is_err() {
@@ -119,21 +111,23 @@ fn shared_png(
 }
 
 /// What the judge saw, beside any backend's frame: the truth, the error heat map and the
-/// reference's colour.
+/// reference's colour. The truth and the reference are the same for every backend's run of a
+/// point: with `shared`, each distinct one is encoded once ([`png`]).
 fn judging_pictures(
     dir: &Path,
     j: &crate::judge::run::Judged,
+    shared: Option<&Path>,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    heatmap::truth_map(&j.truth).save_png(&dir.join("truth.png"))?;
+    let truth = heatmap::truth_map(&j.truth);
+    png(
+        dir,
+        "truth.png",
+        (&truth.data, truth.width, truth.height),
+        shared,
+    )?;
     heatmap::truth_error_map(&j.error, &j.truth).save_png(&dir.join("error.png"))?;
     if let Some(r) = &j.reference {
-        image::save_buffer(
-            dir.join("reference.png"),
-            &r.color,
-            r.width,
-            r.height,
-            image::ColorType::Rgba8,
-        )?;
+        png(dir, "reference.png", (&r.color, r.width, r.height), shared)?;
     }
     Ok(())
 }
