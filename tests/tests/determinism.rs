@@ -40,3 +40,44 @@ fn frames_and_truth_are_identical_on_1_and_3_threads() {
         assert_eq!((t1.class, t1.edge), (t3.class, t3.edge), "{case}: truth");
     }
 }
+
+/// The plain render shades a run of pixels at a time ([`umbra_ref::surface`], the batched
+/// lookup and shading); the judged render looks every pixel up on its own, through the
+/// per-point functions the judge's moved points use. Both must give the same frame, bit for
+/// bit, on the first point of every case file (every filter, outside policy, bias form, light
+/// kind, depth order and bias-matrix order the catalogue has), in both conventions.
+#[test]
+fn the_batched_frame_is_the_per_pixel_frame() {
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let files = umbra_case::case_files(&umbra_tests::cases_dir()).expect("cases");
+    assert!(files.len() > 30, "{} case files", files.len());
+    for file in files {
+        let Some(point) = umbra_case::load_file(&file)
+            .ok()
+            .and_then(|mut p| (!p.is_empty()).then(|| p.swap_remove(0)))
+        else {
+            continue;
+        };
+        let id = point.id();
+        let run = umbra_case::Prepared::new(point);
+        for (clip, profile) in [
+            (
+                umbra_case::ClipDepth::MinusOneToOne,
+                umbra_case::Profile::GL,
+            ),
+            (
+                umbra_case::ClipDepth::ZeroToOne,
+                umbra_case::Profile::VULKAN,
+            ),
+        ] {
+            let plain = umbra_ref::render(&run, clip);
+            let judged = umbra_ref::render_judged(&run, clip, profile).frame;
+            assert_eq!(plain.color, judged.color, "{id} {clip:?}: colour");
+            assert_eq!(
+                bits(&plain.visibility),
+                bits(&judged.visibility),
+                "{id} {clip:?}: visibility"
+            );
+        }
+    }
+}

@@ -253,6 +253,7 @@ impl LookupMatrices {
     }
 
     /// The lookup coordinate of world point `p`, in f32, in the order `order` says.
+    #[inline]
     pub fn coord(&self, conv: Convention, order: BiasMatrix, p: Vec3) -> ShadowCoord {
         let p4 = p.extend(1.0);
         match order {

@@ -23,6 +23,7 @@ pub mod raster;
 pub mod rounding;
 pub mod shading;
 pub mod shadow_pass;
+pub mod surface;
 pub mod truth;
 
 use std::time::Instant;

@@ -19,8 +19,9 @@ use umbra_case::{Convention, Geometry, Prepared, Profile};
 use crate::bands::for_each_band;
 use crate::lookup::{Legal, Lookup, ambiguity, position_freedom};
 use crate::raster::{Coverage, EdgeKind, Rasterizer, Tri};
-use crate::shading::{BACKGROUND, shade, shade_linear, shade_tolerance};
+use crate::shading::{BACKGROUND, shade_linear, shade_run, shade_tolerance};
 use crate::shadow_pass::{SNAP_PX, setup_all};
+use crate::surface::{Surfaces, interpolate};
 
 const NONE: u32 = u32::MAX;
 
@@ -33,6 +34,21 @@ struct Nearest {
     depth: f32,
     /// Index into the set-up triangles (not the source triangle).
     tri: u32,
+}
+
+/// A covered pixel's surface point, for the judged lookup.
+struct Point {
+    x: i32,
+    y: i32,
+    /// Index into the set-up triangles.
+    tri: u32,
+    /// Its source triangle.
+    source: u32,
+    p: Vec3,
+    n: Vec3,
+    albedo: Vec3,
+    to_light: Vec3,
+    to_eye: Vec3,
 }
 
 /// |∂z/∂x| + |∂z/∂y| of a triangle's plane, as the judge's depth tolerance reads it.
@@ -129,84 +145,58 @@ pub fn render(
     let surface_free = judged.map(|(_, profile)| surface_freedom(&tris, &nearest, w, geo, profile));
     let case = run.case();
     let eye = run.camera.eye;
-    let shade_pixel = |i: usize, px: &Nearest| -> ([u8; 4], f32, u32, PixelLegal) {
-        if px.tri == NONE {
-            let flags = surface_free.as_ref().map_or(0, |s| s[i]);
-            let legal = PixelLegal {
-                flags,
-                ..Default::default()
+    // The judged lookup at a surface point: its value and what it allows.
+    let judge = |pt: &Point, free: u8| -> (f32, PixelLegal) {
+        let (tri, t) = (&tris[pt.tri as usize], pt.source as usize);
+        let (p, n) = (pt.p, pt.n);
+        // Vertex snapping (4 sub-pixel bits) moves the triangle under the pixel centre by up
+        // to SNAP_PX along x and y: the interpolated position (and normal) are those of a
+        // point up to that far away on the surface.
+        let (x, y) = (f64::from(pt.x) + 0.5, f64::from(pt.y) + 0.5);
+        let (px_, nx) = interpolate(geo, t, tri.source_weights_at(x + 1.0, y));
+        let (py_, ny) = interpolate(geo, t, tri.source_weights_at(x, y + 1.0));
+        let snap = SNAP_PX as f32;
+        let moves = [(px_ - p) * snap, (py_ - p) * snap];
+        let normal_moves = ((nx - n).length() + (ny - n).length()) * snap;
+        let (vis, l): (f32, Legal) = lookup.judged(p, n, moves);
+        let (albedo, to_light, to_eye) = (pt.albedo, pt.to_light, pt.to_eye);
+        let c0 = shade_linear(&case.shading, albedo, n, to_light, to_eye, 0.0);
+        let c1 = shade_linear(&case.shading, albedo, n, to_light, to_eye, 1.0);
+        let d = position_freedom(p, lookup.reach) + moves[0].length() + moves[1].length();
+        let moved = normal_moves
+            + d / (eye - p).length().max(1e-6)
+            + match run.light.kind {
+                umbra_case::LightKind::Directional { .. } => 0.0,
+                umbra_case::LightKind::Spot { position }
+                | umbra_case::LightKind::Point { position } => {
+                    d / (position - p).length().max(1e-6)
+                }
             };
-            return (BACKGROUND, f32::NAN, 0, legal);
-        }
-        let tri = &tris[px.tri as usize];
-        let t = tri.source as usize;
-        let idx = geo.triangles[t].map(|k| k as usize);
-        let at = |wt: Vec3| {
-            (
-                geo.positions[idx[0]] * wt.x
-                    + geo.positions[idx[1]] * wt.y
-                    + geo.positions[idx[2]] * wt.z,
-                (geo.normals[idx[0]] * wt.x
-                    + geo.normals[idx[1]] * wt.y
-                    + geo.normals[idx[2]] * wt.z)
-                    .normalize_or_zero(),
-            )
-        };
-        let (x, y) = ((i % w as usize) as i32, (i / w as usize) as i32);
-        let (p, n) = at(tri.source_weights(tri.fragment_at(x, y)).as_vec3());
-        let albedo: Vec3 = geo.albedo[geo.object[t] as usize];
-        let to_light = run.light.to_light(p);
-        let to_eye = (eye - p).normalize_or_zero();
-        let (vis, legal) = match &surface_free {
-            Some(free) => {
-                // Vertex snapping (4 sub-pixel bits) moves the triangle under the pixel
-                // centre by up to SNAP_PX along x and y: the interpolated position (and
-                // normal) are those of a point up to that far away on the surface.
-                let (x, y) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
-                let (px_, nx) = at(tri.source_weights_at(x + 1.0, y).as_vec3());
-                let (py_, ny) = at(tri.source_weights_at(x, y + 1.0).as_vec3());
-                let snap = SNAP_PX as f32;
-                let moves = [(px_ - p) * snap, (py_ - p) * snap];
-                let normal_moves = ((nx - n).length() + (ny - n).length()) * snap;
-                let (vis, l): (f32, Legal) = lookup.judged(p, n, moves);
-                let c0 = shade_linear(&case.shading, albedo, n, to_light, to_eye, 0.0);
-                let c1 = shade_linear(&case.shading, albedo, n, to_light, to_eye, 1.0);
-                let d = position_freedom(p, lookup.reach) + moves[0].length() + moves[1].length();
-                let moved = normal_moves
-                    + d / (eye - p).length().max(1e-6)
-                    + match run.light.kind {
-                        umbra_case::LightKind::Directional { .. } => 0.0,
-                        umbra_case::LightKind::Spot { position }
-                        | umbra_case::LightKind::Point { position } => {
-                            d / (position - p).length().max(1e-6)
-                        }
-                    };
-                let ctol = shade_tolerance(&case.shading, albedo, n, to_light, to_eye, moved);
-                (
-                    vis,
-                    PixelLegal {
-                        lo: l.lo,
-                        hi: l.hi,
-                        flags: l.flags | free[i],
-                        c0: c0.to_array(),
-                        c1: c1.to_array(),
-                        ctol,
-                    },
-                )
-            }
-            None => (lookup.visibility(p, n), PixelLegal::default()),
-        };
-        let color = shade(&case.shading, albedo, n, to_light, to_eye, vis);
-        (color, vis, geo.face[t] + 1, legal)
+        let ctol = shade_tolerance(&case.shading, albedo, n, to_light, to_eye, moved);
+        (
+            vis,
+            PixelLegal {
+                lo: l.lo,
+                hi: l.hi,
+                flags: l.flags | free,
+                c0: c0.to_array(),
+                c1: c1.to_array(),
+                ctol,
+            },
+        )
     };
-    // Shade row by row straight into the outputs (each pixel on its own: the result does
-    // not depend on the thread count); what a pixel allows only for judged renders.
+    // Shade row by row straight into the outputs, a run of pixels that show the same
+    // triangle at a time, in stages (surface points, lookups, colours): each pixel is
+    // computed on its own with the same arithmetic, so the result does not depend on the
+    // thread count or on the runs, while the pixels of a stage are independent of each other
+    // and the compiler and the processor overlap them. What a pixel allows only for judged
+    // renders.
     let trace = std::sync::Mutex::new(String::new());
     let n = nearest.len();
     let (wu, hu) = (w as usize, h as usize);
     let mut color = vec![0u8; n * 4];
     let mut visibility = vec![0f32; n];
-    let mut surface = vec![0u32; n];
+    let mut surface_ids = vec![0u32; n];
     let mut legal = vec![PixelLegal::default(); if judged.is_some() { n } else { 0 }];
     let legal_rows: Vec<&mut [PixelLegal]> = if judged.is_some() {
         legal.chunks_mut(wu).collect()
@@ -216,34 +206,89 @@ pub fn render(
     color
         .par_chunks_mut(wu * 4)
         .zip(visibility.par_chunks_mut(wu))
-        .zip(surface.par_chunks_mut(wu))
+        .zip(surface_ids.par_chunks_mut(wu))
         .zip(legal_rows)
         .enumerate()
-        .for_each(|(y, (((c_row, v_row), s_row), l_row))| {
-            for x in 0..wu {
-                let i = y * wu + x;
-                let px = &nearest[i];
-                let (c, v, s, l) = if explain == Some(i) {
-                    let (out, t) = crate::lookup::explaining(|| shade_pixel(i, px));
-                    if let Ok(mut s) = trace.lock() {
-                        *s = t;
+        .for_each_init(
+            || (Surfaces::default(), Vec::new(), Vec::new()),
+            |(surfaces, coords, terms), (y, (((c_row, v_row), s_row), l_row))| {
+                let row = &nearest[y * wu..(y + 1) * wu];
+                let free = |x: usize| surface_free.as_ref().map_or(0, |s| s[y * wu + x]);
+                let mut x0 = 0;
+                while x0 < wu {
+                    let winner = row[x0].tri;
+                    let len = row[x0..].iter().take_while(|px| px.tri == winner).count();
+                    let xs = x0..x0 + len;
+                    x0 += len;
+                    if winner == NONE {
+                        for x in xs {
+                            c_row[4 * x..4 * x + 4].copy_from_slice(&BACKGROUND);
+                            v_row[x] = f32::NAN;
+                            s_row[x] = 0;
+                            if let Some(slot) = l_row.get_mut(x) {
+                                *slot = PixelLegal {
+                                    flags: free(x),
+                                    ..Default::default()
+                                };
+                            }
+                        }
+                        continue;
                     }
-                    out
-                } else {
-                    shade_pixel(i, px)
-                };
-                c_row[4 * x..4 * x + 4].copy_from_slice(&c);
-                v_row[x] = v;
-                s_row[x] = s;
-                if let Some(slot) = l_row.get_mut(x) {
-                    *slot = l;
+                    let tri = &tris[winner as usize];
+                    let t = tri.source as usize;
+                    surfaces.fill(tri, geo, xs.start as i32, y as i32, len, eye, &run.light);
+                    let vis = &mut v_row[xs.clone()];
+                    if surface_free.is_none() && explain.is_none() {
+                        lookup.visibility_run(surfaces, vis, coords);
+                    } else {
+                        for (k, x) in xs.clone().enumerate() {
+                            let pt = Point {
+                                x: x as i32,
+                                y: y as i32,
+                                tri: winner,
+                                source: tri.source,
+                                p: surfaces.position(k),
+                                n: surfaces.normal(k),
+                                albedo: geo.albedo[geo.object[t] as usize],
+                                to_light: surfaces.light_dir(k),
+                                to_eye: surfaces.eye_dir(k),
+                            };
+                            let look = || match &surface_free {
+                                Some(_) => judge(&pt, free(x)),
+                                None => (lookup.visibility(pt.p, pt.n), PixelLegal::default()),
+                            };
+                            let (v, l) = if explain == Some(y * wu + x) {
+                                let (out, t) = crate::lookup::explaining(look);
+                                if let Ok(mut s) = trace.lock() {
+                                    *s = t;
+                                }
+                                out
+                            } else {
+                                look()
+                            };
+                            vis[k] = v;
+                            if let Some(slot) = l_row.get_mut(x) {
+                                *slot = l;
+                            }
+                        }
+                    }
+                    let albedo = geo.albedo[geo.object[t] as usize];
+                    shade_run(
+                        &case.shading,
+                        albedo,
+                        surfaces,
+                        vis,
+                        &mut c_row[4 * xs.start..4 * xs.end],
+                        terms,
+                    );
+                    s_row[xs].fill(geo.face[t] + 1);
                 }
-            }
-        });
+            },
+        );
     LitImage {
         color,
         visibility,
-        surface,
+        surface: surface_ids,
         legal,
         trace: trace.into_inner().unwrap_or_default(),
     }

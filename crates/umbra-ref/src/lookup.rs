@@ -36,6 +36,7 @@ use umbra_case::{Convention, LightKind, LightSetup, LookupMatrices, Profile, Sha
 
 use crate::rounding::{floor_f32, floor_i64};
 use crate::shadow_pass::DepthLayer;
+use crate::surface::Surfaces;
 
 thread_local! {
     /// The trace of the lookup being explained on this thread (see [`explaining`]).
@@ -233,6 +234,59 @@ impl Lookup<'_> {
         match self.setup(p, n) {
             None => 1.0,
             Some(st) => self.filter_value(&st),
+        }
+    }
+
+    /// [`Lookup::visibility`] of every point of a run (`out[k]` for point k of `surfaces`), the
+    /// same steps with the same operations: on a 2D map without per-point bias terms, the
+    /// coordinates of the whole run first (a loop the compiler vectorises: one matrix, no
+    /// branches), then each point's guard, outside test and filter; otherwise point by point.
+    pub fn visibility_run(
+        &self,
+        surfaces: &Surfaces,
+        out: &mut [f32],
+        scratch: &mut Vec<ShadowCoord>,
+    ) {
+        let s = self.shadow;
+        if self.cube() || s.bias.slope.is_some() || s.bias.n_dot_l.is_some() {
+            for (k, o) in out.iter_mut().enumerate() {
+                *o = self.visibility(surfaces.position(k), surfaces.normal(k));
+            }
+            return;
+        }
+        // Step 1 and 3 of every point ([`Lookup::probe`] on the only face).
+        let (m, order, conv, offset) = (
+            &self.matrices[0],
+            s.bias_matrix,
+            self.conv,
+            s.bias.normal_offset,
+        );
+        scratch.clear();
+        scratch.extend((0..out.len()).map(|k| {
+            m.coord(
+                conv,
+                order,
+                surfaces.position(k) + surfaces.normal(k) * offset,
+            )
+        }));
+        // Step 6's bias: the slope and N·L terms are exactly 0 without their settings.
+        let bias = s.bias.constant + 0.0 + 0.0;
+        let away = conv.toward_far() * bias;
+        let clamp = s.compare == Compare::Hardware && s.format.is_fixed();
+        for (o, c) in out.iter_mut().zip(scratch.iter()) {
+            let mut reference = c.depth - away;
+            *o = if (s.guard_behind_light && c.w <= 0.0) || self.outside_lit(c.u, c.v) {
+                1.0
+            } else {
+                if clamp {
+                    reference = reference.clamp(0.0, 1.0);
+                }
+                self.filter_value(&Setup {
+                    face: 0,
+                    c: *c,
+                    reference,
+                })
+            };
         }
     }
 

@@ -118,6 +118,30 @@ impl Span {
     }
 }
 
+impl Span {
+    /// [`Tri::depth`] of `t` at each of the span's fragments, into `out` (cleared first):
+    /// the same operations per fragment, with the edge values stepped in f64, where they are
+    /// exact (integers below 2⁵³, as the i64 values converted), so that the loop has no
+    /// integer conversions and the compiler vectorises it.
+    pub fn depths(&self, t: &Tri, out: &mut Vec<f32>) {
+        out.clear();
+        out.resize(self.len, 0.0);
+        let e = self.e.map(|v| v as f64);
+        let step = self.step.map(|v| v as f64);
+        let a = t.area as f64;
+        let z = t.z.map(f64::from);
+        for (k, d) in out.iter_mut().enumerate() {
+            let kf = k as f64;
+            let b = [
+                (e[0] + kf * step[0]) / a,
+                (e[1] + kf * step[1]) / a,
+                (e[2] + kf * step[2]) / a,
+            ];
+            *d = (b[0] * z[0] + b[1] * z[1] + b[2] * z[2]) as f32;
+        }
+    }
+}
+
 impl Tri {
     /// Screen-space barycentrics at a fragment.
     pub fn screen_bary(&self, f: Fragment) -> [f64; 3] {
@@ -138,6 +162,14 @@ impl Tri {
             *ei = dx * (py - self.y[a]) - dy * (px - self.x[a]);
         }
         Fragment { e }
+    }
+
+    /// What one column to the right adds to each edge value (exact integers).
+    pub fn column_step(&self) -> [i64; 3] {
+        std::array::from_fn(|i| {
+            let (a, b) = ((i + 1) % 3, (i + 2) % 3);
+            -(self.y[b] - self.y[a]) * ONE
+        })
     }
 
     /// Window depth at a fragment (linear in screen space), rounded once to f32.

@@ -177,6 +177,10 @@ pub fn render_face(
     // The GLES 2 path stores the offset depth itself (packed to about 32 bits), not a code.
     let packed = judged.is_some_and(|j| j.1.packed_depth);
     let mut values = vec![format.store(conv.clear_depth()); (w * h) as usize];
+    // The format's store and the depth test, chosen once for the pass (each a few branch-free
+    // operations, so that the per-span loop below vectorises).
+    let max = format.fixed_bits().map(|n| f64::from((1u32 << n) - 1));
+    let forward = conv.toward_far() > 0.0;
     for_each_band(
         &mut values,
         w as usize,
@@ -184,6 +188,7 @@ pub fn render_face(
         &tris,
         false,
         |rows, band, touching| {
+            let mut depths = Vec::new();
             for (_, t) in touching {
                 let offset = if factor != 0.0 || units != 0.0 {
                     polygon_offset(t, format, factor, units, clamp)
@@ -194,16 +199,15 @@ pub fn render_face(
                 t.scan_spans(rows.clone(), |span| {
                     let start = (span.y - rows.start) as usize * w as usize + span.x as usize;
                     let texels = &mut band[start..start + span.len];
-                    for (texel, frag) in texels.iter_mut().zip(span.fragments()) {
-                        let z = (f64::from(t.depth(frag)) + offset) as f32;
-                        let stored = if packed {
-                            z.clamp(0.0, 1.0)
-                        } else {
-                            format.store(z.clamp(0.0, 1.0))
-                        };
-                        if conv.depth_test(stored, *texel) {
-                            *texel = stored;
+                    span.depths(t, &mut depths);
+                    match (packed, max) {
+                        (true, _) => depth_test_run(texels, &depths, offset, forward, |z| z),
+                        (false, Some(max)) => {
+                            depth_test_run(texels, &depths, offset, forward, |z| {
+                                store_fixed(z, max)
+                            })
                         }
+                        (false, None) => depth_test_run(texels, &depths, offset, forward, |z| z),
                     }
                 });
             }
@@ -310,6 +314,41 @@ pub fn render_face(
     }
 }
 
+/// One span's fragments through the offset, the clamp to the depth range, the format's
+/// `store` and the depth test (LESS forward, GREATER reversed) against `texels`.
+#[inline(always)]
+fn depth_test_run(
+    texels: &mut [f32],
+    depths: &[f32],
+    offset: f64,
+    forward: bool,
+    store: impl Fn(f32) -> f32,
+) {
+    for (texel, &d) in texels.iter_mut().zip(depths) {
+        let z = (f64::from(d) + offset) as f32;
+        let stored = store(z.clamp(0.0, 1.0));
+        let pass = if forward {
+            stored < *texel
+        } else {
+            stored > *texel
+        };
+        *texel = if pass { stored } else { *texel };
+    }
+}
+
+/// [`DepthFormat::store`] of a fixed-point format with largest code `max` (≤ 2²⁴ − 1), for
+/// `z` in [0, 1] or NaN, bit for bit: the code rounded half up from a truncation (exact
+/// in i32 here), its sign kept as `round_nonneg_f64` keeps it, NaN staying NaN (a NaN fails
+/// every depth test, as the store's NaN does).
+#[inline(always)]
+fn store_fixed(z: f32, max: f64) -> f32 {
+    let x = f64::from(z) * max;
+    let t = f64::from(x as i32);
+    let code = if x - t >= 0.5 { t + 1.0 } else { t.copysign(x) };
+    let code = if x.is_nan() { x } else { code };
+    (code / max) as f32
+}
+
 /// The largest f32 not above `x`.
 pub fn down(x: f64) -> f32 {
     let f = x as f32;
@@ -352,4 +391,40 @@ pub fn setup_all(
         raster.setup(t.map(|k| clip[k as usize]), i as u32, kinds, &mut tris);
     }
     tris
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The pass's store is the format's, bit for bit, over every kind of depth it meets:
+    /// the ends, −0, values on and next to code midpoints, a sweep of [0, 1], and NaN.
+    #[test]
+    fn the_inlined_store_is_the_formats() {
+        for format in [
+            DepthFormat::Depth16,
+            DepthFormat::Depth24,
+            DepthFormat::Unsized,
+        ] {
+            let bits = format.fixed_bits().expect("fixed point");
+            let max = f64::from((1u32 << bits) - 1);
+            let mut zs = vec![0.0f32, -0.0, 1.0, f32::MIN_POSITIVE, 1.0f32.next_down()];
+            for k in 0..200_000u32 {
+                let z = k as f32 / 200_000.0;
+                zs.extend([z, z.next_up(), z.next_down()]);
+            }
+            for code in (0..(1u32 << bits)).step_by(97) {
+                let mid = ((f64::from(code) + 0.5) / max) as f32;
+                zs.extend([mid, mid.next_up(), mid.next_down()]);
+            }
+            for z in zs.into_iter().filter(|z| (0.0..=1.0).contains(z)) {
+                assert_eq!(
+                    store_fixed(z, max).to_bits(),
+                    format.store(z).to_bits(),
+                    "{format:?} {z:e}"
+                );
+            }
+            assert!(store_fixed(f32::NAN, max).is_nan() && format.store(f32::NAN).is_nan());
+        }
+    }
 }

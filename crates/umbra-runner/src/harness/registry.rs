@@ -52,9 +52,23 @@ pub fn driver_env(id: &str) -> Option<Vec<(&'static str, &'static str)>> {
     }
 }
 
+/// glibc's allocator thresholds for every worker (unless `GLIBC_TUNABLES` is set already).
+///
+/// A worker renders and judges hundreds of frames, each allocating and freeing the same large
+/// buffers (a 1024² map is 4 MB, a view's outputs 1–2 MB, a judged entry up to 16 MB). With
+/// glibc's defaults a freed block above the dynamic mmap threshold goes back to the kernel,
+/// and the heap's top is trimmed above twice that, so the next run faults the same memory in
+/// again page by page: on the standard frame a fifth of the reference's time on two threads
+/// was page faults and the kernel's page lock (perf), and the same held for warm judging.
+/// Allocations below 64 MiB come from the heap and up to 256 MiB of free memory stays mapped
+/// per arena: resident memory a worker keeps, well inside its budget
+/// ([`crate::harness::memory_limit`]), which the watchdog still enforces.
+pub const MALLOC_TUNABLES: &str =
+    "glibc.malloc.mmap_threshold=67108864:glibc.malloc.trim_threshold=268435456";
+
 /// Everything a worker process for `id` needs in its environment: the driver's variables,
-/// and, when a Mesa build is selected ([`crate::harness::mesa_build`]) and the backend runs on Mesa,
-/// the build's loader variables.
+/// when a Mesa build is selected ([`crate::harness::mesa_build`]) and the backend runs on
+/// Mesa, the build's loader variables, and the allocator's thresholds ([`MALLOC_TUNABLES`]).
 pub fn worker_env(id: &str) -> Vec<(String, String)> {
     let mut env: Vec<(String, String)> = driver_env(id)
         .unwrap_or_default()
@@ -70,6 +84,9 @@ pub fn worker_env(id: &str) -> Vec<(String, String)> {
         crate::harness::memory_limit::ENV.to_string(),
         crate::harness::memory_limit::budget().to_string(),
     ));
+    if std::env::var_os("GLIBC_TUNABLES").is_none() {
+        env.push(("GLIBC_TUNABLES".into(), MALLOC_TUNABLES.into()));
+    }
     // insta's own mismatch summary repeats what the run's reason says; unless asked for.
     if std::env::var_os("INSTA_OUTPUT").is_none() {
         env.push(("INSTA_OUTPUT".into(), "none".into()));
