@@ -203,37 +203,38 @@ fn render_inner(
     let [w, h] = run.camera.size;
     let flip = !conv.window_y_down();
     let [mw, mh] = case.shadow.size;
-    let mut values = Vec::with_capacity((mw * mh) as usize * layers.len());
+    let faces = layers.len() as u32;
+    let mut values = Vec::new();
     let mut map = Vec::new();
-    for layer in &layers {
-        values.extend(top_first(&layer.values, mw as usize, 1, flip));
+    for layer in layers {
+        let pairs: Vec<(f32, f32)> = layer.lo.into_iter().zip(layer.hi).collect();
+        // One face (every light but a point light's) is moved, not copied.
+        if values.is_empty() {
+            values = top_first(layer.values, mw as usize, 1, flip);
+        } else {
+            values.extend(top_first(layer.values, mw as usize, 1, flip));
+        }
         if profile.is_some() {
-            let pairs: Vec<(f32, f32)> = layer
-                .lo
-                .iter()
-                .copied()
-                .zip(layer.hi.iter().copied())
-                .collect();
-            map.extend(top_first(&pairs, mw as usize, 1, flip));
+            map.extend(top_first(pairs, mw as usize, 1, flip));
         }
     }
     let frame = Frame {
         width: w,
         height: h,
-        color: top_first(&lit.color, w as usize, 4, flip),
-        visibility: top_first(&lit.visibility, w as usize, 1, flip),
-        surface: Some(top_first(&lit.surface, w as usize, 1, flip)),
+        color: top_first(lit.color, w as usize, 4, flip),
+        visibility: top_first(lit.visibility, w as usize, 1, flip),
+        surface: Some(top_first(lit.surface, w as usize, 1, flip)),
         shadow_map: Some(DepthMap {
             width: mw,
             height: mh,
-            layers: layers.len() as u32,
+            layers: faces,
             format: case.shadow.format,
             values,
         }),
         visibility_storage: VisibilityStorage::Float32,
         timings: Timings::default(),
     };
-    let legal = top_first(&lit.legal, w as usize, 1, flip);
+    let legal = top_first(lit.legal, w as usize, 1, flip);
     let end = Instant::now();
     let frame = Frame {
         timings: Timings {
@@ -248,16 +249,18 @@ fn render_inner(
     (frame, legal, map, lit.trace)
 }
 
-/// Rows in top-first order: reversed when the raster's row 0 is the bottom (the one Y flip).
-fn top_first<T: Clone>(rows: &[T], width: usize, per_pixel: usize, flip: bool) -> Vec<T> {
-    if !flip {
-        return rows.to_vec();
+/// Rows in top-first order: reversed in place when the raster's row 0 is the bottom (the one
+/// Y flip).
+fn top_first<T>(mut rows: Vec<T>, width: usize, per_pixel: usize, flip: bool) -> Vec<T> {
+    let stride = width * per_pixel;
+    if flip && stride > 0 {
+        let n = rows.len() / stride;
+        for r in 0..n / 2 {
+            let (upper, lower) = rows.split_at_mut((n - 1 - r) * stride);
+            upper[r * stride..(r + 1) * stride].swap_with_slice(&mut lower[..stride]);
+        }
     }
-    let mut out = Vec::with_capacity(rows.len());
-    for row in rows.chunks(width * per_pixel).rev() {
-        out.extend_from_slice(row);
-    }
-    out
+    rows
 }
 
 /// The reference as a [`Backend`] (id `ref`, GL clip convention).

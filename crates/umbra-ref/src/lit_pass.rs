@@ -125,18 +125,19 @@ pub fn render(
         &tris,
         false,
         |rows, band, touching| {
+            let mut depths = Vec::new();
             for (index, t) in touching {
                 t.scan_spans(rows.clone(), |span| {
                     let start = (span.y - rows.start) as usize * w as usize + span.x as usize;
                     let pixels = &mut band[start..start + span.len];
-                    for (px, frag) in pixels.iter_mut().zip(span.fragments()) {
-                        let z = t.depth(frag).clamp(0.0, 1.0);
-                        if z < px.depth {
-                            *px = Nearest {
-                                depth: z,
-                                tri: index as u32,
-                            };
-                        }
+                    span.depths(t, &mut depths);
+                    for (px, z) in pixels.iter_mut().zip(&depths) {
+                        let z = z.clamp(0.0, 1.0);
+                        let nearer = z < px.depth;
+                        *px = Nearest {
+                            depth: if nearer { z } else { px.depth },
+                            tri: if nearer { index as u32 } else { px.tri },
+                        };
                     }
                 });
             }

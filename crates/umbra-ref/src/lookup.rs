@@ -273,6 +273,7 @@ impl Lookup<'_> {
         let bias = s.bias.constant + 0.0 + 0.0;
         let away = conv.toward_far() * bias;
         let clamp = s.compare == Compare::Hardware && s.format.is_fixed();
+        let (fw, fh) = (s.size[0] as f32, s.size[1] as f32);
         for (o, c) in out.iter_mut().zip(scratch.iter()) {
             let mut reference = c.depth - away;
             *o = if (s.guard_behind_light && c.w <= 0.0) || self.outside_lit(c.u, c.v) {
@@ -281,11 +282,27 @@ impl Lookup<'_> {
                 if clamp {
                     reference = reference.clamp(0.0, 1.0);
                 }
-                self.filter_value(&Setup {
-                    face: 0,
-                    c: *c,
-                    reference,
-                })
+                match s.filter {
+                    // filter_value's NEAREST tap, with the 2D map's own addressing.
+                    Filter::Nearest => {
+                        let d = self.stored(
+                            0,
+                            floor_i64(c.u * fw),
+                            floor_i64(c.v * fh),
+                            Addressing::Wrap,
+                        );
+                        if conv.compare_lit(reference, d) {
+                            1.0
+                        } else {
+                            0.0
+                        }
+                    }
+                    _ => self.filter_value(&Setup {
+                        face: 0,
+                        c: *c,
+                        reference,
+                    }),
+                }
             };
         }
     }
@@ -428,6 +445,7 @@ impl Lookup<'_> {
     }
 
     /// The stored value at texel (i, j) of `face` under `addressing` and the wrap policy.
+    #[inline]
     fn stored(&self, face: usize, i: i64, j: i64, addressing: Addressing) -> f32 {
         match self.texel(face, i, j, addressing) {
             Texel::At(f, k) => self.layers[f].values[k],
@@ -435,6 +453,7 @@ impl Lookup<'_> {
         }
     }
 
+    #[inline]
     fn texel(&self, face: usize, i: i64, j: i64, addressing: Addressing) -> Texel {
         let [w, h] = self.shadow.size;
         let (wi, hi) = (i64::from(w), i64::from(h));

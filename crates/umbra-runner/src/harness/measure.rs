@@ -64,16 +64,28 @@ pub fn measure(backend: &mut dyn Backend, point: CasePoint, repeat: u32) -> Meas
         return Measurement::Skip(why);
     }
     let prepared = Prepared::new(point);
-    let mut frames = Vec::new();
-    for _ in 0..=repeat.max(1) {
+    // Only the timings are kept, and the last frame: holding every frame would make each
+    // render allocate (and fault in) fresh memory, which a backend rendering in the caller's
+    // memory (the reference) would pay for in its time.
+    let mut timed = Vec::new();
+    let mut last = None;
+    for k in 0..=repeat.max(1) {
+        drop(last.take());
         match backend.render(&prepared) {
-            Ok(f) => frames.push(f),
+            Ok(f) => {
+                if k > 0 {
+                    timed.push(f.timings);
+                }
+                last = Some(f);
+            }
             Err(e) => return Measurement::Error(e.to_string()),
         }
     }
-    let timed = &frames[1..];
+    let Some(frame) = last else {
+        return Measurement::Error("no frame was rendered".into());
+    };
     let ms = |d: Duration| d.as_secs_f64() * 1e3;
-    let clocks: Vec<Option<Clock>> = timed.iter().map(|f| f.timings.clock).collect();
+    let clocks: Vec<Option<Clock>> = timed.iter().map(|t| t.clock).collect();
     let clock = if clocks.iter().all(|c| *c == Some(Clock::Gpu)) {
         "gpu"
     } else if clocks.iter().all(|c| *c != Some(Clock::Gpu)) {
@@ -81,22 +93,21 @@ pub fn measure(backend: &mut dyn Backend, point: CasePoint, repeat: u32) -> Meas
     } else {
         "mixed"
     };
-    let frame = &timed[timed.len() - 1];
     let truth = crate::judge::judge_cache::truth(&prepared);
-    let error = umbra_compare::truth_error(frame, &truth);
-    let edges = umbra_compare::edges::edge_displacement(frame, &truth);
+    let error = umbra_compare::truth_error(&frame, &truth);
+    let edges = umbra_compare::edges::edge_displacement(&frame, &truth);
     Measurement::Done(Measured {
         clock: clock.into(),
         samples: timed.len() as u32,
-        shadow_ms: median(timed.iter().map(|f| ms(f.timings.shadow_pass)).collect()),
-        lit_ms: median(timed.iter().map(|f| ms(f.timings.lit_pass)).collect()),
+        shadow_ms: median(timed.iter().map(|t| ms(t.shadow_pass)).collect()),
+        lit_ms: median(timed.iter().map(|t| ms(t.lit_pass)).collect()),
         frame_ms: median(
             timed
                 .iter()
-                .map(|f| ms(f.timings.shadow_pass + f.timings.lit_pass))
+                .map(|t| ms(t.shadow_pass + t.lit_pass))
                 .collect(),
         ),
-        total_ms: median(timed.iter().map(|f| ms(f.timings.total)).collect()),
+        total_ms: median(timed.iter().map(|t| ms(t.total)).collect()),
         judged: error.all.judged,
         false_shadow: error.all.false_shadow,
         false_light: error.all.false_light,
