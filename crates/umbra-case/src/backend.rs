@@ -117,4 +117,19 @@ pub trait Backend {
     fn renders_identically(&self, a: &Case, b: &Case) -> bool {
         a == b
     }
+
+    /// Renders `twin`, a metamorphic twin of `of`, right after `of` was rendered by
+    /// [`Backend::render`]. Where the twin's shadow pass is the case's by construction
+    /// ([`crate::twin::same_shadow_pass`]: the bias-order twin changes only the lit pass's
+    /// lookup), a backend may draw the lit pass over the shadow map it kept from `of` instead
+    /// of rendering the same map again; it then says so (`true`) and the frame carries no
+    /// shadow map. The default renders the twin afresh.
+    fn render_twin(
+        &mut self,
+        twin: &Prepared,
+        of: &Prepared,
+    ) -> Result<(Frame, bool), BackendError> {
+        let _ = of;
+        self.render(twin).map(|f| (f, false))
+    }
 }

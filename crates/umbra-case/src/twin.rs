@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use serde_json::Value;
 
 use crate::error::{CaseError, CaseErrors};
-use crate::format::{BiasMatrix, TwinAgree};
+use crate::format::{BiasMatrix, Case, TwinAgree};
 use crate::load::{CasePoint, parse_value, set_path};
 use crate::validate::validate;
 
@@ -50,6 +50,16 @@ pub fn twins_of(point: &CasePoint) -> Vec<TwinPlan> {
         });
     }
     plans
+}
+
+/// Whether `a` and `b` have the same shadow pass by construction: they differ at most in
+/// `shadow.bias_matrix`, which only the lit pass's lookup reads (where the bias matrix is
+/// applied to the coordinate). Conservative: any other difference, even one the shadow pass
+/// would not see, says no.
+pub fn same_shadow_pass(a: &Case, b: &Case) -> bool {
+    let mut b = b.clone();
+    b.shadow.bias_matrix = a.shadow.bias_matrix;
+    *a == b
 }
 
 /// `point` with each dotted path in `set` given its value; the twin has no twins of its own.
@@ -97,4 +107,26 @@ pub fn with_values(
         case,
         values,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_the_bias_order_leaves_the_shadow_pass_alone() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../cases/basics/square-occluder.json");
+        let point = crate::load_file(&file).expect("case").remove(0);
+        let twins = twins_of(&point);
+        let order = twins[0].point.as_ref().expect("the bias-order twin");
+        assert_ne!(order.case, point.case);
+        assert!(same_shadow_pass(&point.case, &order.case));
+        let mut other = point.case.clone();
+        other.shadow.bias.constant += 1e-4;
+        assert!(!same_shadow_pass(&point.case, &other));
+        let mut attachments = point.case.clone();
+        attachments.shadow.attachments = crate::format::Attachments::WithColor;
+        assert!(!same_shadow_pass(&point.case, &attachments));
+    }
 }

@@ -140,4 +140,12 @@ impl Backend for GlBackend {
     fn render(&mut self, run: &Prepared) -> Result<Frame, BackendError> {
         self.renderer.render(run)
     }
+
+    fn render_twin(
+        &mut self,
+        twin: &Prepared,
+        of: &Prepared,
+    ) -> Result<(Frame, bool), BackendError> {
+        self.renderer.render_twin(twin, of)
+    }
 }

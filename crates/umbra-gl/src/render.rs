@@ -46,7 +46,21 @@ pub struct Renderer {
     debug: Arc<Mutex<Vec<String>>>,
     /// Whether GL_TIME_ELAPSED queries work.
     pub timer_queries: bool,
+    /// The shadow map of the last run rendered by [`Renderer::render`], kept for its twins
+    /// ([`Renderer::render_twin`]) and deleted by the next run.
+    kept: Option<KeptMap>,
 }
+
+/// A run's shadow map, kept for the twins that share its shadow pass.
+struct KeptMap {
+    /// The case it was rendered for.
+    case: umbra_case::Case,
+    texture: glow::Texture,
+}
+
+/// The largest shadow map kept for a twin (all faces, 4 bytes a texel): a map beyond it is
+/// rendered again for the twin rather than held in memory between runs.
+const KEEP_LIMIT: u64 = 256 << 20;
 
 impl Renderer {
     /// Whether glPolygonOffsetClamp[EXT] was loaded.
@@ -96,6 +110,7 @@ impl Renderer {
             programs: HashMap::new(),
             debug,
             timer_queries,
+            kept: None,
         })
     }
 
@@ -191,16 +206,68 @@ impl Renderer {
 
     /// Renders one run.
     pub fn render(&mut self, run: &Prepared) -> Result<Frame, BackendError> {
+        self.render_run(run, None).map(|(f, _)| f)
+    }
+
+    /// Renders `twin` after `of` (the run [`Renderer::render`] rendered last): where their
+    /// shadow passes are the same by construction ([`umbra_case::twin::same_shadow_pass`]),
+    /// the lit pass reads the map kept from `of` (`true`, and the frame has no shadow map).
+    pub fn render_twin(
+        &mut self,
+        twin: &Prepared,
+        of: &Prepared,
+    ) -> Result<(Frame, bool), BackendError> {
+        self.render_run(twin, Some(of))
+    }
+
+    fn render_run(
+        &mut self,
+        run: &Prepared,
+        twin_of: Option<&Prepared>,
+    ) -> Result<(Frame, bool), BackendError> {
         let start = Instant::now();
         self.ctx
             .make_current()
             .map_err(|e| gl_err("make current", e.0))?;
+        let reuse = match (twin_of, &self.kept) {
+            (Some(of), Some(k))
+                if k.case == *of.case()
+                    && umbra_case::twin::same_shadow_pass(of.case(), run.case()) =>
+            {
+                Some(k.texture)
+            }
+            _ => None,
+        };
+        if twin_of.is_none() {
+            self.release_kept();
+        }
         let mut res = Resources::default();
-        let out = self.render_with(run, &mut res, start);
+        let out = self.render_with(run, &mut res, start, reuse);
+        if twin_of.is_none() && out.is_ok() {
+            let [mw, mh] = run.case().shadow.size;
+            let bytes = 4 * u64::from(mw) * u64::from(mh) * run.light.views.len() as u64;
+            if bytes <= KEEP_LIMIT {
+                if let Some(texture) = res.shadow_map.take() {
+                    self.kept = Some(KeptMap {
+                        case: run.case().clone(),
+                        texture,
+                    });
+                }
+            }
+        }
         res.delete(self.gl());
         // A failed run must not leave errors behind for the next one.
         let _ = self.check("cleanup");
-        out
+        out.map(|f| (f, reuse.is_some()))
+    }
+
+    /// Deletes the kept shadow map, if any.
+    fn release_kept(&mut self) {
+        if let Some(k) = self.kept.take() {
+            // SAFETY: a texture this renderer created on its own context, bound to nothing
+            // that outlives a run.
+            unsafe { self.ctx.gl.delete_texture(k.texture) };
+        }
     }
 
     fn render_with(
@@ -208,6 +275,7 @@ impl Renderer {
         run: &Prepared,
         res: &mut Resources,
         start: Instant,
+        reuse: Option<glow::Texture>,
     ) -> Result<Frame, BackendError> {
         let case = run.case();
         let s = &case.shadow;
@@ -271,221 +339,244 @@ impl Renderer {
             t.begin(gl, 0);
         }
         // SAFETY: objects of the current context; completeness is checked before drawing.
-        let map = unsafe {
-            let map = gl.create_texture().map_err(|e| gl_err("shadow map", e))?;
-            res.textures.push(map);
-            gl.bind_texture(target, Some(map));
-            let face_targets: Vec<u32> = if cube {
-                (0..6)
-                    .map(|k| glow::TEXTURE_CUBE_MAP_POSITIVE_X + k)
-                    .collect()
-            } else {
-                vec![glow::TEXTURE_2D]
-            };
-            let (internal, format, ty) = if es2 {
-                (glow::RGBA as i32, glow::RGBA, glow::UNSIGNED_BYTE)
-            } else {
-                depth_format(s.format)
-            };
-            for &ft in &face_targets {
-                gl.tex_image_2d(
-                    ft,
-                    0,
-                    internal,
-                    mw as i32,
-                    mh as i32,
-                    0,
-                    format,
-                    ty,
-                    glow::PixelUnpackData::Slice(None),
-                );
-            }
-            for (p, v) in [
-                (glow::TEXTURE_MIN_FILTER, glow::NEAREST),
-                (glow::TEXTURE_MAG_FILTER, glow::NEAREST),
-                (glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE),
-                (glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE),
-            ] {
-                gl.tex_parameter_i32(target, p, v as i32);
-            }
-            self.check("shadow map storage")?;
-            let fbo = gl
-                .create_framebuffer()
-                .map_err(|e| gl_err("shadow pass", e))?;
-            res.framebuffers.push(fbo);
-            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-            let mut depth_rb = None;
-            if es2 {
-                let rb = gl
-                    .create_renderbuffer()
-                    .map_err(|e| gl_err("shadow pass", e))?;
-                res.renderbuffers.push(rb);
-                gl.bind_renderbuffer(glow::RENDERBUFFER, Some(rb));
-                gl.renderbuffer_storage(
-                    glow::RENDERBUFFER,
-                    es2_depth(s.format),
-                    mw as i32,
-                    mh as i32,
-                );
-                depth_rb = Some(rb);
-            }
-            let mut dummy = None;
-            if s.attachments == Attachments::WithColor && !es2 {
-                let c = gl.create_texture().map_err(|e| gl_err("shadow pass", e))?;
-                res.textures.push(c);
-                gl.bind_texture(glow::TEXTURE_2D, Some(c));
-                gl.tex_image_2d(
-                    glow::TEXTURE_2D,
-                    0,
-                    glow::RGBA8 as i32,
-                    mw as i32,
-                    mh as i32,
-                    0,
-                    glow::RGBA,
-                    glow::UNSIGNED_BYTE,
-                    glow::PixelUnpackData::Slice(None),
-                );
-                dummy = Some(c);
-            }
-            gl.use_program(Some(shadow_program));
-            let vp_loc = gl.get_uniform_location(shadow_program, "u_view_proj");
-            if is(umbra_case::fault::Fault::ShadowViewport) {
-                let [cw, ch] = run.camera.size;
-                gl.viewport(0, 0, cw as i32, ch as i32);
-            } else {
-                gl.viewport(0, 0, mw as i32, mh as i32);
-            }
-            gl.enable(glow::DEPTH_TEST);
-            gl.depth_func(if s.depth_order == DepthOrder::Forward {
-                glow::LESS
-            } else {
-                glow::GREATER
-            });
-            gl.depth_mask(true);
-            gl.front_face(glow::CCW);
-            match s.cull {
-                Cull::None => gl.disable(glow::CULL_FACE),
-                Cull::Back => {
-                    gl.enable(glow::CULL_FACE);
-                    gl.cull_face(glow::BACK);
+        let map = if let Some(map) = reuse {
+            // The twin's shadow pass is the case's: its map, with a fresh map's sampler state.
+            unsafe {
+                gl.bind_texture(target, Some(map));
+                for (p, v) in [
+                    (glow::TEXTURE_MIN_FILTER, glow::NEAREST),
+                    (glow::TEXTURE_MAG_FILTER, glow::NEAREST),
+                    (glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE),
+                    (glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE),
+                ] {
+                    gl.tex_parameter_i32(target, p, v as i32);
                 }
-                Cull::Front => {
-                    gl.enable(glow::CULL_FACE);
-                    gl.cull_face(glow::FRONT);
+                if !es2 {
+                    gl.tex_parameter_i32(target, glow::TEXTURE_COMPARE_MODE, glow::NONE as i32);
                 }
             }
-            let [factor, units] = s.bias.polygon_offset;
-            let units = if is(umbra_case::fault::Fault::OffsetUnitsLow) {
-                0.1 * units
-            } else {
-                units
-            };
-            let clamp = s.bias.polygon_offset_clamp;
-            if es2 {
-                // Applied in the shader (see shaders::shadow_fragment), clamp included.
-                let sign = conv.toward_far();
-                let r = s.format.offset_unit(0.0);
-                gl.uniform_3_f32(
-                    gl.get_uniform_location(shadow_program, "u_offset").as_ref(),
-                    sign * factor,
-                    sign * r * units,
-                    sign * clamp,
-                );
-                gl.disable(glow::POLYGON_OFFSET_FILL);
-            } else if factor != 0.0 || units != 0.0 {
-                let sign = conv.toward_far();
-                gl.enable(glow::POLYGON_OFFSET_FILL);
-                match (clamp != 0.0, self.ctx.polygon_offset_clamp) {
-                    // SAFETY: the entry point of an advertised extension, on the current
-                    // context, with the GL signature (factor, units, clamp).
-                    (true, Some(f)) => f(sign * factor, sign * units, sign * clamp),
-                    (true, None) => {
-                        return Err(gl_err(
-                            "shadow pass",
-                            "a polygon-offset clamp without glPolygonOffsetClamp (supports() should have refused it)",
-                        ));
-                    }
-                    (false, _) => gl.polygon_offset(sign * factor, sign * units),
-                }
-            } else {
-                gl.disable(glow::POLYGON_OFFSET_FILL);
-            }
-            for (k, ft) in face_targets.iter().enumerate() {
-                if es2 {
-                    gl.framebuffer_texture_2d(
-                        glow::FRAMEBUFFER,
-                        glow::COLOR_ATTACHMENT0,
-                        *ft,
-                        Some(map),
-                        0,
-                    );
-                    gl.framebuffer_renderbuffer(
-                        glow::FRAMEBUFFER,
-                        glow::DEPTH_ATTACHMENT,
-                        glow::RENDERBUFFER,
-                        depth_rb,
-                    );
+            self.check("kept shadow map")?;
+            map
+        } else {
+            unsafe {
+                let map = gl.create_texture().map_err(|e| gl_err("shadow map", e))?;
+                res.shadow_map = Some(map);
+                gl.bind_texture(target, Some(map));
+                let face_targets: Vec<u32> = if cube {
+                    (0..6)
+                        .map(|k| glow::TEXTURE_CUBE_MAP_POSITIVE_X + k)
+                        .collect()
                 } else {
-                    gl.framebuffer_texture_2d(
-                        glow::FRAMEBUFFER,
-                        glow::DEPTH_ATTACHMENT,
-                        *ft,
-                        Some(map),
+                    vec![glow::TEXTURE_2D]
+                };
+                let (internal, format, ty) = if es2 {
+                    (glow::RGBA as i32, glow::RGBA, glow::UNSIGNED_BYTE)
+                } else {
+                    depth_format(s.format)
+                };
+                for &ft in &face_targets {
+                    gl.tex_image_2d(
+                        ft,
                         0,
+                        internal,
+                        mw as i32,
+                        mh as i32,
+                        0,
+                        format,
+                        ty,
+                        glow::PixelUnpackData::Slice(None),
                     );
-                    if let Some(c) = dummy {
+                }
+                for (p, v) in [
+                    (glow::TEXTURE_MIN_FILTER, glow::NEAREST),
+                    (glow::TEXTURE_MAG_FILTER, glow::NEAREST),
+                    (glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE),
+                    (glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE),
+                ] {
+                    gl.tex_parameter_i32(target, p, v as i32);
+                }
+                self.check("shadow map storage")?;
+                let fbo = gl
+                    .create_framebuffer()
+                    .map_err(|e| gl_err("shadow pass", e))?;
+                res.framebuffers.push(fbo);
+                gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+                let mut depth_rb = None;
+                if es2 {
+                    let rb = gl
+                        .create_renderbuffer()
+                        .map_err(|e| gl_err("shadow pass", e))?;
+                    res.renderbuffers.push(rb);
+                    gl.bind_renderbuffer(glow::RENDERBUFFER, Some(rb));
+                    gl.renderbuffer_storage(
+                        glow::RENDERBUFFER,
+                        es2_depth(s.format),
+                        mw as i32,
+                        mh as i32,
+                    );
+                    depth_rb = Some(rb);
+                }
+                let mut dummy = None;
+                if s.attachments == Attachments::WithColor && !es2 {
+                    let c = gl.create_texture().map_err(|e| gl_err("shadow pass", e))?;
+                    res.textures.push(c);
+                    gl.bind_texture(glow::TEXTURE_2D, Some(c));
+                    gl.tex_image_2d(
+                        glow::TEXTURE_2D,
+                        0,
+                        glow::RGBA8 as i32,
+                        mw as i32,
+                        mh as i32,
+                        0,
+                        glow::RGBA,
+                        glow::UNSIGNED_BYTE,
+                        glow::PixelUnpackData::Slice(None),
+                    );
+                    dummy = Some(c);
+                }
+                gl.use_program(Some(shadow_program));
+                let vp_loc = gl.get_uniform_location(shadow_program, "u_view_proj");
+                if is(umbra_case::fault::Fault::ShadowViewport) {
+                    let [cw, ch] = run.camera.size;
+                    gl.viewport(0, 0, cw as i32, ch as i32);
+                } else {
+                    gl.viewport(0, 0, mw as i32, mh as i32);
+                }
+                gl.enable(glow::DEPTH_TEST);
+                gl.depth_func(if s.depth_order == DepthOrder::Forward {
+                    glow::LESS
+                } else {
+                    glow::GREATER
+                });
+                gl.depth_mask(true);
+                gl.front_face(glow::CCW);
+                match s.cull {
+                    Cull::None => gl.disable(glow::CULL_FACE),
+                    Cull::Back => {
+                        gl.enable(glow::CULL_FACE);
+                        gl.cull_face(glow::BACK);
+                    }
+                    Cull::Front => {
+                        gl.enable(glow::CULL_FACE);
+                        gl.cull_face(glow::FRONT);
+                    }
+                }
+                let [factor, units] = s.bias.polygon_offset;
+                let units = if is(umbra_case::fault::Fault::OffsetUnitsLow) {
+                    0.1 * units
+                } else {
+                    units
+                };
+                let clamp = s.bias.polygon_offset_clamp;
+                if es2 {
+                    // Applied in the shader (see shaders::shadow_fragment), clamp included.
+                    let sign = conv.toward_far();
+                    let r = s.format.offset_unit(0.0);
+                    gl.uniform_3_f32(
+                        gl.get_uniform_location(shadow_program, "u_offset").as_ref(),
+                        sign * factor,
+                        sign * r * units,
+                        sign * clamp,
+                    );
+                    gl.disable(glow::POLYGON_OFFSET_FILL);
+                } else if factor != 0.0 || units != 0.0 {
+                    let sign = conv.toward_far();
+                    gl.enable(glow::POLYGON_OFFSET_FILL);
+                    match (clamp != 0.0, self.ctx.polygon_offset_clamp) {
+                        // SAFETY: the entry point of an advertised extension, on the current
+                        // context, with the GL signature (factor, units, clamp).
+                        (true, Some(f)) => f(sign * factor, sign * units, sign * clamp),
+                        (true, None) => {
+                            return Err(gl_err(
+                                "shadow pass",
+                                "a polygon-offset clamp without glPolygonOffsetClamp (supports() should have refused it)",
+                            ));
+                        }
+                        (false, _) => gl.polygon_offset(sign * factor, sign * units),
+                    }
+                } else {
+                    gl.disable(glow::POLYGON_OFFSET_FILL);
+                }
+                for (k, ft) in face_targets.iter().enumerate() {
+                    if es2 {
                         gl.framebuffer_texture_2d(
                             glow::FRAMEBUFFER,
                             glow::COLOR_ATTACHMENT0,
-                            glow::TEXTURE_2D,
-                            Some(c),
+                            *ft,
+                            Some(map),
                             0,
                         );
-                        gl.draw_buffers(&[glow::COLOR_ATTACHMENT0]);
-                        gl.color_mask(true, true, true, true);
+                        gl.framebuffer_renderbuffer(
+                            glow::FRAMEBUFFER,
+                            glow::DEPTH_ATTACHMENT,
+                            glow::RENDERBUFFER,
+                            depth_rb,
+                        );
                     } else {
-                        gl.draw_buffers(&[glow::NONE]);
-                        gl.read_buffer(glow::NONE);
-                        gl.color_mask(false, false, false, false);
-                    }
-                }
-                let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
-                if status != glow::FRAMEBUFFER_COMPLETE {
-                    return Err(gl_err(
-                        "shadow pass",
-                        format!(
-                            "framebuffer incomplete: {} (format {}, {:?})",
-                            status_name(status),
-                            s.format.name(),
-                            s.attachments
-                        ),
-                    ));
-                }
-                let clear = conv.clear_depth();
-                gl.clear_depth_f32(clear);
-                gl.clear_color(clear, clear, clear, clear); // GLES 2: packed far plane (1.0 unpacks past 1)
-                gl.clear(
-                    glow::DEPTH_BUFFER_BIT
-                        | if es2 || dummy.is_some() {
-                            glow::COLOR_BUFFER_BIT
+                        gl.framebuffer_texture_2d(
+                            glow::FRAMEBUFFER,
+                            glow::DEPTH_ATTACHMENT,
+                            *ft,
+                            Some(map),
+                            0,
+                        );
+                        if let Some(c) = dummy {
+                            gl.framebuffer_texture_2d(
+                                glow::FRAMEBUFFER,
+                                glow::COLOR_ATTACHMENT0,
+                                glow::TEXTURE_2D,
+                                Some(c),
+                                0,
+                            );
+                            gl.draw_buffers(&[glow::COLOR_ATTACHMENT0]);
+                            gl.color_mask(true, true, true, true);
                         } else {
-                            0
-                        },
-                );
-                let mut m = run.light.views[k].view_proj(conv);
-                if is(umbra_case::fault::Fault::ShadowHalfTexel) {
-                    // Half a texel along x: 2 · ½ / width in NDC.
-                    m = glam::Mat4::from_translation(glam::Vec3::new(1.0 / mw as f32, 0.0, 0.0))
-                        * m;
+                            gl.draw_buffers(&[glow::NONE]);
+                            gl.read_buffer(glow::NONE);
+                            gl.color_mask(false, false, false, false);
+                        }
+                    }
+                    let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
+                    if status != glow::FRAMEBUFFER_COMPLETE {
+                        return Err(gl_err(
+                            "shadow pass",
+                            format!(
+                                "framebuffer incomplete: {} (format {}, {:?})",
+                                status_name(status),
+                                s.format.name(),
+                                s.attachments
+                            ),
+                        ));
+                    }
+                    let clear = conv.clear_depth();
+                    gl.clear_depth_f32(clear);
+                    gl.clear_color(clear, clear, clear, clear); // GLES 2: packed far plane (1.0 unpacks past 1)
+                    gl.clear(
+                        glow::DEPTH_BUFFER_BIT
+                            | if es2 || dummy.is_some() {
+                                glow::COLOR_BUFFER_BIT
+                            } else {
+                                0
+                            },
+                    );
+                    let mut m = run.light.views[k].view_proj(conv);
+                    if is(umbra_case::fault::Fault::ShadowHalfTexel) {
+                        // Half a texel along x: 2 · ½ / width in NDC.
+                        m = glam::Mat4::from_translation(glam::Vec3::new(
+                            1.0 / mw as f32,
+                            0.0,
+                            0.0,
+                        )) * m;
+                    }
+                    gl.uniform_matrix_4_f32_slice(vp_loc.as_ref(), false, &m.to_cols_array());
+                    gl.draw_arrays(glow::TRIANGLES, 0, count);
+                    self.check(&format!("shadow pass (face {k})"))?;
                 }
-                gl.uniform_matrix_4_f32_slice(vp_loc.as_ref(), false, &m.to_cols_array());
-                gl.draw_arrays(glow::TRIANGLES, 0, count);
-                self.check(&format!("shadow pass (face {k})"))?;
+                gl.disable(glow::POLYGON_OFFSET_FILL);
+                gl.disable(glow::CULL_FACE);
+                gl.color_mask(true, true, true, true);
+                map
             }
-            gl.disable(glow::POLYGON_OFFSET_FILL);
-            gl.disable(glow::CULL_FACE);
-            gl.color_mask(true, true, true, true);
-            map
         };
         if let Some(t) = &timer {
             t.end(gl);
@@ -495,7 +586,7 @@ impl Renderer {
         let shadow_wall = shadow_start.elapsed();
 
         // Depth map readback (GL only: GLES cannot read depth with glReadPixels).
-        let shadow_map = if api == Api::Gl33 {
+        let shadow_map = if api == Api::Gl33 && reuse.is_none() {
             let mut values = Vec::with_capacity((mw * mh) as usize * faces);
             // SAFETY: reading DEPTH_COMPONENT as FLOAT from the complete shadow framebuffer.
             unsafe {
@@ -818,6 +909,8 @@ impl Renderer {
 /// GL objects of one run, deleted at its end whatever happened.
 #[derive(Default)]
 struct Resources {
+    /// The run's shadow map (taken out when it is kept for the run's twins).
+    shadow_map: Option<glow::Texture>,
     buffers: Vec<glow::Buffer>,
     vaos: Vec<glow::VertexArray>,
     textures: Vec<glow::Texture>,
@@ -836,7 +929,7 @@ impl Resources {
             for r in self.renderbuffers {
                 gl.delete_renderbuffer(r);
             }
-            for t in self.textures {
+            for t in self.textures.into_iter().chain(self.shadow_map) {
                 gl.delete_texture(t);
             }
             for v in self.vaos {

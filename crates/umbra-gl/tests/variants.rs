@@ -124,6 +124,10 @@ fn variants_worker() {
                 "{id}: with_color changed the surfaces"
             );
 
+            if rel == cases[0] {
+                twin_shares_the_shadow_pass(&mut backend, &base, &id);
+            }
+
             let nearest = |compare: Compare| {
                 move |c: &mut umbra_case::Case| {
                     c.shadow.filter = Filter::Nearest;
@@ -175,6 +179,48 @@ fn variants_worker() {
     assert!(
         tie_pixels_seen > 10_000,
         "only {tie_pixels_seen} reference lookups were depth ties"
+    );
+}
+
+/// The bias-order twin drawn over the case's kept shadow map ([`Backend::render_twin`]) is the
+/// twin rendered from scratch, bit for bit, and says it shared; a twin whose shadow pass
+/// differs (here: a colour attachment beside the depth) is rendered afresh.
+fn twin_shares_the_shadow_pass(backend: &mut GlBackend, base: &umbra_case::CasePoint, id: &str) {
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let run = Prepared::new(base.clone());
+    let order = umbra_case::twin::twins_of(base)
+        .remove(0)
+        .point
+        .expect("bias-order twin");
+    let twin = Prepared::new(order);
+    let fresh = backend
+        .render(&twin)
+        .unwrap_or_else(|e| panic!("{id}: {e}"));
+    backend.render(&run).unwrap_or_else(|e| panic!("{id}: {e}"));
+    let (shared, yes) = backend
+        .render_twin(&twin, &run)
+        .unwrap_or_else(|e| panic!("{id}: {e}"));
+    assert!(
+        yes,
+        "{id}: the bias-order twin did not share the shadow pass"
+    );
+    assert_eq!(shared.color, fresh.color, "{id}: shared twin's colour");
+    assert_eq!(
+        bits(&shared.visibility),
+        bits(&fresh.visibility),
+        "{id}: shared twin's visibility"
+    );
+    let mut other = base.clone();
+    other.case.shadow.attachments = match other.case.shadow.attachments {
+        Attachments::DepthOnly => Attachments::WithColor,
+        Attachments::WithColor => Attachments::DepthOnly,
+    };
+    let (_, yes) = backend
+        .render_twin(&Prepared::new(other), &run)
+        .unwrap_or_else(|e| panic!("{id}: {e}"));
+    assert!(
+        !yes,
+        "{id}: a twin with another shadow pass shared the case's"
     );
 }
 

@@ -27,13 +27,13 @@ pub fn tables(results: &[RunResult]) -> Tables {
         "test,status,judged,false_shadow,false_light,interior_judged,interior_false_shadow,interior_false_light,edge_px,silhouette,faces_away,outside,agreement,illegal,compared,blind,blind_pct,value_checked,value_margin,illegal_value,illegal_nan,illegal_coverage,illegal_colour,profile,shadow_ms,lit_ms,total_ms,clock\n",
     );
     let mut twins = String::from(
-        "test,twin,agree,skipped,differ,legal_tie,legal_coverage,legal_texel,legal_filter,legal_position,legal_surface,blind,illegal,illegal_value,illegal_coverage,illegal_colour,interior_error,twin_interior_error,render_ms,ok,by_construction\n",
+        "test,twin,agree,skipped,differ,legal_tie,legal_coverage,legal_texel,legal_filter,legal_position,legal_surface,blind,illegal,illegal_value,illegal_coverage,illegal_colour,interior_error,twin_interior_error,render_ms,ok,by_construction,shared_shadow_pass\n",
     );
     for r in results {
         for t in r.metrics.iter().flat_map(|m| &m.twins) {
             let _ = writeln!(
                 twins,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{},{},{}",
                 csv_field(&r.name),
                 t.name,
                 t.agree,
@@ -56,7 +56,8 @@ pub fn tables(results: &[RunResult]) -> Tables {
                     .unwrap_or_default(),
                 t.render_ms,
                 t.ok,
-                t.by_construction
+                t.by_construction,
+                t.shared_shadow_pass
             );
         }
     }

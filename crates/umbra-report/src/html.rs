@@ -287,6 +287,7 @@ fn twins_section(results: &[RunResult]) -> String {
         runs: u64,
         skipped: u64,
         by_construction: u64,
+        shared: u64,
         failed: u64,
         differ: u64,
         tie: u64,
@@ -316,6 +317,7 @@ fn twins_section(results: &[RunResult]) -> String {
                 continue;
             }
             row.runs += 1;
+            row.shared += u64::from(t.shared_shadow_pass);
             row.failed += u64::from(!t.ok);
             row.differ += t.pair.differ;
             row.tie += t.pair.legal_tie;
@@ -342,7 +344,8 @@ fn twins_section(results: &[RunResult]) -> String {
          (<code>bias-order</code>, the other bias-matrix order, is built into every case; the others are each case's \
          <code>expect.twins</code>). <i>identical</i>: bit-identical visibility; <i>legal</i>: the twin's frame passes the \
          same judge as a backend's frame against the case's reference; <i>no_worse</i>: the twin's interior error is not larger. Pixel counts are summed \
-         over runs.</p><table><tr><th>twin</th><th>agree</th><th>backend</th><th>runs</th><th>not run</th><th>same render by construction</th><th>failed</th>\
+         over runs. <i>Shared shadow pass</i>: rendered over the case's own shadow map, where the twin changes only the lit pass and the \
+         backend kept the map (the twin then tests the lit pass alone; its time is the lit pass's).</p><table><tr><th>twin</th><th>agree</th><th>backend</th><th>runs</th><th>not run</th><th>same render by construction</th><th>shared shadow pass</th><th>failed</th>\
          <th>px differ</th><th>ties</th><th>texel/filter/position</th><th>map coverage</th><th>other surface</th><th>illegal</th>\
          <th>interior error: case → twin</th><th>twin ms / case ms</th><th>first failing run</th></tr>",
     );
@@ -355,13 +358,14 @@ fn twins_section(results: &[RunResult]) -> String {
         };
         let _ = write!(
             s,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"{class}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} → {}</td><td>{ratio:.2}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"{class}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{} → {}</td><td>{ratio:.2}</td><td>{}</td></tr>",
             esc(name),
             esc(agree),
             esc(backend),
             r.runs,
             r.skipped,
             r.by_construction,
+            r.shared,
             r.failed,
             r.differ,
             r.tie,

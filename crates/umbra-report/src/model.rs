@@ -101,6 +101,11 @@ pub struct TwinMetric {
     /// differs only in settings the backend never reads), so it holds trivially.
     #[serde(default)]
     pub by_construction: bool,
+    /// Rendered over the case's own shadow map: the twin's shadow pass is the case's by
+    /// construction (it changes only the lit pass), and the backend kept the map
+    /// ([`umbra_case::Backend::render_twin`]), so only the lit pass was drawn again.
+    #[serde(default)]
+    pub shared_shadow_pass: bool,
     /// Whether the relation held.
     pub ok: bool,
 }

@@ -255,13 +255,16 @@ fn run_twins(
                 return m;
             }
             let twin_prepared = Prepared::new(point);
-            let twin = match backend.render(&twin_prepared) {
+            let twin = match backend.render_twin(&twin_prepared, prepared) {
                 // A twin may change the shadow pass on purpose (another frustum, a moved
                 // scene): only its frame is held to the case, not its map.
-                Ok(f) => Frame {
-                    shadow_map: None,
-                    ..f
-                },
+                Ok((f, shared)) => {
+                    m.shared_shadow_pass = shared;
+                    Frame {
+                        shadow_map: None,
+                        ..f
+                    }
+                }
                 Err(e) => {
                     m.ok = false;
                     m.skipped = Some(format!("the twin failed to render: {e}"));
