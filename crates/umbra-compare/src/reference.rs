@@ -191,7 +191,7 @@ pub fn value_ok(v: f32, lo: f32, hi: f32, quantum: f32, eps: f32) -> bool {
     if quantum <= 0.0 {
         return true;
     }
-    let k = (v / quantum).round() * quantum;
+    let k = umbra_ref::rounding::round_f32(v / quantum) * quantum;
     (v - k).abs() <= eps + 4.0 * f32::EPSILON && lo - eps <= k && k <= hi + eps
 }
 
@@ -317,9 +317,17 @@ pub fn colour_ok(rgb: &[u8], v: f32, eps: f32, l: &umbra_ref::PixelLegal) -> boo
         let (a, b) = (at(v0), at(v1));
         let lo = (a.min(b) - l.ctol).clamp(0.0, 1.0);
         let hi = (a.max(b) + l.ctol).clamp(0.0, 1.0);
-        let code = f32::from(rgb[c]);
-        (lo * 255.0).floor() <= code && code <= (hi * 255.0).ceil()
+        within_codes(lo, hi, rgb[c])
     })
+}
+
+/// ⌊lo·255⌋ ≤ code ≤ ⌈hi·255⌉, without libm's floor and ceil (a call each at baseline
+/// x86-64): for an integer c, ⌊x⌋ ≤ c ⟺ x < c + 1 and c ≤ ⌈y⌉ ⟺ y > c − 1, and NaN fails
+/// both as it fails the rounded forms.
+#[inline]
+fn within_codes(lo: f32, hi: f32, code: u8) -> bool {
+    let code = f32::from(code);
+    lo * 255.0 < code + 1.0 && hi * 255.0 > code - 1.0
 }
 
 /// Per pixel: whether the shadow answer may legally differ from the reference's there (its
@@ -384,4 +392,29 @@ pub fn judge_pair(a: &Frame, ja: &Judged, b: &Frame, jb: &Judged) -> RefAgreemen
         *class += 1;
     }
     r
+}
+
+#[cfg(test)]
+mod colour_tests {
+    use super::*;
+
+    /// The comparison form of the colour test is the rounded form, for every code and a
+    /// spread of bounds (the ends, just inside and outside each code, NaN).
+    #[test]
+    fn colour_bounds_without_rounding_calls() {
+        let mut bounds = vec![0.0f32, 1.0, f32::NAN, 0.5];
+        for k in 0..=256 {
+            let x = k as f32 / 255.0;
+            bounds.extend([x, x.next_up(), x.next_down(), x + 0.3 / 255.0]);
+        }
+        for &lo in &bounds {
+            for &hi in bounds.iter().step_by(7) {
+                for code in 0..=255u8 {
+                    let c = f32::from(code);
+                    let rounded = (lo * 255.0).floor() <= c && c <= (hi * 255.0).ceil();
+                    assert_eq!(rounded, within_codes(lo, hi, code), "{lo:e} {hi:e} {code}");
+                }
+            }
+        }
+    }
 }

@@ -29,6 +29,23 @@ pub fn floor_i64(x: f32) -> i64 {
     }
 }
 
+/// `x.round()` (half away from zero), bit for bit (−0 and NaN included), without a libm call
+/// for |x| < 2²³ (beyond, every f32 is an integer).
+#[inline]
+pub fn round_f32(x: f32) -> f32 {
+    if x.abs() < 8_388_608.0 {
+        let t = x as i32 as f32; // truncation, exact here
+        let r = if (x - t).abs() >= 0.5 {
+            t + 1.0f32.copysign(x)
+        } else {
+            t
+        };
+        r.copysign(x)
+    } else {
+        x.round()
+    }
+}
+
 /// `(x.clamp(0.0, 1.0) * 255.0).round() as u8`, bit for bit (NaN gives 0, as the cast does).
 #[inline]
 pub fn unorm8(x: f32) -> u8 {
@@ -81,6 +98,13 @@ mod tests {
         for x in samples() {
             assert_eq!(floor_f32(x).to_bits(), x.floor().to_bits(), "{x:e}");
             assert_eq!(floor_i64(x), x.floor() as i64, "{x:e}");
+        }
+    }
+
+    #[test]
+    fn round_matches_libm() {
+        for x in samples() {
+            assert_eq!(round_f32(x).to_bits(), x.round().to_bits(), "{x:e}");
         }
     }
 

@@ -278,9 +278,16 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             let mut failed = j.failed.clone();
             let mut metrics = metrics;
             let golden_start = std::time::Instant::now();
+            let mut identical_to_golden = false;
             let golden = req.golden.as_ref().map(|dir| {
-                let (g, msg, ssim) = crate::judge::golden::check(dir, &name, &j.frame, &j.legal);
+                let crate::judge::golden::Checked {
+                    golden: g,
+                    message: msg,
+                    ssim,
+                    identical,
+                } = crate::judge::golden::check(dir, &name, &j.frame, &j.legal);
                 metrics.ssim_golden = ssim;
+                identical_to_golden = identical;
                 // A golden blessed on another driver version still fails; the reason says so.
                 let info = backend.info();
                 let here = crate::judge::expectations::reported_version(
@@ -326,6 +333,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                     &dir.join(umbra_report::names::file_name(&name)),
                     &j,
                     golden.as_ref().map(|(a, b)| (a.as_path(), b.as_path())),
+                    identical_to_golden,
                 );
             }
             // Goldens and pictures: the PNG share of the time budget.

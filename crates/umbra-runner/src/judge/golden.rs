@@ -1,10 +1,11 @@
 //! Golden images through insta: `golden/` is insta's snapshot directory, one binary PNG
 //! snapshot per case point and backend (`golden/<stem>.snap` + `.snap.png`, see [`stem`]).
 //!
-//! A result within tolerance of its golden hands the golden's own bytes to insta, so an
-//! unchanged picture never churns the file. A result outside it hands its new bytes to insta,
-//! which records a pending snapshot for `cargo insta review` and fails the run; under
-//! `CI=true` insta writes nothing and the run fails. A missing golden is a change too.
+//! A result within tolerance of its golden passes without insta (which would compare the
+//! golden's own bytes with themselves; its clean-up of the snapshot's pending files is done by
+//! name), so an unchanged picture never churns the file. A result outside it hands its new
+//! bytes to insta, which records a pending snapshot for `cargo insta review` and fails the
+//! run; under `CI=true` insta writes nothing and the run fails. A missing golden is a change too.
 //! `cargo xtask bless` runs with `INSTA_UPDATE=always` and lists what it wrote.
 //!
 //! Goldens stay per backend id; `golden/blessed-on.json` records the Mesa version goldens were
@@ -70,22 +71,35 @@ pub fn stem(name: &str) -> String {
 /// Checks `frame` against golden `name` in `dir`; `legal[i]` marks pixels where a shadow
 /// difference is legal (empty: none). Returns what happened, a message for a change, and the
 /// SSIM of the colour against the golden where one exists.
-pub fn check(
-    dir: &Path,
-    name: &str,
-    frame: &Frame,
-    legal: &[bool],
-) -> (Golden, String, Option<f64>) {
+/// A golden check's outcome.
+pub struct Checked {
+    /// What happened to the golden.
+    pub golden: Golden,
+    /// Why it changed (empty when it did not).
+    pub message: String,
+    /// SSIM of the frame's colour against the golden's, where there is one.
+    pub ssim: Option<f64>,
+    /// Whether the frame's colour is the golden's, pixel for pixel (its PNG is the golden's
+    /// file).
+    pub identical: bool,
+}
+
+/// Checks `frame`'s colour against run `name`'s golden in `dir` (`legal`: the pixels where the
+/// judge allows the shadow itself to differ).
+pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> Checked {
     let stem = stem(name);
     let existing = std::fs::read(dir.join(format!("{stem}.snap.png"))).ok();
     let decoded = existing
         .as_deref()
         .and_then(|bytes| image::load_from_memory(bytes).ok())
         .map(|i| i.to_rgba8());
+    let identical = decoded.as_ref().is_some_and(|img| {
+        img.dimensions() == (frame.width, frame.height) && *img.as_raw() == frame.color
+    });
     let ssim = decoded.as_ref().and_then(|img| {
         // A frame identical to its golden (the usual regression run) is at SSIM 1 by
         // definition; the windowed computation is most of a golden check's time.
-        if img.dimensions() == (frame.width, frame.height) && *img.as_raw() == frame.color {
+        if identical {
             return Some(1.0);
         }
         let golden = Frame {
@@ -108,6 +122,20 @@ pub fn check(
                         || g.iter().zip(f).all(|(a, b)| a.abs_diff(*b) <= 1)
                 })
     });
+    if within && dir.join(format!("{stem}.snap")).is_file() {
+        // insta would be handed the golden's own bytes and find them equal: a pass that
+        // writes nothing, at the price of reading the snapshot again and listing the whole
+        // golden directory (its clean-up of this snapshot's pending files, done here by name).
+        for pending in [format!("{stem}.snap.new"), format!("{stem}.snap.new.png")] {
+            let _ = std::fs::remove_file(dir.join(pending));
+        }
+        return Checked {
+            golden: Golden::Unchanged,
+            message: String::new(),
+            ssim,
+            identical,
+        };
+    }
     let bytes = match (&existing, within) {
         (Some(b), true) => b.clone(),
         _ => png(frame),
@@ -127,9 +155,9 @@ pub fn check(
         settings.bind(|| insta::assert_binary_snapshot!(name_ext.as_str(), bytes.clone()));
     }));
     std::panic::set_hook(hook);
-    match (outcome, within) {
-        (Ok(()), true) => (Golden::Unchanged, String::new(), ssim),
-        (Ok(()), false) => (Golden::Written, format!("golden {stem} written"), ssim),
+    let (golden, message) = match (outcome, within) {
+        (Ok(()), true) => (Golden::Unchanged, String::new()),
+        (Ok(()), false) => (Golden::Written, format!("golden {stem} written")),
         (Err(_), _) => {
             let what = if existing.is_some() {
                 "differs from its golden"
@@ -144,12 +172,14 @@ pub fn check(
                     dir.display()
                 )
             };
-            (
-                Golden::Changed,
-                format!("the colour image {what}; {how}"),
-                ssim,
-            )
+            (Golden::Changed, format!("the colour image {what}; {how}"))
         }
+    };
+    Checked {
+        golden,
+        message,
+        ssim,
+        identical,
     }
 }
 

@@ -40,11 +40,13 @@ pub const THUMB: u32 = 96;
 /// `reference.png`, `truth.png`, and the golden and pending golden when `golden` names files
 /// that exist (`golden.png`, `pending.png`). The reference and the truth are the same for
 /// every backend's run of a point: each distinct picture is encoded once, into `.shared/`
-/// beside the runs' directories, and hard-linked into each run's.
+/// beside the runs' directories, and hard-linked into each run's. A colour that is its
+/// golden's pixel for pixel (`identical`) is the golden's file, linked rather than encoded.
 pub fn write_gallery(
     dir: &Path,
     j: &crate::judge::run::Judged,
     golden: Option<(&Path, &Path)>,
+    identical: bool,
 ) -> Result<(), Box<dyn std::error::Error>> {
     std::fs::create_dir_all(dir)?;
     let f = &j.frame;
@@ -59,60 +61,101 @@ pub fn write_gallery(
     } else {
         (f.width, f.height)
     };
-    image::imageops::thumbnail(&colour, tw, th).save(dir.join("thumb.png"))?;
-    colour.save(dir.join("color.png"))?;
+    let thumb = image::imageops::thumbnail(&colour, tw, th);
+    save(&dir.join("thumb.png"), (thumb.as_raw(), tw, th))?;
+    let blessed = golden.map(|g| g.0).filter(|g| g.is_file());
+    match blessed {
+        Some(g) if identical => link(g, &dir.join("color.png"))?,
+        _ => save(&dir.join("color.png"), (&f.color, f.width, f.height))?,
+    }
     // The gallery root is the conformance run's own (cleared at its start): its runs share
     // `.shared/` beside their directories.
     judging_pictures(dir, j, dir.parent().map(|p| p.join(".shared")).as_deref())?;
     if let Some((blessed, pending)) = golden {
         for (from, to) in [(blessed, "golden.png"), (pending, "pending.png")] {
             if from.is_file() {
-                std::fs::copy(from, dir.join(to))?;
+                link(from, &dir.join(to))?;
             }
         }
     }
     Ok(())
 }
 
-/// `dir/name`: with `shared`, a hard link to `shared/HASH.png`, which is encoded only if no
-/// worker has encoded the same pixels yet (through [`crate::atomic_file`], so a reader never
-/// sees half a file; where a link cannot be made, a copy); without, the picture itself.
-fn png(
-    dir: &Path,
-    name: &str,
-    (rgba, width, height): (&[u8], u32, u32),
-    shared: Option<&Path>,
-) -> Result<(), Box<dyn std::error::Error>> {
-    let save = |path: &Path| {
-        image::save_buffer(path, rgba, width, height, image::ColorType::Rgba8)
-            .map_err(std::io::Error::other)
-    };
-    let target = dir.join(name);
-    let Some(shared) = shared else {
-        return Ok(save(&target)?);
-    };
-    std::fs::create_dir_all(shared)?;
-    let key = umbra_report::names::fnv64(
-        width
-            .to_le_bytes()
-            .into_iter()
-            .chain(height.to_le_bytes())
-            .chain(rgba.iter().copied()),
-    );
-    let file = shared.join(format!("{key}.png"));
-    if !file.is_file() {
-        crate::atomic_file::replace(&file, save)?;
-    }
-    let _ = std::fs::remove_file(&target);
-    if std::fs::hard_link(&file, &target).is_err() {
-        std::fs::copy(&file, &target)?;
+/// Encodes a gallery picture: PNG with the Paeth filter on every row, which compresses these
+/// renders within a few per cent of the encoder's default adaptive choice (tried per row
+/// with every filter) at well under half its time. Goldens keep the default encoding
+/// ([`crate::judge::golden::png`]): their bytes are what insta compares.
+fn save(path: &Path, (rgba, width, height): (&[u8], u32, u32)) -> std::io::Result<()> {
+    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+    let file = std::io::BufWriter::new(std::fs::File::create(path)?);
+    image::ImageEncoder::write_image(
+        PngEncoder::new_with_quality(file, CompressionType::Fast, FilterType::Paeth),
+        rgba,
+        width,
+        height,
+        image::ExtendedColorType::Rgba8,
+    )
+    .map_err(std::io::Error::other)
+}
+
+/// `to` as a hard link to `from` (a copy where no link can be made), replacing `to`.
+fn link(from: &Path, to: &Path) -> std::io::Result<()> {
+    let _ = std::fs::remove_file(to);
+    if std::fs::hard_link(from, to).is_err() {
+        std::fs::copy(from, to)?;
     }
     Ok(())
 }
 
+/// A 64-bit content key of a picture: its size, then its pixels eight bytes at a time, each
+/// word mixed in by a multiply and a shift (a content address within one run, not a
+/// cryptographic hash; byte-wise FNV cost more than encoding the picture).
+fn picture_key(width: u32, height: u32, rgba: &[u8]) -> u64 {
+    let mix = |h: u64, w: u64| {
+        let h = (h ^ w).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+        h ^ (h >> 29)
+    };
+    let mut h = mix(
+        0xcbf2_9ce4_8422_2325,
+        u64::from(width) << 32 | u64::from(height),
+    );
+    let words = rgba.chunks_exact(8);
+    let rest = words.remainder();
+    for w in words {
+        h = mix(h, u64::from_le_bytes(w.try_into().unwrap_or_default()));
+    }
+    let mut last = [0u8; 8];
+    last[..rest.len()].copy_from_slice(rest);
+    mix(mix(h, u64::from_le_bytes(last)), rest.len() as u64)
+}
+
+/// `dir/name`: with `shared`, a hard link to `shared/KEY.png` ([`picture_key`]), which is
+/// encoded only if no worker has encoded the same pixels yet (through
+/// [`crate::atomic_file`], so a reader never sees half a file; where a link cannot be made, a
+/// copy); without, the picture itself.
+fn png(
+    dir: &Path,
+    name: &str,
+    picture: (&[u8], u32, u32),
+    shared: Option<&Path>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let target = dir.join(name);
+    let Some(shared) = shared else {
+        return Ok(save(&target, picture)?);
+    };
+    std::fs::create_dir_all(shared)?;
+    let (rgba, width, height) = picture;
+    let file = shared.join(format!("{:016x}.png", picture_key(width, height, rgba)));
+    if !file.is_file() {
+        crate::atomic_file::replace(&file, |path| save(path, picture))?;
+    }
+    Ok(link(&file, &target)?)
+}
+
 /// What the judge saw, beside any backend's frame: the truth, the error heat map and the
 /// reference's colour. The truth and the reference are the same for every backend's run of a
-/// point: with `shared`, each distinct one is encoded once ([`png`]).
+/// point, and backends that agree have the same heat map: with `shared`, each distinct
+/// picture is encoded once ([`png`]).
 fn judging_pictures(
     dir: &Path,
     j: &crate::judge::run::Judged,
@@ -125,7 +168,13 @@ fn judging_pictures(
         (&truth.data, truth.width, truth.height),
         shared,
     )?;
-    heatmap::truth_error_map(&j.error, &j.truth).save_png(&dir.join("error.png"))?;
+    let error = heatmap::truth_error_map(&j.error, &j.truth);
+    png(
+        dir,
+        "error.png",
+        (&error.data, error.width, error.height),
+        shared,
+    )?;
     if let Some(r) = &j.reference {
         png(dir, "reference.png", (&r.color, r.width, r.height), shared)?;
     }
