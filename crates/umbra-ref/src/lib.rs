@@ -153,16 +153,18 @@ fn render_inner(
         })
         .collect();
     let shadow_done = Instant::now();
+    let matrices: Vec<LookupMatrices> = run
+        .light
+        .views
+        .iter()
+        .map(|v| LookupMatrices::new(conv, v.view_proj(conv)))
+        .collect();
     let lookup = lookup::Lookup {
         conv,
         shadow: &case.shadow,
         light: &run.light,
-        matrices: run
-            .light
-            .views
-            .iter()
-            .map(|v| LookupMatrices::new(conv, v.view_proj(conv)))
-            .collect(),
+        wide: lookup::Lookup::widened(&matrices, case.shadow.bias_matrix),
+        matrices,
         layers: &layers,
         reach: {
             let (lo, hi) = run.geometry.bounds();

@@ -72,6 +72,9 @@ pub struct Lookup<'a> {
     pub light: &'a LightSetup,
     /// One matrix pair per face.
     pub matrices: Vec<LookupMatrices>,
+    /// Per face, the matrix the bias-matrix order multiplies the point by, widened to f64 for
+    /// the judged bounds (from [`Lookup::matrices`] by [`Lookup::widened`]).
+    pub wide: Vec<glam::DMat4>,
     /// One layer per face.
     pub layers: &'a [DepthLayer],
     /// The case's reach, for the position freedom: the largest of the scene's extent and the
@@ -396,8 +399,9 @@ impl Lookup<'_> {
         let [w, h] = s.size;
         let (fw, fh) = (w as f32, h as f32);
         let (u, v) = (st.c.u, st.c.v);
+        let addressing = self.tap_addressing();
         let tap = |i: i64, j: i64| -> f32 {
-            let d = self.stored(st.face, i, j, self.tap_addressing());
+            let d = self.stored(st.face, i, j, addressing);
             if self.conv.compare_lit(st.reference, d) {
                 1.0
             } else {
@@ -504,7 +508,12 @@ impl Lookup<'_> {
         if d > 0.0 {
             for e in [Vec3::X, Vec3::Y, Vec3::Z] {
                 let (f2, c2, r2) = self.probe(p + e * d, n);
-                let (f3, _, _) = self.probe(p - e * d, n);
+                // The other end only for its face: a 2D map has one.
+                let f3 = if self.cube() {
+                    self.probe(p - e * d, n).0
+                } else {
+                    face
+                };
                 if f2 != face || f3 != face {
                     let mut all = self.legal_at(p, n, 0.0);
                     for e in [Vec3::X, Vec3::Y, Vec3::Z] {
@@ -656,11 +665,19 @@ impl Lookup<'_> {
     /// comes after the divide): what the error bounds below are computed from.
     fn lookup_point(&self, p: Vec3, n: Vec3, face: usize) -> (Vec3, glam::DVec4, glam::DMat4) {
         let q = p + n * self.shadow.bias.normal_offset;
-        let m = match self.shadow.bias_matrix {
-            BiasMatrix::BeforeDivide => self.matrices[face].texture,
-            BiasMatrix::AfterDivide => self.matrices[face].light,
-        };
-        (q, q.as_dvec3().extend(1.0), m.as_dmat4())
+        (q, q.as_dvec3().extend(1.0), self.wide[face])
+    }
+
+    /// [`Lookup::wide`] of `matrices` under `order`: the texture matrix before the divide, the
+    /// light's after it.
+    pub fn widened(matrices: &[LookupMatrices], order: BiasMatrix) -> Vec<glam::DMat4> {
+        matrices
+            .iter()
+            .map(|m| match order {
+                BiasMatrix::BeforeDivide => m.texture.as_dmat4(),
+                BiasMatrix::AfterDivide => m.light.as_dmat4(),
+            })
+            .collect()
     }
 
     fn coord_error(&self, p: Vec3, n: Vec3, st: &Setup) -> (f64, f64) {

@@ -339,8 +339,7 @@ fn depth_test_run(
 
 /// [`DepthFormat::store`] of a fixed-point format with largest code `max` = 2ⁿ − 1 (n ≤ 24)
 /// and `inv` = 1/max rounded to f64, for `z` in [0, 1] or NaN, bit for bit: the code rounded
-/// half up from a truncation (exact in i32 here), its sign kept as `round_nonneg_f64` keeps
-/// it, NaN staying NaN (a NaN fails every depth test, as the store's NaN does).
+/// half up from a truncation, its sign kept as `round_nonneg_f64` keeps it, NaN staying NaN (a NaN fails every depth test, as the store's NaN does).
 ///
 /// The store divides, code/max in f64 then to f32; this multiplies by `inv`, which gives the
 /// same f32 for every code: code/max is never a dyadic rational (max is odd; codes 0 and max
@@ -350,7 +349,13 @@ fn depth_test_run(
 #[inline(always)]
 fn store_fixed(z: f32, max: f64, inv: f64) -> f32 {
     let x = f64::from(z) * max;
-    let t = f64::from(x as i32);
+    // The truncation of x ≥ 0 (below 2²⁵ here) in f64 alone, so that it vectorises (`as i32`
+    // saturates, which compiles to a scalar conversion and checks per lane): adding and
+    // removing 2⁵² rounds x to an integer (exactly: the sum's ulp is 1), one less where that
+    // rounded up. NaN stays NaN.
+    const TWO52: f64 = 4_503_599_627_370_496.0;
+    let r = (x + TWO52) - TWO52;
+    let t = if r > x { r - 1.0 } else { r };
     let code = if x - t >= 0.5 { t + 1.0 } else { t.copysign(x) };
     let code = if x.is_nan() { x } else { code };
     (code * inv) as f32
