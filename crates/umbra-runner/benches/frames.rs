@@ -5,6 +5,10 @@
 //! one run, so the ratios between them are measured side by side. The clock column says
 //! whether a time comes from GPU timer queries or CPU wall.
 //!
+//! Then the catalogue's largest frames, the reference beside gl33/llvmpipe in the same way:
+//! the point with the most view pixels and the point with the most shadow-map texels (all
+//! faces), each passes' times and their ratio.
+//!
 //! Then the reference's own passes on 1 thread and on every core (Mpixels/s of the map and of
 //! the view), and the per-stage share of the latest conformance run in this target directory
 //! (target/umbra/latest/report.json), when there is one: `cargo xtask conformance` measures
@@ -81,6 +85,77 @@ fn main() {
             "reference / gl33/llvmpipe frame time, same frame, same run: {:.2}",
             r / l
         );
+    }
+    // The catalogue's largest frames: most view pixels, most map texels (every face).
+    let mut catalogue: Vec<(std::path::PathBuf, usize, u64, u64, String)> = Vec::new();
+    let files = umbra_case::case_files(&root.join("cases")).unwrap_or_default();
+    for f in &files {
+        for (k, p) in umbra_case::load_file(f)
+            .unwrap_or_default()
+            .iter()
+            .enumerate()
+        {
+            let [w, h] = p.case.camera.size;
+            let [mw, mh] = p.case.shadow.size;
+            let faces = if matches!(p.case.light, umbra_case::format::Light::Point(_)) {
+                6
+            } else {
+                1
+            };
+            catalogue.push((
+                f.clone(),
+                k,
+                u64::from(w) * u64::from(h),
+                u64::from(mw) * u64::from(mh) * faces,
+                p.id(),
+            ));
+        }
+    }
+    let largest_view = catalogue.iter().max_by_key(|p| (p.2, p.3));
+    let largest_map = catalogue.iter().max_by_key(|p| (p.3, p.2));
+    for (what, p) in [
+        ("most view pixels", largest_view),
+        ("most map texels", largest_map),
+    ] {
+        let Some((file, k, view, texels, id)) = p else {
+            continue;
+        };
+        let r = measure_backends(
+            exe,
+            file,
+            *k,
+            &["ref".to_string(), "gl33/llvmpipe".to_string()],
+            9,
+            Duration::from_secs(600),
+            &[],
+        );
+        let get = |b: &str| {
+            r.iter()
+                .find(|(id, _)| id == b)
+                .and_then(|(_, m)| m.as_ref().ok())
+        };
+        match (get("ref"), get("gl33/llvmpipe")) {
+            (Some(a), Some(b)) => println!(
+                "largest frame ({what}: {id}, {view} px, {texels} texels): reference shadow {:.2} + lit {:.2} = {:.2} ms, gl33/llvmpipe {:.2} + {:.2} = {:.2} ms ({}); ratio {:.2} (shadow {:.2}, lit {:.2})",
+                a.shadow_ms,
+                a.lit_ms,
+                a.frame_ms,
+                b.shadow_ms,
+                b.lit_ms,
+                b.frame_ms,
+                b.clock,
+                a.frame_ms / b.frame_ms,
+                a.shadow_ms / b.shadow_ms,
+                a.lit_ms / b.lit_ms
+            ),
+            _ => println!(
+                "largest frame ({what}: {id}): not measured: {r:?}",
+                r = r
+                    .iter()
+                    .map(|(b, m)| (b, m.as_ref().err()))
+                    .collect::<Vec<_>>()
+            ),
+        }
     }
     // The reference's passes per thread count, in the same run: its worker inherits
     // RAYON_NUM_THREADS (the judged variant is not timed here: see judging in the time budget).
