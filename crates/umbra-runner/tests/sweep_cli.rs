@@ -26,6 +26,10 @@ fn sweep_writes_csv_plots_and_report() {
         .arg(&case)
         .arg("--out")
         .arg(&out)
+        // Its own cache, not target/umbra/cache/judge under the crate's directory (the
+        // test's working directory).
+        .arg("--judge-cache")
+        .arg(dir.join("cache"))
         .output()
         .expect("run umbra sweep");
     let text = common::text(&o);
