@@ -140,7 +140,7 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint, twins: bool) -> Ou
             ));
         }
     }
-    let reference = (!is_ref).then(|| judged.frame.clone());
+    let reference = (!is_ref).then_some(judged.frame);
     if let Some(a) = agreement.as_ref().filter(|_| !is_ref) {
         if (a.illegal > 0 || a.illegal_map > 0) && prepared.case().expect.backends_agree {
             for (check, count) in [
