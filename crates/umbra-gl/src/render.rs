@@ -58,6 +58,14 @@ struct KeptMap {
     texture: glow::Texture,
 }
 
+/// A new shadow map's sampler state (the lit pass sets its own; a kept map is reset to this).
+const FRESH_MAP_SAMPLER: [(u32, u32); 4] = [
+    (glow::TEXTURE_MIN_FILTER, glow::NEAREST),
+    (glow::TEXTURE_MAG_FILTER, glow::NEAREST),
+    (glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE),
+    (glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE),
+];
+
 /// The largest shadow map kept for a twin (all faces, 4 bytes a texel): a map beyond it is
 /// rendered again for the twin rather than held in memory between runs.
 const KEEP_LIMIT: u64 = 256 << 20;
@@ -343,12 +351,7 @@ impl Renderer {
             // The twin's shadow pass is the case's: its map, with a fresh map's sampler state.
             unsafe {
                 gl.bind_texture(target, Some(map));
-                for (p, v) in [
-                    (glow::TEXTURE_MIN_FILTER, glow::NEAREST),
-                    (glow::TEXTURE_MAG_FILTER, glow::NEAREST),
-                    (glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE),
-                    (glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE),
-                ] {
+                for (p, v) in FRESH_MAP_SAMPLER {
                     gl.tex_parameter_i32(target, p, v as i32);
                 }
                 if !es2 {
@@ -387,12 +390,7 @@ impl Renderer {
                         glow::PixelUnpackData::Slice(None),
                     );
                 }
-                for (p, v) in [
-                    (glow::TEXTURE_MIN_FILTER, glow::NEAREST),
-                    (glow::TEXTURE_MAG_FILTER, glow::NEAREST),
-                    (glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE),
-                    (glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE),
-                ] {
+                for (p, v) in FRESH_MAP_SAMPLER {
                     gl.tex_parameter_i32(target, p, v as i32);
                 }
                 self.check("shadow map storage")?;
