@@ -4,9 +4,9 @@
 //! read next to the GL and Vulkan specs, stage by stage:
 //! [`raster`] (clipping, 8 sub-pixel bits, the tie rule, interpolation),
 //! [`shadow_pass`] (depth per format, polygon offset), [`lookup`] (bias matrix order, guard,
-//! outside policy, compare with the spec's clamp, NEAREST/LINEAR/PCF), [`lit_pass`] and
-//! [`shading`]. Work is split in bands of rows ([`bands`]) so it is parallel and still
-//! bit-identical whatever the thread count.
+//! outside policy, compare with the spec's clamp, NEAREST/LINEAR/PCF), [`lit_pass`] (with
+//! [`surface`], the varyings of a run of pixels) and [`shading`]. Work is split in bands of
+//! rows ([`bands`]) so it is parallel and still bit-identical whatever the thread count.
 //!
 //! [`truth`] is independent of all of that: it shoots f64 rays through pixel centres and
 //! shadow rays to the light against the same triangles, with a watertight ray/triangle test so

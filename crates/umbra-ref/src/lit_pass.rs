@@ -2,7 +2,10 @@
 //! the nearest fragment per pixel, then shade each pixel once. Deferring the shading changes
 //! nothing a GPU would show (the lookup does not affect depth) and looks up each pixel once.
 //! Varyings (world position, normal) interpolate perspective-correctly and are evaluated in
-//! f32, as a GPU's would be.
+//! f32, as a GPU's would be. Pixels are shaded a run at a time (the pixels of a row that one
+//! triangle won): [`crate::surface`], the run's lookups and its colours, each a loop over
+//! independent pixels with the per-pixel arithmetic unchanged (a test holds the frame to the
+//! judged render's, which looks every pixel up on its own).
 //!
 //! A judged render also marks the pixels where another conformant implementation may show
 //! another surface ([`crate::lookup::ambiguity::SURFACE`]): within the vertex snapping's
