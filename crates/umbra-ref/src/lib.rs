@@ -24,6 +24,8 @@ pub mod rounding;
 pub mod shading;
 pub mod shadow_pass;
 pub mod surface;
+#[cfg(test)]
+mod test_rng;
 pub mod truth;
 
 use std::time::Instant;

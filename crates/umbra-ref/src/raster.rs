@@ -700,13 +700,7 @@ mod tests {
                 height: 48,
                 cull: Cull::None,
             };
-            let mut state = 0x9e37_79b9_7f4a_7c15u64;
-            let mut next = move || {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                (state >> 11) as f32 / (1u64 << 53) as f32
-            };
+            let mut next = crate::test_rng::uniform(0x9e37_79b9_7f4a_7c15);
             let mut fragments = 0;
             for k in 0..4000 {
                 let spread = [1.1, 3.0, 0.2][k % 3];

@@ -54,7 +54,7 @@ pub fn shade_run(
                 let n = Vec3::new(nx[k], ny[k], nz[k]);
                 let l = Vec3::new(lx[k], ly[k], lz[k]);
                 let ndl = n.dot(l);
-                let h = crate::surface::normalize_or_zero(l + Vec3::new(ex[k], ey[k], ez[k]));
+                let h = (l + Vec3::new(ex[k], ey[k], ez[k])).normalize_or_zero();
                 scratch[k] = [ndl, ndl.max(0.0), n.dot(h).max(0.0)];
             }
             for [ndl, _, x] in scratch.iter_mut() {
@@ -170,13 +170,7 @@ mod tests {
     /// back-facing pixels, and visibilities 0, 1 and between.
     #[test]
     fn a_run_is_shaded_as_its_pixels_are() {
-        let mut state = 0x853c_49e6_748f_ea9bu64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f32 / (1u64 << 53) as f32
-        };
+        let mut next = crate::test_rng::uniform(0x853c_49e6_748f_ea9b);
         for model in [ShadingModel::Dimmed, ShadingModel::Classic] {
             for _ in 0..200 {
                 let s = Shading {
@@ -192,13 +186,8 @@ mod tests {
                 let len = 37;
                 let mut vis = Vec::new();
                 for k in 0..len {
-                    let mut dir = || {
-                        crate::surface::normalize_or_zero(Vec3::new(
-                            next() - 0.5,
-                            next() - 0.5,
-                            next() - 0.5,
-                        ))
-                    };
+                    let mut dir =
+                        || Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or_zero();
                     let (n, l, e) = (dir(), dir(), dir());
                     for a in 0..3 {
                         run.n[a].push(n[a]);

@@ -118,8 +118,8 @@ impl Surfaces {
             // interpolate: the f32 varyings.
             let (fx, fy, fz) = (wt.x as f32, wt.y as f32, wt.z as f32);
             let p = pa * fx + pb * fy + pc * fz;
-            let n = normalize_or_zero(na * fx + nb * fy + nc * fz);
-            let to_eye = normalize_or_zero(eye - p);
+            let n = (na * fx + nb * fy + nc * fz).normalize_or_zero();
+            let to_eye = (eye - p).normalize_or_zero();
             (px[k], py[k], pz[k]) = (p.x, p.y, p.z);
             (nx[k], ny[k], nz[k]) = (n.x, n.y, n.z);
             (ex[k], ey[k], ez[k]) = (to_eye.x, to_eye.y, to_eye.z);
@@ -133,9 +133,9 @@ impl Surfaces {
             }
             LightKind::Spot { position } | LightKind::Point { position } => {
                 for k in 0..len {
-                    // glam's normalize: v · (1 / sqrt(v·v)), unchecked.
-                    let v = position - Vec3::new(self.p[0][k], self.p[1][k], self.p[2][k]);
-                    let l = v * (1.0 / ((v.x * v.x + v.y * v.y) + v.z * v.z).sqrt());
+                    // LightSetup::to_light's arithmetic, with the position read from the run.
+                    let l = (position - Vec3::new(self.p[0][k], self.p[1][k], self.p[2][k]))
+                        .normalize();
                     (lx[k], ly[k], lz[k]) = (l.x, l.y, l.z);
                 }
             }
@@ -147,18 +147,6 @@ impl Surfaces {
 #[inline(always)]
 fn weighted(w0: DVec3, w1: DVec3, w2: DVec3, r: [f64; 3]) -> DVec3 {
     w0 * r[0] + w1 * r[1] + w2 * r[2]
-}
-
-/// glam's `Vec3::normalize_or_zero`, bit for bit: v · (1 / sqrt(v·v)) where that reciprocal
-/// is finite and positive, else zero.
-#[inline(always)]
-pub fn normalize_or_zero(v: Vec3) -> Vec3 {
-    let rcp = 1.0 / ((v.x * v.x + v.y * v.y) + v.z * v.z).sqrt();
-    if rcp.is_finite() && rcp > 0.0 {
-        v * rcp
-    } else {
-        Vec3::ZERO
-    }
 }
 
 /// The position and unit normal at weights `wt` on source triangle `t`'s vertices (the
@@ -186,13 +174,7 @@ mod tests {
     /// triangles, clipped ones included, in both conventions.
     #[test]
     fn a_run_is_its_pixels_one_by_one() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f32 / (1u64 << 53) as f32
-        };
+        let mut next = crate::test_rng::uniform(0x2545_f491_4f6c_dd1d);
         let mut checked = 0;
         for conv in [Convention::GL, Convention::ZERO_TO_ONE] {
             let r = Rasterizer {
