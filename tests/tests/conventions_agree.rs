@@ -45,3 +45,42 @@ fn gl_and_zero_to_one_references_agree_away_from_edges() {
     println!("total: {total} of {compared} px differ, all on edges");
     assert!(compared > 500_000);
 }
+
+/// The reference rendered in the zero-to-one convention is a conformant implementation
+/// (another clip range, another projection matrix, other f32 roundings: what a Vulkan or
+/// wgpu driver computes), so on generated scenes (far from the origin, reversed depth, every
+/// format and filter) its frame and its shadow map must lie inside the intervals the judge
+/// computes in the GL convention. Before the stored depth's freedom counted the projection's
+/// cancellation (`umbra_ref::shadow_pass::depth_error`), reversed-depth D32F maps and scenes
+/// 4·10⁴ m from the origin failed here as they failed on wgpu-vk/lavapipe in the soak.
+#[test]
+fn zero_to_one_references_are_legal_under_the_gl_judge() {
+    let mut texels = 0u64;
+    let mut pixels = 0u64;
+    for seed in [5u64, 8] {
+        for case in umbra_case::generate::cases(seed, 25) {
+            let text = umbra_case::generate::to_json(&case);
+            let points = umbra_case::load_str(&text, std::path::Path::new("generated.json"))
+                .expect("a generated case is valid");
+            for point in points {
+                let id = point.id();
+                let run = Prepared::new(point);
+                let profile = umbra_case::Profile::GL.effective_for(run.case());
+                let judged = umbra_ref::render_judged(&run, ClipDepth::MinusOneToOne, profile);
+                let zo = umbra_ref::render(&run, ClipDepth::ZeroToOne);
+                let (a, _) = umbra_compare::reference::judge(&judged, &zo);
+                assert_eq!(
+                    (a.illegal, a.illegal_map),
+                    (0, 0),
+                    "{id}: the zero-to-one reference breaks the GL judge ({}; {} map texels)",
+                    a.illegal_summary(),
+                    a.illegal_map
+                );
+                texels += a.map_checked;
+                pixels += a.compared;
+            }
+        }
+    }
+    println!("{pixels} pixels and {texels} map texels held");
+    assert!(texels > 1_000_000 && pixels > 500_000, "{pixels} {texels}");
+}

@@ -1,6 +1,8 @@
 //! The discrimination matrix: for every pair of distinct settings of a technique knob the case
 //! format expresses, some point of the catalogue, rendered by the reference with one setting,
-//! must be *illegal* under the judge of the other (in either direction). Otherwise a driver
+//! must be *illegal* under the judge of the other (in either direction): its pixels, or where
+//! no point separates them by pixels, its shadow map (what the judge reads back on GL 3.3 and
+//! wgpu's copyable formats; the table says which). Otherwise a driver
 //! that implements one as the other passes the whole catalogue, and the catalogue is blind to
 //! that mistake.
 //!
@@ -143,7 +145,21 @@ struct Separation {
     point: String,
     judged_as: String,
     rendered_as: String,
+    /// Illegal pixels (what every API's judge sees).
     illegal: u64,
+    /// Illegal shadow-map texels (what the judge sees where the map is read back: GL 3.3
+    /// and wgpu's copyable formats); a pair told apart by the map alone is reported so.
+    texels: u64,
+}
+
+impl Separation {
+    fn what(&self) -> String {
+        if self.illegal > 0 {
+            format!("{} px illegal", self.illegal)
+        } else {
+            format!("{} map texels illegal (no pixel)", self.texels)
+        }
+    }
 }
 
 #[test]
@@ -161,10 +177,14 @@ fn every_pair_of_technique_settings_is_told_apart_by_some_catalogue_point() {
         let n = knob.values.len();
         let mut sep: BTreeMap<(usize, usize), Separation> = BTreeMap::new();
         // Exceptions are tried too (one that some point separates is stale), but the search
-        // stops once every other pair is told apart.
+        // stops once every other pair is told apart by pixels (a map-only separation keeps
+        // the search going for a pixel one).
         let all_done = |sep: &BTreeMap<(usize, usize), Separation>| {
-            (0..n)
-                .all(|a| (a + 1..n).all(|b| is_exception(&knob, a, b) || sep.contains_key(&(a, b))))
+            (0..n).all(|a| {
+                (a + 1..n).all(|b| {
+                    is_exception(&knob, a, b) || sep.get(&(a, b)).is_some_and(|s| s.illegal > 0)
+                })
+            })
         };
         // Preferred cases first (first point of each sweep value set), then the rest.
         let mut order: Vec<&CasePoint> = Vec::new();
@@ -197,7 +217,13 @@ fn every_pair_of_technique_settings_is_told_apart_by_some_catalogue_point() {
                 .collect();
             for a in 0..n {
                 for b in 0..n {
-                    if a == b || sep.contains_key(&(a.min(b), a.max(b))) {
+                    // A pixel separation settles a pair; one by the map alone may still be
+                    // bettered by a later point.
+                    if a == b
+                        || sep
+                            .get(&(a.min(b), a.max(b)))
+                            .is_some_and(|s: &Separation| s.illegal > 0)
+                    {
                         continue;
                     }
                     let (Some((_, judged_a)), Some((frame_b, _))) = (&variants[a], &variants[b])
@@ -205,7 +231,10 @@ fn every_pair_of_technique_settings_is_told_apart_by_some_catalogue_point() {
                         continue;
                     };
                     let (r, _) = umbra_compare::reference::judge(judged_a, frame_b);
-                    if r.illegal > 0 {
+                    let better = sep
+                        .get(&(a.min(b), a.max(b)))
+                        .is_none_or(|s| r.illegal > 0 && s.illegal == 0);
+                    if (r.illegal > 0 || r.illegal_map > 0) && better {
                         sep.insert(
                             (a.min(b), a.max(b)),
                             Separation {
@@ -213,6 +242,7 @@ fn every_pair_of_technique_settings_is_told_apart_by_some_catalogue_point() {
                                 judged_as: knob.values[a].to_string(),
                                 rendered_as: knob.values[b].to_string(),
                                 illegal: r.illegal,
+                                texels: r.illegal_map,
                             },
                         );
                     }
@@ -224,12 +254,18 @@ fn every_pair_of_technique_settings_is_told_apart_by_some_catalogue_point() {
                 let (va, vb) = (knob.values[a].to_string(), knob.values[b].to_string());
                 match (sep.get(&(a, b)), is_exception(&knob, a, b)) {
                     (Some(s), true) => stale.push(format!(
-                        "{} {va} vs {vb}: {} px illegal on {}",
-                        knob.path, s.illegal, s.point
+                        "{} {va} vs {vb}: {} on {}",
+                        knob.path,
+                        s.what(),
+                        s.point
                     )),
                     (Some(s), false) => table.push(format!(
-                        "{:<28} {va} vs {vb}: {} px illegal when {} is rendered for {} on {}",
-                        knob.path, s.illegal, s.rendered_as, s.judged_as, s.point
+                        "{:<28} {va} vs {vb}: {} when {} is rendered for {} on {}",
+                        knob.path,
+                        s.what(),
+                        s.rendered_as,
+                        s.judged_as,
+                        s.point
                     )),
                     (None, true) => exceptions_held.push(format!(
                         "{:<28} {va} vs {vb}: exception: {}",

@@ -5,7 +5,10 @@
 //! - `cargo xtask conformance [ARGS]`: installs the Mesa packages when missing and allowed,
 //!   then runs `umbra conformance ARGS` and passes its exit code through (0 as expected,
 //!   1 regressions, 125 could not run), so `git bisect run cargo xtask conformance` works.
-//! - `cargo xtask test`: the same set-up, then the whole test suite and a conformance run.
+//! - `cargo xtask test`: the same set-up, then the whole test suite, a conformance run, the
+//!   self-test and a fixed-seed soak of generated cases.
+//! - `cargo xtask soak --seed S --count N`: generated cases on every backend, judged alone,
+//!   failures by class (`umbra soak`).
 //! - `cargo xtask selftest`: every injected fault on every backend it applies to; a fault the
 //!   judge does not catch fails it. Part of `cargo xtask test`.
 //! - `cargo xtask sweep [--scene CASE] [--backend ID]...`: speed against error, a technique
@@ -37,6 +40,10 @@ const PASS_THROUGH: &[(&str, &str)] = &[
     (
         "selftest",
         "The same set-up, then `umbra selftest ARGS`: every injected fault on every backend it applies to",
+    ),
+    (
+        "soak",
+        "The same set-up, then `umbra soak ARGS`: generated cases (--seed S --count N) on every backend, judged alone, failures by class",
     ),
     (
         "sweep",
@@ -82,7 +89,7 @@ fn command() -> clap::Command {
     }
     c.subcommand(
         clap::Command::new("test")
-            .about("The set-up, the whole test suite (cargo test --workspace ARGS), then conformance and selftest as CI runs them")
+            .about("The set-up, the whole test suite (cargo test --workspace ARGS), then conformance, selftest and a 40-case soak as CI runs them")
             .arg(rest().help("extra arguments for cargo test")),
     )
     .subcommand(
@@ -149,15 +156,20 @@ fn test(extra: &[String]) -> i32 {
     if code != 0 {
         return code;
     }
-    // The main job on every case, as CI will run it, then the harness's own sensitivity.
+    // The main job on every case, as CI will run it, then the harness's own sensitivity, then
+    // the judge on scenes it was not developed against (a fixed seed: the same 40 generated
+    // cases in every CI run, about a minute on 2 cores).
     let conformance = umbra(&["conformance"], &[]);
     let selftest = umbra(&["selftest"], &[]);
-    if conformance != 0 {
-        conformance
-    } else {
-        selftest
-    }
+    let soak = umbra(&["soak"], &CI_SOAK.map(String::from));
+    [conformance, selftest, soak]
+        .into_iter()
+        .find(|c| *c != 0)
+        .unwrap_or(0)
 }
+
+/// The soak `cargo xtask test` runs (README, "Generated scenes").
+const CI_SOAK: [&str; 4] = ["--seed", "21", "--count", "40"];
 
 fn bless(args: &[String]) -> i32 {
     if std::env::var("CI").is_ok_and(|v| v == "true" || v == "1") {

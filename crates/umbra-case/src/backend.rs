@@ -50,6 +50,10 @@ pub struct Needs {
     pub depth_order: DepthOrder,
     /// A polygon-offset clamp (Vulkan's depthBiasClamp).
     pub polygon_offset_clamp: bool,
+    /// A polygon-offset `units` that is not a whole number (glPolygonOffset takes a float;
+    /// Vulkan's depthBiasConstantFactor too, but wgpu's `DepthBiasState::constant` is an
+    /// integer).
+    pub fractional_offset_units: bool,
 }
 
 impl Needs {
@@ -64,6 +68,7 @@ impl Needs {
             outside: s.outside,
             depth_order: s.depth_order,
             polygon_offset_clamp: s.bias.polygon_offset_clamp != 0.0,
+            fractional_offset_units: s.bias.polygon_offset[1].fract() != 0.0,
         }
     }
 }

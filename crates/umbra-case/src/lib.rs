@@ -10,7 +10,10 @@
 //! - [`light`] and [`prepare`]: the light faces and camera of a run, fitted where asked.
 //! - [`depth`]: storage per depth format and the polygon-offset unit.
 //! - [`frame`] and [`backend`]: what a backend returns and the trait it implements.
-//! - [`profile`]: what an API lets an implementation do differently (the judge's input).
+//! - [`profile`]: what an API lets an implementation do differently (the judge's input), and
+//!   the driver deviations diagnosed in Mesa's sources that expectations can name.
+//! - [`generate`]: valid cases drawn from a seed across the whole format, for soaking the
+//!   judge on scenes it was not developed against (`umbra soak`).
 //! - [`technique`] and [`lit_shader`]: the lit pass's technique read from a run once, the
 //!   self-test's faults resolved on it, and the lookup's steps written once for any shading
 //!   language (GL and wgpu supply only their language).
@@ -26,6 +29,7 @@ pub mod error;
 pub mod fault;
 pub mod format;
 pub mod frame;
+pub mod generate;
 pub mod light;
 pub mod lit_shader;
 pub mod load;
@@ -44,8 +48,8 @@ pub use error::{CaseError, CaseErrors};
 pub use format::Case;
 pub use frame::{Clock, DepthMap, Frame, Timings, VisibilityStorage};
 pub use light::{LightKind, LightSetup};
-pub use load::{CasePoint, case_files, load_file, load_str};
+pub use load::{CasePoint, case_files, get_path, load_file, load_str};
 pub use prepare::Prepared;
-pub use profile::{Profile, Spec};
+pub use profile::{Deviation, Deviations, Profile, Spec};
 pub use scene::{Geometry, tessellate};
 pub use technique::Technique;

@@ -247,16 +247,23 @@ pub fn cube_texel_dir(f: usize, i: f64, j: f64, size: f64) -> glam::DVec3 {
 /// same table as [`cube_texel_dir`] (major axis from [`cube_face`]).
 pub fn cube_face_coords(d: glam::DVec3) -> (usize, f64, f64) {
     let f = cube_face(d);
+    let (sc, tc) = cube_coords_on(d, f);
+    (f, sc, tc)
+}
+
+/// The (s_c, t_c) face coordinates of direction `d` on face `f` (the table of
+/// [`cube_face_coords`], whichever axis is major: for a face chosen where the major axis is a
+/// tie, which the specs leave to the implementation).
+pub fn cube_coords_on(d: glam::DVec3, f: usize) -> (f64, f64) {
     let a = d.abs();
-    let (sc, tc) = match f {
+    match f {
         0 => (-d.z / a.x, -d.y / a.x),
         1 => (d.z / a.x, -d.y / a.x),
         2 => (d.x / a.y, d.z / a.y),
         3 => (d.x / a.y, -d.z / a.y),
         4 => (d.x / a.z, -d.y / a.z),
         _ => (-d.x / a.z, -d.y / a.z),
-    };
-    (f, sc, tc)
+    }
 }
 
 fn fit_bounds(view: Mat4, geometry: &Geometry) -> [f32; 6] {

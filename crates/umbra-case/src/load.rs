@@ -308,6 +308,26 @@ pub(crate) fn set_path<'v>(doc: &'v mut Value, path: &str) -> Result<&'v mut Val
     Ok(cur)
 }
 
+/// The value at a dotted path (`a.b[2].c`) of `doc`, if there is one: the reading twin of
+/// the sweeps' paths (expectations' `@when` conditions use it).
+pub fn get_path<'v>(doc: &'v Value, path: &str) -> Option<&'v Value> {
+    let mut cur = doc;
+    for seg in path.split('.') {
+        let (key, index) = match seg.find('[') {
+            Some(open) if seg.ends_with(']') => (
+                &seg[..open],
+                Some(seg[open + 1..seg.len() - 1].parse::<usize>().ok()?),
+            ),
+            _ => (seg, None),
+        };
+        cur = cur.as_object()?.get(key)?;
+        if let Some(i) = index {
+            cur = cur.as_array()?.get(i)?;
+        }
+    }
+    Some(cur)
+}
+
 /// Every `*.json` under `dir`, recursively, sorted by path.
 pub fn case_files(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let mut out = Vec::new();

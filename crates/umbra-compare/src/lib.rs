@@ -9,7 +9,10 @@
 //!   *away from edges*, with every excluded pixel counted by reason.
 //! - [`agreement`]: mask agreement of two frames, with an optional shift radius in pixels.
 //! - [`heatmap`]: images of both, colour-coded (legend in [`heatmap`]).
+//! - [`reference`]: a frame against the reference's legal intervals (the value judge), and
+//!   [`consensus`]: where a failing frame broke them, compared across drivers.
 
+pub mod consensus;
 pub mod edges;
 pub mod heatmap;
 pub mod reference;

@@ -28,6 +28,7 @@ use umbra_case::Frame;
 use umbra_ref::Judged;
 use umbra_ref::lookup::ambiguity;
 
+use crate::consensus::Failed;
 use crate::is_shadowed;
 
 /// Agreement with the reference, with every check's counts.
@@ -290,21 +291,40 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
             }
         }
     }
-    if let Some(map) = &frame.shadow_map {
-        if map.values.len() == basis.map.len() {
-            r.map_checked = map.values.len() as u64;
-            r.illegal_map = map
-                .values
-                .iter()
-                .zip(&basis.map)
-                .filter(|(v, (lo, hi))| {
-                    let slack = |x: f32| umbra_case::depth::f32_spacing(x);
-                    !(lo - slack(*lo) <= **v && **v <= hi + slack(*hi))
-                })
-                .count() as u64;
-        }
+    if let Some(map) = map_failures(basis, frame) {
+        r.map_checked = basis.map.len() as u64;
+        r.illegal_map = map.total;
     }
     (r, px)
+}
+
+/// The shadow-map texels of `frame` outside the ranges a conformant implementation may store
+/// (each within one f32 spacing), side = above; `None` where the map is not checked (the
+/// backend reads none back, or the basis kept no ranges).
+pub fn map_failures(basis: &Judged, frame: &Frame) -> Option<Failed> {
+    let map = frame.shadow_map.as_ref()?;
+    if map.values.len() != basis.map.len() || basis.map.is_empty() {
+        return None;
+    }
+    let slack = |x: f32| umbra_case::depth::f32_spacing(x);
+    let mut failed = Failed::default();
+    for (k, (v, (lo, hi))) in map.values.iter().zip(&basis.map).enumerate() {
+        if !(lo - slack(*lo) <= *v && *v <= hi + slack(*hi)) {
+            failed.push(k, *v > *hi);
+        }
+    }
+    Some(failed)
+}
+
+/// The pixels [`judge`] found illegal (`px`), side = shadowed: a fingerprint's frame part.
+pub fn frame_failures(frame: &Frame, px: &[PixelJudgement]) -> Failed {
+    let mut failed = Failed::default();
+    for (i, j) in px.iter().enumerate() {
+        if *j == PixelJudgement::Illegal {
+            failed.push(i, is_shadowed(frame.visibility[i]));
+        }
+    }
+    failed
 }
 
 /// Whether an RGB8 colour is the shading of visibility `v` (± `eps`) at this pixel: each

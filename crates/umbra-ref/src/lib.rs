@@ -33,7 +33,7 @@ use std::time::Instant;
 use umbra_case::format::Case;
 use umbra_case::{
     Backend, BackendError, BackendId, ClipDepth, Clock, Convention, DepthMap, DriverInfo, Frame,
-    LookupMatrices, Needs, Prepared, Profile, Support, Timings, VisibilityStorage,
+    Needs, Prepared, Profile, Support, Timings, VisibilityStorage,
 };
 
 pub use lit_pass::PixelLegal;
@@ -155,34 +155,7 @@ fn render_inner(
         })
         .collect();
     let shadow_done = Instant::now();
-    let matrices: Vec<LookupMatrices> = run
-        .light
-        .views
-        .iter()
-        .map(|v| LookupMatrices::new(conv, v.view_proj(conv)))
-        .collect();
-    let lookup = lookup::Lookup {
-        conv,
-        shadow: &case.shadow,
-        light: &run.light,
-        wide: lookup::Lookup::widened(&matrices, case.shadow.bias_matrix),
-        matrices,
-        layers: &layers,
-        reach: {
-            let (lo, hi) = run.geometry.bounds();
-            let eyes = run.light.views.iter().map(|v| {
-                // The view's translation column is −R·eye: its length is the eye's distance.
-                v.view.w_axis.truncate().length()
-            });
-            eyes.fold(
-                (hi - lo)
-                    .max_element()
-                    .max(run.camera.eye.abs().max_element()),
-                f32::max,
-            )
-        },
-        profile: profile.unwrap_or_default(),
-    };
+    let lookup = lookup::Lookup::new(run, conv, &layers, profile.unwrap_or_default());
     let camera_kinds = adjacency.as_ref().map(|a| {
         a.edge_kinds(
             &run.geometry,

@@ -54,12 +54,6 @@ struct Point {
     to_eye: Vec3,
 }
 
-/// |∂z/∂x| + |∂z/∂y| of a triangle's plane, as the judge's depth tolerance reads it.
-fn slope_sum(t: &Tri) -> f32 {
-    let (dx, dy) = t.depth_slopes();
-    (dx.abs() + dy.abs()) as f32
-}
-
 /// What a judged pixel allows (see [`crate::Judged`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PixelLegal {
@@ -313,11 +307,20 @@ fn surface_freedom(
     } else {
         0.0
     };
-    let tol = |slope: f64, z: f64, norm: f64| {
-        slope * SNAP_PX * norm + 4.0 * f64::from(umbra_case::depth::f32_spacing(z as f32)) + storage
+    // The plane's snapping and its corners' transform error (`Tri::z_err`), carried to the
+    // centre by the weights (`None`: the winner, whose weights at the centre are not kept,
+    // takes its largest), a few roundings of z, and the buffer's storage.
+    let tol = |t: &Tri, z: f64, e: Option<[i64; 3]>| {
+        let (dx, dy) = t.depth_slopes();
+        let (norm, transform) = match e {
+            Some(e) => (t.weight_norm(e), t.depth_error_at(e)),
+            None => (1.0, t.z_err.iter().copied().fold(0.0, f64::max)),
+        };
+        (dx.abs() + dy.abs()) * SNAP_PX * norm
+            + transform
+            + 4.0 * f64::from(umbra_case::depth::f32_spacing(z as f32))
+            + storage
     };
-    // The winners' slopes, once per triangle (the loop below reads them per visited centre).
-    let slopes: Vec<f32> = tris.iter().map(slope_sum).collect();
     let mut free = vec![0u8; nearest.len()];
     for_each_band(
         &mut free,
@@ -334,8 +337,6 @@ fn surface_freedom(
                 std::collections::HashSet::new();
             for (_, t) in touching {
                 let face = geo.face[t.source as usize];
-                let (dx, dy) = t.depth_slopes();
-                let slope = dx.abs() + dy.abs();
                 t.scan_near(rows.clone(), SNAP_PX, |x, y, e, coverage| {
                     let certain = coverage != Coverage::Maybe;
                     let i = (y - rows.start) as usize * w as usize + x as usize;
@@ -362,8 +363,7 @@ fn surface_freedom(
                     } else {
                         let z = t.depth_at(e);
                         let zw = f64::from(win.depth);
-                        z - tol(slope, z, t.weight_norm(e))
-                            <= zw + tol(f64::from(slopes[win.tri as usize]), zw, 1.0)
+                        z - tol(t, z, Some(e)) <= zw + tol(&tris[win.tri as usize], zw, None)
                     };
                     if flag {
                         band[i] |= ambiguity::SURFACE;

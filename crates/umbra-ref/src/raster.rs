@@ -80,6 +80,9 @@ pub struct Tri {
     pub source: u32,
     /// Whether the source triangle is front-facing.
     pub front: bool,
+    /// Judged renders: per corner, how far another implementation's window depth may lie
+    /// from ours ([`crate::shadow_pass::depth_error`]); 0 otherwise.
+    pub z_err: [f64; 3],
 }
 
 /// One covered pixel centre: the three edge values (each ≥ 0).
@@ -409,11 +412,32 @@ impl Tri {
         }
     }
 
+    /// Whether the centre with edge values `e` lies within `delta_px` of a diagonal the
+    /// clipper added inside the source triangle ([`EdgeKind::Internal`]).
+    pub fn near_internal(&self, e: [i64; 3], delta_px: f64) -> bool {
+        (0..3).any(|i| {
+            let (a, b) = ((i + 1) % 3, (i + 2) % 3);
+            let (dx, dy) = (self.x[b] - self.x[a], self.y[b] - self.y[a]);
+            let tol = delta_px * ONE as f64 * (dx.abs() + dy.abs()) as f64;
+            self.edges[i] == EdgeKind::Internal && (e[i] as f64).abs() <= tol
+        })
+    }
+
     /// Window depth at a centre given its edge values (inside or just outside: the plane is
     /// extended), in f64.
     pub fn depth_at(&self, e: [i64; 3]) -> f64 {
         let a = self.area as f64;
         (0..3).map(|i| e[i] as f64 / a * f64::from(self.z[i])).sum()
+    }
+
+    /// Σ|bᵢ|·z_errᵢ at a centre: how far the corners' transform errors ([`Tri::z_err`]) carry
+    /// to the plane's value there (a corner the clipper made far away, with a large error,
+    /// weighs little where its weight is small).
+    pub fn depth_error_at(&self, e: [i64; 3]) -> f64 {
+        let a = self.area as f64;
+        (0..3)
+            .map(|i| (e[i] as f64 / a).abs() * self.z_err[i])
+            .sum()
     }
 
     /// Σ|bᵢ| of the screen-space barycentrics at a centre: 1 inside, a little more just
@@ -625,6 +649,7 @@ impl Rasterizer {
             edges,
             source,
             front,
+            z_err: [0.0; 3],
         });
     }
 }

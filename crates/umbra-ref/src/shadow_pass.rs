@@ -24,6 +24,11 @@ use crate::raster::{Coverage, EdgeKind, Rasterizer, Tri};
 /// the f32 window coordinates themselves carry about 1/1024 pixel at 16k.
 pub const SNAP_PX: f64 = 1.0 / 16.0 + 1.0 / 512.0 + 1.0 / 1024.0;
 
+/// Under [`umbra_case::Deviation::EdgeHoles`], how near a clip fan's diagonal a centre must
+/// lie to fall out of both its triangles: well beyond a float span end's rounding (an ULP at
+/// a 16k-texel map is 1/512 px).
+const HOLE_PX: f64 = 1.0 / 64.0;
+
 /// One rendered face: stored depth per texel, in raster row order (row 0 = window y 0).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DepthLayer {
@@ -44,9 +49,10 @@ pub struct DepthLayer {
 /// - **Vertex snapping** ([`SNAP_PX`]): the depth plane at the centre moves by up to
 ///   (|∂z/∂x| + |∂z/∂y|)·δ·Σ|bᵢ|, and the slopes m is made of by up to
 ///   (|∂z/∂x| + |∂z/∂y|)·2δ/h (h the smallest altitude, in pixels).
-/// - **Interpolation**: a few f32 roundings of z on either side, 4 ULP(z), and 2 more for the
-///   projection itself: a [0,1] API's matrix gives window z directly where GL's goes through
-///   0.5·z_ndc + 0.5, so the same point's depth differs by an ULP or two between conventions.
+/// - **Transform**: each corner's window depth as another implementation computes it
+///   ([`depth_error`]: the clip rows' dot products, the divide and the viewport, absolute in
+///   the magnitudes they cancel, for GL's clip convention and a [0, 1] one), carried to the
+///   centre by the weights; and the interpolation's own roundings, 4 ULP(z).
 /// - **Polygon offset, one-sided**: m may be the specs' sqrt(∂x² + ∂y²) or the allowed
 ///   max(|∂x|, |∂y|) (ours: max), and r ∈ [2⁻ⁿ, 2·2⁻ⁿ] for fixed point (ours: one step) and
 ///   fixed for float ([`DepthFormat::offset_unit_range`]): a conformant offset lies between
@@ -79,6 +85,7 @@ pub struct Freedom {
     units: f64,
     clamp: f64,
     packed: bool,
+    deviations: umbra_case::Deviations,
 }
 
 impl Freedom {
@@ -92,6 +99,7 @@ impl Freedom {
             units: f64::from(units),
             clamp: f64::from(shadow.bias.polygon_offset_clamp),
             packed: profile.packed_depth,
+            deviations: profile.deviations,
         }
     }
 
@@ -110,7 +118,13 @@ impl Freedom {
             let r = f64::from(self.format.offset_unit(0.0));
             ((m_max - snap - diff).max(0.0), m_max + snap + diff, r, r)
         } else {
-            let (r_lo, r_hi) = self.format.offset_unit_range(z);
+            let (r_lo, mut r_hi) = self.format.offset_unit_range(z);
+            if self.deviations.has(umbra_case::Deviation::OffsetUnitX4) {
+                // The deviation's unit, where the format has codes (module note of Deviation).
+                if let Some(n) = self.format.fixed_bits() {
+                    r_hi = r_hi.max(4.0 / f64::from((1u32 << n) - 1));
+                }
+            }
             ((m_max - snap).max(0.0), dx.hypot(dy) + snap, r_lo, r_hi)
         };
         let ends = |a: f64, b: f64, k: f64| {
@@ -125,6 +139,21 @@ impl Freedom {
         } else if self.clamp < 0.0 {
             (lo, hi) = (lo.max(self.clamp), hi.max(self.clamp));
         }
+        if self
+            .deviations
+            .has(umbra_case::Deviation::OffsetVertexClamp)
+        {
+            // A vertex whose offset depth leaves [0, 1] keeps none of it; the fragments
+            // between keep part: anything from no offset to the whole.
+            let away = f64::from(self.conv.toward_far());
+            let leaves = t.z.iter().any(|&z| {
+                let moved = f64::from(z) + away * hi;
+                !(0.0..=1.0).contains(&moved)
+            });
+            if leaves {
+                (lo, hi) = (lo.min(0.0), hi.max(0.0));
+            }
+        }
         (lo, hi)
     }
 
@@ -132,17 +161,41 @@ impl Freedom {
     fn stored(&self, t: &Tri, e: [i64; 3], offset: (f64, f64)) -> (f64, f64) {
         let z = t.depth_at(e);
         let (dx, dy) = t.depth_slopes();
-        let err = (dx.abs() + dy.abs()) * SNAP_PX * t.weight_norm(e)
-            + 6.0 * f64::from(umbra_case::depth::f32_spacing(z as f32));
+        let norm = t.weight_norm(e);
+        // The plane's snapping and its corners' transform ([`depth_error`]), carried to the
+        // centre by the weights, and the interpolation's own roundings of z.
+        let err = (dx.abs() + dy.abs()) * SNAP_PX * norm
+            + t.depth_error_at(e)
+            + 4.0 * f64::from(umbra_case::depth::f32_spacing(z as f32));
         let away = f64::from(self.conv.toward_far());
         let (o1, o2) = (away * offset.0, away * offset.1);
-        let (lo, hi) = (z - err + o1.min(o2), z + err + o1.max(o2));
+        let (mut lo, mut hi) = (z - err + o1.min(o2), z + err + o1.max(o2));
         if self.packed {
             let pack = |d: f64| 2f64.powi(-24) * d.abs() * (1.0 + 1.0 / 254.0) + 255f64.powi(-4);
             let (lo, hi) = (lo.clamp(0.0, 1.0), hi.clamp(0.0, 1.0));
-            // The 24-bit depth test may keep a surface up to one step behind the nearest.
-            let d24 = 1.0 / f64::from((1u32 << 24) - 1);
-            return (lo - pack(lo) - d24, hi + pack(hi) + d24);
+            // The pass's depth test (a 16-bit renderbuffer for depth16, 24-bit otherwise:
+            // umbra-gl's es2_depth) may keep a surface up to one step behind the nearest.
+            let bits = if self.format == DepthFormat::Depth16 {
+                16
+            } else {
+                24
+            };
+            let step = 1.0 / f64::from((1u32 << bits) - 1);
+            return (lo - pack(lo) - step, hi + pack(hi) + step);
+        }
+        if self.deviations.has(umbra_case::Deviation::Z16SpanStep)
+            && self.format.fixed_bits() == Some(16)
+        {
+            // Up to 30 pixels of the truncated step's lost fraction, the depth lagging
+            // behind its slope along x (module note of the deviation).
+            let (dx, _) = t.depth_slopes();
+            let steps = dx.abs() * 65535.0;
+            let lag = 30.0 * (steps - steps.floor()) / 65535.0;
+            if dx > 0.0 {
+                lo -= lag;
+            } else {
+                hi += lag;
+            }
         }
         let (lo, hi) = if self.format.is_fixed() {
             (lo.clamp(0.0, 1.0), hi.clamp(0.0, 1.0))
@@ -221,6 +274,7 @@ pub fn render_face(
         };
     };
     let freedom = Freedom::new(conv, shadow, profile);
+    let holes = profile.deviations.has(umbra_case::Deviation::EdgeHoles);
     let forward = conv.toward_far() > 0.0;
     let clear = f64::from(conv.clear_depth());
     // Per texel: the nearest possible value, the farthest possible over the certain
@@ -258,6 +312,15 @@ pub fn render_face(
             for (_, t) in touching {
                 let offset = freedom.offset(t);
                 t.scan_near(rows.clone(), SNAP_PX, |x, y, e, coverage| {
+                    // Holes on edges (the deviation): a shared edge's centres, and those on a
+                    // clip fan's diagonal, only may be covered.
+                    let coverage = match coverage {
+                        Coverage::Pair(_) if holes => Coverage::Maybe,
+                        Coverage::Certain if holes && t.near_internal(e, HOLE_PX) => {
+                            Coverage::Maybe
+                        }
+                        c => c,
+                    };
                     let (lo, hi) = freedom.stored(t, e, offset);
                     let (near, far) = if forward { (lo, hi) } else { (hi, lo) };
                     let i = (y - rows.start) as usize * w as usize + x as usize;
@@ -397,12 +460,121 @@ pub fn setup_all(
         .iter()
         .map(|p| view_proj * p.extend(1.0))
         .collect();
+    // Judged renders: per vertex, the clip z and w rows' terms (Σ|mᵢ·pᵢ| and how many are
+    // non-zero), what bounds how far another implementation's transform of the same vertex
+    // may land ([`depth_error`]).
+    let rows: Vec<[Row; 2]> = if edges.is_some() {
+        let m = view_proj.as_dmat4();
+        geo.positions
+            .iter()
+            .map(|p| {
+                let p4 = p.as_dvec3().extend(1.0);
+                let row = |r: usize| {
+                    let terms = (0..4).map(|k| m.col(k)[r] * p4[k]);
+                    Row {
+                        sum: terms.clone().map(f64::abs).sum(),
+                        terms: terms.filter(|t| *t != 0.0).count() as u32,
+                    }
+                };
+                [row(2), row(3)]
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
     let mut tris = Vec::with_capacity(geo.triangles.len());
     for (i, t) in geo.triangles.iter().enumerate() {
         let kinds = edges.map_or([EdgeKind::Open; 3], |e| e[i]);
+        let first = tris.len();
         raster.setup(t.map(|k| clip[k as usize]), i as u32, kinds, &mut tris);
+        if !rows.is_empty() {
+            let src = t.map(|k| rows[k as usize]);
+            for tri in &mut tris[first..] {
+                tri.z_err = [0, 1, 2].map(|v| {
+                    // A clipped corner: the weighted sums of the source's, and the
+                    // clipper's interpolation (a difference, a product and a sum) on top.
+                    let lam = tri.weights[v].abs();
+                    let clipped = lam.max_element() < 1.0;
+                    let mix = |r: usize| Row {
+                        sum: lam.x * src[0][r].sum + lam.y * src[1][r].sum + lam.z * src[2][r].sum,
+                        terms: (0..3)
+                            .filter(|&k| lam[k] != 0.0)
+                            .map(|k| src[k][r].terms)
+                            .max()
+                            .unwrap_or(4)
+                            + if clipped { 3 } else { 0 },
+                    };
+                    depth_error(raster.conv, mix(0), mix(1), 1.0 / tri.inv_w[v], tri.z[v])
+                });
+            }
+        }
     }
     tris
+}
+
+/// One row of a vertex's clip transform: Σ|mₖ·pₖ| over its terms and how many are non-zero
+/// (an axis-aligned light view has two or three, a rotated one four).
+#[derive(Clone, Copy, Debug)]
+pub struct Row {
+    /// Σ|mₖ·pₖ|.
+    pub sum: f64,
+    /// Non-zero terms (each a rounding, and one more for each sum).
+    pub terms: u32,
+}
+
+/// How far another implementation's window depth of a vertex may lie from ours, for a vertex
+/// whose clip z and w rows are `z_row` and `w_row` ([`Row`]: the magnitudes the dot products
+/// cancel), with clip w `w` and window depth `z` in convention `conv`.
+///
+/// Each of z_c and w_c is a dot product of an uploaded matrix row with (p, 1), rounded within
+/// γₖ·Σ|mᵢ·pᵢ| of the exact value (k its non-zero terms, fused or not; GLSL 4.60 §4.7.1, Vulkan
+/// "Precision and Operation of SPIR-V Instructions"), by ours and by theirs, so the two
+/// differ by twice that; then the divide and the viewport transform, a few roundings of
+/// z_ndc and z. The error is absolute in the sums, not relative to the depth: where they
+/// cancel (a scene far from the origin; reversed depth's far values near 0 in GL's [−1, 1]
+/// clip space, where ½·z_ndc + ½ loses the bits ½ holds) the depth keeps only the precision
+/// of the terms. The judged render is in GL's clip convention and a [0, 1] API computes
+/// z' = ½(z_c + w_c) with its own rounding and no ½ on the way to the window, so the bound is
+/// the larger of the two (the [0, 1] one, about twice GL's, where nothing cancels).
+pub fn depth_error(conv: Convention, z_row: Row, w_row: Row, w: f64, z: f32) -> f64 {
+    const U: f64 = 1.0 / 16_777_216.0;
+    let gamma = |k: u32| f64::from(k) * U / (1.0 - f64::from(k) * U);
+    let w = w.abs().max(1e-30);
+    let ulp = |x: f64| f64::from(umbra_case::depth::f32_spacing(x as f32));
+    let z = f64::from(z);
+    let window = |z_row: Row, ndc: f64, scale: f64| {
+        let e_ndc =
+            2.0 * (gamma(z_row.terms) * z_row.sum + ndc.abs() * gamma(w_row.terms) * w_row.sum) / w
+                + 3.0 * ulp(ndc);
+        scale * e_ndc + ulp(z)
+    };
+    // This convention's rows, and the other's: ½(z + w) and w, or 2·z' − w and w (its own
+    // matrix, whose z row has terms where either of ours has).
+    let (own, other) = match conv.clip {
+        umbra_case::ClipDepth::MinusOneToOne => (
+            window(z_row, 2.0 * z - 1.0, 0.5),
+            window(
+                Row {
+                    sum: 0.5 * (z_row.sum + w_row.sum),
+                    terms: (z_row.terms + w_row.terms).min(4),
+                },
+                z,
+                1.0,
+            ),
+        ),
+        umbra_case::ClipDepth::ZeroToOne => (
+            window(z_row, z, 1.0),
+            window(
+                Row {
+                    sum: 2.0 * z_row.sum + w_row.sum,
+                    terms: (z_row.terms + w_row.terms).min(4),
+                },
+                2.0 * z - 1.0,
+                0.5,
+            ),
+        ),
+    };
+    own.max(other)
 }
 
 #[cfg(test)]

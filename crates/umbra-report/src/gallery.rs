@@ -87,6 +87,7 @@ pub fn section(results: &[RunResult], pictures: &Path) -> String {
             "t": thumb,
             "p": pics,
             "r": r.reason,
+            "d": r.diagnosis.as_ref().map(|d| d.message.clone()),
             "x": r.reproduce,
             "g": r.golden,
         }));
@@ -192,7 +193,7 @@ const SCRIPT: &str = r#"(function () {
   function open(k) {
     var r = data.runs[k];
     document.getElementById('g-title').textContent = r.s + ' ' + r.n;
-    document.getElementById('g-reason').textContent = r.r || '';
+    document.getElementById('g-reason').textContent = (r.r || '') + (r.d ? ' | consensus: ' + r.d : '');
     document.getElementById('g-reproduce').textContent = r.x;
     var box = document.getElementById('g-pictures');
     box.textContent = '';

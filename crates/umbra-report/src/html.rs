@@ -39,7 +39,8 @@ pub fn report(
          table{border-collapse:collapse}td,th{border:1px solid #ddd;padding:3px 6px;text-align:right}td:first-child{text-align:left}\
          .Pass,.ExpectedFail{color:#176b1c}.Fail,.Crash,.Timeout,.UnexpectedPass{color:#b00020;font-weight:bold}.Skip{color:#777}.Flake{color:#b26a00}\
          figure{display:inline-block;margin:4px}figure img{image-rendering:pixelated;max-width:320px;border:1px solid #ccc}\
-         .failure{border:1px solid #e0b4b4;background:#fff6f6;padding:8px;margin:12px 0}",
+         .failure{border:1px solid #e0b4b4;background:#fff6f6;padding:8px;margin:12px 0}\
+         .diagnosis{background:#eef4ff;padding:4px}.diagnosis.model{background:#fff3cd}",
     );
     s.push_str(crate::gallery::STYLE);
     s.push_str(
@@ -77,11 +78,16 @@ pub fn report(
         let dir = failures_dir.join(crate::names::file_name(&r.name));
         let _ = write!(
             s,
-            "<div class=\"failure\"><h3><span class=\"{}\">{}</span> {}</h3><p>{}</p><p>reproduce: <code>{}</code></p>{}{}{}{}{}</div>",
+            "<div class=\"failure\"><h3><span class=\"{}\">{}</span> {}</h3><p>{}</p>{}<p>reproduce: <code>{}</code></p>{}{}{}{}{}</div>",
             r.status.name(),
             r.status,
             esc(&r.name),
             esc(&r.reason),
+            r.diagnosis.as_ref().map_or(String::new(), |d| format!(
+                "<p class=\"diagnosis{}\"><b>consensus:</b> {}</p>",
+                if d.suspect_model() { " model" } else { "" },
+                esc(&d.message)
+            )),
             esc(&r.reproduce),
             img(&dir, "reference.png", "reference"),
             img(&dir, "color.png", "backend"),

@@ -39,6 +39,7 @@ pub fn report(
                 "name": r.name,
                 "metrics": r.metrics,
                 "failed": r.failed,
+                "diagnosis": r.diagnosis,
                 "reproduce": r.reproduce,
             })
         })

@@ -26,7 +26,7 @@ pub mod model;
 pub mod names;
 pub mod pareto;
 
-pub use model::{FailedCheck, Metrics, RunResult, Status, TimeBudget, TwinMetric};
+pub use model::{Diagnosis, FailedCheck, Metrics, RunResult, Status, TimeBudget, TwinMetric};
 
 /// Writes a conformance run's reports into `out/latest` and `out/runs/STAMP`: results.csv,
 /// failures.csv, errors.csv, twins.csv, drivers.txt, report.json, junit.xml, report.html.

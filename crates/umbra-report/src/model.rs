@@ -144,6 +144,11 @@ pub struct Metrics {
     /// The profile the run was judged for (`gl`, `gles3`, `gles2-packed`, `vulkan`).
     #[serde(default)]
     pub profile: String,
+    /// The effective profile its legal intervals were computed for (the profile with the
+    /// freedoms that cannot matter for the case dropped): runs of one point with the same
+    /// `judged_as` were held to the same intervals.
+    #[serde(default)]
+    pub judged_as: String,
     /// The backend's visibility target (`f32`, `unorm8`).
     #[serde(default)]
     pub visibility_storage: String,
@@ -209,9 +214,41 @@ pub struct RunResult {
     pub time_s: f64,
     /// The command that reproduces this run alone.
     pub reproduce: String,
+    /// For a failing run: how the other drivers of its profile answered where it failed
+    /// (the consensus diagnosis), when any other ran the point.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub diagnosis: Option<Diagnosis>,
+    /// Where the run broke the model (what the diagnosis compares; not reported itself).
+    #[serde(skip)]
+    pub fingerprint: Option<umbra_compare::consensus::Fingerprint>,
     /// The multi-line description of a judged run (terminal and logs only).
     #[serde(skip)]
     pub details: String,
+}
+
+/// The consensus diagnosis of a failing run: whether the other drivers judged against the
+/// same legal intervals (the same case point and effective profile) fail the same way at the
+/// same pixels. Every correct implementation gives a legal answer, so when every driver of a
+/// profile answers alike where the judge says none may, the judge's model is the first
+/// suspect; when the others answer legally there, the driver is.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Diagnosis {
+    /// Drivers judged against the same intervals that ran the point, this one included.
+    pub drivers: usize,
+    /// Of those, how many fail the same way at the same pixels, this one included.
+    pub agree: usize,
+    /// The other drivers that answer legally at those pixels.
+    pub disagree: Vec<String>,
+    /// What the terminal and the reports show.
+    pub message: String,
+}
+
+impl Diagnosis {
+    /// Whether every driver of the profile fails alike (at least two of them): umbra's
+    /// model, not a driver, is the first suspect.
+    pub fn suspect_model(&self) -> bool {
+        self.drivers >= 2 && self.agree == self.drivers
+    }
 }
 
 /// Where a conformance run's time went, summed over its runs (worker time, not wall).

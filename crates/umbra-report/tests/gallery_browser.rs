@@ -44,6 +44,8 @@ fn run(backend: &str, case: &str, status: Status) -> RunResult {
         golden: Some("unchanged".into()),
         time_s: 0.1,
         reproduce: format!("cargo run --bin umbra -- render cases/{case}.json --backend {backend}"),
+        diagnosis: None,
+        fingerprint: None,
         details: String::new(),
     }
 }

@@ -4,7 +4,7 @@
 
 use std::process::ExitCode;
 
-use umbra_runner::commands::{bisect, conformance, drivers, reduce, render, selftest, sweep};
+use umbra_runner::commands::{bisect, conformance, drivers, reduce, render, selftest, soak, sweep};
 use umbra_runner::{cli, harness};
 
 fn main() -> ExitCode {
@@ -20,6 +20,7 @@ fn main() -> ExitCode {
             "render" => render::main(&args),
             "conformance" => conformance::main(&args),
             "selftest" => selftest::main(&args),
+            "soak" => soak::main(&args),
             "sweep" => sweep::main(&args),
             "drivers" => drivers::main(&args),
             "bisect" => bisect::main(&args),

@@ -85,12 +85,16 @@ impl Backend for WgpuBackend {
         if needs.polygon_offset_clamp && !self.gpu.depth_bias_clamp {
             return Support::Unsupported("a polygon-offset clamp needs wgpu's DEPTH_BIAS_CLAMP downlevel capability, which this adapter lacks (wgpu's GL backend does not offer it)".into());
         }
+        if needs.fractional_offset_units {
+            return Support::Unsupported("wgpu's depth bias constant (DepthBiasState::constant) is an integer, and this case's polygon_offset units is not a whole number".into());
+        }
         Support::Supported
     }
 
     fn render(&mut self, run: &Prepared) -> Result<Frame, BackendError> {
         let units = run.case().shadow.bias.polygon_offset[1];
         if units.fract() != 0.0 {
+            // `supports` refuses such a case; a caller that renders anyway gets the same reason.
             return Err(BackendError::Unsupported(format!(
                 "wgpu's depth bias constant is an integer; polygon_offset units {units} is not"
             )));

@@ -36,6 +36,9 @@ use umbra_report::{Metrics, RunResult, Status, TimeBudget};
 /// A point's swept values, `(path, value)` in axis order.
 type SweepValues = Vec<(String, serde_json::Value)>;
 
+/// A loaded point: its id, its swept values and its case as JSON.
+type PointPlan = (String, SweepValues, std::sync::Arc<serde_json::Value>);
+
 /// Worker start-up (spawn to hello) and, within it, context or device creation, summed over
 /// every worker of the run, in µs: part of the harness overhead the summary reports.
 static WORKER_START_US: AtomicU64 = AtomicU64::new(0);
@@ -49,6 +52,9 @@ struct Planned {
     index: usize,
     id: String,
     values: SweepValues,
+    /// The point's case as JSON, defaults included: what expectations' `@when` conditions
+    /// read (shared by the point's runs on every backend).
+    case: std::sync::Arc<serde_json::Value>,
 }
 
 impl Planned {
@@ -71,11 +77,34 @@ struct Settings {
 
 /// Runs the command; returns the process exit code.
 pub fn main(args: &Args) -> i32 {
+    run(args).code
+}
+
+/// What a conformance run ended with: its exit code and every run's result (empty when it
+/// could not start).
+pub struct Finished {
+    /// 0 as expected, 1 a regression, 125 could not run.
+    pub code: i32,
+    /// Every run, sorted by name, with its final status.
+    pub results: Vec<RunResult>,
+}
+
+impl From<i32> for Finished {
+    fn from(code: i32) -> Finished {
+        Finished {
+            code,
+            results: Vec::new(),
+        }
+    }
+}
+
+/// Runs the conformance job as `main` does and returns its results too (for `umbra soak`).
+pub fn run(args: &Args) -> Finished {
     let build = match crate::harness::mesa_build::select(args.value("mesa")) {
         Ok(b) => b,
         Err(e) => {
             eprintln!("error: {e}");
-            return 125;
+            return 125.into();
         }
     };
     let cases_dir = PathBuf::from(args.value("cases").unwrap_or("cases"));
@@ -88,25 +117,25 @@ pub fn main(args: &Args) -> i32 {
         Ok(b) => b,
         Err(e) => {
             eprintln!("error: {e}");
-            return 125;
+            return 125.into();
         }
     };
     let shard = match args.value("shard").map(parse_shard).transpose() {
         Ok(s) => s.unwrap_or((0, 1)),
-        Err(e) => return usage(&e),
+        Err(e) => return usage(&e).into(),
     };
     let jobs = match args.value("jobs").map(str::parse::<usize>).transpose() {
         Ok(j) => j
             .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
             .max(1),
-        Err(_) => return usage("--jobs takes a positive number"),
+        Err(_) => return usage("--jobs takes a positive number").into(),
     };
     let timeout = match args.value("timeout").map(str::parse::<u64>).transpose() {
         Ok(t) => Duration::from_secs(t.unwrap_or(300)),
-        Err(_) => return usage("--timeout takes whole seconds"),
+        Err(_) => return usage("--timeout takes whole seconds").into(),
     };
     if let Err(e) = crate::harness::memory_limit::select(args.value("max-memory"), jobs) {
-        return usage(&e);
+        return Finished::from(usage(&e));
     }
     let expectations = match Expectations::load(Path::new(
         args.value("expectations").unwrap_or("expectations"),
@@ -114,24 +143,24 @@ pub fn main(args: &Args) -> i32 {
         Ok(e) => e,
         Err(e) => {
             eprintln!("error: {e}");
-            return 125;
+            return 125.into();
         }
     };
     let files = match umbra_case::case_files(&cases_dir) {
         Ok(f) if !f.is_empty() => f,
         Ok(_) => {
             eprintln!("error: no *.json case under {}", cases_dir.display());
-            return 125;
+            return 125.into();
         }
         Err(e) => {
             eprintln!("error: cannot read {}: {e}", cases_dir.display());
-            return 125;
+            return 125.into();
         }
     };
 
     // Plan.
     let mut results: Vec<RunResult> = Vec::new();
-    let mut points: Vec<(PathBuf, Vec<(String, SweepValues)>)> = Vec::new();
+    let mut points: Vec<(PathBuf, Vec<PointPlan>)> = Vec::new();
     let mut monotone: Vec<Monotone> = Vec::new();
     for f in &files {
         match umbra_case::load_file(f) {
@@ -139,7 +168,12 @@ pub fn main(args: &Args) -> i32 {
                 monotone.extend(Monotone::of(&p));
                 points.push((
                     f.clone(),
-                    p.iter().map(|p| (p.id(), p.values.clone())).collect(),
+                    p.iter()
+                        .map(|p| {
+                            let case = serde_json::to_value(&p.case).unwrap_or_default();
+                            (p.id(), p.values.clone(), std::sync::Arc::new(case))
+                        })
+                        .collect(),
                 ));
             }
             Err(e) => results.push(RunResult {
@@ -155,6 +189,8 @@ pub fn main(args: &Args) -> i32 {
                 golden: None,
                 time_s: 0.0,
                 reproduce: format!("cargo run --bin umbra -- render {}", f.display()),
+                diagnosis: None,
+                fingerprint: None,
                 details: String::new(),
             }),
         }
@@ -162,13 +198,14 @@ pub fn main(args: &Args) -> i32 {
     let mut plan = Vec::new();
     for b in &backends {
         for (file, ids) in &points {
-            for (index, (id, values)) in ids.iter().enumerate() {
+            for (index, (id, values, case)) in ids.iter().enumerate() {
                 let p = Planned {
                     backend: b.clone(),
                     file: file.clone(),
                     index,
                     id: id.clone(),
                     values: values.clone(),
+                    case: case.clone(),
                 };
                 if crate::glob::matches(&filter, id) || crate::glob::matches(&filter, &p.name()) {
                     plan.push(p);
@@ -187,7 +224,7 @@ pub fn main(args: &Args) -> i32 {
             "error: --filter {filter:?} (shard {}/{}) selects no run",
             shard.0, shard.1
         );
-        return 125;
+        return 125.into();
     }
 
     // Execute.
@@ -267,7 +304,7 @@ pub fn main(args: &Args) -> i32 {
         Ok(d) => d,
         Err(_) => {
             eprintln!("error: a worker thread panicked");
-            return 125;
+            return 125.into();
         }
     };
     progress.close();
@@ -280,6 +317,7 @@ pub fn main(args: &Args) -> i32 {
     for m in &monotone {
         m.judge(&mut results);
     }
+    crate::judge::consensus::diagnose(&mut results);
 
     // Report.
     let budget = TimeBudget::of(
@@ -302,7 +340,7 @@ pub fn main(args: &Args) -> i32 {
         &budget,
     ) {
         eprintln!("error: cannot write reports under {}: {e}", out.display());
-        return 125;
+        return 125.into();
     }
     let count = |name: &str| results.iter().filter(|r| r.status.name() == name).count();
     let regressions: Vec<&RunResult> = results
@@ -321,6 +359,18 @@ pub fn main(args: &Args) -> i32 {
             r.status,
             r.name,
             first_line(&r.reason)
+        );
+        if let Some(d) = &r.diagnosis {
+            println!("    {}", d.message);
+        }
+    }
+    let suspects = results
+        .iter()
+        .filter(|r| r.diagnosis.as_ref().is_some_and(|d| d.suspect_model()))
+        .count();
+    if suspects > 0 {
+        println!(
+            "consensus: {suspects} failing run(s) fail the same way on every driver judged against the same intervals: suspect umbra's model there before the drivers"
         );
     }
     let passed = count("Pass") + count("ExpectedFail") + count("Flake");
@@ -388,7 +438,7 @@ pub fn main(args: &Args) -> i32 {
         regressions.len(),
         count("Skip")
     );
-    if !refused.is_empty() {
+    let code = if !refused.is_empty() {
         for r in &refused {
             eprintln!("error: {r}");
         }
@@ -404,7 +454,8 @@ pub fn main(args: &Args) -> i32 {
         125
     } else {
         0
-    }
+    };
+    Finished { code, results }
 }
 
 /// A case's `expect.error_falls_along`: runs of one backend that differ only in that axis,
@@ -692,6 +743,8 @@ fn run_group(
                     repeat: None,
                     no_twins: false,
                     gallery: Some(settings.gallery.clone()),
+                    deviation: Some(expectations.deviations(&name, &p.case).names())
+                        .filter(|n| !n.is_empty()),
                 };
                 let first = attempt(&mut worker, &start_worker, &req, settings.timeout);
                 if first.status.is_failure() {
@@ -722,8 +775,11 @@ fn run_group(
             details,
             failed,
             golden,
+            fingerprint,
+            under_deviation,
         } = outcome;
-        let (status, expected) = expectations.apply(&name, raw, &failed);
+        let (status, expected) =
+            expectations.apply(&name, &p.case, raw, &failed, under_deviation.as_deref());
         let reason = match (&status, expected) {
             (Status::ExpectedFail | Status::UnexpectedPass, Some(why)) => {
                 format!("expected: {why}; got: {reason}")
@@ -749,6 +805,8 @@ fn run_group(
                 p.backend,
                 p.id
             ),
+            diagnosis: None,
+            fingerprint,
             details,
         };
         if let Ok(mut d) = done.lock() {
@@ -785,6 +843,8 @@ struct Attempt {
     details: String,
     failed: Vec<umbra_report::FailedCheck>,
     golden: Option<String>,
+    fingerprint: Option<umbra_compare::consensus::Fingerprint>,
+    under_deviation: Option<Vec<umbra_report::FailedCheck>>,
 }
 
 impl Attempt {
@@ -796,6 +856,8 @@ impl Attempt {
             details: String::new(),
             failed: Vec::new(),
             golden: None,
+            fingerprint: None,
+            under_deviation: None,
         }
     }
 }
@@ -854,5 +916,7 @@ fn from_report(r: RunReport) -> Attempt {
         details: r.details,
         failed: r.failed,
         golden: r.golden,
+        fingerprint: r.fingerprint,
+        under_deviation: r.under_deviation,
     }
 }

@@ -7,4 +7,5 @@ pub mod drivers;
 pub mod reduce;
 pub mod render;
 pub mod selftest;
+pub mod soak;
 pub mod sweep;

@@ -153,6 +153,7 @@ impl Judge {
             repeat: None,
             no_twins: true,
             gallery: None,
+            deviation: None,
         };
         let v = match w.run(&req, self.timeout) {
             Reply::Report(r) => match r.outcome.as_str() {

@@ -1,6 +1,9 @@
 //! `umbra render CASE [--backend ID] [-o DIR] [--point GLOB]`: one case on one backend, for a
 //! person at a desk. Writes colour, visibility, truth, error heat map and shadow map PNGs and
-//! prints the error figures and timings of each sweep point.
+//! prints the error figures and timings of each sweep point. A run that breaks what the specs
+//! allow lists its first illegal pixels with their intervals, and `--explain X,Y` prints the
+//! reference's judged lookup at one pixel step by step: the evidence for a bug report, or
+//! for a fix of umbra's model.
 
 use std::path::{Path, PathBuf};
 
@@ -90,6 +93,10 @@ pub fn main(args: &Args) -> i32 {
         }
         estimated = estimated.max(e.total());
     }
+    let explain = match args.value("explain").map(parse_pixel).transpose() {
+        Ok(p) => p,
+        Err(e) => return usage_error(&e),
+    };
     crate::harness::memory_limit::watch_self(budget);
     let many = selected.len() > 1;
     let mut code = 0;
@@ -107,6 +114,9 @@ pub fn main(args: &Args) -> i32 {
                 for p in &j.problems {
                     println!("  problem: {p}");
                     code = 1;
+                }
+                if explain.is_some() || !j.fingerprint.is_empty() {
+                    print!("{}", explain_pixels(&j, backend.profile(), explain));
                 }
                 let dir = if many {
                     out.join(umbra_report::names::file_name(&id))
@@ -135,6 +145,140 @@ pub fn main(args: &Args) -> i32 {
         );
     }
     code
+}
+
+/// How many illegal pixels `render` lists.
+const LISTED: usize = 12;
+
+/// The first illegal pixels of a judged run, each with its value and what the specs allow
+/// there, and with `pixel` the reference's step-by-step trace of that pixel's judged lookup
+/// (why its interval is what it is).
+fn explain_pixels(
+    j: &crate::judge::run::Judged,
+    profile: umbra_case::Profile,
+    pixel: Option<(u32, u32)>,
+) -> String {
+    use std::fmt::Write as _;
+    let profile = profile.effective_for(j.prepared.case());
+    let (basis, trace) = umbra_ref::explain(
+        &j.prepared,
+        umbra_case::ClipDepth::MinusOneToOne,
+        profile,
+        pixel,
+    );
+    let w = j.frame.width as usize;
+    let mut s = String::new();
+    let failed = &j.fingerprint.frame;
+    if failed.total > 0 {
+        let _ = writeln!(
+            s,
+            "  illegal pixels ({} in all; x, y top-left, the backend's value, the interval a conformant {} implementation may return, why it is that wide):",
+            failed.total,
+            profile.name()
+        );
+    }
+    for e in failed.entries.iter().take(LISTED) {
+        let i = (*e >> 1) as usize;
+        let l = basis.legal[i];
+        let _ = writeln!(
+            s,
+            "    ({}, {}): {} not in [{}, {}] ({}); the reference gives {}",
+            i % w,
+            i / w,
+            j.frame.visibility[i],
+            l.lo,
+            l.hi,
+            flag_names(l.flags),
+            basis.frame.visibility[i],
+        );
+    }
+    if let (Some(map), Some(failed)) = (&j.frame.shadow_map, &j.fingerprint.map) {
+        if failed.total > 0 {
+            let _ = writeln!(
+                s,
+                "  illegal shadow-map texels ({} in all; layer, x, y top-left, the stored value, the range a conformant implementation may store):",
+                failed.total
+            );
+        }
+        let per_layer = (map.width * map.height) as usize;
+        for e in failed.entries.iter().take(LISTED) {
+            let k = (*e >> 1) as usize;
+            let (layer, t) = (k / per_layer, k % per_layer);
+            let (lo, hi) = basis.map.get(k).copied().unwrap_or((f32::NAN, f32::NAN));
+            let _ = writeln!(
+                s,
+                "    layer {layer} ({}, {}): {} not in [{lo}, {hi}]; the reference stores {}",
+                t % map.width as usize,
+                t / map.width as usize,
+                map.values[k],
+                basis
+                    .frame
+                    .shadow_map
+                    .as_ref()
+                    .and_then(|m| m.values.get(k))
+                    .copied()
+                    .unwrap_or(f32::NAN),
+            );
+        }
+    }
+    if let Some((x, y)) = pixel {
+        let i = y as usize * w + x as usize;
+        match (j.frame.visibility.get(i), basis.legal.get(i)) {
+            (Some(v), Some(l)) => {
+                let _ = writeln!(
+                    s,
+                    "  pixel ({x}, {y}): the backend gives {v}, legal [{}, {}] ({}); the reference's judged lookup:",
+                    l.lo,
+                    l.hi,
+                    flag_names(l.flags)
+                );
+                for line in trace.lines() {
+                    let _ = writeln!(s, "    {line}");
+                }
+            }
+            _ => {
+                let _ = writeln!(
+                    s,
+                    "  pixel ({x}, {y}) is outside the {}x{} frame",
+                    j.frame.width, j.frame.height
+                );
+            }
+        }
+    }
+    s
+}
+
+/// The names of a pixel's ambiguity flags, or `exact`.
+fn flag_names(flags: u8) -> String {
+    use umbra_ref::lookup::ambiguity as a;
+    let names: Vec<&str> = [
+        (a::DEPTH_TIE, "depth tie"),
+        (a::TEXEL_BOUNDARY, "texel"),
+        (a::FILTER, "filter"),
+        (a::POSITION, "position"),
+        (a::COVERAGE, "coverage"),
+        (a::SEAM, "seam"),
+        (a::SURFACE, "other surface"),
+    ]
+    .into_iter()
+    .filter(|(f, _)| flags & f != 0)
+    .map(|(_, n)| n)
+    .collect();
+    if names.is_empty() {
+        "exact".into()
+    } else {
+        names.join(", ")
+    }
+}
+
+/// `X,Y` → (x, y).
+fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("--explain takes a pixel as X,Y (top-left origin), got {s:?}");
+    let (x, y) = s.split_once(',').ok_or_else(bad)?;
+    Ok((
+        x.trim().parse().map_err(|_| bad())?,
+        y.trim().parse().map_err(|_| bad())?,
+    ))
 }
 
 fn usage_error(msg: &str) -> i32 {

@@ -372,6 +372,7 @@ pub fn main(args: &Args) -> i32 {
                 repeat: Some(repeat),
                 no_twins: false,
                 gallery: None,
+                deviation: None,
             };
             let (result, skipped) = match w.run(&req, timeout) {
                 Reply::Report(r) => match (r.outcome.as_str(), r.measured) {
@@ -466,6 +467,7 @@ pub fn measure_backends(
                     repeat: Some(repeat),
                     no_twins: false,
                     gallery: None,
+                    deviation: None,
                 };
                 match w.run(&req, timeout) {
                     Reply::Report(r) => r.measured.ok_or(r.reason),

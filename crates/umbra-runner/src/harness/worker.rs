@@ -15,7 +15,7 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 
 use crate::args::Args;
-use crate::judge::run::{Outcome, describe, run_point};
+use crate::judge::run::{Outcome, describe, run_point, run_point_as};
 use umbra_report::Metrics;
 
 /// A request for one run.
@@ -40,6 +40,11 @@ pub struct Request {
     /// reference, truth, golden; none: do not write).
     #[serde(default)]
     pub gallery: Option<PathBuf>,
+    /// Modelled driver deviations ([`umbra_case::Deviation`] names joined by `+`): a failing
+    /// run is judged again with them allowed, and the checks that still fail are reported
+    /// ([`RunReport::under_deviation`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub deviation: Option<String>,
 }
 
 /// What one run produced (the raw outcome; expectations are the parent's business).
@@ -61,6 +66,14 @@ pub struct RunReport {
     /// The checks a failing run failed, with their pixel counts (what expectations match).
     #[serde(default)]
     pub failed: Vec<umbra_report::FailedCheck>,
+    /// Where a judged run broke the model, when it did anywhere (the consensus diagnosis
+    /// compares it across drivers).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fingerprint: Option<umbra_compare::consensus::Fingerprint>,
+    /// For a failing run of a request with a deviation: the checks that still fail when it is
+    /// judged with the deviation allowed (empty: the deviation explains the failure).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub under_deviation: Option<Vec<umbra_report::FailedCheck>>,
 }
 
 /// Runs the worker loop; returns the exit code.
@@ -216,6 +229,17 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             },
         };
     }
+    let deviations = match umbra_case::Deviations::parse(req.deviation.as_deref().unwrap_or("")) {
+        Ok(d) => d,
+        Err(d) => {
+            return RunReport {
+                outcome: "fail".into(),
+                reason: format!("unknown deviation {d:?} in the request"),
+                ..Default::default()
+            };
+        }
+    };
+    let again = (!deviations.is_empty()).then(|| (deviations, point.clone()));
     match run_point(backend, point, !req.no_twins) {
         Outcome::Skip(why) => RunReport {
             outcome: "skip".into(),
@@ -250,7 +274,8 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 }),
                 illegal: j.agreement.as_ref().map(|a| a.illegal),
                 reference: j.agreement.clone(),
-                profile: backend.profile().name().into(),
+                profile: backend.profile().name(),
+                judged_as: backend.profile().effective_for(j.prepared.case()).name(),
                 visibility_storage: j.frame.visibility_storage.name().into(),
                 ssim: j.ssim,
                 ssim_golden: None,
@@ -347,7 +372,19 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                     );
                 }
             }
+            // Judged again under the deviation the run's expectation names: what still fails
+            // is what the deviation does not explain.
+            let under_deviation = again.filter(|_| failing).map(|(d, point)| {
+                match run_point_as(backend, point, !req.no_twins, d) {
+                    Outcome::Done(j) => j.failed,
+                    Outcome::Skip(why) | Outcome::Error(why) => vec![umbra_report::FailedCheck {
+                        check: format!("render ({why})"),
+                        count: 1,
+                    }],
+                }
+            });
             RunReport {
+                under_deviation,
                 outcome: if failing {
                     "fail".into()
                 } else {
@@ -359,6 +396,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 golden,
                 measured: None,
                 failed,
+                fingerprint: (!j.fingerprint.is_empty()).then(|| j.fingerprint.clone()),
             }
         }
     }

@@ -26,6 +26,20 @@
 //! so `mesa=22.3` is any 22.3.x) against the Mesa version the driver reports, or
 //! `renderer=GLOB` against its renderer string. `@applies all` lifts the condition. A
 //! backend with no Mesa version (the reference) matches no `mesa` term.
+//!
+//! **Expectations by cause.** A name glob pins a deviation to the cases someone has seen it
+//! on; a user's new case with the same technique would report it as a bare regression. A
+//! line `@when TERM...` makes the lines after it (to the next `@when`, or `@when any`) match
+//! only runs whose case point satisfies every term ([`Condition`]): `PATH=VALUE`,
+//! `PATH!=VALUE`, `PATH<VALUE`, `PATH>VALUE` (also `<=`, `>=`) over the point's JSON, dotted
+//! as sweeps are (`shadow.bias.polygon_offset[1]!=0`, `shadow.format=depth16`,
+//! `light.point!=null`). And the status `Deviation:NAME` expects the failure that a modelled
+//! driver deviation explains ([`umbra_case::Deviation`]): the run is judged again with the
+//! deviation's freedom added, and it is the expected failure only if that judgement passes
+//! every check; anything the deviation does not explain is still a regression. Under
+//! `@when`, a run that passes is a pass (a technique that can show a deviation does not
+//! show it on every scene); only a name-pinned expectation turns a pass into
+//! `UnexpectedPass`.
 
 use std::fmt;
 use std::path::Path;
@@ -43,6 +57,9 @@ pub enum Expected {
     Timeout,
     /// The backend cannot run it.
     Skip,
+    /// A failure that the modelled deviation explains completely: judged again with its
+    /// freedom added, the run passes every check.
+    Deviation(umbra_case::Deviation),
 }
 
 /// One check of an expected failure and the most pixels it may fail on.
@@ -73,6 +90,21 @@ impl Expected {
             "Crash" => return Ok(Expected::Crash),
             "Timeout" => return Ok(Expected::Timeout),
             "Skip" => return Ok(Expected::Skip),
+            _ if s.starts_with("Deviation:") => {
+                let name = &s["Deviation:".len()..];
+                return umbra_case::Deviation::parse(name)
+                    .map(Expected::Deviation)
+                    .ok_or_else(|| {
+                        let known: Vec<&str> = umbra_case::Deviation::ALL
+                            .iter()
+                            .map(|d| d.name())
+                            .collect();
+                        format!(
+                            "unknown deviation {name:?}; the modelled deviations are {}",
+                            known.join(", ")
+                        )
+                    });
+            }
             "Fail" => {
                 return Err(
                     "an expected failure must say what fails: Fail:CHECK<=N[+CHECK<=N]... (copy it from the run's `failed:` signature)"
@@ -83,7 +115,7 @@ impl Expected {
         }
         let Some(sig) = s.strip_prefix("Fail:") else {
             return Err(format!(
-                "status {s:?} is not one of Fail:CHECK<=N[+...], Crash, Timeout, Skip"
+                "status {s:?} is not one of Fail:CHECK<=N[+...], Deviation:NAME, Crash, Timeout, Skip"
             ));
         };
         let mut bounds = Vec::new();
@@ -115,7 +147,7 @@ impl Expected {
     /// The raw status this expectation is about.
     fn status(&self) -> &'static str {
         match self {
-            Expected::Fail(_) => "Fail",
+            Expected::Fail(_) | Expected::Deviation(_) => "Fail",
             Expected::Crash => "Crash",
             Expected::Timeout => "Timeout",
             Expected::Skip => "Skip",
@@ -133,6 +165,7 @@ impl fmt::Display for Expected {
                     .collect();
                 write!(f, "Fail:{}", parts.join("+"))
             }
+            Expected::Deviation(d) => write!(f, "Deviation:{}", d.name()),
             other => f.write_str(other.status()),
         }
     }
@@ -148,7 +181,7 @@ pub fn signature(failed: &[umbra_report::FailedCheck]) -> String {
 }
 
 /// One expectation line.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Expectation {
     /// Glob over the run name.
     pub pattern: String,
@@ -162,6 +195,112 @@ pub struct Expectation {
     pub file: String,
     /// The drivers it applies to (from the `@applies` line above it; empty: all).
     pub applies: Selector,
+    /// The case points it applies to (from the `@when` line above it; empty: all).
+    pub when: Condition,
+}
+
+/// The case points an expectation applies to (`@when TERM...`): every term must hold. An
+/// expectation under a condition, `always` included, names a cause rather than cases.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Condition {
+    /// `(path, operator, value)`.
+    pub terms: Vec<(String, String, serde_json::Value)>,
+    /// `@when always`: a cause that can show on any case point.
+    pub always: bool,
+}
+
+impl Condition {
+    /// Parses the terms of a `@when` line (`any` alone: no condition; `always`: every case
+    /// point, as a cause).
+    pub fn parse(text: &str) -> Result<Condition, String> {
+        let mut terms = Vec::new();
+        let mut always = false;
+        for t in text.split_whitespace() {
+            if t == "any" {
+                continue;
+            }
+            if t == "always" {
+                always = true;
+                continue;
+            }
+            let Some((at, op)) = ["!=", "<=", ">=", "=", "<", ">"]
+                .into_iter()
+                .find_map(|op| t.find(op).map(|at| (at, op)))
+            else {
+                return Err(format!(
+                    "@when term {t:?} is not PATH=VALUE (or !=, <, >, <=, >=), e.g. shadow.bias.polygon_offset[1]!=0"
+                ));
+            };
+            let (path, value) = (&t[..at], &t[at + op.len()..]);
+            if path.is_empty() || value.is_empty() {
+                return Err(format!("@when term {t:?} needs a path and a value"));
+            }
+            // A value is JSON where it parses (0, 1.5, null, "x"), else a bare word.
+            let value = serde_json::from_str(value)
+                .unwrap_or_else(|_| serde_json::Value::String(value.to_string()));
+            terms.push((path.to_string(), op.to_string(), value));
+        }
+        Ok(Condition { terms, always })
+    }
+
+    /// Whether case point `case` (as JSON, defaults included) satisfies every term; a path the
+    /// case lacks reads as null.
+    pub fn holds(&self, case: &serde_json::Value) -> bool {
+        use std::cmp::Ordering;
+        self.terms.iter().all(|(path, op, want)| {
+            let have = umbra_case::get_path(case, path).unwrap_or(&serde_json::Value::Null);
+            let order = match (have.as_f64(), want.as_f64()) {
+                (Some(a), Some(b)) => a.partial_cmp(&b),
+                _ => same(have, want).then_some(Ordering::Equal),
+            };
+            match op.as_str() {
+                "=" => order == Some(Ordering::Equal),
+                "!=" => order != Some(Ordering::Equal),
+                "<" => order == Some(Ordering::Less),
+                ">" => order == Some(Ordering::Greater),
+                "<=" => matches!(order, Some(Ordering::Less | Ordering::Equal)),
+                _ => matches!(order, Some(Ordering::Greater | Ordering::Equal)),
+            }
+        })
+    }
+
+    /// Whether there is no condition (the expectation names cases, not a cause).
+    pub fn is_empty(&self) -> bool {
+        self.terms.is_empty() && !self.always
+    }
+}
+
+/// JSON equality with numbers compared by value (`0` is `0.0`), so `[0, 0]` matches a case's
+/// `[0.0, 0.0]`.
+fn same(a: &serde_json::Value, b: &serde_json::Value) -> bool {
+    use serde_json::Value;
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => x.as_f64() == y.as_f64(),
+        (Value::Array(x), Value::Array(y)) => {
+            x.len() == y.len() && x.iter().zip(y).all(|(p, q)| same(p, q))
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            x.len() == y.len() && x.iter().all(|(k, v)| y.get(k).is_some_and(|w| same(v, w)))
+        }
+        _ => a == b,
+    }
+}
+
+impl fmt::Display for Condition {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.terms.is_empty() {
+            return f.write_str(if self.always { "always" } else { "any" });
+        }
+        let parts: Vec<String> = self
+            .terms
+            .iter()
+            .map(|(p, op, v)| match v {
+                serde_json::Value::String(s) => format!("{p}{op}{s}"),
+                v => format!("{p}{op}{v}"),
+            })
+            .collect();
+        f.write_str(&parts.join(" "))
+    }
 }
 
 /// What a backend's driver is, for `@applies` ([`Selector`]).
@@ -313,6 +452,7 @@ impl Expectations {
         for f in files {
             let text = std::fs::read_to_string(&f).map_err(|e| format!("{}: {e}", f.display()))?;
             let mut applies = Selector::default();
+            let mut when = Condition::default();
             for (n, line) in text.lines().enumerate() {
                 let line = line.trim();
                 if line.is_empty() || line.starts_with('#') {
@@ -321,6 +461,10 @@ impl Expectations {
                 let source = format!("{}:{}", f.display(), n + 1);
                 if let Some(rest) = line.strip_prefix("@applies") {
                     applies = Selector::parse(rest).map_err(|e| format!("{source}: {e}"))?;
+                    continue;
+                }
+                if let Some(rest) = line.strip_prefix("@when") {
+                    when = Condition::parse(rest).map_err(|e| format!("{source}: {e}"))?;
                     continue;
                 }
                 let mut parts = line.splitn(3, ',');
@@ -343,6 +487,7 @@ impl Expectations {
                     source,
                     file: f.display().to_string(),
                     applies: applies.clone(),
+                    when: when.clone(),
                 });
             }
         }
@@ -372,28 +517,80 @@ impl Expectations {
         out
     }
 
-    /// The first expectation whose pattern matches `name`.
-    pub fn find(&self, name: &str) -> Option<&Expectation> {
+    /// The first expectation whose pattern matches `name` and whose `@when` condition holds
+    /// for its case point `case` (JSON).
+    pub fn find(&self, name: &str, case: &serde_json::Value) -> Option<&Expectation> {
         self.0
             .iter()
-            .find(|e| crate::glob::matches(&e.pattern, name))
+            .find(|e| crate::glob::matches(&e.pattern, name) && e.when.holds(case))
     }
 
-    /// The final status of a raw outcome for `name` that failed the checks `failed`, and
-    /// why (the expectation's reason and, for a failure that does not match its signature,
-    /// how it differs).
+    /// The deviations a run must be judged under as well, when the expectation that matches
+    /// it names one: that one and every other `Deviation:` expectation that matches the run
+    /// (a run can show two known deviations at once). Empty otherwise; the worker is asked to
+    /// judge a run again only then.
+    pub fn deviations(&self, name: &str, case: &serde_json::Value) -> umbra_case::Deviations {
+        if !matches!(
+            self.find(name, case).map(|e| &e.expected),
+            Some(Expected::Deviation(_))
+        ) {
+            return umbra_case::Deviations::NONE;
+        }
+        self.0
+            .iter()
+            .filter(|e| crate::glob::matches(&e.pattern, name) && e.when.holds(case))
+            .filter_map(|e| match e.expected {
+                Expected::Deviation(d) => Some(d),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// The final status of a raw outcome for run `name` of case point `case` that failed the
+    /// checks `failed` (and, judged again under the deviation its expectation names, the
+    /// checks `under_deviation`), and why: the expectation's reason and, for a failure that
+    /// does not match it, how it differs.
     pub fn apply(
         &self,
         name: &str,
+        case: &serde_json::Value,
         raw: Status,
         failed: &[umbra_report::FailedCheck],
+        under_deviation: Option<&[umbra_report::FailedCheck]>,
     ) -> (Status, Option<String>) {
-        let Some(e) = self.find(name) else {
+        let Some(e) = self.find(name, case) else {
             return (raw, None);
         };
-        let why = format!("{} ({}, {})", e.reason, e.expected, e.source);
+        let why = if e.when.is_empty() {
+            format!("{} ({}, {})", e.reason, e.expected, e.source)
+        } else {
+            format!(
+                "{} ({} when {}, {})",
+                e.reason, e.expected, e.when, e.source
+            )
+        };
         match (&raw, &e.expected) {
+            // A cause does not show on every scene: a pass under it is a pass.
+            (Status::Pass | Status::Flake, _) if !e.when.is_empty() => (raw, None),
             (Status::Pass | Status::Flake, _) => (Status::UnexpectedPass, Some(why)),
+            (Status::Fail, Expected::Deviation(d)) => match under_deviation {
+                Some([]) if !failed.is_empty() => (Status::ExpectedFail, Some(why)),
+                Some(still) if !still.is_empty() => (
+                    Status::Fail,
+                    Some(format!(
+                        "fails differently than expected: judged with the deviation {} (and any other that matches) allowed, it still fails {}; {why}",
+                        d.name(),
+                        signature(still)
+                    )),
+                ),
+                _ => (
+                    Status::Fail,
+                    Some(format!(
+                        "fails differently than expected: not a judged failure the deviation {} could explain; {why}",
+                        d.name()
+                    )),
+                ),
+            },
             (Status::Fail, Expected::Fail(bounds)) => {
                 let outside: Vec<String> = failed
                     .iter()
@@ -463,6 +660,16 @@ mod tests {
         assert_eq!(reported_version(["OpenGL ES 3.2 NVIDIA 550.1"]), None);
     }
 
+    /// `apply` for a run with no `@when` in play and no deviation judged.
+    fn plain(
+        e: &Expectations,
+        name: &str,
+        raw: Status,
+        failed: &[umbra_report::FailedCheck],
+    ) -> (Status, Option<String>) {
+        e.apply(name, &serde_json::Value::Null, raw, failed, None)
+    }
+
     fn failed(checks: &[(&str, u64)]) -> Vec<umbra_report::FailedCheck> {
         checks
             .iter()
@@ -482,15 +689,17 @@ mod tests {
             source: "x.txt:1".into(),
             file: "x.txt".into(),
             applies: Selector::default(),
+            when: Condition::default(),
         }]);
         let same = failed(&[("value", 29), ("twin:bias-order", 29)]);
         assert_eq!(
-            e.apply("gles2/zink/spot-20deg", Status::Fail, &same).0,
+            plain(&e, "gles2/zink/spot-20deg", Status::Fail, &same).0,
             Status::ExpectedFail
         );
         // Fewer pixels is still the expected failure.
         assert_eq!(
-            e.apply(
+            plain(
+                &e,
                 "gles2/zink/spot-20deg",
                 Status::Fail,
                 &failed(&[("value", 3)])
@@ -499,15 +708,15 @@ mod tests {
             Status::ExpectedFail
         );
         assert_eq!(
-            e.apply("gles2/zink/spot-20deg", Status::Pass, &[]).0,
+            plain(&e, "gles2/zink/spot-20deg", Status::Pass, &[]).0,
             Status::UnexpectedPass
         );
         assert_eq!(
-            e.apply("gles2/zink/spot-20deg", Status::Crash, &[]).0,
+            plain(&e, "gles2/zink/spot-20deg", Status::Crash, &[]).0,
             Status::Crash
         );
         assert_eq!(
-            e.apply("gl33/zink/spot-20deg", Status::Fail, &same).0,
+            plain(&e, "gl33/zink/spot-20deg", Status::Fail, &same).0,
             Status::Fail
         );
         assert!(Status::UnexpectedPass.is_regression() && !Status::ExpectedFail.is_regression());
@@ -522,11 +731,18 @@ mod tests {
             source: "x.txt:2".into(),
             file: "x.txt".into(),
             applies: Selector::default(),
+            when: Condition::default(),
         }]);
-        let (status, why) = e.apply("gl33/softpipe/x", Status::Fail, &failed(&[("map", 5000)]));
+        let (status, why) = plain(
+            &e,
+            "gl33/softpipe/x",
+            Status::Fail,
+            &failed(&[("map", 5000)]),
+        );
         assert_eq!(status, Status::Fail);
         assert!(why.unwrap_or_default().contains("map=5000"));
-        let (status, why) = e.apply(
+        let (status, why) = plain(
+            &e,
             "gl33/softpipe/x",
             Status::Fail,
             &failed(&[("map", 10), ("colour", 2)]),
@@ -623,5 +839,92 @@ mod tests {
         let e = Expectations::load(&dir).expect_err("bad term");
         assert!(e.contains("bad.txt:1") && e.contains(">="), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// `@when` terms over a case point's JSON: numbers by value, bare words as strings,
+    /// arrays element by element, a missing path as null.
+    #[test]
+    fn conditions_hold_on_the_case_point() {
+        let case = serde_json::json!({
+            "light": { "point": { "position": [0, 3, 0] } },
+            "shadow": { "format": "depth16", "bias": { "polygon_offset": [2.0, 4.0] } },
+        });
+        let holds = |t: &str| Condition::parse(t).expect("parse").holds(&case);
+        assert!(holds("shadow.bias.polygon_offset[1]!=0"));
+        assert!(holds(
+            "shadow.bias.polygon_offset[1]>=4 shadow.format=depth16"
+        ));
+        assert!(!holds("shadow.bias.polygon_offset[1]<4"));
+        assert!(holds("shadow.bias.polygon_offset!=[0,0]"));
+        assert!(holds("shadow.bias.polygon_offset=[2,4]"));
+        assert!(holds("light.point!=null"));
+        assert!(!holds("light.spot!=null"));
+        assert!(!holds("shadow.format=depth24"));
+        assert!(holds("always"));
+        assert!(Condition::parse("any").expect("any").is_empty());
+        assert!(!Condition::parse("always").expect("always").is_empty());
+        let e = Condition::parse("shadow.format").expect_err("no operator");
+        assert!(e.contains("PATH=VALUE"), "{e}");
+    }
+
+    /// A cause expectation (`@when` … `Deviation:NAME`): the failure the deviation explains is
+    /// expected, one it does not is a regression that says what is left, a pass is a pass;
+    /// every deviation line that matches the run is in the set it is judged under.
+    #[test]
+    fn deviations_expect_what_they_explain_and_nothing_else() {
+        let dir = std::env::temp_dir().join(format!("umbra-exp-dev-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        std::fs::write(
+            dir.join("d.txt"),
+            "gl33/zink/pinned,Fail:map<=5,a case by name\n\
+             @when shadow.bias.polygon_offset[1]!=0\n\
+             gl33/zink/*,Deviation:offset-unit-x4,doubled unit\n\
+             @when always\n\
+             gl33/zink/*,Deviation:edge-holes,holes\n\
+             @when any\n",
+        )
+        .expect("write");
+        let e = Expectations::load(&dir).expect("load");
+        let _ = std::fs::remove_dir_all(&dir);
+        let with_units = serde_json::json!({ "shadow": { "bias": { "polygon_offset": [0, 4] } } });
+        let without = serde_json::json!({ "shadow": { "bias": { "polygon_offset": [0, 0] } } });
+        let set = e.deviations("gl33/zink/new-case", &with_units);
+        assert_eq!(set.names(), "offset-unit-x4+edge-holes");
+        assert_eq!(
+            e.deviations("gl33/zink/new-case", &without).names(),
+            "edge-holes"
+        );
+        // A name-pinned line first: no deviation is asked for.
+        assert!(e.deviations("gl33/zink/pinned", &with_units).is_empty());
+        let map = failed(&[("map", 900)]);
+        let (status, _) = e.apply(
+            "gl33/zink/new-case",
+            &with_units,
+            Status::Fail,
+            &map,
+            Some(&[]),
+        );
+        assert_eq!(status, Status::ExpectedFail);
+        let left = failed(&[("value", 3)]);
+        let (status, why) = e.apply(
+            "gl33/zink/new-case",
+            &with_units,
+            Status::Fail,
+            &map,
+            Some(&left),
+        );
+        assert_eq!(status, Status::Fail);
+        assert!(why.unwrap_or_default().contains("still fails value=3"));
+        // Not judged again (a crash, say, or no judged check): not explained.
+        let (status, _) = e.apply("gl33/zink/new-case", &with_units, Status::Fail, &map, None);
+        assert_eq!(status, Status::Fail);
+        // A cause does not show on every scene.
+        let (status, why) = e.apply("gl33/zink/new-case", &with_units, Status::Pass, &[], None);
+        assert_eq!((status, why), (Status::Pass, None));
+        // By name, a pass is still news.
+        let (status, _) = e.apply("gl33/zink/pinned", &with_units, Status::Pass, &[], None);
+        assert_eq!(status, Status::UnexpectedPass);
+        let err = Expected::parse("Deviation:nope").expect_err("unknown");
+        assert!(err.contains("offset-unit-x4"), "{err}");
     }
 }

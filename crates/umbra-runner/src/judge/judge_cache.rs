@@ -154,7 +154,7 @@ pub fn basis(prepared: &Prepared, profile: Profile) -> Basis {
     let judged = cached(
         dir.as_deref(),
         "judged",
-        key(prepared, profile.name()),
+        key(prepared, &profile.name()),
         write_judged,
         |bytes, k| read_judged(bytes, k, profile),
         || {
@@ -505,10 +505,10 @@ mod tests {
         let profile = Profile::GLES2;
         let truth = ground_truth(&prepared);
         let judged = umbra_ref::render_judged(&prepared, ClipDepth::MinusOneToOne, profile);
-        let (kt, kj) = (key(&prepared, ""), key(&prepared, profile.name()));
+        let (kt, kj) = (key(&prepared, ""), key(&prepared, &profile.name()));
         assert_ne!(
             kj,
-            key(&prepared, Profile::GL.name()),
+            key(&prepared, &Profile::GL.name()),
             "the profile is part of the key"
         );
         let back = read_truth(&write_truth(&truth, kt), kt).expect("truth");

@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use umbra_case::format::{InteriorError, TwinAgree};
 use umbra_case::{Backend, CasePoint, Frame, Needs, Prepared, Support};
 use umbra_compare::TruthError;
+use umbra_compare::consensus::{Failed, Fingerprint};
 use umbra_compare::reference::RefAgreement;
 use umbra_ref::truth::Truth;
 use umbra_report::{FailedCheck, TwinMetric};
@@ -44,6 +45,9 @@ pub struct Judged {
     pub twins: Vec<TwinMetric>,
     /// Problems with the result (empty = as expected).
     pub problems: Vec<String>,
+    /// Where the frame, its map and its twins broke the model (empty when nothing did): what
+    /// the consensus diagnosis compares across drivers.
+    pub fingerprint: Fingerprint,
 }
 
 /// The outcome of trying to run a point on a backend.
@@ -59,6 +63,18 @@ pub enum Outcome {
 /// Renders `point` on `backend` and judges it against the truth (and the reference), with its
 /// metamorphic twins when `twins` is set.
 pub fn run_point(backend: &mut dyn Backend, point: CasePoint, twins: bool) -> Outcome {
+    run_point_as(backend, point, twins, umbra_case::Deviations::NONE)
+}
+
+/// [`run_point`], judged with `deviations` allowed besides the backend's profile: what the
+/// expectations that name modelled deviations ask for (`Deviation:NAME`).
+pub fn run_point_as(
+    backend: &mut dyn Backend,
+    point: CasePoint,
+    twins: bool,
+    deviations: umbra_case::Deviations,
+) -> Outcome {
+    let profile = backend.profile().with_deviations(deviations);
     if let Support::Unsupported(why) = backend.supports(&Needs::of(&point.case)) {
         return Outcome::Skip(why);
     }
@@ -68,6 +84,9 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint, twins: bool) -> Ou
     let prepared = Prepared::new(point);
     let frame = match backend.render(&prepared) {
         Ok(f) => f,
+        // A backend that finds out only while rendering that it cannot run the case says so
+        // the same way: a skip with its reason, never a failure.
+        Err(umbra_case::BackendError::Unsupported(why)) => return Outcome::Skip(why),
         Err(e) => return Outcome::Error(e.to_string()),
     };
     if (frame.width, frame.height) != (prepared.camera.size[0], prepared.camera.size[1])
@@ -83,7 +102,7 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint, twins: bool) -> Ou
     // judges the twins, so even the reference needs it): computed once per point and profile
     // in a conformance run.
     let crate::judge::judge_cache::Basis { truth, judged } =
-        crate::judge::judge_cache::basis(&prepared, backend.profile());
+        crate::judge::judge_cache::basis(&prepared, profile);
     let error = umbra_compare::truth_error(&frame, &truth);
     let mut problems = Vec::new();
     let mut failed = Vec::new();
@@ -115,10 +134,25 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint, twins: bool) -> Ou
         umbra_compare::reference::free_pixels(&judged)
     };
     let twins_start = Instant::now();
-    let twins = if twins {
+    let (twins, twin_failures): (Vec<TwinMetric>, Vec<(String, Failed)>) = if twins {
         run_twins(backend, &as_written, &prepared, &frame, &error, &judged)
+            .into_iter()
+            .map(|(m, f)| {
+                let name = m.name.clone();
+                (m, (name, f))
+            })
+            .unzip()
     } else {
-        Vec::new()
+        (Vec::new(), Vec::new())
+    };
+    let fingerprint = Fingerprint {
+        profile: judged.profile.name(),
+        frame: umbra_compare::reference::frame_failures(&frame, &pixels),
+        map: umbra_compare::reference::map_failures(&judged, &frame),
+        twins: twin_failures
+            .into_iter()
+            .filter(|(_, f)| f.total > 0)
+            .collect(),
     };
     let twins_time = twins_start.elapsed();
     for t in &twins {
@@ -204,6 +238,7 @@ pub fn run_point(backend: &mut dyn Backend, point: CasePoint, twins: bool) -> Ou
         twins_time,
         twins,
         problems,
+        fingerprint,
     }))
 }
 
@@ -217,7 +252,7 @@ fn run_twins(
     frame: &Frame,
     error: &TruthError,
     judged: &umbra_ref::Judged,
-) -> Vec<TwinMetric> {
+) -> Vec<(TwinMetric, Failed)> {
     let interior = |e: &TruthError| e.away_from_edges.false_shadow + e.away_from_edges.false_light;
     umbra_case::twin::twins_of(as_written)
         .into_iter()
@@ -237,12 +272,12 @@ fn run_twins(
                 Err(e) => {
                     m.ok = false;
                     m.skipped = Some(format!("cannot build the twin: {e}"));
-                    return m;
+                    return (m, Failed::default());
                 }
             };
             if let Support::Unsupported(why) = backend.supports(&Needs::of(&point.case)) {
                 m.skipped = Some(why);
-                return m;
+                return (m, Failed::default());
             }
             if backend.renders_identically(&as_written.case, &point.case) {
                 // The same render twice: its frame would be the case's own, bit for bit.
@@ -252,7 +287,7 @@ fn run_twins(
                     compared: error.all.judged,
                     ..Default::default()
                 };
-                return m;
+                return (m, Failed::default());
             }
             let twin_prepared = Prepared::new(point);
             let twin = match backend.render_twin(&twin_prepared, prepared) {
@@ -268,14 +303,14 @@ fn run_twins(
                 Err(e) => {
                     m.ok = false;
                     m.skipped = Some(format!("the twin failed to render: {e}"));
-                    return m;
+                    return (m, Failed::default());
                 }
             };
             m.render_ms = twin.timings.total.as_secs_f64() * 1e3;
             if (twin.width, twin.height) != (frame.width, frame.height) {
                 m.ok = false;
                 m.skipped = Some("the twin's frame has another size".into());
-                return m;
+                return (m, Failed::default());
             }
             if matches!(plan.agree, TwinAgree::NoWorse | TwinAgree::Reported) {
                 // Cached like the case's own: the same twin on every backend is one truth.
@@ -283,16 +318,21 @@ fn run_twins(
                 m.twin_interior_error =
                     Some(interior(&umbra_compare::truth_error(&twin, &twin_truth)));
             }
-            m.pair = umbra_compare::reference::judge(judged, &twin).0;
+            let (pair, px) = umbra_compare::reference::judge(judged, &twin);
+            m.pair = pair;
+            let mut failed = umbra_compare::reference::frame_failures(&twin, &px);
             match plan.agree {
                 TwinAgree::Identical => {
                     // Bit-identical visibility wherever either frame covers a surface.
-                    let differ = (0..frame.visibility.len())
-                        .filter(|&i| {
-                            (frame.covered(i) || twin.covered(i))
-                                && frame.visibility[i].to_bits() != twin.visibility[i].to_bits()
-                        })
-                        .count() as u64;
+                    failed = Failed::default();
+                    for i in 0..frame.visibility.len() {
+                        if (frame.covered(i) || twin.covered(i))
+                            && frame.visibility[i].to_bits() != twin.visibility[i].to_bits()
+                        {
+                            failed.push(i, umbra_compare::is_shadowed(twin.visibility[i]));
+                        }
+                    }
+                    let differ = failed.total;
                     m.pair = RefAgreement {
                         compared: m.pair.compared,
                         differ,
@@ -309,7 +349,10 @@ fn run_twins(
                 TwinAgree::NoWorse => m.ok = m.twin_interior_error <= Some(m.interior_error),
                 TwinAgree::Reported => {}
             }
-            m
+            if m.ok {
+                failed = Failed::default();
+            }
+            (m, failed)
         })
         .collect()
 }

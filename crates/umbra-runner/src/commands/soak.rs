@@ -1,0 +1,240 @@
+//! `umbra soak --seed S --count N`: the judge on scenes it was not developed against.
+//!
+//! The catalogue is the set the tolerance model was built around; a model too tight for
+//! some technique can pass all of it and fail a correct driver on the first case a user
+//! writes. The soak draws `N` valid cases from seed `S` ([`umbra_case::generate`]), writes
+//! them under `OUT/cases/`, and runs them on every selected backend as a conformance run does
+//! with the judge alone (no goldens: generated cases have none), expectations applied. It
+//! prints, per backend, the runs, passes, skips, diagnosed deviations (expected failures,
+//! matched by cause on cases that have never been seen) and failures by class, counting
+//! those the consensus diagnosis marks as suspected model errors apart. Reports go where a
+//! conformance run puts them (`OUT/latest/`), and `OUT/latest/soak.csv` holds the table.
+//!
+//! The exit code is the conformance run's: 0 when every run is as expected, 1 on any
+//! failure, 125 when nothing could run.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use crate::args::Args;
+use umbra_report::{RunResult, Status};
+
+/// The default output directory.
+pub const DEFAULT_OUT: &str = "target/umbra/soak";
+
+/// Runs the command; returns the exit code.
+pub fn main(args: &Args) -> i32 {
+    let seed = match args.value("seed").map(str::parse::<u64>).transpose() {
+        Ok(s) => s.unwrap_or(1),
+        Err(_) => return usage("--seed takes a whole number"),
+    };
+    let count = match args.value("count").map(str::parse::<usize>).transpose() {
+        Ok(Some(0)) | Err(_) => return usage("--count takes a positive number of cases"),
+        Ok(c) => c.unwrap_or(100),
+    };
+    let out = PathBuf::from(args.value("out").unwrap_or(DEFAULT_OUT));
+    let dir = out.join("cases");
+    if let Err(e) = write_cases(&dir, seed, count) {
+        eprintln!(
+            "error: cannot write the generated cases under {}: {e}",
+            dir.display()
+        );
+        return 125;
+    }
+    println!(
+        "soak: {count} cases of seed {seed} under {} (umbra_case::generate)",
+        dir.display()
+    );
+    let mut run_args = Args::default();
+    run_args.set("cases", dir.display().to_string());
+    run_args.set("golden", "none".into());
+    run_args.set("out", out.display().to_string());
+    for flag in [
+        "jobs",
+        "timeout",
+        "expectations",
+        "mesa",
+        "max-memory",
+        "judge-cache",
+        "filter",
+    ] {
+        if let Some(v) = args.value(flag) {
+            run_args.set(flag, v.to_string());
+        }
+    }
+    for b in args.values("backend") {
+        run_args.set("backend", b.to_string());
+    }
+    if args.has("verbose") {
+        run_args.set("verbose", String::new());
+    }
+    let started = std::time::Instant::now();
+    let finished = super::conformance::run(&run_args);
+    if finished.results.is_empty() {
+        return finished.code;
+    }
+    let table = Table::of(&finished.results);
+    print!(
+        "{}",
+        table.text(seed, count, started.elapsed().as_secs_f64())
+    );
+    let csv = out.join("latest").join("soak.csv");
+    if let Err(e) = std::fs::write(&csv, table.csv()) {
+        eprintln!("error: cannot write {}: {e}", csv.display());
+    }
+    finished.code
+}
+
+/// Writes the `count` cases of `seed` as `DIR/soak-SEED-K.json`, removing any other case
+/// file there first (a smaller soak into the same directory must not run a larger one's).
+pub fn write_cases(dir: &Path, seed: u64, count: usize) -> std::io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    for e in std::fs::read_dir(dir)? {
+        let p = e?.path();
+        if p.extension().is_some_and(|x| x == "json") {
+            std::fs::remove_file(p)?;
+        }
+    }
+    for case in umbra_case::generate::cases(seed, count) {
+        let text = umbra_case::generate::to_json(&case);
+        std::fs::write(dir.join(format!("{}.json", case.name)), text + "\n")?;
+    }
+    Ok(())
+}
+
+fn usage(msg: &str) -> i32 {
+    eprintln!("error: {msg}\nusage: {}", crate::cli::usage("soak"));
+    125
+}
+
+/// The soak's counts per backend, and its failures by class.
+#[derive(Default)]
+pub struct Table {
+    /// Per backend: runs, passes, skips, diagnosed (expected failures), failures, of which
+    /// suspected model errors.
+    pub rows: BTreeMap<String, [usize; 6]>,
+    /// Per class (`Fail value+twin:bias-order`, `skip: …`, `diagnosed: …`), per backend.
+    pub classes: BTreeMap<String, BTreeMap<String, usize>>,
+}
+
+/// The column names of [`Table::rows`].
+pub const COLUMNS: [&str; 6] = [
+    "runs",
+    "pass",
+    "skip",
+    "diagnosed",
+    "fail",
+    "suspected model",
+];
+
+impl Table {
+    /// Counts `results`.
+    pub fn of(results: &[RunResult]) -> Table {
+        let mut t = Table::default();
+        for r in results {
+            let row = t.rows.entry(r.backend.clone()).or_default();
+            row[0] += 1;
+            let model = r.diagnosis.as_ref().is_some_and(|d| d.suspect_model());
+            let class = match &r.status {
+                Status::Pass | Status::Flake => {
+                    row[1] += 1;
+                    None
+                }
+                Status::Skip(why) => {
+                    row[2] += 1;
+                    Some(format!("skip: {}", short(why)))
+                }
+                Status::ExpectedFail => {
+                    row[3] += 1;
+                    let why = r
+                        .reason
+                        .strip_prefix("expected: ")
+                        .and_then(|s| s.split("; got:").next())
+                        .unwrap_or(&r.reason);
+                    Some(format!("diagnosed: {}", short(why)))
+                }
+                other => {
+                    row[4] += 1;
+                    if model {
+                        row[5] += 1;
+                    }
+                    let checks: Vec<&str> = r.failed.iter().map(|c| c.check.as_str()).collect();
+                    let what = if checks.is_empty() {
+                        short(&r.reason)
+                    } else {
+                        checks.join("+")
+                    };
+                    Some(format!(
+                        "{}{other} {what}",
+                        if model { "suspected model error: " } else { "" }
+                    ))
+                }
+            };
+            if let Some(c) = class {
+                *t.classes
+                    .entry(c)
+                    .or_default()
+                    .entry(r.backend.clone())
+                    .or_default() += 1;
+            }
+        }
+        t
+    }
+
+    /// The table as the terminal shows it.
+    pub fn text(&self, seed: u64, count: usize, seconds: f64) -> String {
+        let mut s = format!("\nsoak of {count} generated cases (seed {seed}) in {seconds:.0} s\n");
+        let _ = writeln!(
+            s,
+            "{:<20} {:>6} {:>6} {:>6} {:>9} {:>6} {:>15}",
+            "backend", COLUMNS[0], COLUMNS[1], COLUMNS[2], COLUMNS[3], COLUMNS[4], COLUMNS[5]
+        );
+        for (b, r) in &self.rows {
+            let _ = writeln!(
+                s,
+                "{b:<20} {:>6} {:>6} {:>6} {:>9} {:>6} {:>15}",
+                r[0], r[1], r[2], r[3], r[4], r[5]
+            );
+        }
+        if !self.classes.is_empty() {
+            s.push_str("by class (runs per backend):\n");
+            for (class, per) in &self.classes {
+                let total: usize = per.values().sum();
+                let backends: Vec<String> = per.iter().map(|(b, n)| format!("{b} {n}")).collect();
+                let _ = writeln!(s, "  {total:>5}  {class}\n         {}", backends.join(", "));
+            }
+        }
+        s
+    }
+
+    /// `backend,runs,pass,skip,diagnosed,fail,suspected_model`, then the classes as
+    /// `class,backend,count`.
+    pub fn csv(&self) -> String {
+        let mut s = String::from("backend,runs,pass,skip,diagnosed,fail,suspected_model\n");
+        for (b, r) in &self.rows {
+            let _ = writeln!(
+                s,
+                "{b},{},{},{},{},{},{}",
+                r[0], r[1], r[2], r[3], r[4], r[5]
+            );
+        }
+        s.push_str("\nclass,backend,runs\n");
+        for (class, per) in &self.classes {
+            for (b, n) in per {
+                let _ = writeln!(s, "{},{b},{n}", umbra_report::csv::csv_field(class));
+            }
+        }
+        s
+    }
+}
+
+/// The first line of a reason, numbers kept, cut at 100 characters.
+fn short(s: &str) -> String {
+    let line = s.lines().next().unwrap_or("");
+    let mut out: String = line.chars().take(100).collect();
+    if line.chars().count() > 100 {
+        out.push('…');
+    }
+    out
+}
