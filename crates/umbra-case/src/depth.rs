@@ -70,7 +70,16 @@ impl DepthFormat {
     ///   §14.6.5, Vulkan "Depth Bias"): fixed, no freedom. (Which exponent "e" means for
     ///   z ∈ [2ᵉ, 2ᵉ⁺¹) is read as floor(log₂|z|), as GL drivers do; Dawn records that the
     ///   WebGPU CTS reads e + 1, dawn:2076.)
+    /// - Unsized (`DEPTH_COMPONENT`): the GL stores it "with internal component resolutions
+    ///   of its own choosing" (GL 4.6 §8.5), so r is that choice's: 24-bit fixed point as
+    ///   umbra models the storage, or 32-bit (llvmpipe and softpipe pick Z32_UNORM for an
+    ///   UNSIGNED_INT upload, a Vulkan driver D32F: a soak found llvmpipe storing no visible
+    ///   units offset on an unsized map): from the float or 2⁻³² unit up to 2·2⁻²⁴.
     pub fn offset_unit_range(self, max_abs_z: f32) -> (f64, f64) {
+        if self == DepthFormat::Unsized {
+            let float = f64::from(DepthFormat::Depth32f.offset_unit(max_abs_z));
+            return (float.min(2f64.powi(-32)), 2.0 * 2f64.powi(-24));
+        }
         match self.fixed_bits() {
             Some(n) => {
                 let r = 2f64.powi(-(n as i32));
@@ -196,6 +205,11 @@ mod tests {
         );
         let r = f64::from(DepthFormat::Depth32f.offset_unit(0.75));
         assert_eq!(DepthFormat::Depth32f.offset_unit_range(0.75), (r, r));
+        // The driver's choice: 24 bits or 32, fixed or float.
+        assert_eq!(
+            DepthFormat::Unsized.offset_unit_range(0.75),
+            (2f64.powi(-32), 2f64.powi(-23))
+        );
     }
 
     #[test]

@@ -367,7 +367,8 @@ pub struct Shadow {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum DepthFormat {
-    /// `DEPTH_COMPONENT` with no size: the driver picks; the reference models it as 24 bits.
+    /// `DEPTH_COMPONENT` with no size: the driver picks; the reference stores it as 24 bits, and the
+    /// judge lets its polygon-offset unit be a 24- or 32-bit one (GL 4.6 §8.5).
     Unsized,
     /// 16-bit unsigned normalised.
     Depth16,

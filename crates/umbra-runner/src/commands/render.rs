@@ -180,12 +180,28 @@ fn explain_pixels(
     for e in failed.entries.iter().take(LISTED) {
         let i = (*e >> 1) as usize;
         let l = basis.legal[i];
+        let v = j.frame.visibility[i];
+        let eps = j.frame.visibility_storage.tolerance();
+        if umbra_compare::reference::value_ok(v, l.lo, l.hi, basis.quantum, eps) {
+            // A legal value with a colour that is not its shading (or another surface).
+            let rgb = &j.frame.color[i * 4..i * 4 + 3];
+            let shade = |c: usize| l.c0[c] + (l.c1[c] - l.c0[c]) * v;
+            let _ = writeln!(
+                s,
+                "    ({}, {}): visibility {v} is legal, but the colour {rgb:?} is not its shading {:?} ± {} per channel (×255: {:?})",
+                i % w,
+                i / w,
+                [shade(0), shade(1), shade(2)],
+                l.ctol,
+                [shade(0) * 255.0, shade(1) * 255.0, shade(2) * 255.0],
+            );
+            continue;
+        }
         let _ = writeln!(
             s,
-            "    ({}, {}): {} not in [{}, {}] ({}); the reference gives {}",
+            "    ({}, {}): {v} not in [{}, {}] ({}); the reference gives {}",
             i % w,
             i / w,
-            j.frame.visibility[i],
             l.lo,
             l.hi,
             flag_names(l.flags),
