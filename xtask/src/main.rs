@@ -89,7 +89,7 @@ fn command() -> clap::Command {
     }
     c.subcommand(
         clap::Command::new("test")
-            .about("The set-up, the whole test suite (cargo test --workspace ARGS), then conformance, selftest and a 40-case soak as CI runs them")
+            .about("The set-up, the whole test suite (cargo test --workspace ARGS), then conformance, selftest and a 60-case soak as CI runs them")
             .arg(rest().help("extra arguments for cargo test")),
     )
     .subcommand(
@@ -157,7 +157,7 @@ fn test(extra: &[String]) -> i32 {
         return code;
     }
     // The main job on every case, as CI will run it, then the harness's own sensitivity, then
-    // the judge on scenes it was not developed against (a fixed seed: the same 40 generated
+    // the judge on scenes it was not developed against (a fixed seed: the same 60 generated
     // cases in every CI run, about a minute on 2 cores).
     let conformance = umbra(&["conformance"], &[]);
     let selftest = umbra(&["selftest"], &[]);
@@ -169,7 +169,7 @@ fn test(extra: &[String]) -> i32 {
 }
 
 /// The soak `cargo xtask test` runs (README, "Generated scenes").
-const CI_SOAK: [&str; 4] = ["--seed", "21", "--count", "40"];
+const CI_SOAK: [&str; 4] = ["--seed", "21", "--count", "60"];
 
 fn bless(args: &[String]) -> i32 {
     if std::env::var("CI").is_ok_and(|v| v == "true" || v == "1") {

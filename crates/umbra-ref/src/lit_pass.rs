@@ -9,7 +9,7 @@
 //!
 //! A judged render also marks the pixels where another conformant implementation may show
 //! another surface ([`crate::lookup::ambiguity::SURFACE`]): within the vertex snapping's
-//! reach ([`crate::shadow_pass::SNAP_PX`]) of an open edge of what covers it, of an edge it
+//! reach ([`crate::raster::Tri::reach`]) of an open edge of what covers it, of an edge it
 //! shares with another face, or of a surface that may cover it and is nearer or tied in
 //! depth within both planes' freedom (the camera's depth buffer: f32, or 24-bit on the GLES 2
 //! path). There the lookups of two frames are not of the same point and are not compared.
@@ -23,7 +23,7 @@ use crate::bands::for_each_band;
 use crate::lookup::{Legal, Lookup, ambiguity, position_freedom};
 use crate::raster::{Coverage, EdgeKind, Rasterizer, Tri};
 use crate::shading::{BACKGROUND, shade_linear, shade_run, shade_tolerance};
-use crate::shadow_pass::{SNAP_PX, setup_all};
+use crate::shadow_pass::setup_all;
 use crate::surface::{Surfaces, interpolate};
 
 const NONE: u32 = u32::MAX;
@@ -148,12 +148,12 @@ pub fn render(
         let (tri, t) = (&tris[pt.tri as usize], pt.source as usize);
         let (p, n) = (pt.p, pt.n);
         // Vertex snapping (4 sub-pixel bits) moves the triangle under the pixel centre by up
-        // to SNAP_PX along x and y: the interpolated position (and normal) are those of a
+        // to its reach along x and y: the interpolated position (and normal) are those of a
         // point up to that far away on the surface.
         let (x, y) = (f64::from(pt.x) + 0.5, f64::from(pt.y) + 0.5);
         let (px_, nx) = interpolate(geo, t, tri.source_weights_at(x + 1.0, y));
         let (py_, ny) = interpolate(geo, t, tri.source_weights_at(x, y + 1.0));
-        let snap = SNAP_PX as f32;
+        let snap = tri.reach() as f32;
         let moves = [(px_ - p) * snap, (py_ - p) * snap];
         let normal_moves = ((nx - n).length() + (ny - n).length()) * snap;
         let (vis, l): (f32, Legal) = lookup.judged(p, n, moves);
@@ -316,7 +316,7 @@ fn surface_freedom(
             Some(e) => (t.weight_norm(e), t.depth_error_at(e)),
             None => (1.0, t.z_err.iter().copied().fold(0.0, f64::max)),
         };
-        (dx.abs() + dy.abs()) * SNAP_PX * norm
+        (dx.abs() + dy.abs()) * t.reach() * norm
             + transform
             + 4.0 * f64::from(umbra_case::depth::f32_spacing(z as f32))
             + storage
@@ -337,7 +337,7 @@ fn surface_freedom(
                 std::collections::HashSet::new();
             for (_, t) in touching {
                 let face = geo.face[t.source as usize];
-                t.scan_near(rows.clone(), SNAP_PX, |x, y, e, coverage| {
+                t.scan_near(rows.clone(), t.reach(), |x, y, e, coverage| {
                     let certain = coverage != Coverage::Maybe;
                     let i = (y - rows.start) as usize * w as usize + x as usize;
                     if let Coverage::Pair(partner) = coverage {
@@ -387,7 +387,7 @@ fn near_other_face(t: &Tri, e: [i64; 3], face: u32) -> bool {
         EdgeKind::Shared { face: other, .. } if other != face => {
             let (a, b) = ((i + 1) % 3, (i + 2) % 3);
             let (dx, dy) = (t.x[b] - t.x[a], t.y[b] - t.y[a]);
-            let reach = SNAP_PX
+            let reach = t.reach()
                 * f64::from(1u32 << crate::raster::SUBPIXEL_BITS)
                 * (dx.abs() + dy.abs()) as f64;
             (e[i] as f64).abs() <= reach

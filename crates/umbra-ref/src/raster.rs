@@ -83,7 +83,19 @@ pub struct Tri {
     /// Judged renders: per corner, how far another implementation's window depth may lie
     /// from ours ([`crate::shadow_pass::depth_error`]); 0 otherwise.
     pub z_err: [f64; 3],
+    /// Judged renders: how far, in pixels, another implementation's transform may put any
+    /// corner's window x or y beyond ours besides snapping ([`crate::shadow_pass::xy_error`]:
+    /// far from the origin, where the clip rows cancel large terms, a vertex lands a
+    /// fraction of a pixel off); 0 otherwise.
+    pub xy_err: f64,
 }
+
+/// How far another implementation's vertex window coordinates may lie from ours, per axis, in
+/// pixels: GL 4.6 §14.5 and Vulkan "Rasterization" require only 4 sub-pixel bits (and fix no
+/// rounding mode, so up to one 1/16 grid step), ours snap to 8 bits (1/512 by rounding), and
+/// the f32 window coordinates themselves carry about 1/1024 pixel at 16k. A triangle's own
+/// reach adds its corners' transform error ([`Tri::reach`]).
+pub const SNAP_PX: f64 = 1.0 / 16.0 + 1.0 / 512.0 + 1.0 / 1024.0;
 
 /// One covered pixel centre: the three edge values (each ≥ 0).
 #[derive(Clone, Copy, Debug)]
@@ -412,6 +424,12 @@ impl Tri {
         }
     }
 
+    /// How far, in pixels, another implementation may place this triangle's corners: the
+    /// snapping ([`SNAP_PX`]) and the transform ([`Tri::xy_err`]).
+    pub fn reach(&self) -> f64 {
+        SNAP_PX + self.xy_err
+    }
+
     /// Whether the centre with edge values `e` lies within `delta_px` of a diagonal the
     /// clipper added inside the source triangle ([`EdgeKind::Internal`]).
     pub fn near_internal(&self, e: [i64; 3], delta_px: f64) -> bool {
@@ -650,6 +668,7 @@ impl Rasterizer {
             source,
             front,
             z_err: [0.0; 3],
+            xy_err: 0.0,
         });
     }
 }

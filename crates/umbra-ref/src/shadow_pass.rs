@@ -18,11 +18,7 @@ use umbra_case::{Convention, Geometry, Profile};
 use crate::bands::for_each_band;
 use crate::raster::{Coverage, EdgeKind, Rasterizer, Tri};
 
-/// How far another implementation's vertex window coordinates may lie from ours, per axis, in
-/// pixels: GL 4.6 §14.5 and Vulkan "Rasterization" require only 4 sub-pixel bits (and fix no
-/// rounding mode, so up to one 1/16 grid step), ours snap to 8 bits (1/512 by rounding), and
-/// the f32 window coordinates themselves carry about 1/1024 pixel at 16k.
-pub const SNAP_PX: f64 = 1.0 / 16.0 + 1.0 / 512.0 + 1.0 / 1024.0;
+pub use crate::raster::SNAP_PX;
 
 /// Under [`umbra_case::Deviation::EdgeHoles`], how near a clip fan's diagonal a centre must
 /// lie to fall out of both its triangles: well beyond a float span end's rounding (an ULP at
@@ -110,7 +106,7 @@ impl Freedom {
         }
         let (dx, dy) = t.depth_slopes();
         let m_max = dx.abs().max(dy.abs());
-        let snap = (dx.abs() + dy.abs()) * 2.0 * SNAP_PX / t.min_altitude().max(1e-9);
+        let snap = (dx.abs() + dy.abs()) * 2.0 * t.reach() / t.min_altitude().max(1e-9);
         let z = t.max_abs_z();
         let (m_lo, m_hi, r_lo, r_hi) = if self.packed {
             // umbra's GLES 2 shader: m = max(|dFdx z|, |dFdy z|), r = one step of the format.
@@ -164,7 +160,7 @@ impl Freedom {
         let norm = t.weight_norm(e);
         // The plane's snapping and its corners' transform ([`depth_error`]), carried to the
         // centre by the weights, and the interpolation's own roundings of z.
-        let err = (dx.abs() + dy.abs()) * SNAP_PX * norm
+        let err = (dx.abs() + dy.abs()) * t.reach() * norm
             + t.depth_error_at(e)
             + 4.0 * f64::from(umbra_case::depth::f32_spacing(z as f32));
         let away = f64::from(self.conv.toward_far());
@@ -311,7 +307,7 @@ pub fn render_face(
                 std::collections::HashMap::new();
             for (_, t) in touching {
                 let offset = freedom.offset(t);
-                t.scan_near(rows.clone(), SNAP_PX, |x, y, e, coverage| {
+                t.scan_near(rows.clone(), t.reach(), |x, y, e, coverage| {
                     // Holes on edges (the deviation): a shared edge's centres, and those on a
                     // clip fan's diagonal, only may be covered.
                     let coverage = match coverage {
@@ -463,7 +459,7 @@ pub fn setup_all(
     // Judged renders: per vertex, the clip z and w rows' terms (Σ|mᵢ·pᵢ| and how many are
     // non-zero), what bounds how far another implementation's transform of the same vertex
     // may land ([`depth_error`]).
-    let rows: Vec<[Row; 2]> = if edges.is_some() {
+    let rows: Vec<[Row; 4]> = if edges.is_some() {
         let m = view_proj.as_dmat4();
         geo.positions
             .iter()
@@ -476,7 +472,7 @@ pub fn setup_all(
                         terms: terms.filter(|t| *t != 0.0).count() as u32,
                     }
                 };
-                [row(2), row(3)]
+                [row(0), row(1), row(2), row(3)]
             })
             .collect()
     } else {
@@ -490,26 +486,56 @@ pub fn setup_all(
         if !rows.is_empty() {
             let src = t.map(|k| rows[k as usize]);
             for tri in &mut tris[first..] {
+                let corners = [0, 1, 2].map(|v| corner_rows(&src, tri.weights[v]));
                 tri.z_err = [0, 1, 2].map(|v| {
-                    // A clipped corner: the weighted sums of the source's, and the
-                    // clipper's interpolation (a difference, a product and a sum) on top.
-                    let lam = tri.weights[v].abs();
-                    let clipped = lam.max_element() < 1.0;
-                    let mix = |r: usize| Row {
-                        sum: lam.x * src[0][r].sum + lam.y * src[1][r].sum + lam.z * src[2][r].sum,
-                        terms: (0..3)
-                            .filter(|&k| lam[k] != 0.0)
-                            .map(|k| src[k][r].terms)
-                            .max()
-                            .unwrap_or(4)
-                            + if clipped { 3 } else { 0 },
-                    };
-                    depth_error(raster.conv, mix(0), mix(1), 1.0 / tri.inv_w[v], tri.z[v])
+                    let [_, _, z, w] = corners[v];
+                    depth_error(raster.conv, z, w, 1.0 / tri.inv_w[v], tri.z[v])
                 });
+                tri.xy_err = (0..3)
+                    .map(|v| {
+                        let [x, y, _, w] = corners[v];
+                        xy_error(raster, x, y, w, 1.0 / tri.inv_w[v])
+                    })
+                    .fold(0.0, f64::max);
             }
         }
     }
     tris
+}
+
+/// The clip rows of a corner at `weights` on the source triangle's corners `src`: for an
+/// original corner its own; for one the clipper made, the weighted sums of the source's and
+/// the clipper's interpolation (a difference, a product and a sum) on top of their terms.
+fn corner_rows(src: &[[Row; 4]; 3], weights: glam::DVec3) -> [Row; 4] {
+    let lam = weights.abs();
+    let clipped = lam.max_element() < 1.0;
+    [0, 1, 2, 3].map(|r| Row {
+        sum: lam.x * src[0][r].sum + lam.y * src[1][r].sum + lam.z * src[2][r].sum,
+        terms: (0..3)
+            .filter(|&k| lam[k] != 0.0)
+            .map(|k| src[k][r].terms)
+            .max()
+            .unwrap_or(4)
+            + if clipped { 3 } else { 0 },
+    })
+}
+
+/// How far, in pixels, another implementation's window x and y of a corner with clip rows
+/// `x_row`, `y_row`, `w_row` and clip w `w` may lie from ours through the transform alone
+/// (the snapping is [`SNAP_PX`]): each of x_c, y_c and w_c within γₖ·Σ∣mᵢ·pᵢ∣ of the exact
+/// value by either side, then the divide, in NDC units of the half-viewport (|x_ndc| taken up
+/// to 4, the guard band the corners stay in). Negligible near the origin; in a scene 10⁴ m
+/// away, whose rows cancel terms of that size, a vertex lands a good fraction of a texel off
+/// and coverage along every edge is free that far (a soak of generated scenes found
+/// wgpu-vk/lavapipe's maps covering texels beyond the snapping's reach there).
+pub fn xy_error(raster: &Rasterizer, x_row: Row, y_row: Row, w_row: Row, w: f64) -> f64 {
+    const U: f64 = 1.0 / 16_777_216.0;
+    let gamma = |k: u32| f64::from(k) * U / (1.0 - f64::from(k) * U);
+    let w = w.abs().max(1e-30);
+    let px = |r: Row, half: f64| {
+        2.0 * (gamma(r.terms) * r.sum + 4.0 * gamma(w_row.terms) * w_row.sum) / w * half
+    };
+    px(x_row, 0.5 * f64::from(raster.width)).max(px(y_row, 0.5 * f64::from(raster.height)))
 }
 
 /// One row of a vertex's clip transform: Σ|mₖ·pₖ| over its terms and how many are non-zero
