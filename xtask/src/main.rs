@@ -15,7 +15,7 @@
 //!   matrix measured per backend (`umbra sweep`): CSV, Pareto plot (PNG, SVG) and an HTML
 //!   section under target/umbra/sweep/.
 //! - `cargo xtask bless [ARGS]`: a conformance run that accepts every changed or new golden
-//!   (insta's `INSTA_UPDATE=always`), then lists what changed under `golden/` for review in
+//!   (`umbra conformance --bless`, which alone gives its workers `INSTA_UPDATE=always`), then lists what changed under `golden/` for review in
 //!   `git diff` before committing. Refused under `CI=true`: CI never writes a golden.
 //! - `cargo xtask fetch-mesa [--dir DIR]`: a second Mesa (bookworm-backports, 25.0.7) unpacked
 //!   into a directory without changing the system (`fetch_mesa`), for `--mesa DIR`.
@@ -177,8 +177,9 @@ fn bless(args: &[String]) -> i32 {
         return 2;
     }
     mesa::ensure();
-    let mut cmd = umbra_command(&["conformance"], args);
-    cmd.env("INSTA_UPDATE", "always");
+    let mut args = args.to_vec();
+    args.push("--bless".into());
+    let cmd = umbra_command(&["conformance"], &args);
     let code = status(cmd);
     let mut git = Command::new("git");
     git.current_dir(workspace_root())

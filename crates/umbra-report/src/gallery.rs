@@ -97,8 +97,8 @@ pub fn section(results: &[RunResult], pictures: &Path) -> String {
         "pics": store.encoded,
         "runs": runs,
     });
-    // `</` inside a script element would end it: JSON allows the escaped solidus.
-    let data = data.to_string().replace("</", "<\\/");
+    // Inside a script element: no `<`, `>` or `&` may appear as themselves.
+    let data = crate::escape::script_json(&data);
     let options = |all: &str, values: &BTreeSet<String>| {
         let mut s = format!("<option value=\"\">{all}</option>");
         for v in values {

@@ -4,14 +4,8 @@
 
 use std::fmt::Write as _;
 
+use crate::escape::xml;
 use crate::model::{RunResult, Status};
-
-fn xml(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
 
 /// The document.
 pub fn junit(results: &[RunResult]) -> String {
@@ -38,7 +32,7 @@ pub fn junit(results: &[RunResult]) -> String {
                 let _ = write!(
                     s,
                     "<failure type=\"{}\" message=\"{}\">{}</failure>",
-                    st,
+                    xml(&st.to_string()),
                     xml(first_line(&r.reason)),
                     xml(&r.reproduce)
                 );

@@ -28,12 +28,13 @@ pub mod pareto;
 
 pub use model::{Diagnosis, FailedCheck, Metrics, RunResult, Status, TimeBudget, TwinMetric};
 
-/// Writes a conformance run's reports into `out/latest` and `out/runs/STAMP`: results.csv,
-/// failures.csv, errors.csv, twins.csv, drivers.txt, report.json, junit.xml, report.html.
+/// Writes a conformance run's reports into its directory `dir`: results.csv, failures.csv,
+/// errors.csv, twins.csv, drivers.txt, report.json, junit.xml, report.html (the runner
+/// publishes the directory as `latest` once this succeeds).
 /// `failures` is where the workers wrote each failing run's pictures, `pictures` every judged
 /// run's gallery pictures (one directory per run in each).
 pub fn write_conformance(
-    out: &Path,
+    dir: &Path,
     failures: &Path,
     pictures: &Path,
     results: &[RunResult],
@@ -46,23 +47,22 @@ pub fn write_conformance(
     let junit = junit::junit(results);
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     let html = html::report(results, drivers, failures, pictures, &command, budget);
-    let stamp = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_secs())
-        .unwrap_or(0);
-    for dir in [out.join("latest"), out.join("runs").join(stamp.to_string())] {
-        std::fs::create_dir_all(&dir)?;
-        std::fs::write(dir.join("results.csv"), &tables.results)?;
-        std::fs::write(dir.join("failures.csv"), &tables.failures)?;
-        std::fs::write(dir.join("errors.csv"), &tables.errors)?;
-        std::fs::write(dir.join("twins.csv"), &tables.twins)?;
-        std::fs::write(dir.join("drivers.txt"), drivers)?;
-        std::fs::write(
-            dir.join("report.json"),
-            serde_json::to_string_pretty(&report).unwrap_or_default(),
-        )?;
-        std::fs::write(dir.join("junit.xml"), &junit)?;
-        std::fs::write(dir.join("report.html"), &html)?;
+    let json = serde_json::to_string_pretty(&report).map_err(std::io::Error::other)?;
+    std::fs::create_dir_all(dir)?;
+    for (name, text) in [
+        ("results.csv", tables.results.as_str()),
+        ("failures.csv", &tables.failures),
+        ("errors.csv", &tables.errors),
+        ("twins.csv", &tables.twins),
+        ("drivers.txt", drivers),
+        ("report.json", &json),
+        ("junit.xml", &junit),
+        ("report.html", &html),
+    ] {
+        // Flushed and synced: a full disk shows here, as an error, not later as a short file.
+        let mut f = std::fs::File::create(dir.join(name))?;
+        std::io::Write::write_all(&mut f, text.as_bytes())?;
+        f.sync_all()?;
     }
     Ok(())
 }

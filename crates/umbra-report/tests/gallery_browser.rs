@@ -186,3 +186,87 @@ fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
         "the detail view shows the reproduce command"
     );
 }
+
+/// What a case's name, a driver's string or an error may hold: a comment opener and a script
+/// element (which once made the gallery's JSON swallow the rest of the page), quotes, an
+/// escape sequence and a carriage return (which once reached junit.xml and the terminal raw),
+/// a NUL, U+2028 and a bidirectional override.
+const HOSTILE: &str = "<!-- <script>document.title='pwned'</script> & \"q\" 'a' \u{1b}[2K\rconformance: 0 failed\u{0}\u{2028}\u{202e}x";
+
+#[test]
+fn hostile_strings_leave_every_section_and_the_script_intact_in_chromium() {
+    let dir = scratch("hostile");
+    let pictures = dir.join("pictures");
+    let mut results = Vec::new();
+    for (i, status) in [
+        Status::Fail,
+        Status::ExpectedFail,
+        Status::Skip(HOSTILE.into()),
+        Status::Pass,
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let mut r = run("gl33/llvmpipe", &format!("hostile-{i}"), status);
+        r.reason = HOSTILE.into();
+        r.diagnosis = Some(umbra_report::Diagnosis {
+            drivers: 2,
+            agree: 2,
+            disagree: vec![HOSTILE.into()],
+            message: HOSTILE.into(),
+        });
+        r.reproduce = format!("umbra render {HOSTILE}");
+        let d = pictures.join(umbra_report::names::file_name(&r.name));
+        std::fs::create_dir_all(&d).expect("run dir");
+        png(&d.join("thumb.png"), 48, 36, 10);
+        results.push(r);
+    }
+    umbra_report::write_conformance(
+        &dir,
+        &dir.join("failures"),
+        &pictures,
+        &results,
+        &format!("gl33/llvmpipe: Mesa | {HOSTILE} | 4.5"),
+        &serde_json::json!({}),
+        &TimeBudget::default(),
+    )
+    .expect("write reports");
+    let page = dir.join("report.html");
+    let (dom, log) = dump(&page, "");
+    assert_eq!(attribute(&dom, "data-script-errors"), None, "script errors");
+    assert!(!log.contains("Uncaught"), "console: {log}");
+    assert!(!dom.contains("<title>pwned"), "a reason's script ran");
+    // Every section is there after the gallery (the JSON block did not swallow the page).
+    let sections = std::fs::read_to_string(&page)
+        .expect("page")
+        .matches("<h2")
+        .count();
+    assert!(sections >= 6, "{sections} sections in the source");
+    assert_eq!(dom.matches("<h2").count(), sections, "sections in the DOM");
+    assert_eq!(
+        attribute(&dom, "data-gallery-cells"),
+        Some(results.len().to_string().as_str()),
+        "the gallery's script ran over every run"
+    );
+
+    // junit.xml: only characters XML 1.0 allows, markup escaped.
+    let junit = std::fs::read_to_string(dir.join("junit.xml")).expect("junit");
+    let bad: Vec<char> = junit
+        .chars()
+        .filter(|c| {
+            !(matches!(c, '\t' | '\n' | '\r')
+                || (*c >= ' ' && !matches!(c, '\u{fffe}' | '\u{ffff}')))
+        })
+        .collect();
+    assert!(bad.is_empty(), "characters XML 1.0 forbids: {bad:?}");
+    assert!(
+        !junit.contains("<script") && !junit.contains("<!--"),
+        "{junit}"
+    );
+    assert!(!junit.contains('\r'), "a raw carriage return: {junit:?}");
+    // report.json reads back with the text as it was.
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).expect("json"))
+            .expect("report.json is JSON");
+    assert!(json.to_string().contains("pwned"));
+}

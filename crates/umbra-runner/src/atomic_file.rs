@@ -8,10 +8,15 @@ use std::path::{Path, PathBuf};
 
 /// Writes `path` through `write`, which is handed a temporary path in the same directory
 /// with the same extension (`.PID.NAME`), then renamed over `path`.
+/// On any error (a full disk, a read-only directory) the temporary file is removed and
+/// `path` is as it was.
 pub fn replace(path: &Path, write: impl FnOnce(&Path) -> io::Result<()>) -> io::Result<()> {
     let tmp = temporary(path);
-    write(&tmp)?;
-    std::fs::rename(&tmp, path)
+    let done = write(&tmp).and_then(|()| std::fs::rename(&tmp, path));
+    if done.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    done
 }
 
 /// Writes `bytes` to `path` as [`replace`] does.
@@ -22,4 +27,54 @@ pub fn write(path: &Path, bytes: &[u8]) -> io::Result<()> {
 fn temporary(path: &Path) -> PathBuf {
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("file");
     path.with_file_name(format!(".{}.{name}", std::process::id()))
+}
+
+/// Removes from `dir` the temporary files of [`replace`] whose process has ended (killed
+/// before it could rename or remove them); returns how many. A live process's are left.
+pub fn sweep(dir: &Path) -> usize {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    let mut removed = 0;
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let Some(pid) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix('.'))
+            .and_then(|n| n.split_once('.'))
+            .and_then(|(pid, _)| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if !Path::new(&format!("/proc/{pid}")).exists() && std::fs::remove_file(e.path()).is_ok() {
+            removed += 1;
+        }
+    }
+    removed
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_failed_write_leaves_no_temporary_and_the_old_file() {
+        let dir = std::env::temp_dir().join(format!("umbra-atomic-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("dir");
+        let target = dir.join("entry.bin");
+        super::write(&target, b"old").expect("write");
+        let failed = super::replace(&target, |tmp| {
+            std::fs::write(tmp, b"half")?;
+            Err(std::io::Error::other("disk full"))
+        });
+        assert!(failed.is_err());
+        assert_eq!(std::fs::read(&target).expect("kept"), b"old");
+        let names: Vec<_> = std::fs::read_dir(&dir).expect("list").flatten().collect();
+        assert_eq!(names.len(), 1, "the temporary file is removed");
+        // A dead process's temporary is swept; a live one's (this process's) is kept.
+        std::fs::write(dir.join(".4194303999.entry.bin"), b"x").expect("stale");
+        std::fs::write(dir.join(format!(".{}.other.bin", std::process::id())), b"x").expect("live");
+        assert_eq!(super::sweep(&dir), 1);
+        assert_eq!(std::fs::read_dir(&dir).expect("list").count(), 2);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

@@ -128,6 +128,10 @@ pub const FLAGS: &[Flag] = &[
         "verbose",
         "print every run's details, not just the ones that need a look",
     ),
+    switch(
+        "bless",
+        "accept every changed or new golden (what `cargo xtask bless` runs; refused under CI=true); review with `git diff golden/` before committing",
+    ),
     valued(
         "point",
         "GLOB",
@@ -253,6 +257,7 @@ pub const COMMANDS: &[Spec] = &[
             "max-memory",
             "judge-cache",
             "verbose",
+            "bless",
         ],
         required: &[],
         hidden: false,

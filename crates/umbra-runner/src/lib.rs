@@ -12,3 +12,4 @@ pub mod commands;
 pub mod glob;
 pub mod harness;
 pub mod judge;
+pub mod run_dir;

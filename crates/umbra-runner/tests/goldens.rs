@@ -1,5 +1,6 @@
 //! Goldens through insta, end to end, in a scratch golden directory:
-//! missing golden under CI → fail, nothing written; bless (`INSTA_UPDATE=always`) → written;
+//! missing golden under CI → fail, nothing written; bless (`--bless`, what `cargo xtask
+//! bless` runs) → written;
 //! unchanged → pass without rewriting; a deliberately changed golden → fail under CI with
 //! nothing written, and outside CI a pending `.snap.new` for `cargo insta review`.
 
@@ -11,6 +12,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn umbra(golden: &Path, out: &Path, env: &[(&str, &str)]) -> Output {
+    umbra_with(golden, out, env, &[])
+}
+
+fn umbra_with(golden: &Path, out: &Path, env: &[(&str, &str)], extra: &[&str]) -> Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_umbra"));
     cmd.args([
         "conformance",
@@ -23,6 +28,7 @@ fn umbra(golden: &Path, out: &Path, env: &[(&str, &str)]) -> Output {
         "--out",
         out.to_str().unwrap_or_default(),
     ])
+    .args(extra)
     .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
     .env_remove("CI")
     .env_remove("INSTA_UPDATE");
@@ -60,7 +66,7 @@ fn goldens_fail_on_change_and_are_only_written_by_blessing() {
     );
     assert!(files(&golden).is_empty(), "CI wrote {:?}", files(&golden));
 
-    let o = umbra(&golden, &out, &[("INSTA_UPDATE", "always")]);
+    let o = umbra_with(&golden, &out, &[], &["--bless"]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     let written = files(&golden);
     // The golden (snapshot + picture); the reference has no driver version, so no manifest
@@ -104,7 +110,7 @@ fn goldens_fail_on_change_and_are_only_written_by_blessing() {
         "CI must not write a pending snapshot"
     );
 
-    let o = umbra(&golden, &out, &[("INSTA_UPDATE", "new")]);
+    let o = umbra(&golden, &out, &[]);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     assert!(
         files(&golden).iter().any(|f| f.ends_with(".snap.new")),

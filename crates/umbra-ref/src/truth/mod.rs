@@ -93,46 +93,18 @@ struct Scene<'a> {
     map: [u32; 2],
     eps: f64,
     radius: i32,
+    inv_cam: DMat4,
+    size: [u32; 2],
 }
 
 /// Computes the truth of `run`.
 pub fn ground_truth(run: &Prepared) -> Truth {
     let start = Instant::now();
-    let case = run.case();
-    let geo = &run.geometry;
-    let conv = Convention::ZERO_TO_ONE;
-    let (lo, hi) = geo.bounds();
-    let extent = f64::from((hi - lo).max_element()).max(1e-6);
-    let faces = run
-        .light
-        .views
-        .iter()
-        .map(|v| {
-            let m = to_f64(v.view_proj(conv));
-            (m, m.inverse())
-        })
-        .collect();
-    let scene = Scene {
-        bvh: Bvh::new(geo),
-        face: &geo.face,
-        light: run.light.kind,
-        faces,
-        map: case.shadow.size,
-        eps: extent * 1e-9,
-        radius: edge_radius(case.shadow.filter),
-    };
     let [w, h] = run.camera.size;
-    let inv_cam = to_f64(run.camera.view_proj(conv)).inverse();
+    let scene = Scene::new(run);
     let pixels: Vec<(Class, bool, u32, DVec3)> = (0..w * h)
         .into_par_iter()
-        .map(|i| {
-            let (x, y) = (i % w, i / w);
-            let ndc_x = (f64::from(x) + 0.5) / f64::from(w) * 2.0 - 1.0;
-            let ndc_y = 1.0 - (f64::from(y) + 0.5) / f64::from(h) * 2.0;
-            let near = project(inv_cam, DVec3::new(ndc_x, ndc_y, 0.0));
-            let far = project(inv_cam, DVec3::new(ndc_x, ndc_y, 1.0));
-            scene.pixel(&Ray::new(near, far - near))
-        })
+        .map(|i| scene.camera_pixel(i))
         .collect();
     let mut truth = Truth {
         width: w,
@@ -151,6 +123,61 @@ pub fn ground_truth(run: &Prepared) -> Truth {
     }
     truth.elapsed = start.elapsed();
     truth
+}
+
+/// The truth of `run` at the pixels `at` (row-major indices), each exactly what
+/// [`ground_truth`] computes there: class, edge flag and face. A stored truth is checked
+/// against a sample of its pixels this way (the judging cache's sanity check) at the cost of
+/// those pixels' rays, not the frame's.
+pub fn truth_at(run: &Prepared, at: &[usize]) -> Vec<(Class, bool, u32)> {
+    let scene = Scene::new(run);
+    at.iter()
+        .map(|&i| {
+            let (c, e, f, _) = scene.camera_pixel(i as u32);
+            (c, e, f)
+        })
+        .collect()
+}
+
+impl<'a> Scene<'a> {
+    fn new(run: &'a Prepared) -> Scene<'a> {
+        let case = run.case();
+        let geo = &run.geometry;
+        let conv = Convention::ZERO_TO_ONE;
+        let (lo, hi) = geo.bounds();
+        let extent = f64::from((hi - lo).max_element()).max(1e-6);
+        let faces = run
+            .light
+            .views
+            .iter()
+            .map(|v| {
+                let m = to_f64(v.view_proj(conv));
+                (m, m.inverse())
+            })
+            .collect();
+        Scene {
+            bvh: Bvh::new(geo),
+            face: &geo.face,
+            light: run.light.kind,
+            faces,
+            map: case.shadow.size,
+            eps: extent * 1e-9,
+            radius: edge_radius(case.shadow.filter),
+            inv_cam: to_f64(run.camera.view_proj(conv)).inverse(),
+            size: run.camera.size,
+        }
+    }
+
+    /// The truth at camera pixel `i` (row-major), through the pixel's centre.
+    fn camera_pixel(&self, i: u32) -> (Class, bool, u32, DVec3) {
+        let [w, h] = self.size;
+        let (x, y) = (i % w, i / w);
+        let ndc_x = (f64::from(x) + 0.5) / f64::from(w) * 2.0 - 1.0;
+        let ndc_y = 1.0 - (f64::from(y) + 0.5) / f64::from(h) * 2.0;
+        let near = project(self.inv_cam, DVec3::new(ndc_x, ndc_y, 0.0));
+        let far = project(self.inv_cam, DVec3::new(ndc_x, ndc_y, 1.0));
+        self.pixel(&Ray::new(near, far - near))
+    }
 }
 
 impl Scene<'_> {

@@ -13,9 +13,12 @@
 //!   is a Flake.
 //! - Statuses and expectations: [`crate::judge::expectations`]. A case file that cannot be loaded fails the
 //!   run under its own name.
-//! - Reports in `OUT/latest/` and `OUT/runs/<unix time>/`: `results.csv` and `failures.csv`
-//!   (deqp-runner's formats), `junit.xml`, `report.json`, `report.html` (self-contained),
-//!   `errors.csv`, `drivers.txt`, and the pictures of each failure under `failures/`.
+//! - Reports in the run's own directory `OUT/runs/ID/` ([`crate::run_dir`]), shown by the link
+//!   `OUT/latest` once complete: `results.csv` and `failures.csv` (deqp-runner's formats),
+//!   `junit.xml`, `report.json`, `report.html` (self-contained), `errors.csv`, `drivers.txt`,
+//!   the pictures of each failure under `failures/` and the gallery's under `pictures/`. An
+//!   interrupted run (SIGINT, SIGTERM: [`crate::harness::interrupt`]) or one that cannot
+//!   write its reports is not published and exits 130 or 125, saying where it left what.
 //! - Exit codes: 0 all as expected, 1 a regression (Fail, Crash, Timeout, UnexpectedPass),
 //!   125 nothing could run (no case, no available backend, bad arguments or expectations), so
 //!   `git bisect run cargo xtask conformance --filter X` works.
@@ -31,6 +34,8 @@ use crate::args::Args;
 use crate::harness::pool::{Reply, Worker};
 use crate::harness::worker::{Request, RunReport};
 use crate::judge::expectations::Expectations;
+use crate::run_dir::RunDir;
+use umbra_report::escape::{shell_word, term};
 use umbra_report::{Metrics, RunResult, Status, TimeBudget};
 
 /// A point's swept values, `(path, value)` in axis order.
@@ -73,12 +78,18 @@ struct Settings {
     gallery: PathBuf,
     expectations: Expectations,
     verbose: bool,
+    /// `--bless`: workers may write goldens.
+    bless: bool,
 }
 
 /// Runs the command; returns the process exit code.
 pub fn main(args: &Args) -> i32 {
     run(args).code
 }
+
+/// What a command built on a conformance run adds to its reports (`umbra soak`'s table),
+/// written into the run's directory before it is published.
+pub type Extra<'a> = &'a dyn Fn(&Path, &[RunResult]) -> std::io::Result<()>;
 
 /// What a conformance run ended with: its exit code and every run's result (empty when it
 /// could not start).
@@ -98,8 +109,15 @@ impl From<i32> for Finished {
     }
 }
 
-/// Runs the conformance job as `main` does and returns its results too (for `umbra soak`).
+/// Runs the conformance job as `main` does and returns its results too.
 pub fn run(args: &Args) -> Finished {
+    run_in(args, None, None)
+}
+
+/// [`run`] into `run_dir` when the caller made it (`umbra soak` writes its cases there
+/// first), with `extra` reports.
+pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Finished {
+    crate::harness::interrupt::install();
     let build = match crate::harness::mesa_build::select(args.value("mesa")) {
         Ok(b) => b,
         Err(e) => {
@@ -125,17 +143,41 @@ pub fn run(args: &Args) -> Finished {
         Err(e) => return usage(&e).into(),
     };
     let jobs = match args.value("jobs").map(str::parse::<usize>).transpose() {
-        Ok(j) => j
-            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-            .max(1),
+        Ok(Some(0)) => {
+            return usage("--jobs 0: at least one worker must run; give --jobs 1 or more (default: the core count)").into();
+        }
+        Ok(j) => j.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
         Err(_) => return usage("--jobs takes a positive number").into(),
     };
     let timeout = match args.value("timeout").map(str::parse::<u64>).transpose() {
+        Ok(Some(0)) => {
+            return usage("--timeout 0: no run can finish in no time; give whole seconds, 1 or more (default 300)").into();
+        }
         Ok(t) => Duration::from_secs(t.unwrap_or(300)),
         Err(_) => return usage("--timeout takes whole seconds").into(),
     };
-    if let Err(e) = crate::harness::memory_limit::select(args.value("max-memory"), jobs) {
-        return Finished::from(usage(&e));
+    if let Err(e) = crate::harness::memory_limit::check_jobs(jobs) {
+        return usage(&e).into();
+    }
+    match crate::harness::memory_limit::select(args.value("max-memory"), jobs) {
+        Ok(b) if b < umbra_case::memory::BASE_BYTES => {
+            return usage(&format!(
+                "the memory budget per worker, {}, is below one run's base ({}: a worker with its driver, before any case; umbra_case::memory::BASE_BYTES); give --max-memory 1GiB or more, or fewer --jobs",
+                umbra_case::memory::gib(b),
+                umbra_case::memory::gib(umbra_case::memory::BASE_BYTES)
+            ))
+            .into();
+        }
+        Ok(_) => {}
+        Err(e) => return Finished::from(usage(&e)),
+    }
+    if let Some(dir) = args.value("golden").filter(|d| *d != "none") {
+        if !Path::new(dir).is_dir() {
+            return usage(&format!(
+                "--golden {dir}: no such directory; give the golden directory (golden/), or --golden none to run without golden checks"
+            ))
+            .into();
+        }
     }
     let expectations = match Expectations::load(Path::new(
         args.value("expectations").unwrap_or("expectations"),
@@ -195,6 +237,9 @@ pub fn run(args: &Args) -> Finished {
             }),
         }
     }
+    if let Some(e) = duplicate_names(&points) {
+        return usage(&e).into();
+    }
     let mut plan = Vec::new();
     for b in &backends {
         for (file, ids) in &points {
@@ -213,19 +258,65 @@ pub fn run(args: &Args) -> Finished {
             }
         }
     }
+    {
+        let known = crate::harness::registry::known();
+        let mut ids: Vec<&str> = known.iter().map(String::as_str).collect();
+        if crate::harness::fake::enabled() {
+            ids.extend(crate::harness::fake::IDS);
+        }
+        let runs: Vec<(String, &serde_json::Value)> =
+            plan.iter().map(|p| (p.name(), &*p.case)).collect();
+        if let Err(e) = expectations.validate(&ids, &runs) {
+            eprintln!("error: {e}");
+            return 125.into();
+        }
+    }
+    let selected = plan.len();
     let plan: Vec<Planned> = plan
         .into_iter()
         .enumerate()
         .filter(|(i, _)| i % shard.1 == shard.0)
         .map(|(_, p)| p)
         .collect();
-    if plan.is_empty() && results.is_empty() {
-        eprintln!(
-            "error: --filter {filter:?} (shard {}/{}) selects no run",
-            shard.0, shard.1
-        );
+    if selected == 0 && results.is_empty() {
+        eprintln!("error: --filter {filter:?} selects no run");
         return 125.into();
     }
+    if plan.is_empty() && results.is_empty() {
+        // More shards than runs (a CI matrix sized for a larger plan): an empty shard is a
+        // successful one.
+        println!(
+            "note: shard {}/{} holds none of the {selected} selected runs (there are more shards than runs); nothing to do",
+            shard.0, shard.1
+        );
+        println!("conformance: 0 passed, 0 failed, 0 skipped");
+        return 0.into();
+    }
+
+    let bless = args.has("bless");
+    if bless && crate::judge::golden::under_ci() {
+        return usage("--bless: CI=true: goldens change only through review (`cargo xtask bless` or `cargo insta review` on a desk), never in CI").into();
+    }
+    if bless && args.value("golden") == Some("none") {
+        return usage("--bless with --golden none: there are no goldens to bless").into();
+    }
+    let inherited = crate::judge::golden::inherited_insta();
+    if !inherited.is_empty() {
+        eprintln!(
+            "note: ignored {} from the environment: umbra sets insta's environment itself; goldens change only through `cargo xtask bless` or `cargo insta review`",
+            term(&inherited.join(" "))
+        );
+    }
+    let run_dir = match run_dir.map_or_else(|| RunDir::create(&out), Ok) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!(
+                "error: cannot create a run directory under {}: {e}; give --out a writable directory",
+                out.join("runs").display()
+            );
+            return 125.into();
+        }
+    };
 
     // Execute.
     let started = Instant::now();
@@ -248,13 +339,12 @@ pub fn run(args: &Args) -> Finished {
         judge_cache,
         timeout,
         golden,
-        failures: out.join("latest").join("failures"),
-        gallery: out.join("latest").join("pictures"),
+        failures: run_dir.dir.join("failures"),
+        gallery: run_dir.dir.join("pictures"),
         expectations,
         verbose: args.has("verbose"),
+        bless,
     };
-    let _ = std::fs::remove_dir_all(&settings.failures);
-    let _ = std::fs::remove_dir_all(&settings.gallery);
     let mut groups: BTreeMap<String, VecDeque<Planned>> = BTreeMap::new();
     for p in plan {
         groups.entry(p.backend.clone()).or_default().push_back(p);
@@ -299,6 +389,7 @@ pub fn run(args: &Args) -> Finished {
         refused,
         unavailable_runs,
         progress,
+        storage,
         ..
     } = match done.into_inner() {
         Ok(d) => d,
@@ -308,6 +399,21 @@ pub fn run(args: &Args) -> Finished {
         }
     };
     progress.close();
+    if let Some(sig) = crate::harness::interrupt::requested() {
+        run_dir.abandon(&format!(
+            "interrupted by {} after {} of {total} runs",
+            crate::harness::interrupt::name(sig),
+            results.len()
+        ));
+        return Finished { code: 130, results };
+    }
+    if let Some(first) = storage.first() {
+        run_dir.abandon(&format!(
+            "{} run(s) could not write their pictures ({first})",
+            storage.len()
+        ));
+        return Finished { code: 125, results };
+    }
     driver_rows.sort_by(|a, b| a["backend"].as_str().cmp(&b["backend"].as_str()));
     let drivers = format!(
         "Mesa: {}\n{drivers}",
@@ -330,17 +436,20 @@ pub fn run(args: &Args) -> Finished {
         "mesa_build": build,
         "drivers": driver_rows,
     });
-    if let Err(e) = umbra_report::write_conformance(
-        &out,
-        &out.join("latest").join("failures"),
-        &out.join("latest").join("pictures"),
+    let written = umbra_report::write_conformance(
+        &run_dir.dir,
+        &settings.failures,
+        &settings.gallery,
         &results,
         &drivers,
         &header,
         &budget,
-    ) {
-        eprintln!("error: cannot write reports under {}: {e}", out.display());
-        return 125.into();
+    )
+    .and_then(|()| extra.map_or(Ok(()), |f| f(&run_dir.dir, &results)))
+    .and_then(|()| run_dir.publish());
+    if let Err(e) = written {
+        run_dir.abandon(&format!("cannot write the reports: {e}"));
+        return Finished { code: 125, results };
     }
     let count = |name: &str| results.iter().filter(|r| r.status.name() == name).count();
     let regressions: Vec<&RunResult> = results
@@ -348,20 +457,21 @@ pub fn run(args: &Args) -> Finished {
         .filter(|r| r.status.is_regression())
         .collect();
     println!(
-        "\n{} runs in {:.1} s; reports in {}",
+        "\n{} runs in {:.1} s; reports in {} (-> runs/{})",
         results.len(),
         started.elapsed().as_secs_f64(),
-        out.join("latest").display()
+        out.join("latest").display(),
+        run_dir.id
     );
     for r in &regressions {
         println!(
             "  regression: {} {}: {}",
             r.status,
-            r.name,
-            first_line(&r.reason)
+            term(&r.name),
+            term(first_line(&r.reason))
         );
         if let Some(d) = &r.diagnosis {
-            println!("    {}", d.message);
+            println!("    {}", term(&d.message));
         }
     }
     let suspects = results
@@ -395,7 +505,7 @@ pub fn run(args: &Args) -> Finished {
         );
     }
     // Blessing (`cargo xtask bless`): record the driver each backend's goldens now match.
-    if std::env::var("INSTA_UPDATE").is_ok_and(|v| v == "always") {
+    if settings.bless {
         if let Some(dir) = &settings.golden {
             let version_of = |b: &str| {
                 driver_rows
@@ -524,6 +634,28 @@ impl Monotone {
     }
 }
 
+/// Two case files that give one case name (their runs would share a name, a row and a
+/// golden): the error naming both.
+fn duplicate_names(points: &[(PathBuf, Vec<PointPlan>)]) -> Option<String> {
+    let mut seen: BTreeMap<String, &Path> = BTreeMap::new();
+    for (file, ids) in points {
+        let Some(name) = ids
+            .first()
+            .and_then(|(_, _, case)| case["name"].as_str().map(str::to_string))
+        else {
+            continue;
+        };
+        if let Some(first) = seen.insert(name.clone(), file) {
+            return Some(format!(
+                "{} and {} both have \"name\": {name:?}; their runs, rows and goldens would be one; rename one (the field `name`)",
+                first.display(),
+                file.display()
+            ));
+        }
+    }
+    None
+}
+
 fn usage(msg: &str) -> i32 {
     eprintln!("error: {msg}\nusage: {}", crate::cli::usage("conformance"));
     125
@@ -556,6 +688,9 @@ struct Collected {
     refused: Vec<String>,
     unavailable_runs: usize,
     finished: usize,
+    /// Pictures that could not be written (a full disk), one line per run: the run's
+    /// report would be incomplete, so it is not published.
+    storage: Vec<String>,
     /// What the terminal shows while the run goes on.
     progress: crate::harness::progress::Progress,
 }
@@ -579,6 +714,10 @@ struct Queues {
 impl Queues {
     /// A backend to work on, and whether this is its first worker (which reports its driver).
     fn pick(&mut self) -> Option<(String, bool)> {
+        // Interrupted: no new run starts; those in flight finish.
+        if crate::harness::interrupt::requested().is_some() {
+            return None;
+        }
         let left = |b: &String| self.remaining.get(b).map_or(0, VecDeque::len);
         let busy = |b: &String| self.busy.get(b).copied().unwrap_or(0);
         let free = self
@@ -603,6 +742,9 @@ impl Queues {
 
     /// The next run of `backend`, if any is left.
     fn next_run(&mut self, backend: &str) -> Option<Planned> {
+        if crate::harness::interrupt::requested().is_some() {
+            return None;
+        }
         self.remaining.get_mut(backend)?.pop_front()
     }
 
@@ -631,6 +773,9 @@ fn run_group(
         crate::judge::judge_cache::ENV.into(),
         settings.judge_cache.clone(),
     ));
+    if settings.bless {
+        env.extend(crate::judge::golden::insta_env(true));
+    }
     let start_worker = || {
         let t = Instant::now();
         let w = Worker::start(backend, &env, settings.timeout);
@@ -777,6 +922,7 @@ fn run_group(
             golden,
             fingerprint,
             under_deviation,
+            storage,
         } = outcome;
         let (status, expected) =
             expectations.apply(&name, &p.case, raw, &failed, under_deviation.as_deref());
@@ -800,10 +946,10 @@ fn run_group(
             golden,
             time_s: t0.elapsed().as_secs_f64(),
             reproduce: format!(
-                "cargo run --bin umbra -- render {} --backend {} --point '{}'",
-                p.file.display(),
+                "cargo run --bin umbra -- render {} --backend {} --point {}",
+                shell_word(&p.file.display().to_string()),
                 p.backend,
-                p.id
+                shell_word(&p.id)
             ),
             diagnosis: None,
             fingerprint,
@@ -830,6 +976,7 @@ fn run_group(
             if unavailable.is_some() && start_error.is_none() {
                 d.unavailable_runs += 1;
             }
+            d.storage.extend(storage);
             d.results.push(result);
         }
     }
@@ -845,6 +992,7 @@ struct Attempt {
     golden: Option<String>,
     fingerprint: Option<umbra_compare::consensus::Fingerprint>,
     under_deviation: Option<Vec<umbra_report::FailedCheck>>,
+    storage: Option<String>,
 }
 
 impl Attempt {
@@ -858,6 +1006,7 @@ impl Attempt {
             golden: None,
             fingerprint: None,
             under_deviation: None,
+            storage: None,
         }
     }
 }
@@ -918,5 +1067,6 @@ fn from_report(r: RunReport) -> Attempt {
         golden: r.golden,
         fingerprint: r.fingerprint,
         under_deviation: r.under_deviation,
+        storage: r.storage,
     }
 }

@@ -3,12 +3,13 @@
 //! The catalogue is the set the tolerance model was built around; a model too tight for
 //! some technique can pass all of it and fail a correct driver on the first case a user
 //! writes. The soak draws `N` valid cases from seed `S` ([`umbra_case::generate`]), writes
-//! them under `OUT/cases/`, and runs them on every selected backend as a conformance run does
+//! them under the run's own directory (`OUT/runs/ID/cases/`), and runs them on every selected backend as a conformance run does
 //! with the judge alone (no goldens: generated cases have none), expectations applied. It
 //! prints, per backend, the runs, passes, skips, diagnosed deviations (expected failures,
 //! matched by cause on cases that have never been seen) and failures by class, counting
 //! those the consensus diagnosis marks as suspected model errors apart. Reports go where a
-//! conformance run puts them (`OUT/latest/`), and `OUT/latest/soak.csv` holds the table.
+//! conformance run puts them ([`crate::run_dir`]: `OUT/latest` shows the run once complete),
+//! and `soak.csv` beside them holds the table.
 //!
 //! The exit code is the conformance run's: 0 when every run is as expected, 1 on any
 //! failure, 125 when nothing could run.
@@ -34,14 +35,27 @@ pub fn main(args: &Args) -> i32 {
         Ok(c) => c.unwrap_or(100),
     };
     let out = PathBuf::from(args.value("out").unwrap_or(DEFAULT_OUT));
-    let dir = out.join("cases");
+    // The cases live in the run's own directory: two soaks into one --out never share them,
+    // and the report's reproduce commands keep pointing at them.
+    let run_dir = match crate::run_dir::RunDir::create(&out) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!(
+                "error: cannot create a run directory under {}: {e}; give --out a writable directory",
+                out.join("runs").display()
+            );
+            return 125;
+        }
+    };
+    let dir = run_dir.dir.join("cases");
     if let Err(e) = write_cases(&dir, seed, count) {
-        eprintln!(
-            "error: cannot write the generated cases under {}: {e}",
+        run_dir.abandon(&format!(
+            "cannot write the generated cases under {}: {e}",
             dir.display()
-        );
+        ));
         return 125;
     }
+    let run_path = run_dir.dir.clone();
     println!(
         "soak: {count} cases of seed {seed} under {} (umbra_case::generate)",
         dir.display()
@@ -70,8 +84,13 @@ pub fn main(args: &Args) -> i32 {
         run_args.set("verbose", String::new());
     }
     let started = std::time::Instant::now();
-    let finished = super::conformance::run(&run_args);
+    let soak_csv = |dir: &Path, results: &[RunResult]| {
+        std::fs::write(dir.join("soak.csv"), Table::of(results).csv())
+    };
+    let finished = super::conformance::run_in(&run_args, Some(run_dir), Some(&soak_csv));
     if finished.results.is_empty() {
+        // Nothing ran (a usage error, said above): the run's directory holds only the cases.
+        let _ = std::fs::remove_dir_all(&run_path);
         return finished.code;
     }
     let table = Table::of(&finished.results);
@@ -79,10 +98,6 @@ pub fn main(args: &Args) -> i32 {
         "{}",
         table.text(seed, count, started.elapsed().as_secs_f64())
     );
-    let csv = out.join("latest").join("soak.csv");
-    if let Err(e) = std::fs::write(&csv, table.csv()) {
-        eprintln!("error: cannot write {}: {e}", csv.display());
-    }
     finished.code
 }
 

@@ -17,6 +17,7 @@ pub fn rerun(args: &[String], env: &[(String, String)]) -> i32 {
     };
     let mut cmd = Command::new(exe);
     cmd.args(args);
+    crate::harness::pool::without_inherited_insta(&mut cmd);
     for (k, v) in env {
         cmd.env(k, v);
     }

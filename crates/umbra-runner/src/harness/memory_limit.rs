@@ -38,6 +38,26 @@ pub fn select(arg: Option<&str>, workers: usize) -> Result<u64, String> {
     Ok(*BUDGET.get_or_init(|| b))
 }
 
+/// Whether `jobs` workers at once fit this machine: each needs at least one run's base
+/// ([`umbra_case::memory::BASE_BYTES`]: a process with its driver, before any case) of the
+/// memory the kernel reports available. An error naming `--jobs` and the most that fit.
+pub fn check_jobs(jobs: usize) -> Result<(), String> {
+    let Some(avail) = available() else {
+        return Ok(());
+    };
+    let base = umbra_case::memory::BASE_BYTES;
+    let most = (avail / base).max(1);
+    if jobs as u64 > most {
+        return Err(format!(
+            "--jobs {jobs}: {jobs} workers need at least {} ({} each before any case), and this machine has {} available; give --jobs {most} or fewer (default: the core count)",
+            umbra_case::memory::gib(base.saturating_mul(jobs as u64)),
+            umbra_case::memory::gib(base),
+            umbra_case::memory::gib(avail)
+        ));
+    }
+    Ok(())
+}
+
 /// This process's budget ([`select`]ed, else from the environment, else the default for one
 /// worker).
 pub fn budget() -> u64 {

@@ -5,6 +5,7 @@
 
 pub mod child;
 pub mod fake;
+pub mod interrupt;
 pub mod measure;
 pub mod memory_limit;
 pub mod mesa_build;

@@ -50,6 +50,7 @@ impl Worker {
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit());
+        without_inherited_insta(&mut cmd);
         for (k, v) in env {
             cmd.env(k, v);
         }
@@ -118,6 +119,12 @@ impl Worker {
                     return Reply::TimedOut;
                 }
                 Err(RecvTimeoutError::Timeout) => {
+                    // Asked to stop (SIGINT, SIGTERM): the run in flight ends now, unpublished.
+                    if crate::harness::interrupt::requested().is_some() {
+                        let _ = self.child.kill();
+                        let _ = self.child.wait();
+                        return Reply::Crashed("interrupted".into());
+                    }
                     if let Some(why) = crate::harness::memory_limit::over(self.child.id(), budget) {
                         let _ = self.child.kill();
                         let _ = self.child.wait();
@@ -151,5 +158,16 @@ impl Drop for Worker {
     fn drop(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
+    }
+}
+
+/// Removes every inherited insta variable that steers it from `cmd`'s environment: goldens are written
+/// only as umbra decides ([`crate::judge::golden::insta_env`]), whatever the shell or the CI
+/// file set.
+pub fn without_inherited_insta(cmd: &mut Command) {
+    for (k, _) in std::env::vars_os() {
+        if crate::judge::golden::controls_insta(&k.to_string_lossy()) {
+            cmd.env_remove(k);
+        }
     }
 }

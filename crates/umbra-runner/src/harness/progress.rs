@@ -51,6 +51,9 @@ impl Progress {
     /// line (`[k/N] Status name (ms): reason`).
     pub fn finished(&mut self, status: &str, line: &str) {
         self.done += 1;
+        // The line carries a case's name and a driver's or an error's text: no control
+        // character of theirs reaches the terminal.
+        let line = umbra_report::escape::term(line);
         let quiet = match status {
             "Pass" | "ExpectedFail" | "Flake" => {
                 self.pass += 1;

@@ -87,10 +87,8 @@ pub fn worker_env(id: &str) -> Vec<(String, String)> {
     if std::env::var_os("GLIBC_TUNABLES").is_none() {
         env.push(("GLIBC_TUNABLES".into(), MALLOC_TUNABLES.into()));
     }
-    // insta's own mismatch summary repeats what the run's reason says; unless asked for.
-    if std::env::var_os("INSTA_OUTPUT").is_none() {
-        env.push(("INSTA_OUTPUT".into(), "none".into()));
-    }
+    // insta's whole environment is umbra's (the inherited one is removed at the spawn).
+    env.extend(crate::judge::golden::insta_env(false));
     env
 }
 

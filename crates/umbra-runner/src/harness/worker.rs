@@ -74,6 +74,10 @@ pub struct RunReport {
     /// judged with the deviation allowed (empty: the deviation explains the failure).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub under_deviation: Option<Vec<umbra_report::FailedCheck>>,
+    /// A picture of the run that could not be written (a full disk): the run's judgement
+    /// stands, but its report would be incomplete, so the conformance run is not published.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub storage: Option<String>,
 }
 
 /// Runs the worker loop; returns the exit code.
@@ -346,6 +350,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                     (g, _) => format!("{g:?}").to_lowercase(),
                 }
             });
+            let mut storage = None;
             if let Some(dir) = &req.gallery {
                 let golden = req.golden.as_ref().map(|g| {
                     let stem = crate::judge::golden::stem(&name);
@@ -354,22 +359,26 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                         g.join(format!("{stem}.snap.new.png")),
                     )
                 });
-                let _ = crate::judge::pictures::write_gallery(
-                    &dir.join(umbra_report::names::file_name(&name)),
+                let at = dir.join(umbra_report::names::file_name(&name));
+                if let Err(e) = crate::judge::pictures::write_gallery(
+                    &at,
                     &j,
                     golden.as_ref().map(|(a, b)| (a.as_path(), b.as_path())),
                     identical_to_golden,
-                );
+                ) {
+                    storage = Some(format!("cannot write pictures under {}: {e}", at.display()));
+                }
             }
             // Goldens and pictures: the PNG share of the time budget.
             metrics.golden_ms = golden_start.elapsed().as_secs_f64() * 1e3;
             let failing = !problems.is_empty();
             if failing {
                 if let Some(dir) = &req.failures {
-                    let _ = crate::judge::pictures::write_images(
-                        &dir.join(umbra_report::names::file_name(&name)),
-                        &j,
-                    );
+                    let at = dir.join(umbra_report::names::file_name(&name));
+                    if let Err(e) = crate::judge::pictures::write_images(&at, &j) {
+                        storage =
+                            Some(format!("cannot write pictures under {}: {e}", at.display()));
+                    }
                 }
             }
             // Judged again under the deviation the run's expectation names: what still fails
@@ -385,6 +394,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             });
             RunReport {
                 under_deviation,
+                storage,
                 outcome: if failing {
                     "fail".into()
                 } else {

@@ -363,6 +363,16 @@ impl Selector {
                 continue;
             }
             if let Some(glob) = t.strip_prefix("renderer=") {
+                if glob.is_empty() {
+                    return Err(format!(
+                        "@applies term {t:?} has an empty glob (e.g. renderer=*zink*)"
+                    ));
+                }
+                if let Some(why) = crate::glob::unpaired(glob) {
+                    return Err(format!(
+                        "@applies term {t:?} can never match a renderer: {why}"
+                    ));
+                }
                 terms.push(Term::Renderer(glob.to_string()));
                 continue;
             }
@@ -438,14 +448,21 @@ impl fmt::Display for Selector {
 pub struct Expectations(pub Vec<Expectation>);
 
 impl Expectations {
-    /// Reads `dir/*.txt` (a missing directory means no expectations).
+    /// Reads `dir/*.txt`. A directory that is not there is an error (a mistyped
+    /// `--expectations` would turn every expected failure into a regression); an empty one
+    /// means no expectations.
     pub fn load(dir: &Path) -> Result<Expectations, String> {
         let mut files: Vec<_> = match std::fs::read_dir(dir) {
             Ok(rd) => rd
                 .filter_map(|e| e.ok().map(|e| e.path()))
                 .filter(|p| p.extension().is_some_and(|x| x == "txt"))
                 .collect(),
-            Err(_) => return Ok(Expectations::default()),
+            Err(e) => {
+                return Err(format!(
+                    "--expectations {}: {e}; give the directory of expectation files (expectations/*.txt), or an empty directory for none",
+                    dir.display()
+                ));
+            }
         };
         files.sort();
         let mut out = Vec::new();
@@ -492,6 +509,53 @@ impl Expectations {
             }
         }
         Ok(Expectations(out))
+    }
+
+    /// Checks the lines against the runs they are for (`runs`: each planned run's name and
+    /// case point, `backends`: every backend id): a name glob that no run name can match,
+    /// and two lines that both claim one run when neither is a `Deviation:` (the second
+    /// would never apply, silently) are errors naming the lines and the fix.
+    pub fn validate(
+        &self,
+        backends: &[&str],
+        runs: &[(String, &serde_json::Value)],
+    ) -> Result<(), String> {
+        for e in &self.0 {
+            if let Some(why) = crate::glob::never_matches(&e.pattern, backends) {
+                return Err(format!(
+                    "{}: the pattern {:?} can never match a run: {why}",
+                    e.source, e.pattern
+                ));
+            }
+        }
+        let plain: Vec<&Expectation> = self
+            .0
+            .iter()
+            .filter(|e| !matches!(e.expected, Expected::Deviation(_)))
+            .collect();
+        for (name, case) in runs {
+            let mut claimed: Option<&Expectation> = None;
+            for e in &plain {
+                if !(crate::glob::matches(&e.pattern, name) && e.when.holds(case)) {
+                    continue;
+                }
+                match claimed {
+                    Some(first)
+                        if first.applies == e.applies
+                            || first.applies.0.is_empty()
+                            || e.applies.0.is_empty() =>
+                    {
+                        return Err(format!(
+                            "{} and {} both match run {name} (for the same drivers): the second would never apply; narrow one pattern or remove one line",
+                            first.source, e.source
+                        ));
+                    }
+                    Some(_) => {}
+                    None => claimed = Some(e),
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The expectations that apply to a backend with driver `d`.

@@ -5,8 +5,16 @@
 //! golden's own bytes with themselves; its clean-up of the snapshot's pending files is done by
 //! name), so an unchanged picture never churns the file. A result outside it hands its new
 //! bytes to insta, which records a pending snapshot for `cargo insta review` and fails the
-//! run; under `CI=true` insta writes nothing and the run fails. A missing golden is a change too.
-//! `cargo xtask bless` runs with `INSTA_UPDATE=always` and lists what it wrote.
+//! run. A missing golden is a change too. Under `CI=true` insta is not called at all and
+//! nothing under `golden/` is created, changed or deleted (pending files included): a change
+//! fails the run and says how to review it locally.
+//!
+//! Who may write a golden is umbra's decision, not the environment's: workers get insta's
+//! environment from [`insta_env`] only (every inherited `INSTA_*` variable is removed and the
+//! run says it ignored it), so `INSTA_UPDATE=always` or `INSTA_FORCE_PASS=1` in a shell or a
+//! CI file can neither write nor pass a golden. `cargo xtask bless` runs `umbra conformance
+//! --bless` (refused under `CI=true`), which alone sets `INSTA_UPDATE=always`, and lists what
+//! it wrote.
 //!
 //! Goldens stay per backend id; `golden/blessed-on.json` records the Mesa version goldens were
 //! blessed on (`cargo xtask bless` writes it): per backend, the version its goldens were first
@@ -122,16 +130,35 @@ pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> Checked {
                         || g.iter().zip(f).all(|(a, b)| a.abs_diff(*b) <= 1)
                 })
     });
+    let ci = under_ci();
     if within && dir.join(format!("{stem}.snap")).is_file() {
         // insta would be handed the golden's own bytes and find them equal: a pass that
         // writes nothing, at the price of reading the snapshot again and listing the whole
-        // golden directory (its clean-up of this snapshot's pending files, done here by name).
-        for pending in [format!("{stem}.snap.new"), format!("{stem}.snap.new.png")] {
-            let _ = std::fs::remove_file(dir.join(pending));
+        // golden directory (its clean-up of this snapshot's pending files, done here by name;
+        // never under CI, which changes nothing under golden/).
+        if !ci {
+            for pending in [format!("{stem}.snap.new"), format!("{stem}.snap.new.png")] {
+                let _ = std::fs::remove_file(dir.join(pending));
+            }
         }
         return Checked {
             golden: Golden::Unchanged,
             message: String::new(),
+            ssim,
+            identical,
+        };
+    }
+    if ci {
+        let what = if existing.is_some() {
+            "differs from its golden"
+        } else {
+            "has no golden yet"
+        };
+        return Checked {
+            golden: Golden::Changed,
+            message: format!(
+                "the colour image {what}; CI=true: nothing written; run `cargo xtask bless` or `cargo insta review` locally and commit the result"
+            ),
             ssim,
             identical,
         };
@@ -164,14 +191,10 @@ pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> Checked {
             } else {
                 "has no golden yet"
             };
-            let how = if std::env::var("CI").is_ok_and(|v| v == "true" || v == "1") {
-                "CI=true: nothing written; run `cargo xtask bless` or `cargo insta review` locally and commit the result".to_string()
-            } else {
-                format!(
-                    "review it with `cargo insta review` (pending {}/{stem}.snap.new) or accept all with `cargo xtask bless`",
-                    dir.display()
-                )
-            };
+            let how = format!(
+                "review it with `cargo insta review` (pending {}/{stem}.snap.new) or accept all with `cargo xtask bless`",
+                dir.display()
+            );
             (Golden::Changed, format!("the colour image {what}; {how}"))
         }
     };
@@ -181,6 +204,52 @@ pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> Checked {
         ssim,
         identical,
     }
+}
+
+/// Whether this process runs under CI (`CI=true` or `CI=1`, as CI systems set it).
+pub fn under_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v == "true" || v == "1")
+}
+
+/// The insta variables this process inherited ([`controls_insta`], `NAME=VALUE`): each is
+/// removed from every worker's environment and named in a note by the runner.
+pub fn inherited_insta() -> Vec<String> {
+    std::env::vars_os()
+        .filter_map(|(k, v)| {
+            let k = k.into_string().ok()?;
+            controls_insta(&k).then(|| format!("{k}={}", v.to_string_lossy()))
+        })
+        .collect()
+}
+
+/// Whether an environment variable steers insta (every `INSTA_*` but
+/// `INSTA_WORKSPACE_ROOT`, which only saves insta a `cargo metadata` call per worker: the
+/// workspace's `.cargo/config.toml` sets it, and it neither writes nor passes a golden;
+/// insta's settings from its config file are all overridden by [`insta_env`]).
+pub fn controls_insta(name: &str) -> bool {
+    name.starts_with("INSTA_") && name != "INSTA_WORKSPACE_ROOT"
+}
+
+/// insta's whole environment in a worker: review snapshots (`.snap.new`) normally, write
+/// goldens only when `bless`, nothing under CI (where insta is not called anyway); never
+/// force a pass or an update; its own summary off (the run's reason says it).
+pub fn insta_env(bless: bool) -> Vec<(String, String)> {
+    let update = if under_ci() {
+        "no"
+    } else if bless {
+        "always"
+    } else {
+        "new"
+    };
+    [
+        ("INSTA_UPDATE", update),
+        ("INSTA_FORCE_PASS", "0"),
+        ("INSTA_FORCE_UPDATE", "0"),
+        ("INSTA_OUTPUT", "none"),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v.to_string()))
+    .collect()
 }
 
 /// The manifest of driver versions the goldens were blessed on, in the golden directory.

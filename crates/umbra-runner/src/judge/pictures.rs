@@ -41,7 +41,11 @@ pub const THUMB: u32 = 96;
 /// that exist (`golden.png`, `pending.png`). The reference and the truth are the same for
 /// every backend's run of a point: each distinct picture is encoded once, into `.shared/`
 /// beside the runs' directories, and hard-linked into each run's. A colour that is its
-/// golden's pixel for pixel (`identical`) is the golden's file, linked rather than encoded.
+/// golden's pixel for pixel (`identical`) is the golden's bytes, not encoded again.
+///
+/// Nothing here is ever a link to a file outside the report: a golden or a pending snapshot
+/// is *copied* into `.shared/` (once per report) and linked from there, so a tool that edits
+/// report pictures in place (a PNG optimiser over a CI artifact) cannot change `golden/`.
 pub fn write_gallery(
     dir: &Path,
     j: &crate::judge::run::Judged,
@@ -63,18 +67,26 @@ pub fn write_gallery(
     };
     let thumb = image::imageops::thumbnail(&colour, tw, th);
     save(&dir.join("thumb.png"), (thumb.as_raw(), tw, th))?;
+    // The gallery root is the conformance run's own: its runs share `.shared/` beside their
+    // directories.
+    let shared = dir.parent().map(|p| p.join(".shared"));
     let blessed = golden.map(|g| g.0).filter(|g| g.is_file());
-    match blessed {
-        Some(g) if identical => link(g, &dir.join("color.png"))?,
+    match (blessed, &shared) {
+        (Some(g), Some(shared)) if identical => {
+            link(&copy_into(g, shared)?, &dir.join("color.png"))?;
+        }
         _ => save(&dir.join("color.png"), (&f.color, f.width, f.height))?,
     }
-    // The gallery root is the conformance run's own (cleared at its start): its runs share
-    // `.shared/` beside their directories.
-    judging_pictures(dir, j, dir.parent().map(|p| p.join(".shared")).as_deref())?;
+    judging_pictures(dir, j, shared.as_deref())?;
     if let Some((blessed, pending)) = golden {
         for (from, to) in [(blessed, "golden.png"), (pending, "pending.png")] {
             if from.is_file() {
-                link(from, &dir.join(to))?;
+                match &shared {
+                    Some(shared) => link(&copy_into(from, shared)?, &dir.join(to))?,
+                    None => {
+                        std::fs::copy(from, dir.join(to))?;
+                    }
+                }
             }
         }
     }
@@ -98,7 +110,24 @@ fn save(path: &Path, (rgba, width, height): (&[u8], u32, u32)) -> std::io::Resul
     .map_err(std::io::Error::other)
 }
 
-/// `to` as a hard link to `from` (a copy where no link can be made), replacing `to`.
+/// A copy of `from` (a golden or a pending snapshot) in the report's `shared` directory,
+/// named by its bytes' key, made once per report (through [`crate::atomic_file`], so
+/// concurrent workers never see half a file): the file the report's pictures link to.
+fn copy_into(from: &Path, shared: &Path) -> std::io::Result<std::path::PathBuf> {
+    let bytes = std::fs::read(from)?;
+    std::fs::create_dir_all(shared)?;
+    let file = shared.join(format!(
+        "file-{:016x}.png",
+        picture_key(bytes.len() as u32, 0, &bytes)
+    ));
+    if !file.is_file() {
+        crate::atomic_file::write(&file, &bytes)?;
+    }
+    Ok(file)
+}
+
+/// `to` as a hard link to `from`, a file of the report itself (a copy where no link can be
+/// made), replacing `to`.
 fn link(from: &Path, to: &Path) -> std::io::Result<()> {
     let _ = std::fs::remove_file(to);
     if std::fs::hard_link(from, to).is_err() {

@@ -1,0 +1,712 @@
+//! Fault injection: umbra's results hold under faults in its own plumbing, or it says so.
+//! Each test injects one fault from the outside, through the `umbra` binary, as a CI system
+//! or a careless contributor would:
+//!
+//! - a damaged judging cache (bytes flipped, truncated, emptied) is recomputed with a warning
+//!   naming the file, and the results are the clean run's; one that cannot be written is said
+//!   once;
+//! - two runs into one `--out` keep both their results; a run killed (SIGKILL) at several
+//!   points or interrupted (SIGTERM) leaves the previous `latest` intact;
+//! - a full disk (a small tmpfs where one can be mounted, and always a file-size limit) leaves
+//!   the previous `latest` intact and no temporary file behind;
+//! - report pictures are copies: editing them in place leaves the goldens as they were;
+//! - insta's environment (`INSTA_UPDATE=always`, `INSTA_FORCE_PASS=1`) can neither write nor
+//!   pass a golden, and under `CI=true` nothing under the golden directory changes, pending
+//!   snapshots included;
+//! - hostile text in a reason reaches neither the terminal nor junit.xml raw (the HTML page
+//!   is checked in chromium by umbra-report's `gallery_browser`);
+//! - configuration mistakes are usage errors (exit 125) naming the flag, and an empty shard
+//!   is a successful one.
+
+mod common;
+
+use common::{scratch, text};
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn command(args: &[&str], env: &[(&str, &str)]) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_umbra"));
+    c.args(args)
+        .current_dir(repo())
+        .env("UMBRA_FAKE_BACKENDS", "1")
+        .env_remove("UMBRA_MESA");
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    c
+}
+
+fn umbra(args: &[&str], env: &[(&str, &str)]) -> Output {
+    command(args, env).output().expect("run umbra")
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap_or_default()
+}
+
+/// A conformance run of the reference on one case point, judged alone.
+fn ref_run<'a>(out: &'a Path, cache: &'a Path) -> Vec<&'a str> {
+    vec![
+        "conformance",
+        "--backend",
+        "ref",
+        "--filter",
+        "square*",
+        "--golden",
+        "none",
+        "--out",
+        s(out),
+        "--judge-cache",
+        s(cache),
+    ]
+}
+
+/// results.csv without its time column, and errors.csv: what a run judged.
+fn judged(out: &Path) -> String {
+    let results = std::fs::read_to_string(out.join("latest/results.csv")).expect("results.csv");
+    let rows: Vec<String> = results
+        .lines()
+        .map(|l| l.rsplit_once(',').map_or(l, |(a, _)| a).to_string())
+        .collect();
+    let errors = std::fs::read_to_string(out.join("latest/errors.csv")).expect("errors.csv");
+    let errors: Vec<String> = errors
+        .lines()
+        .map(|l| {
+            // The time columns end each row; what was judged comes before them.
+            l.split(',').take(12).collect::<Vec<_>>().join(",")
+        })
+        .collect();
+    format!("{}\n{}", rows.join("\n"), errors.join("\n"))
+}
+
+/// Every file under `dir`, recursively.
+fn walk(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    if let Ok(rd) = std::fs::read_dir(dir) {
+        for e in rd.flatten() {
+            let p = e.path();
+            if e.file_type().is_ok_and(|t| t.is_dir()) {
+                out.extend(walk(&p));
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    out
+}
+
+/// Temporary files of umbra's atomic writes (`.PID.NAME`) left anywhere under `dir`.
+fn temporaries(dir: &Path) -> Vec<PathBuf> {
+    walk(dir)
+        .into_iter()
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .and_then(|n| n.strip_prefix('.'))
+                .and_then(|n| n.split_once('.'))
+                .is_some_and(|(pid, _)| pid.parse::<u32>().is_ok())
+        })
+        .collect()
+}
+
+fn latest_id(out: &Path) -> Option<String> {
+    std::fs::read_link(out.join("latest"))
+        .ok()
+        .and_then(|t| t.file_name().map(|n| n.to_string_lossy().into_owned()))
+}
+
+/// Every report file is there and report.json is whole.
+fn assert_complete(run: &Path) {
+    for f in [
+        "results.csv",
+        "failures.csv",
+        "errors.csv",
+        "twins.csv",
+        "drivers.txt",
+        "report.json",
+        "junit.xml",
+        "report.html",
+    ] {
+        assert!(run.join(f).is_file(), "{} lacks {f}", run.display());
+    }
+    let json = std::fs::read_to_string(run.join("report.json")).expect("report.json");
+    serde_json::from_str::<serde_json::Value>(&json).expect("report.json is whole JSON");
+    assert!(!run.join("INCOMPLETE").exists(), "{}", run.display());
+}
+
+/// One way to damage a cache entry's bytes.
+type Damage = fn(&mut Vec<u8>);
+
+#[test]
+fn damaged_cache_entries_are_recomputed_with_a_warning_and_judge_as_a_clean_run() {
+    let (out, cache) = (scratch("fi-cache-out"), scratch("fi-cache"));
+    let o = umbra(&ref_run(&out, &cache), &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let clean = judged(&out);
+    let entries: Vec<PathBuf> = walk(&cache)
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|x| x == "bin"))
+        .collect();
+    assert!(entries.len() >= 2, "truth and judged entries: {entries:?}");
+    let damages: [(&str, Damage); 4] = [
+        ("flipped", |b| {
+            let mid = b.len() / 2;
+            for k in 0..4 {
+                b[mid + 97 * k] ^= 0x5a;
+            }
+        }),
+        ("one bit", |b| b[30] ^= 0x01),
+        ("truncated", |b| b.truncate(b.len() / 3)),
+        ("empty", Vec::clear),
+    ];
+    for (what, damage) in damages {
+        for e in &entries {
+            let mut bytes = std::fs::read(e).expect("entry");
+            damage(&mut bytes);
+            std::fs::write(e, bytes).expect("damage");
+        }
+        let o = umbra(&ref_run(&out, &cache), &[]);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(0), "{what}: {t}");
+        for e in &entries {
+            let name = e.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+            assert!(
+                t.lines()
+                    .any(|l| l.starts_with("warning: judging cache entry") && l.contains(name)),
+                "{what}: no warning naming {name}:\n{t}"
+            );
+        }
+        assert_eq!(judged(&out), clean, "{what}: judged differently");
+    }
+    // The recomputed entries are whole again: a further run says nothing.
+    let o = umbra(&ref_run(&out, &cache), &[]);
+    assert!(!text(&o).contains("warning:"), "{}", text(&o));
+    assert_eq!(judged(&out), clean);
+}
+
+#[test]
+fn a_cache_that_cannot_be_written_is_said_once_and_the_run_is_the_same() {
+    let (out, dir) = (scratch("fi-ro-out"), scratch("fi-ro"));
+    let o = umbra(&ref_run(&out, &dir.join("c")), &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let clean = judged(&out);
+    // A regular file where the cache directory should be: nothing can be written under it
+    // (a read-only mount would be the same; a chmod is no test when the tests run as root).
+    let blocked = dir.join("blocked");
+    std::fs::write(&blocked, b"not a directory").expect("file");
+    let o = umbra(&ref_run(&out, &blocked), &[]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert_eq!(t.matches("cannot be written").count(), 1, "said once:\n{t}");
+    assert!(t.contains("warning: the judging cache"), "{t}");
+    assert_eq!(judged(&out), clean);
+}
+
+#[test]
+fn two_runs_into_one_out_both_keep_their_results() {
+    let (out, cache) = (scratch("fi-two"), scratch("fi-two-cache"));
+    let start = || {
+        command(&ref_run(&out, &cache), &[])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("spawn")
+    };
+    let (a, b) = (start(), start());
+    let (a, b) = (
+        a.wait_with_output().expect("a"),
+        b.wait_with_output().expect("b"),
+    );
+    assert_eq!(a.status.code(), Some(0), "{}", text(&a));
+    assert_eq!(b.status.code(), Some(0), "{}", text(&b));
+    let runs: Vec<PathBuf> = std::fs::read_dir(out.join("runs"))
+        .expect("runs")
+        .flatten()
+        .map(|e| e.path())
+        .collect();
+    assert_eq!(runs.len(), 2, "{runs:?}");
+    for r in &runs {
+        assert_complete(r);
+        let id = r.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        assert!(
+            text(&a).contains(id) || text(&b).contains(id),
+            "each run names its own directory ({id})"
+        );
+        // Each run's pictures are its own: one run, one picture directory.
+        assert_eq!(
+            std::fs::read_dir(r.join("pictures"))
+                .expect("pictures")
+                .flatten()
+                .filter(|e| !e.file_name().to_string_lossy().starts_with('.'))
+                .count(),
+            1
+        );
+    }
+    let shown = latest_id(&out).expect("latest is a link to a run");
+    assert!(runs.iter().any(|r| r.ends_with(&shown)));
+}
+
+/// Waits for `child` up to `limit`; kills it if it is still running then.
+fn wait_for(child: &mut Child, limit: Duration) -> Option<std::process::ExitStatus> {
+    let t = Instant::now();
+    while t.elapsed() < limit {
+        if let Ok(Some(st)) = child.try_wait() {
+            return Some(st);
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    None
+}
+
+#[test]
+fn a_killed_or_interrupted_run_leaves_the_previous_latest_intact() {
+    let (out, cache) = (scratch("fi-kill"), scratch("fi-kill-cache"));
+    let o = umbra(&ref_run(&out, &cache), &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let before = latest_id(&out).expect("published");
+    let report = std::fs::read(out.join("latest/report.json")).expect("report");
+    // A run that lasts: the reference, then a backend that hangs until its timeout.
+    let long = [
+        "conformance",
+        "--backend",
+        "ref",
+        "--backend",
+        "fake/hang",
+        "--filter",
+        "*occluder",
+        "--golden",
+        "none",
+        "--timeout",
+        "60",
+        "--out",
+        s(&out),
+        "--judge-cache",
+        s(&cache),
+    ];
+    for at in [50, 400, 1500, 3000] {
+        let mut child = command(&long, &[])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("spawn");
+        std::thread::sleep(Duration::from_millis(at));
+        let _ = child.kill();
+        let _ = child.wait();
+        assert_eq!(
+            latest_id(&out).as_deref(),
+            Some(before.as_str()),
+            "killed at {at} ms"
+        );
+        assert_eq!(
+            std::fs::read(out.join("latest/report.json")).expect("report"),
+            report,
+            "killed at {at} ms: the previous report changed"
+        );
+    }
+    // SIGTERM: an orderly stop, now, not after the hang's timeout.
+    let mut child = command(&long, &[])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    std::thread::sleep(Duration::from_millis(2500));
+    let t = Instant::now();
+    let kill = Command::new("sh")
+        .args(["-c", &format!("kill -TERM {}", child.id())])
+        .status()
+        .expect("kill");
+    assert!(kill.success());
+    let status = wait_for(&mut child, Duration::from_secs(20)).expect("stopped on SIGTERM");
+    let o = child.wait_with_output().expect("output");
+    let t_stop = t.elapsed();
+    let said = text(&o);
+    assert_eq!(status.code(), Some(130), "{said}");
+    assert!(t_stop < Duration::from_secs(15), "took {t_stop:?}");
+    assert!(
+        said.contains("interrupted by SIGTERM") && said.contains("not published"),
+        "{said}"
+    );
+    assert!(
+        said.contains(&format!("still shows runs/{before}")),
+        "{said}"
+    );
+    assert_eq!(latest_id(&out).as_deref(), Some(before.as_str()));
+    let unfinished = std::fs::read_dir(out.join("runs"))
+        .expect("runs")
+        .flatten()
+        .filter(|e| e.path().join("INCOMPLETE").is_file())
+        .count();
+    assert!(unfinished >= 1, "the interrupted run is marked");
+    // The next run publishes, and sweeps what killed processes left in the cache.
+    let o = umbra(&ref_run(&out, &cache), &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert_complete(&out.join("latest"));
+    assert_eq!(temporaries(&cache), Vec::<PathBuf>::new());
+    assert_eq!(temporaries(&out.join("latest")), Vec::<PathBuf>::new());
+}
+
+/// A disk-full run: exit 125, said, the previous `latest` whole, no temporary file.
+fn assert_full_disk_is_contained(out: &Path, cache: &Path, before: &str, o: &Output) {
+    let t = text(o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(
+        t.contains("not published") || t.contains("cannot create a run directory"),
+        "{t}"
+    );
+    assert_eq!(latest_id(out).as_deref(), Some(before), "{t}");
+    assert_complete(&out.join("latest"));
+    assert_eq!(temporaries(out), Vec::<PathBuf>::new(), "{t}");
+    assert_eq!(temporaries(cache), Vec::<PathBuf>::new(), "{t}");
+}
+
+#[test]
+fn a_full_disk_leaves_the_previous_latest_intact_and_no_temporary_file() {
+    // A file-size limit (`ulimit -f`, in 512-byte blocks), which every machine has: the
+    // report page (pictures inlined) cannot be written, the small files can.
+    let (out, cache) = (scratch("fi-full"), scratch("fi-full-cache"));
+    let o = umbra(&ref_run(&out, &cache), &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let before = latest_id(&out).expect("published");
+    let args = ref_run(&out, &cache).join(" ");
+    let o = Command::new("sh")
+        .args([
+            "-c",
+            &format!("ulimit -f 40; exec {} {args}", env!("CARGO_BIN_EXE_umbra")),
+        ])
+        .current_dir(repo())
+        .output()
+        .expect("run");
+    assert!(
+        text(&o).contains("File too large"),
+        "the limit bit: {}",
+        text(&o)
+    );
+    assert_full_disk_is_contained(&out, &cache, &before, &o);
+
+    // A real ENOSPC on a small tmpfs, where this process may mount one (root with
+    // CAP_SYS_ADMIN, as in CI's container and on a developer's machine under sudo): the disk
+    // filled to within one 64 KiB chunk (the run gets part way), then to the last block.
+    let mnt = scratch("fi-tmpfs");
+    let Some(_mounted) = Tmpfs::mount(&mnt, "16m") else {
+        eprintln!(
+            "note: cannot mount a tmpfs here; ENOSPC was tested through the file-size limit above"
+        );
+        return;
+    };
+    let (out, cache) = (mnt.join("out"), mnt.join("cache"));
+    let o = umbra(&ref_run(&out, &cache), &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let before = latest_id(&out).expect("published");
+    for left in [1, 0] {
+        let fill = mnt.join("fill");
+        std::fs::create_dir_all(&fill).expect("fill dir");
+        let mut chunks = 0;
+        while std::fs::write(fill.join(chunks.to_string()), vec![0u8; 64 << 10]).is_ok() {
+            chunks += 1;
+        }
+        for k in 0..left {
+            let _ = std::fs::remove_file(fill.join((chunks - 1 - k).to_string()));
+        }
+        let o = umbra(&ref_run(&out, &cache), &[]);
+        let t = text(&o);
+        assert!(
+            t.contains("No space left on device"),
+            "{left} chunk(s) free: {t}"
+        );
+        assert_full_disk_is_contained(&out, &cache, &before, &o);
+        std::fs::remove_dir_all(&fill).expect("unfill");
+    }
+}
+
+/// A tmpfs mounted for one test, unmounted when dropped (also when the test fails).
+struct Tmpfs(PathBuf);
+
+impl Tmpfs {
+    fn mount(at: &Path, size: &str) -> Option<Tmpfs> {
+        Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs", s(at)])
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|st| st.success())
+            .then(|| Tmpfs(at.to_path_buf()))
+    }
+}
+
+impl Drop for Tmpfs {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(&self.0).status();
+    }
+}
+
+/// A conformance run of the reference on one case point against the goldens in `golden`.
+fn golden_run(golden: &Path, out: &Path, extra: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut args = vec![
+        "conformance",
+        "--backend",
+        "ref",
+        "--filter",
+        "square*",
+        "--golden",
+        s(golden),
+        "--out",
+        s(out),
+    ];
+    args.extend(extra);
+    umbra(&args, env)
+}
+
+#[test]
+fn report_pictures_are_copies_and_editing_them_leaves_the_goldens() {
+    let root = scratch("fi-links");
+    let (golden, out) = (root.join("golden"), root.join("out"));
+    std::fs::create_dir_all(&golden).expect("golden");
+    let run = |extra: &[&str], env: &[(&str, &str)]| golden_run(&golden, &out, extra, env);
+    let o = run(&["--bless"], &[("CI", "false")]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let o = run(&[], &[("CI", "true")]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let goldens: Vec<(PathBuf, Vec<u8>)> = walk(&golden)
+        .into_iter()
+        .map(|p| {
+            let b = std::fs::read(&p).expect("golden");
+            (p, b)
+        })
+        .collect();
+    assert!(
+        goldens
+            .iter()
+            .any(|(p, _)| p.to_string_lossy().ends_with(".snap.png"))
+    );
+    let pictures = walk(&out.join("latest/pictures"));
+    assert!(
+        pictures.iter().any(|p| p.ends_with("golden.png")),
+        "{pictures:?}"
+    );
+    // An in-place optimiser: every report picture rewritten through its own path.
+    for p in &pictures {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .truncate(true)
+            .open(p)
+            .and_then(|mut f| std::io::Write::write_all(&mut f, b"optimised"))
+            .expect("edit in place");
+    }
+    for (p, b) in &goldens {
+        assert_eq!(
+            &std::fs::read(p).expect("golden"),
+            b,
+            "{} changed",
+            p.display()
+        );
+    }
+}
+
+#[test]
+fn insta_environment_can_neither_write_nor_pass_a_golden_and_ci_changes_nothing() {
+    let root = scratch("fi-insta");
+    let (golden, out) = (root.join("golden"), root.join("out"));
+    std::fs::create_dir_all(&golden).expect("golden");
+    let run = |extra: &[&str], env: &[(&str, &str)]| golden_run(&golden, &out, extra, env);
+    // No golden yet: the environment asks insta to write it, and to pass whatever happens.
+    let hostile = [
+        ("INSTA_UPDATE", "always"),
+        ("INSTA_FORCE_PASS", "1"),
+        ("INSTA_FORCE_UPDATE", "1"),
+    ];
+    for ci in ["true", "false"] {
+        let mut env = hostile.to_vec();
+        env.push(("CI", ci));
+        let o = run(&[], &env);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(1), "CI={ci}: {t}");
+        assert!(t.contains("note: ignored INSTA_"), "{t}");
+        assert!(
+            !walk(&golden)
+                .iter()
+                .any(|p| p.to_string_lossy().ends_with(".snap.png")),
+            "CI={ci}: a golden was written: {:?}",
+            walk(&golden)
+        );
+    }
+    // Outside CI that left a pending snapshot for review; under CI=true it must stay as it is,
+    // byte for byte, and nothing else may appear.
+    let listing = |d: &Path| -> Vec<(PathBuf, Vec<u8>)> {
+        let mut v: Vec<(PathBuf, Vec<u8>)> = walk(d)
+            .into_iter()
+            .map(|p| {
+                let b = std::fs::read(&p).expect("file");
+                (p, b)
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    let pending = listing(&golden);
+    assert!(
+        pending
+            .iter()
+            .any(|(p, _)| p.to_string_lossy().ends_with(".snap.new.png")),
+        "{pending:?}"
+    );
+    let o = run(&[], &[("CI", "true")]);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert_eq!(listing(&golden), pending, "CI changed the golden directory");
+    // Blessing is a flag, refused under CI.
+    let o = run(&["--bless"], &[("CI", "true")]);
+    assert_eq!(o.status.code(), Some(125), "{}", text(&o));
+    assert_eq!(listing(&golden), pending);
+    let o = run(&["--bless"], &[("CI", "false")]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let blessed = walk(&golden)
+        .into_iter()
+        .find(|p| p.to_string_lossy().ends_with(".snap.png"))
+        .expect("blessed");
+    // A pending snapshot beside a golden the run matches: outside CI a match clears it (as
+    // insta would), under CI=true it stays, with its .snap.new.
+    let stem = blessed
+        .to_string_lossy()
+        .trim_end_matches(".png")
+        .to_string();
+    std::fs::write(format!("{stem}.new"), "pending review\n").expect("pending");
+    std::fs::copy(&blessed, format!("{stem}.new.png")).expect("pending png");
+    let pending = listing(&golden);
+    let o = run(&[], &[("CI", "true")]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert_eq!(listing(&golden), pending, "CI changed the golden directory");
+}
+
+#[test]
+fn hostile_text_reaches_neither_the_terminal_nor_junit_raw() {
+    let (out, exp) = (scratch("fi-hostile"), scratch("fi-hostile-exp"));
+    let reason =
+        "<!-- <script>x</script> \u{1b}[2K\rconformance: 0 failed, 0 skipped\u{7}\u{2028}\u{202e}";
+    std::fs::write(
+        exp.join("hostile.txt"),
+        format!("fake/crash/square*,Crash,{reason}\n"),
+    )
+    .expect("expectations");
+    let o = umbra(
+        &[
+            "conformance",
+            "--backend",
+            "fake/crash",
+            "--filter",
+            "square*",
+            "--golden",
+            "none",
+            "--expectations",
+            s(&exp),
+            "--out",
+            s(&out),
+        ],
+        &[("CI", "true")],
+    );
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(stdout.contains("ExpectedFail"), "{stdout}");
+    assert!(
+        !stdout
+            .chars()
+            .any(|c| (c.is_control() && c != '\n') || ('\u{202a}'..='\u{202e}').contains(&c)),
+        "a control character reached the terminal: {stdout:?}"
+    );
+    assert!(stdout.contains("\\u{1b}[2K\\r"), "{stdout}");
+    assert_eq!(
+        stdout
+            .lines()
+            .filter(|l| l.starts_with("conformance:"))
+            .count(),
+        1,
+        "{stdout}"
+    );
+    let junit = std::fs::read_to_string(out.join("latest/junit.xml")).expect("junit");
+    assert!(
+        !junit.chars().any(|c| c.is_control() && c != '\n'),
+        "{junit:?}"
+    );
+}
+
+#[test]
+fn configuration_mistakes_are_usage_errors_that_name_the_flag() {
+    let out = scratch("fi-usage");
+    let nowhere = out.join("nowhere");
+    let exp = scratch("fi-usage-exp");
+    let base = |extra: &[&str]| -> Output {
+        let mut args = vec![
+            "conformance",
+            "--backend",
+            "ref",
+            "--filter",
+            "square*",
+            "--out",
+            s(&out),
+        ];
+        args.extend(extra);
+        umbra(&args, &[("CI", "true")])
+    };
+    for (extra, says) in [
+        (vec!["--timeout", "0"], "--timeout 0"),
+        (vec!["--jobs", "0"], "--jobs 0"),
+        (vec!["--jobs", "99999"], "--jobs 99999"),
+        (vec!["--max-memory", "1KiB"], "--max-memory"),
+        (vec!["--expectations", s(&nowhere)], "--expectations"),
+        (vec!["--golden", s(&nowhere)], "--golden"),
+    ] {
+        let o = base(&extra);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(125), "{extra:?}: {t}");
+        assert!(t.contains(says), "{extra:?} must name {says}: {t}");
+    }
+    assert!(!nowhere.exists(), "--golden DIR must not be created");
+
+    // Expectation lines that can never match, or that claim one run twice.
+    for (lines, says) in [
+        ("ref/square-occluder[,Crash,typo\n", "can never match"),
+        (
+            "[z-a]*,Crash,a class umbra globs do not have\n",
+            "can never match",
+        ),
+        (
+            "@applies renderer=[\nref/*,Crash,x\n",
+            "can never match a renderer",
+        ),
+        (
+            "ref/square*,Crash,one\nref/*,Timeout,two\n",
+            "both match run ref/square-occluder",
+        ),
+    ] {
+        std::fs::write(exp.join("e.txt"), lines).expect("expectations");
+        let o = base(&["--expectations", s(&exp), "--golden", "none"]);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(125), "{lines:?}: {t}");
+        assert!(t.contains(says) && t.contains("e.txt:"), "{lines:?}: {t}");
+    }
+
+    // Two case files with one name.
+    let cases = scratch("fi-usage-cases");
+    let square =
+        std::fs::read_to_string(repo().join("cases/basics/square-occluder.json")).expect("case");
+    std::fs::write(cases.join("a.json"), &square).expect("a");
+    std::fs::write(cases.join("b.json"), &square).expect("b");
+    let o = base(&["--cases", s(&cases), "--golden", "none"]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(
+        t.contains("a.json") && t.contains("b.json") && t.contains("name"),
+        "{t}"
+    );
+
+    // More shards than runs: an empty shard succeeds, with a note.
+    let o = base(&["--golden", "none", "--shard", "5/9"]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(t.contains("shard 5/9 holds none"), "{t}");
+}
