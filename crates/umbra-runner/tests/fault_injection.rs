@@ -345,12 +345,31 @@ fn a_killed_or_interrupted_run_leaves_the_previous_latest_intact() {
         .filter(|e| e.path().join("INCOMPLETE").is_file())
         .count();
     assert!(unfinished >= 1, "the interrupted run is marked");
-    // The next run publishes, and sweeps what killed processes left in the cache.
+    // The next run publishes, and sweeps what killed processes left in the cache: a worker
+    // killed while computing an entry leaves its lock (a parent's SIGKILL alone does not: its
+    // workers see their input close and finish), and one killed mid-write its temporary.
+    let build = std::fs::read_dir(&cache)
+        .expect("cache")
+        .flatten()
+        .find(|e| e.path().is_dir())
+        .expect("this build's directory")
+        .path();
+    std::fs::write(build.join("truth-00000000deadbeef.lock"), "4194303999").expect("lock");
+    std::fs::write(
+        build.join(".4194303999.truth-00000000deadbeef.bin"),
+        b"half",
+    )
+    .expect("tmp");
     let o = umbra(&ref_run(&out, &cache), &[]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     assert_complete(&out.join("latest"));
     assert_eq!(temporaries(&cache), Vec::<PathBuf>::new());
     assert_eq!(temporaries(&out.join("latest")), Vec::<PathBuf>::new());
+    let locks: Vec<PathBuf> = walk(&cache)
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|x| x == "lock"))
+        .collect();
+    assert_eq!(locks, Vec::<PathBuf>::new(), "locks of killed processes");
 }
 
 /// A disk-full run: exit 125, said, the previous `latest` whole, no temporary file.
@@ -709,4 +728,29 @@ fn configuration_mistakes_are_usage_errors_that_name_the_flag() {
     let t = text(&o);
     assert_eq!(o.status.code(), Some(0), "{t}");
     assert!(t.contains("shard 5/9 holds none"), "{t}");
+}
+
+#[test]
+fn a_damaged_blessed_on_manifest_is_said_and_not_used() {
+    let root = scratch("fi-manifest");
+    let (golden, out) = (root.join("golden"), root.join("out"));
+    std::fs::create_dir_all(&golden).expect("golden");
+    let o = golden_run(&golden, &out, &["--bless"], &[("CI", "false")]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    // A hand edit that does not update the checksum (or a damaged file).
+    std::fs::write(
+        golden.join("blessed-on.json"),
+        "{\n  \"#fnv1a64\": \"0000000000000000\",\n  \"ref\": \"9.9\"\n}\n",
+    )
+    .expect("manifest");
+    let o = golden_run(&golden, &out, &[], &[("CI", "true")]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert_eq!(
+        t.lines()
+            .filter(|l| l.contains("blessed-on.json") && l.contains("fails its checksum"))
+            .count(),
+        1,
+        "said once: {t}"
+    );
 }

@@ -179,6 +179,12 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
             .into();
         }
     }
+    if args.value("golden") != Some("none") {
+        let dir = args.value("golden").unwrap_or("golden");
+        if let Some(warning) = crate::judge::golden::check_manifest(Path::new(dir)) {
+            eprintln!("{}", term(&warning));
+        }
+    }
     let expectations = match Expectations::load(Path::new(
         args.value("expectations").unwrap_or("expectations"),
     )) {

@@ -255,27 +255,68 @@ pub fn insta_env(bless: bool) -> Vec<(String, String)> {
 /// The manifest of driver versions the goldens were blessed on, in the golden directory.
 pub const MANIFEST: &str = "blessed-on.json";
 
+/// The key of [`MANIFEST`] that holds the checksum of its other entries.
+const MANIFEST_SUM: &str = "#fnv1a64";
+
+/// The manifest's entries, if it is there and whole: its checksum (64-bit FNV-1a of the
+/// other entries as compact JSON, keys sorted) must match. `Err` says what is wrong.
+fn manifest(dir: &Path) -> Result<Option<std::collections::BTreeMap<String, String>>, String> {
+    let path = dir.join(MANIFEST);
+    let text = match std::fs::read_to_string(&path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(format!("cannot be read ({e})")),
+    };
+    let mut map: std::collections::BTreeMap<String, String> =
+        serde_json::from_str(&text).map_err(|e| format!("is not a JSON map of strings ({e})"))?;
+    let Some(sum) = map.remove(MANIFEST_SUM) else {
+        return Err(format!("has no \"{MANIFEST_SUM}\" entry"));
+    };
+    let want = manifest_sum(&map);
+    if sum != want {
+        return Err(format!(
+            "fails its checksum (\"{MANIFEST_SUM}\": {sum:?}, its entries give {want:?}): edited by hand or damaged"
+        ));
+    }
+    Ok(Some(map))
+}
+
+fn manifest_sum(map: &std::collections::BTreeMap<String, String>) -> String {
+    let text = serde_json::to_string(map).unwrap_or_default();
+    let h = text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    format!("{h:016x}")
+}
+
+/// Checks [`MANIFEST`] in `dir` once for a run: `Some(warning)` when it is there but damaged
+/// (its versions are then not used: a golden blessed on another driver is judged as any
+/// other, without the version note).
+pub fn check_manifest(dir: &Path) -> Option<String> {
+    manifest(dir).err().map(|why| {
+        format!(
+            "warning: {} {why}; its driver versions are not used; restore it from git, or rewrite it with `cargo xtask bless`",
+            dir.join(MANIFEST).display()
+        )
+    })
+}
+
 /// The Mesa version the golden of run `name` on backend `id` was blessed on, if recorded: the
 /// golden's own entry (written when that golden was written), else the backend's (the
-/// version the backend's goldens were first blessed on).
+/// version the backend's goldens were first blessed on). Nothing from a damaged manifest
+/// ([`check_manifest`] says so once per run).
 pub fn blessed_on(dir: &Path, id: &str, name: &str) -> Option<String> {
-    let text = std::fs::read_to_string(dir.join(MANIFEST)).ok()?;
-    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    v[stem(name).as_str()]
-        .as_str()
-        .or(v[id].as_str())
-        .map(str::to_string)
+    let map = manifest(dir).ok()??;
+    map.get(&stem(name)).or(map.get(id)).cloned()
 }
 
 /// Records blessings: `(key, version)` where the key is a golden's stem (that golden was
 /// written on that version) or a backend id (set only if the backend has no entry yet). Keeps
-/// every other entry; leaves the file untouched when nothing changes.
+/// every other entry of a whole manifest; leaves the file untouched when nothing changes.
+/// The checksum is written with the entries.
 pub fn record_blessed(dir: &Path, entries: &[(String, String)]) -> std::io::Result<()> {
     let path = dir.join(MANIFEST);
-    let mut map: std::collections::BTreeMap<String, String> = std::fs::read_to_string(&path)
-        .ok()
-        .and_then(|t| serde_json::from_str(&t).ok())
-        .unwrap_or_default();
+    let mut map = manifest(dir).ok().flatten().unwrap_or_default();
     for (key, v) in entries {
         if key.contains('/') {
             map.entry(key.clone()).or_insert_with(|| v.clone());
@@ -283,15 +324,43 @@ pub fn record_blessed(dir: &Path, entries: &[(String, String)]) -> std::io::Resu
             map.insert(key.clone(), v.clone());
         }
     }
+    let sum = manifest_sum(&map);
+    map.insert(MANIFEST_SUM.to_string(), sum);
     let text = serde_json::to_string_pretty(&map).unwrap_or_default() + "\n";
     if std::fs::read_to_string(&path).is_ok_and(|t| t == text) {
         return Ok(());
     }
-    std::fs::write(path, text)
+    crate::atomic_file::write(&path, text.as_bytes())
 }
 
 /// Whether two Mesa versions are the same release for goldens (numeric parts only, so a
 /// distribution's packaging suffix does not matter).
 pub fn same_release(a: &str, b: &str) -> bool {
     crate::judge::expectations::version_parts(a) == crate::judge::expectations::version_parts(b)
+}
+
+#[cfg(test)]
+mod manifest_tests {
+    use super::*;
+
+    #[test]
+    fn the_committed_manifest_is_whole_and_a_damaged_one_is_refused() {
+        let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../golden");
+        assert_eq!(check_manifest(&golden), None);
+        assert!(blessed_on(&golden, "gl33/llvmpipe", "gl33/llvmpipe/x").is_some());
+        let dir = std::env::temp_dir().join(format!("umbra-manifest-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("dir");
+        record_blessed(&dir, &[("ref".into(), "1.0".into())]).expect("write");
+        assert_eq!(check_manifest(&dir), None);
+        assert_eq!(blessed_on(&dir, "ref", "ref/x").as_deref(), Some("1.0"));
+        let path = dir.join(MANIFEST);
+        let edited = std::fs::read_to_string(&path)
+            .expect("manifest")
+            .replace("1.0", "9.9");
+        std::fs::write(&path, edited).expect("edit");
+        assert!(check_manifest(&dir).is_some_and(|w| w.contains("fails its checksum")));
+        assert_eq!(blessed_on(&dir, "ref", "ref/x"), None);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

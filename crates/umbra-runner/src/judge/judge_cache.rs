@@ -153,10 +153,20 @@ pub fn prepare(root: &Path) -> PathBuf {
             dir.display()
         );
     }
-    let swept = crate::atomic_file::sweep(&dir);
+    let mut swept = crate::atomic_file::sweep(&dir);
+    // Locks of processes that died holding them (killed mid-computation).
+    for e in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
+        let p = e.path();
+        if p.extension().is_some_and(|x| x == "lock")
+            && holder_gone(&p)
+            && std::fs::remove_file(&p).is_ok()
+        {
+            swept += 1;
+        }
+    }
     if swept > 0 {
         eprintln!(
-            "note: removed {swept} temporary file(s) of ended processes from the judging cache {}",
+            "note: removed {swept} temporary or lock file(s) of ended processes from the judging cache {}",
             dir.display()
         );
     }
