@@ -29,6 +29,13 @@ fn temporary(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{}.{name}", std::process::id()))
 }
 
+/// Whether process `pid` is alive on this machine (it has a `/proc` entry): the test every
+/// clean-up of what a dead process left uses (temporaries here, the judging cache's locks,
+/// unfinished run directories).
+pub fn process_alive(pid: u32) -> bool {
+    Path::new(&format!("/proc/{pid}")).exists()
+}
+
 /// Removes from `dir` the temporary files of [`replace`] whose process has ended (killed
 /// before it could rename or remove them); returns how many. A live process's are left.
 pub fn sweep(dir: &Path) -> usize {
@@ -46,7 +53,7 @@ pub fn sweep(dir: &Path) -> usize {
         else {
             continue;
         };
-        if !Path::new(&format!("/proc/{pid}")).exists() && std::fs::remove_file(e.path()).is_ok() {
+        if !process_alive(pid) && std::fs::remove_file(e.path()).is_ok() {
             removed += 1;
         }
     }

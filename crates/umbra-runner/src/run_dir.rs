@@ -132,7 +132,8 @@ fn prune(out: &Path) {
             && id
                 .split('-')
                 .nth(1)
-                .is_some_and(|pid| Path::new("/proc").join(pid).exists());
+                .and_then(|pid| pid.parse().ok())
+                .is_some_and(crate::atomic_file::process_alive);
         if Some(id) != shown.as_ref() && !live {
             let _ = std::fs::remove_dir_all(dir);
         }

@@ -50,8 +50,9 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap_or_default()
 }
 
-/// A conformance run of the reference on one case point, judged alone.
-fn ref_run<'a>(out: &'a Path, cache: &'a Path) -> Vec<&'a str> {
+/// A conformance run of the reference on one case point with goldens in `golden` (or
+/// `none`).
+fn ref_args<'a>(out: &'a Path, golden: &'a str) -> Vec<&'a str> {
     vec![
         "conformance",
         "--backend",
@@ -59,12 +60,17 @@ fn ref_run<'a>(out: &'a Path, cache: &'a Path) -> Vec<&'a str> {
         "--filter",
         "square*",
         "--golden",
-        "none",
+        golden,
         "--out",
         s(out),
-        "--judge-cache",
-        s(cache),
     ]
+}
+
+/// [`ref_args`] judged alone, with the judging cache in `cache`.
+fn ref_run<'a>(out: &'a Path, cache: &'a Path) -> Vec<&'a str> {
+    let mut args = ref_args(out, "none");
+    args.extend(["--judge-cache", s(cache)]);
+    args
 }
 
 /// results.csv without its time column, and errors.csv: what a run judged.
@@ -467,17 +473,7 @@ impl Drop for Tmpfs {
 
 /// A conformance run of the reference on one case point against the goldens in `golden`.
 fn golden_run(golden: &Path, out: &Path, extra: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut args = vec![
-        "conformance",
-        "--backend",
-        "ref",
-        "--filter",
-        "square*",
-        "--golden",
-        s(golden),
-        "--out",
-        s(out),
-    ];
+    let mut args = ref_args(out, s(golden));
     args.extend(extra);
     umbra(&args, env)
 }

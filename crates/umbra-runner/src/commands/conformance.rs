@@ -171,19 +171,22 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
         Ok(_) => {}
         Err(e) => return Finished::from(usage(&e)),
     }
-    if let Some(dir) = args.value("golden").filter(|d| *d != "none") {
-        if !Path::new(dir).is_dir() {
+    let golden = match args.value("golden") {
+        Some("none") => None,
+        Some(dir) if !Path::new(dir).is_dir() => {
             return usage(&format!(
                 "--golden {dir}: no such directory; give the golden directory (golden/), or --golden none to run without golden checks"
             ))
             .into();
         }
-    }
-    if args.value("golden") != Some("none") {
-        let dir = args.value("golden").unwrap_or("golden");
-        if let Some(warning) = crate::judge::golden::check_manifest(Path::new(dir)) {
-            eprintln!("{}", term(&warning));
-        }
+        Some(dir) => Some(PathBuf::from(dir)),
+        None => Some(PathBuf::from("golden")),
+    };
+    if let Some(warning) = golden
+        .as_deref()
+        .and_then(crate::judge::golden::check_manifest)
+    {
+        eprintln!("{}", term(&warning));
     }
     let expectations = match Expectations::load(Path::new(
         args.value("expectations").unwrap_or("expectations"),
@@ -303,7 +306,7 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
     if bless && crate::judge::golden::under_ci() {
         return usage("--bless: CI=true: goldens change only through review (`cargo xtask bless` or `cargo insta review` on a desk), never in CI").into();
     }
-    if bless && args.value("golden") == Some("none") {
+    if bless && golden.is_none() {
         return usage("--bless with --golden none: there are no goldens to bless").into();
     }
     let inherited = crate::judge::golden::inherited_insta();
@@ -326,11 +329,6 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
 
     // Execute.
     let started = Instant::now();
-    let golden = match args.value("golden") {
-        Some("none") => None,
-        Some(dir) => Some(PathBuf::from(dir)),
-        None => Some(PathBuf::from("golden")),
-    };
     // Absolute, because workers may run with another working directory one day.
     let golden = golden.map(|g| std::fs::canonicalize(&g).unwrap_or(g));
     // The judging basis (truth and reference) of each point, shared by every backend's worker

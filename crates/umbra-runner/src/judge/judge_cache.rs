@@ -398,7 +398,7 @@ fn holder_gone(lock: &Path) -> bool {
         .ok()
         .and_then(|t| t.trim().parse::<u32>().ok())
     {
-        Some(pid) => !Path::new(&format!("/proc/{pid}")).exists(),
+        Some(pid) => !crate::atomic_file::process_alive(pid),
         None => std::fs::metadata(lock)
             .and_then(|m| m.modified())
             .ok()
@@ -470,12 +470,12 @@ fn read_truth(bytes: &[u8], key: u64) -> Result<Truth, String> {
         bytes: unsealed(bytes)?,
         at: 0,
     };
-    r.header(TRUTH_MAGIC, key)?;
-    parse_truth(r).ok_or_else(|| "has a valid checksum but not the truth's layout".to_string())
+    let dims = r.header(TRUTH_MAGIC, key)?;
+    parse_truth(r, dims)
+        .ok_or_else(|| "has a valid checksum but not the truth's layout".to_string())
 }
 
-fn parse_truth(mut r: Reader) -> Option<Truth> {
-    let (width, height, n) = r.dims()?;
+fn parse_truth(mut r: Reader, (width, height, n): (u32, u32, usize)) -> Option<Truth> {
     let class = r
         .take(n)?
         .iter()
@@ -530,13 +530,16 @@ fn read_judged(bytes: &[u8], key: u64, profile: Profile) -> Result<Judged, Strin
         bytes: unsealed(bytes)?,
         at: 0,
     };
-    r.header(JUDGED_MAGIC, key)?;
-    parse_judged(r, profile)
+    let dims = r.header(JUDGED_MAGIC, key)?;
+    parse_judged(r, dims, profile)
         .ok_or_else(|| "has a valid checksum but not the judged render's layout".to_string())
 }
 
-fn parse_judged(mut r: Reader, profile: Profile) -> Option<Judged> {
-    let (width, height, n) = r.dims()?;
+fn parse_judged(
+    mut r: Reader,
+    (width, height, n): (u32, u32, usize),
+    profile: Profile,
+) -> Option<Judged> {
     let quantum = r.f32()?;
     let color = r.take(n * 4)?.to_vec();
     let visibility = r.u32s(n)?.into_iter().map(f32::from_bits).collect();
@@ -613,8 +616,9 @@ impl<'a> Reader<'a> {
     fn u64(&mut self) -> Option<u64> {
         Some(u64::from_le_bytes(self.take(8)?.try_into().ok()?))
     }
-    /// Magic and key (skipping the size, which [`Reader::dims`] reads).
-    fn header(&mut self, magic: &[u8; 5], key: u64) -> Result<(), String> {
+    /// Magic, size and key, in that order: the size and the pixel count, or why the entry
+    /// is not one of `magic` made for `key`.
+    fn header(&mut self, magic: &[u8; 5], key: u64) -> Result<(u32, u32, usize), String> {
         let found = self.take(5).unwrap_or_default();
         if found != magic {
             return Err(format!(
@@ -623,23 +627,18 @@ impl<'a> Reader<'a> {
                 String::from_utf8_lossy(found)
             ));
         }
-        let made_for = self
-            .bytes
-            .get(13..21)
-            .map(|b| u64::from_le_bytes(b.try_into().unwrap_or_default()));
-        if made_for != Some(key) {
+        let short = || "is too short for its header".to_string();
+        let (w, h) = (self.u32().ok_or_else(short)?, self.u32().ok_or_else(short)?);
+        let made_for = self.u64().ok_or_else(short)?;
+        if made_for != key {
             return Err(format!(
-                "was made for another case point (key {:016x}, not {key:016x})",
-                made_for.unwrap_or(0)
+                "was made for another case point (key {made_for:016x}, not {key:016x})"
             ));
         }
-        Ok(())
-    }
-    /// Width, height (after the magic) and key; the pixel count.
-    fn dims(&mut self) -> Option<(u32, u32, usize)> {
-        let (w, h) = (self.u32()?, self.u32()?);
-        self.u64()?;
-        Some((w, h, (w as usize).checked_mul(h as usize)?))
+        let n = (w as usize)
+            .checked_mul(h as usize)
+            .ok_or_else(|| format!("claims an impossible size {w}x{h}"))?;
+        Ok((w, h, n))
     }
     fn done(&self) -> Option<()> {
         (self.at == self.bytes.len()).then_some(())
