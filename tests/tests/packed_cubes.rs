@@ -49,7 +49,7 @@ fn no_light_leaks_between_the_cubes_in_truth_or_reference() {
     for point in points("packed-cubes/packed-cubes.json") {
         let id = point.id();
         let run = Prepared::new(point);
-        let LightKind::Directional { towards } = run.light.kind else {
+        let LightKind::Directional { towards, .. } = run.light.kind else {
             panic!("directional")
         };
         let t = towards.as_dvec3();

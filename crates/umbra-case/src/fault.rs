@@ -24,6 +24,9 @@ pub enum Subtlety {
     Filtered,
     /// Changes only the shaded colour.
     Colour,
+    /// Moves a face's content by a symmetry of the square: invisible wherever that content
+    /// is symmetric.
+    Orientation,
 }
 
 impl Subtlety {
@@ -36,7 +39,88 @@ impl Subtlety {
             Subtlety::SubStep => "sub-step",
             Subtlety::Filtered => "filtered values",
             Subtlety::Colour => "colour",
+            Subtlety::Orientation => "orientation",
         }
+    }
+}
+
+/// A wrong orientation of a square image: one of the seven symmetries of the square other
+/// than the identity (the dihedral group D4), acting on a face's clip x and y. A cube face drawn
+/// with a wrong up vector is rotated; one drawn with the wrong handedness (or stored with its
+/// rows or columns reversed, or its axes swapped) is mirrored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Orientation {
+    /// A quarter turn (x, y) → (−y, x): the face's up vector is one of its sides.
+    Rot90,
+    /// A half turn (x, y) → (−x, −y): the face's up vector is reversed.
+    Rot180,
+    /// Three quarter turns (x, y) → (y, −x).
+    Rot270,
+    /// Columns reversed (x, y) → (−x, y): the face's handedness is wrong.
+    MirrorX,
+    /// Rows reversed (x, y) → (x, −y): the other row order.
+    MirrorY,
+    /// Axes swapped (x, y) → (y, x): the image transposed.
+    Transpose,
+    /// Axes swapped and reversed (x, y) → (−y, −x).
+    AntiTranspose,
+}
+
+impl Orientation {
+    /// Every wrong orientation.
+    pub const ALL: [Orientation; 7] = [
+        Orientation::Rot90,
+        Orientation::Rot180,
+        Orientation::Rot270,
+        Orientation::MirrorX,
+        Orientation::MirrorY,
+        Orientation::Transpose,
+        Orientation::AntiTranspose,
+    ];
+
+    /// Name for fault names and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Orientation::Rot90 => "rot90",
+            Orientation::Rot180 => "rot180",
+            Orientation::Rot270 => "rot270",
+            Orientation::MirrorX => "mirror-x",
+            Orientation::MirrorY => "mirror-y",
+            Orientation::Transpose => "transpose",
+            Orientation::AntiTranspose => "anti-transpose",
+        }
+    }
+
+    /// The 2 × 2 matrix acting on (x, y), rows first.
+    pub fn xy(self) -> [[f32; 2]; 2] {
+        match self {
+            Orientation::Rot90 => [[0.0, -1.0], [1.0, 0.0]],
+            Orientation::Rot180 => [[-1.0, 0.0], [0.0, -1.0]],
+            Orientation::Rot270 => [[0.0, 1.0], [-1.0, 0.0]],
+            Orientation::MirrorX => [[-1.0, 0.0], [0.0, 1.0]],
+            Orientation::MirrorY => [[1.0, 0.0], [0.0, -1.0]],
+            Orientation::Transpose => [[0.0, 1.0], [1.0, 0.0]],
+            Orientation::AntiTranspose => [[0.0, -1.0], [-1.0, 0.0]],
+        }
+    }
+
+    /// The matrix put in front of a face's view-projection: it moves clip x and y (and so
+    /// the rendered image) and leaves z and w alone.
+    pub fn clip(self) -> glam::Mat4 {
+        let [[a, b], [c, d]] = self.xy();
+        glam::Mat4::from_cols(
+            glam::Vec4::new(a, c, 0.0, 0.0),
+            glam::Vec4::new(b, d, 0.0, 0.0),
+            glam::Vec4::Z,
+            glam::Vec4::W,
+        )
+    }
+
+    /// It reverses the winding (a mirror): the pass's front face is flipped with it, so that
+    /// the face's content is moved and no other triangle is culled.
+    pub fn mirrors(self) -> bool {
+        let [[a, b], [c, d]] = self.xy();
+        a * d - b * c < 0.0
     }
 }
 
@@ -99,11 +183,22 @@ pub enum Fault {
     DimmingOff,
     /// The specular term is not shadowed.
     SpecularUnshadowed,
+    /// One face of the map is drawn with a wrong orientation: cube face `face` (0–5 in the
+    /// GL order +x, −x, +y, −y, +z, −z), or the 2D map when `face` is `None`.
+    Oriented {
+        /// The cube face, or None for a 2D map.
+        face: Option<u8>,
+        /// The mistake.
+        orientation: Orientation,
+    },
 }
 
 impl Fault {
-    /// Every fault.
-    pub const ALL: [Fault; 26] = [
+    /// Every fault the self-test runs by default. [`Fault::Oriented`] has 6 × 7 + 7 forms;
+    /// three stand for them here (a wrong handedness on the +x face, the one the
+    /// four-fold symmetric point-light cases could not see; a wrong up vector on the −y face;
+    /// a transposed 2D map), and `umbra selftest --fault` or `--orientations` runs any.
+    pub const ALL: [Fault; 29] = [
         Fault::CompareFlipped,
         Fault::NoDivide,
         Fault::NoGuard,
@@ -130,11 +225,33 @@ impl Fault {
         Fault::ColourGamma,
         Fault::DimmingOff,
         Fault::SpecularUnshadowed,
+        Fault::Oriented {
+            face: Some(0),
+            orientation: Orientation::MirrorX,
+        },
+        Fault::Oriented {
+            face: Some(3),
+            orientation: Orientation::Rot90,
+        },
+        Fault::Oriented {
+            face: None,
+            orientation: Orientation::Transpose,
+        },
     ];
 
+    /// Every orientation fault: each cube face and the 2D map, each wrong orientation.
+    pub fn orientations() -> Vec<Fault> {
+        let faces = (0..6).map(Some).chain(std::iter::once(None));
+        faces
+            .flat_map(|face| {
+                Orientation::ALL.map(|orientation| Fault::Oriented { face, orientation })
+            })
+            .collect()
+    }
+
     /// The fault's name, as `UMBRA_FAULT` takes it.
-    pub fn name(self) -> &'static str {
-        match self {
+    pub fn name(self) -> String {
+        let name = match self {
             Fault::CompareFlipped => "compare-flipped",
             Fault::NoDivide => "no-divide",
             Fault::NoGuard => "no-guard",
@@ -161,7 +278,14 @@ impl Fault {
             Fault::ColourGamma => "colour-gamma",
             Fault::DimmingOff => "dimming-off",
             Fault::SpecularUnshadowed => "specular-unshadowed",
-        }
+            Fault::Oriented { face, orientation } => {
+                return match face {
+                    Some(f) => format!("face{f}-{}", orientation.name()),
+                    None => format!("map-{}", orientation.name()),
+                };
+            }
+        };
+        name.to_string()
     }
 
     /// How small its effect is.
@@ -177,13 +301,32 @@ impl Fault {
             | Fault::BilinearCoarse
             | Fault::Vis4Bit => Subtlety::Filtered,
             Fault::ColourGamma | Fault::DimmingOff | Fault::SpecularUnshadowed => Subtlety::Colour,
+            Fault::Oriented { .. } => Subtlety::Orientation,
             _ => Subtlety::Gross,
         }
     }
 
     /// Parses a name.
     pub fn parse(s: &str) -> Option<Fault> {
-        Fault::ALL.into_iter().find(|f| f.name() == s)
+        Fault::ALL
+            .into_iter()
+            .chain(Fault::orientations())
+            .find(|f| f.name() == s)
+    }
+
+    /// The matrix put in front of face `face`'s view-projection when the shadow pass renders
+    /// it (`cube`: the map is a cube map), and whether that matrix mirrors the face; `None`
+    /// when this fault leaves the face alone.
+    pub fn face_mistake(self, face: usize, cube: bool) -> Option<(glam::Mat4, bool)> {
+        match self {
+            Fault::Oriented {
+                face: f,
+                orientation,
+            } if f.map(usize::from) == cube.then_some(face) => {
+                Some((orientation.clip(), orientation.mirrors()))
+            }
+            _ => None,
+        }
     }
 
     /// The active fault of this process, if the self-test turned one on.
@@ -194,5 +337,42 @@ impl Fault {
         std::env::var("UMBRA_FAULT")
             .ok()
             .and_then(|f| Fault::parse(&f))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn orientations_are_the_seven_other_symmetries_of_the_square() {
+        let mut seen = vec![[[1.0, 0.0], [0.0, 1.0]]];
+        for o in Orientation::ALL {
+            let m = o.xy();
+            // A symmetry of the square maps its corner (1, 1) onto a corner.
+            let corner = [m[0][0] + m[0][1], m[1][0] + m[1][1]];
+            assert!(corner.iter().all(|c| c.abs() == 1.0), "{o:?}");
+            assert!(!seen.contains(&m), "{o:?} repeats a symmetry");
+            seen.push(m);
+            let clip = o.clip() * glam::Vec4::new(0.25, 0.5, 0.3, 1.0);
+            assert_eq!((clip.z, clip.w), (0.3, 1.0), "{o:?} moves depth");
+        }
+        let mirrors = Orientation::ALL.iter().filter(|o| o.mirrors()).count();
+        assert_eq!(mirrors, 4);
+    }
+
+    #[test]
+    fn every_fault_name_parses_back() {
+        for f in Fault::ALL.into_iter().chain(Fault::orientations()) {
+            assert_eq!(Fault::parse(&f.name()), Some(f), "{}", f.name());
+        }
+        assert_eq!(Fault::orientations().len(), 49);
+        let f = Fault::parse("face3-mirror-x").expect("a fault");
+        assert!(f.face_mistake(3, true).is_some_and(|(_, m)| m));
+        assert!(f.face_mistake(2, true).is_none());
+        assert!(f.face_mistake(0, false).is_none());
+        let m = Fault::parse("map-transpose").expect("a fault");
+        assert!(m.face_mistake(0, false).is_some());
+        assert!(m.face_mistake(0, true).is_none());
     }
 }

@@ -354,6 +354,9 @@ pub struct Shadow {
     /// What a lookup outside the map's [0,1]² footprint returns. Default `lit`.
     #[serde(default)]
     pub outside: Outside,
+    /// What a receiver beyond the light's far plane reads. Default `compare`.
+    #[serde(default, skip_serializing_if = "BeyondFar::is_compare")]
+    pub beyond_far: BeyondFar,
     /// Skip the lookup (read lit) where the light-space w ≤ 0. Default `true`.
     #[serde(default = "default_true")]
     pub guard_behind_light: bool,
@@ -451,6 +454,50 @@ pub struct NdotLBias {
     pub scale: f32,
     /// The least bias. Required, ≥ 0.
     pub min: f32,
+    /// Which light vector L is. Default `direction`.
+    #[serde(default, skip_serializing_if = "LightVector::is_direction")]
+    pub light: LightVector,
+}
+
+/// The light vector of an N·L bias.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LightVector {
+    /// The unit vector towards the light the shading uses: the light's direction for a
+    /// directional light, towards its position for a spot or point light.
+    #[default]
+    Direction,
+    /// normalize(position − p) towards the light's eye even for a directional (orthographic)
+    /// light, as tutorial code writes it (LearnOpenGL's `normalize(lightPos - fragPos)`); the
+    /// same as `direction` for spot and point lights.
+    Position,
+}
+
+impl LightVector {
+    fn is_direction(&self) -> bool {
+        *self == LightVector::Direction
+    }
+}
+
+/// What a lookup whose receiver lies beyond the light's far plane reads.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BeyondFar {
+    /// Whatever the compare gives (a fixed-point format's hardware compare clamps the
+    /// reference to the far plane and reads lit against a cleared texel; D32F and a manual
+    /// compare read shadowed).
+    #[default]
+    Compare,
+    /// The shader reads lit where the coordinate's depth lies beyond the far plane (> 1, or
+    /// < 0 with reversed depth), before any shader bias: tutorial code's
+    /// `if (projCoords.z > 1.0) shadow = 0.0`.
+    Lit,
+}
+
+impl BeyondFar {
+    fn is_compare(&self) -> bool {
+        *self == BeyondFar::Compare
+    }
 }
 
 /// Face culling.
@@ -675,6 +722,7 @@ impl Default for Shadow {
             bias_matrix: BiasMatrix::default(),
             attachments: Attachments::default(),
             outside: Outside::default(),
+            beyond_far: BeyondFar::default(),
             guard_behind_light: true,
             depth_order: DepthOrder::default(),
         }

@@ -489,6 +489,7 @@ impl Gen {
                 Compare::Manual
             },
             bias: self.bias(),
+            beyond_far: BeyondFar::Compare,
             cull: self.rng.pick(&[Cull::None, Cull::Back, Cull::Front]),
             bias_matrix: self
                 .rng
@@ -545,6 +546,7 @@ impl Gen {
                     b.n_dot_l = Some(NdotLBias {
                         scale: self.rng.log_range(1e-3, 5e-2),
                         min: self.rng.log_range(1e-4, 5e-3),
+                        light: LightVector::Direction,
                     })
                 }
                 _ => b.normal_offset = self.rng.log_range(5e-3, 0.1),

@@ -93,6 +93,9 @@ pub enum LightKind {
     Directional {
         /// Unit vector towards the light.
         towards: Vec3,
+        /// The light's eye (its `position`, or the target moved `distance` towards it): only
+        /// an N·L bias that asks for the vector to the light's position reads it.
+        position: Vec3,
     },
     /// A positional light with one perspective face.
     Spot {
@@ -148,7 +151,10 @@ impl LightSetup {
                     (None, Some(Fit::Scene) | None) => fit_bounds(view, geometry),
                 };
                 LightSetup {
-                    kind: LightKind::Directional { towards },
+                    kind: LightKind::Directional {
+                        towards,
+                        position: eye,
+                    },
                     views: vec![LightView {
                         view,
                         projection: Projection::Ortho { bounds },
@@ -203,10 +209,28 @@ impl LightSetup {
     /// Unit vector from `p` towards the light.
     pub fn to_light(&self, p: Vec3) -> Vec3 {
         match self.kind {
-            LightKind::Directional { towards } => towards,
+            LightKind::Directional { towards, .. } => towards,
             LightKind::Spot { position } | LightKind::Point { position } => {
                 (position - p).normalize()
             }
+        }
+    }
+
+    /// The light's position: a directional light's eye, a spot or point light's position.
+    pub fn position(&self) -> Vec3 {
+        match self.kind {
+            LightKind::Directional { position, .. }
+            | LightKind::Spot { position }
+            | LightKind::Point { position } => position,
+        }
+    }
+
+    /// The light vector of an N·L bias at `p`: [`LightSetup::to_light`], or with
+    /// [`LightVector::Position`] the unit vector towards [`LightSetup::position`].
+    pub fn bias_light_vector(&self, p: Vec3, which: crate::format::LightVector) -> Vec3 {
+        match which {
+            crate::format::LightVector::Direction => self.to_light(p),
+            crate::format::LightVector::Position => (self.position() - p).normalize(),
         }
     }
 }

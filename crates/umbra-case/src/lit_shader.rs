@@ -31,6 +31,8 @@ pub enum Uniform {
     NdotLScale,
     /// The N·L bias's least value.
     NdotLMin,
+    /// The light's position (a vec3; a directional light's eye).
+    LightPosition,
 }
 
 /// One shading language's pieces of the lit pass. Each method returns source text, whole
@@ -165,6 +167,14 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
     if t.tests_outside() {
         *s += d.outside_test();
     }
+    if t.beyond_far_lit {
+        // Tutorial code's `if (projCoords.z > 1.0) shadow = 0.0`, before any shader bias
+        // (umbra_ref::lookup, step 5).
+        *s += match t.order {
+            DepthOrder::Forward => "  if (c.z > 1.0) { return 1.0; }\n",
+            DepthOrder::Reversed => "  if (c.z < 0.0) { return 1.0; }\n",
+        };
+    }
     if t.cube {
         *s += d.cube_rows();
     }
@@ -179,9 +189,15 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
         *s += &d.slope_bias(&scale);
     }
     if t.n_dot_l {
-        // LearnOpenGL's max(s·(1 − N·L), min), N·L unclamped (umbra_ref::lookup, step 6).
+        // LearnOpenGL's max(s·(1 − N·L), min), N·L unclamped (umbra_ref::lookup, step 6);
+        // its L is the vector to the light's position even for an orthographic light.
+        let l = if t.n_dot_l_from_position {
+            format!("normalize({} - p)", d.uniform(Uniform::LightPosition))
+        } else {
+            "to_light(p)".to_string()
+        };
         *s += &format!(
-            "  bias += max({} * (1.0 - dot(n, to_light(p))), {});\n",
+            "  bias += max({} * (1.0 - dot(n, {l})), {});\n",
             d.uniform(Uniform::NdotLScale),
             d.uniform(Uniform::NdotLMin)
         );

@@ -16,7 +16,9 @@
 //! before or after the divide), w > 0 guard, outside test, bias, the reference's clamp, filter.
 
 use crate::fault::Fault;
-use crate::format::{BiasMatrix, Compare, DepthOrder, Filter, Outside, Shading};
+use crate::format::{
+    BeyondFar, BiasMatrix, Compare, DepthOrder, Filter, LightVector, Outside, Shading,
+};
 use crate::light::LightKind;
 use crate::prepare::Prepared;
 
@@ -46,6 +48,11 @@ pub struct Technique {
     pub slope: bool,
     /// An N·L bias is present (its scale and least value are uniforms).
     pub n_dot_l: bool,
+    /// The N·L bias's L is the vector towards the light's position on a directional light
+    /// (`light: position`; on spot and point lights that is the light direction already).
+    pub n_dot_l_from_position: bool,
+    /// The shader reads lit beyond the light's far plane (`beyond_far: lit`).
+    pub beyond_far_lit: bool,
     /// The illumination model and its constants (written into the shader).
     pub shading: Shading,
     /// The self-test's fault: read by the methods below and nowhere else.
@@ -145,6 +152,11 @@ impl Technique {
             order: s.depth_order,
             slope: s.bias.slope.is_some(),
             n_dot_l: s.bias.n_dot_l.is_some(),
+            n_dot_l_from_position: matches!(run.light.kind, LightKind::Directional { .. })
+                && s.bias
+                    .n_dot_l
+                    .is_some_and(|b| b.light == LightVector::Position),
+            beyond_far_lit: s.beyond_far == BeyondFar::Lit,
             shading: case.shading.clone(),
             fault,
         }

@@ -438,3 +438,48 @@ mod colour_tests {
         }
     }
 }
+
+#[cfg(test)]
+mod technique_tests {
+    use super::*;
+    use umbra_case::{ClipDepth, Prepared, Profile};
+
+    /// The techniques as programs write them are told apart: a backend that ignores one of a
+    /// case's settings (the N·L bias's light vector, the beyond-far policy) renders what the
+    /// case with the other value renders, and that frame must be illegal under the case's own
+    /// intervals. Each point of `cases/bias/learnopengl.json` is rendered by the reference and
+    /// judged against every other point's intervals (GL profile); its own frame passes.
+    #[test]
+    fn learnopengl_settings_are_each_seen() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../cases/bias/learnopengl.json");
+        let points = umbra_case::load_file(&file).expect("a valid case");
+        assert_eq!(points.len(), 4, "two settings, two values each");
+        let runs: Vec<Prepared> = points.into_iter().map(Prepared::new).collect();
+        let bases: Vec<Judged> = runs
+            .iter()
+            .map(|r| umbra_ref::render_judged(r, ClipDepth::MinusOneToOne, Profile::GL))
+            .collect();
+        let mut table = String::new();
+        for (i, basis) in bases.iter().enumerate() {
+            let (own, _) = judge(basis, &basis.frame);
+            assert_eq!(own.illegal, 0, "{}", runs[i].point.id());
+            for (j, other) in bases.iter().enumerate().filter(|(j, _)| *j != i) {
+                let (a, _) = judge(basis, &other.frame);
+                table += &format!(
+                    "{} judged as {}: {} illegal px\n",
+                    runs[j].point.id(),
+                    runs[i].point.id(),
+                    a.illegal
+                );
+                assert!(
+                    a.illegal > 0,
+                    "{} passes as {}:\n{table}",
+                    runs[j].point.id(),
+                    runs[i].point.id()
+                );
+            }
+        }
+        println!("{table}");
+    }
+}

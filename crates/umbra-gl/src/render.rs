@@ -566,12 +566,21 @@ impl Renderer {
                             0.0,
                         )) * m;
                     }
+                    // A face drawn with a wrong orientation (mirrors flip the front face
+                    // with it, so that only the face's content moves).
+                    let mistake = fault.and_then(|f| f.face_mistake(k, cube));
+                    if let Some((wrong, _)) = mistake {
+                        m = wrong * m;
+                    }
+                    let mirrored = mistake.is_some_and(|(_, mirrors)| mirrors);
+                    gl.front_face(if mirrored { glow::CW } else { glow::CCW });
                     gl.uniform_matrix_4_f32_slice(vp_loc.as_ref(), false, &m.to_cols_array());
                     gl.draw_arrays(glow::TRIANGLES, 0, count);
                     self.check(&format!("shadow pass (face {k})"))?;
                 }
                 gl.disable(glow::POLYGON_OFFSET_FILL);
                 gl.disable(glow::CULL_FACE);
+                gl.front_face(glow::CCW);
                 gl.color_mask(true, true, true, true);
                 map
             }
@@ -712,7 +721,8 @@ impl Renderer {
                 &tex,
             );
             let (pos, towards) = match run.light.kind {
-                LightKind::Directional { towards } => (glam::Vec3::ZERO, towards),
+                // A directional light's eye is read only by an N·L bias towards its position.
+                LightKind::Directional { towards, position } => (position, towards),
                 LightKind::Spot { position } | LightKind::Point { position } => {
                     (position, glam::Vec3::ZERO)
                 }

@@ -274,6 +274,7 @@ impl Dialect for Glsl {
             Uniform::SlopeScale => "u_slope_scale",
             Uniform::NdotLScale => "u_ndl_scale",
             Uniform::NdotLMin => "u_ndl_min",
+            Uniform::LightPosition => "u_light_pos",
         }
     }
 

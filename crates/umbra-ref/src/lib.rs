@@ -30,7 +30,8 @@ pub mod truth;
 
 use std::time::Instant;
 
-use umbra_case::format::Case;
+use umbra_case::fault::Fault;
+use umbra_case::format::{Case, Cull};
 use umbra_case::{
     Backend, BackendError, BackendId, ClipDepth, Clock, Convention, DepthMap, DriverInfo, Frame,
     Needs, Prepared, Profile, Support, Timings, VisibilityStorage,
@@ -48,7 +49,15 @@ pub fn convention(case: &Case, clip: ClipDepth) -> Convention {
 
 /// Renders both passes of `run` in clip convention `clip`.
 pub fn render(run: &Prepared, clip: ClipDepth) -> Frame {
-    render_inner(run, clip, None, None).0
+    render_inner(run, clip, None, None, None).0
+}
+
+/// Renders like [`render`] with a geometric `fault` in the shadow pass (a face drawn with a
+/// wrong orientation, [`umbra_case::fault::Fault::face_mistake`]): what a backend making that
+/// mistake would show, for the face/orientation test. The reference backend itself never
+/// reads `UMBRA_FAULT`.
+pub fn render_with_fault(run: &Prepared, clip: ClipDepth, fault: Fault) -> Frame {
+    render_inner(run, clip, None, None, Some(fault)).0
 }
 
 /// A judged reference render: the reference's frame and, per pixel (top row first), what a
@@ -85,7 +94,7 @@ pub fn explain(
     profile: Profile,
     pixel: Option<(u32, u32)>,
 ) -> (Judged, String) {
-    let (frame, legal, map, trace) = render_inner(run, clip, Some(profile), pixel);
+    let (frame, legal, map, trace) = render_inner(run, clip, Some(profile), pixel, None);
     (
         Judged {
             frame,
@@ -131,23 +140,39 @@ fn render_inner(
     clip: ClipDepth,
     profile: Option<Profile>,
     pixel: Option<(u32, u32)>,
+    fault: Option<Fault>,
 ) -> (Frame, Vec<PixelLegal>, Vec<(f32, f32)>, String) {
     let start = Instant::now();
     let case = run.case();
     let conv = convention(case, clip);
     let adjacency = profile.map(|_| adjacency::Adjacency::new(&run.geometry));
+    let cube = run.light.views.len() == 6;
     let layers: Vec<_> = run
         .light
         .views
         .iter()
-        .map(|v| {
-            let vp = v.view_proj(conv);
+        .enumerate()
+        .map(|(k, v)| {
+            let mut vp = v.view_proj(conv);
+            let mut shadow = std::borrow::Cow::Borrowed(&case.shadow);
+            if let Some((wrong, mirrors)) = fault.and_then(|f| f.face_mistake(k, cube)) {
+                vp = wrong * vp;
+                if mirrors {
+                    // The front face turns with the mirror: the same triangles are culled.
+                    let s = shadow.to_mut();
+                    s.cull = match s.cull {
+                        Cull::Back => Cull::Front,
+                        Cull::Front => Cull::Back,
+                        Cull::None => Cull::None,
+                    };
+                }
+            }
             let kinds = adjacency
                 .as_ref()
                 .map(|a| a.edge_kinds(&run.geometry, vp, case.shadow.cull));
             shadow_pass::render_face(
                 conv,
-                &case.shadow,
+                &shadow,
                 vp,
                 &run.geometry,
                 kinds.as_deref().zip(profile),

@@ -4,14 +4,19 @@
 //! 2. Face: the light's only face, or the cube face of p' by major axis.
 //! 3. Coordinate: (u, v, depth, w) with the bias matrix before or after the divide.
 //! 4. Guard: w ≤ 0 (behind a perspective light) reads lit when the guard is on.
-//! 5. Outside: `lit` reads lit when (u, v) leaves [0,1]² (cube faces never do: they clamp).
+//! 5. Outside: `lit` reads lit when (u, v) leaves [0,1]² (cube faces never do: they clamp);
+//!    `beyond_far: lit` reads lit when the depth lies beyond the far plane (> 1, reversed < 0),
+//!    tested on the coordinate's depth before any shader bias, as tutorial code tests
+//!    `projCoords.z > 1.0`.
 //! 6. Reference: depth − (constant + slope bias + N·L bias) away from the light; clamped to [0,1] for a
 //!    hardware compare on a fixed-point format (GL 3.3 §3.8.16, Vulkan "Depth Compare"),
 //!    never for a manual compare or a float format. The slope bias is
 //!    min(s · tan θ, max) with tan θ = sqrt(1 − c²)/c, c = N·L > 0 (0 where c ≤ 0), the
 //!    algebraic form of tan(acos(c)): the same number, without acos and tan, whose GLSL and
 //!    SPIR-V precision (4096 ULP, absolute 2⁻¹¹) would allow several D24 steps of bias. The
-//!    N·L bias is max(s · (1 − c), min), LearnOpenGL's form, c unclamped.
+//!    N·L bias is max(s · (1 − c), min), LearnOpenGL's form, c unclamped; its L is the light
+//!    direction, or with `light: position` the unit vector to the light's position (a
+//!    directional light's eye), as LearnOpenGL writes it for its orthographic light.
 //! 7. Filter: NEAREST texel floor(u·size); LINEAR = 2x2 at floor(u·size − ½) with bilinear
 //!    weights of the compare results (never of depths); PCF N = N×N NEAREST compares at
 //!    offsets (k − (N−1)/2) texels, averaged.
@@ -31,7 +36,7 @@
 //! itself may move by [`position_freedom`], over which the interval is the hull.
 
 use glam::Vec3;
-use umbra_case::format::{BiasMatrix, Compare, Filter, Outside, Shadow};
+use umbra_case::format::{BeyondFar, BiasMatrix, Compare, Filter, LightVector, Outside, Shadow};
 use umbra_case::{Convention, LightKind, LightSetup, LookupMatrices, Profile, ShadowCoord, Spec};
 
 use crate::rounding::{floor_f32, floor_i64};
@@ -297,7 +302,11 @@ impl Lookup<'_> {
         scratch: &mut Vec<ShadowCoord>,
     ) {
         let s = self.shadow;
-        if self.cube() || s.bias.slope.is_some() || s.bias.n_dot_l.is_some() {
+        if self.cube()
+            || s.bias.slope.is_some()
+            || s.bias.n_dot_l.is_some()
+            || s.beyond_far == BeyondFar::Lit
+        {
             for (k, o) in out.iter_mut().enumerate() {
                 *o = self.visibility(surfaces.position(k), surfaces.normal(k));
             }
@@ -439,6 +448,16 @@ impl Lookup<'_> {
         (c, c.depth - self.conv.toward_far() * bias)
     }
 
+    /// Whether the `beyond_far: lit` policy applies to a coordinate of this depth.
+    fn beyond_far(&self, depth: f32) -> bool {
+        self.shadow.beyond_far == BeyondFar::Lit
+            && if self.conv.toward_far() > 0.0 {
+                depth > 1.0
+            } else {
+                depth < 0.0
+            }
+    }
+
     /// Whether a 2D map's `lit` outside policy applies to (u, v).
     fn outside_lit(&self, u: f32, v: f32) -> bool {
         !self.cube()
@@ -449,7 +468,10 @@ impl Lookup<'_> {
     fn setup(&self, p: Vec3, n: Vec3) -> Option<Setup> {
         let s = self.shadow;
         let (face, c, mut reference) = self.probe(p, n);
-        if (s.guard_behind_light && c.w <= 0.0) || self.outside_lit(c.u, c.v) {
+        if (s.guard_behind_light && c.w <= 0.0)
+            || self.outside_lit(c.u, c.v)
+            || self.beyond_far(c.depth)
+        {
             return None;
         }
         if s.compare == Compare::Hardware && s.format.is_fixed() {
@@ -477,7 +499,7 @@ impl Lookup<'_> {
         let Some(b) = self.shadow.bias.n_dot_l else {
             return 0.0;
         };
-        let c = n.dot(self.light.to_light(p));
+        let c = n.dot(self.light.bias_light_vector(p, b.light));
         (b.scale * (1.0 - c)).max(b.min)
     }
 
@@ -627,12 +649,34 @@ impl Lookup<'_> {
         let s = self.shadow;
         let (c, raw) = self.probe_on(p, n, face);
         let (mut du, mut dv, mut dr, mut dw) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+        let mut dz = 0.0f64;
         for m in moves {
             let (c2, r2) = self.probe_on(p + *m, n, face);
             du += f64::from((c2.u - c.u).abs());
             dv += f64::from((c2.v - c.v).abs());
             dr += f64::from((r2 - raw).abs());
             dw += f64::from((c2.w - c.w).abs());
+            dz += f64::from((c2.depth - c.depth).abs());
+        }
+        // `beyond_far: lit`: the coordinate's depth free within its arithmetic and the
+        // point's moves; beyond the far plane for all of them reads lit, for some of them
+        // may.
+        let (mut far_sure, mut far_maybe) = (false, false);
+        if s.beyond_far == BeyondFar::Lit {
+            let e = dz + self.depth_error(p, n, face, c.depth);
+            let z = f64::from(c.depth);
+            let (near_end, far_end) = if self.conv.toward_far() > 0.0 {
+                (z - e, z + e)
+            } else {
+                (-(z + e), -(z - e))
+            };
+            let bound = if self.conv.toward_far() > 0.0 {
+                1.0
+            } else {
+                0.0
+            };
+            far_sure = near_end > bound && self.beyond_far(c.depth);
+            far_maybe = far_end > bound || self.beyond_far(c.depth);
         }
         let guard_maybe = s.guard_behind_light && f64::from(c.w) - dw <= 0.0;
         if s.guard_behind_light && f64::from(c.w) + dw <= 0.0 {
@@ -651,13 +695,17 @@ impl Lookup<'_> {
             note(|| "    outside the map: lit".into());
             return Legal::LIT;
         }
+        if far_sure {
+            note(|| "    beyond the far plane: lit".into());
+            return Legal::LIT;
+        }
         let mut reference = raw;
         if s.compare == Compare::Hardware && s.format.is_fixed() {
             reference = reference.clamp(0.0, 1.0);
         }
         let st = Setup { face, c, reference };
         let mut l = self.legal_taps(p, n, &st, (du, dv, dr));
-        if guard_maybe || outside_maybe {
+        if guard_maybe || outside_maybe || far_maybe {
             l = l.hull(Legal::LIT);
         }
         l
@@ -1080,36 +1128,18 @@ impl Lookup<'_> {
     ///   (`referenceBits`), umbra only the texture's own codes.
     fn reference_range(&self, p: Vec3, n: Vec3, st: &Setup, extra: f64) -> (f64, f64) {
         let s = self.shadow;
-        let (q, p4, m) = self.lookup_point(p, n, st.face);
-        let row = |r: usize| -> f64 { (0..4).map(|k| (m.col(k)[r] * p4[k]).abs()).sum() };
-        let (sz, sw) = (row(2), row(3));
-        let wv = (0..4)
-            .map(|k| m.col(k)[3] * p4[k])
-            .sum::<f64>()
-            .abs()
-            .max(1e-30);
-        let zv = (0..4).map(|k| m.col(k)[2] * p4[k]).sum::<f64>();
-        let ratio = zv / wv;
-        let mut err = 2.0 * gamma(4.0) * (sz + ratio.abs() * sw) / wv + 3.0 * ulp(ratio);
-        if s.bias_matrix == BiasMatrix::AfterDivide {
-            // depth = scale·ndc + offset: one more product and sum.
-            let scale = match self.conv.clip {
-                umbra_case::ClipDepth::MinusOneToOne => 0.5,
-                umbra_case::ClipDepth::ZeroToOne => 1.0,
-            };
-            err = err * scale + 2.0 * ulp(f64::from(st.c.depth));
-        }
+        let q = self.lookup_point(p, n, st.face).0;
+        let err = self.depth_error(p, n, st.face, st.c.depth);
         let depth = f64::from(st.c.depth);
         let (mut b_lo, mut b_hi) = (f64::from(s.bias.constant), f64::from(s.bias.constant));
-        // c = N·L as the shader computes it, and how far it may be off.
-        let cosine = || {
-            let to_light = self.light.to_light(q);
+        // c = N·L as the shader computes it (with the light vector `which`), and how far it
+        // may be off.
+        let cosine = |which: LightVector| {
+            let to_light = self.light.bias_light_vector(q, which);
             let c = f64::from(n.dot(to_light));
-            let dist = match self.light.kind {
-                LightKind::Directional { .. } => f64::INFINITY,
-                LightKind::Spot { position } | LightKind::Point { position } => {
-                    f64::from((position - q).length())
-                }
+            let dist = match (self.light.kind, which) {
+                (LightKind::Directional { .. }, LightVector::Direction) => f64::INFINITY,
+                _ => f64::from((self.light.position() - q).length()),
             };
             (
                 c,
@@ -1118,13 +1148,13 @@ impl Lookup<'_> {
         };
         if let Some(nl) = s.bias.n_dot_l {
             // max(s·(1 − c), min) decreases in c; a product, a sum and a max (3u relative).
-            let (c, dc) = cosine();
+            let (c, dc) = cosine(nl.light);
             let f = |c: f64| (f64::from(nl.scale) * (1.0 - c)).max(f64::from(nl.min));
             b_lo += f(c + dc) * (1.0 - 3.0 * U);
             b_hi += f(c - dc) * (1.0 + 3.0 * U);
         }
         if let Some(slope) = s.bias.slope {
-            let (c, dc) = cosine();
+            let (c, dc) = cosine(LightVector::Direction);
             let tan = |c: f64| {
                 if c > 0.0 {
                     (1.0 - c * c).max(0.0).sqrt() / c
@@ -1162,6 +1192,35 @@ impl Lookup<'_> {
             }
         }
         (lo, hi)
+    }
+
+    /// How far another implementation's coordinate depth (before any shader bias) may lie
+    /// from `depth` at this point: t.z and t.w are each a 4-term f32 dot product of the same
+    /// uploaded matrix row with (p, 1), rounded within γ₄·Σ|mᵢ·pᵢ| by either side, so twice
+    /// that, then a division (2.5 ULP, GLSL 4.60 §4.7.1, SPIR-V) and our own rounding; the
+    /// bias matrix after the divide adds a product and a sum.
+    fn depth_error(&self, p: Vec3, n: Vec3, face: usize, depth: f32) -> f64 {
+        let s = self.shadow;
+        let (_, p4, m) = self.lookup_point(p, n, face);
+        let row = |r: usize| -> f64 { (0..4).map(|k| (m.col(k)[r] * p4[k]).abs()).sum() };
+        let (sz, sw) = (row(2), row(3));
+        let wv = (0..4)
+            .map(|k| m.col(k)[3] * p4[k])
+            .sum::<f64>()
+            .abs()
+            .max(1e-30);
+        let zv = (0..4).map(|k| m.col(k)[2] * p4[k]).sum::<f64>();
+        let ratio = zv / wv;
+        let mut err = 2.0 * gamma(4.0) * (sz + ratio.abs() * sw) / wv + 3.0 * ulp(ratio);
+        if s.bias_matrix == BiasMatrix::AfterDivide {
+            // depth = scale·ndc + offset: one more product and sum.
+            let scale = match self.conv.clip {
+                umbra_case::ClipDepth::MinusOneToOne => 0.5,
+                umbra_case::ClipDepth::ZeroToOne => 1.0,
+            };
+            err = err * scale + 2.0 * ulp(f64::from(depth));
+        }
+        err
     }
 }
 

@@ -126,7 +126,7 @@ impl Surfaces {
         }
         let [lx, ly, lz] = &mut self.to_light;
         match light.kind {
-            LightKind::Directional { towards } => {
+            LightKind::Directional { towards, .. } => {
                 lx.fill(towards.x);
                 ly.fill(towards.y);
                 lz.fill(towards.z);
@@ -206,7 +206,7 @@ mod tests {
                 let position = Vec3::new(next() * 9.0, 20.0, next() * 9.0);
                 let towards = Vec3::new(next(), 1.0, next()).normalize();
                 let lights = [
-                    LightKind::Directional { towards },
+                    LightKind::Directional { towards, position },
                     LightKind::Spot { position },
                     LightKind::Point { position },
                 ]

@@ -205,6 +205,10 @@ pub const FLAGS: &[Flag] = &[
         "S",
         "seed of the generated cases: the same seed gives the same cases everywhere [default: 1]",
     ),
+    switch(
+        "orientations",
+        "selftest: instead of the faults on the backends, the face/orientation table: every cube face and the 2D map drawn with each of the seven wrong orientations by the reference, and the catalogue points that catch each",
+    ),
     valued(
         "count",
         "N",
@@ -270,6 +274,7 @@ pub const COMMANDS: &[Spec] = &[
             "backend",
             "fault",
             "cases",
+            "orientations",
             "seed",
             "count",
             "out",

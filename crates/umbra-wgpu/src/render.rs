@@ -179,54 +179,67 @@ impl Gpu {
         let color_target = [Some(wgpu::ColorTargetState::from(
             wgpu::TextureFormat::Rgba8Unorm,
         ))];
-        let shadow_pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("shadow"),
-            layout: Some(&shadow_layout),
-            vertex: wgpu::VertexState {
-                module: &shadow_module,
-                entry_point: Some("vs"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: STRIDE,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &position_only,
-                })],
-            },
-            primitive: wgpu::PrimitiveState {
-                // Cube faces are rendered with y flipped, which reverses their winding.
-                front_face: if cube {
-                    wgpu::FrontFace::Cw
-                } else {
-                    wgpu::FrontFace::Ccw
+        // Cube faces are rendered with y flipped, which reverses their winding; a face the
+        // self-test draws mirrored gets the other front face too.
+        let normal_front = if cube {
+            wgpu::FrontFace::Cw
+        } else {
+            wgpu::FrontFace::Ccw
+        };
+        let shadow_pipeline_for = |front_face| {
+            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("shadow"),
+                layout: Some(&shadow_layout),
+                vertex: wgpu::VertexState {
+                    module: &shadow_module,
+                    entry_point: Some("vs"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: STRIDE,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &position_only,
+                    })],
                 },
-                cull_mode: match s.cull {
-                    Cull::None => None,
-                    Cull::Back => Some(wgpu::Face::Back),
-                    Cull::Front => Some(wgpu::Face::Front),
+                primitive: wgpu::PrimitiveState {
+                    front_face,
+                    cull_mode: match s.cull {
+                        Cull::None => None,
+                        Cull::Back => Some(wgpu::Face::Back),
+                        Cull::Front => Some(wgpu::Face::Front),
+                    },
+                    ..Default::default()
                 },
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(if s.depth_order == DepthOrder::Forward {
-                    wgpu::CompareFunction::Less
-                } else {
-                    wgpu::CompareFunction::Greater
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(if s.depth_order == DepthOrder::Forward {
+                        wgpu::CompareFunction::Less
+                    } else {
+                        wgpu::CompareFunction::Greater
+                    }),
+                    stencil: Default::default(),
+                    bias,
                 }),
-                stencil: Default::default(),
-                bias,
-            }),
-            multisample: Default::default(),
-            fragment: with_color.then(|| wgpu::FragmentState {
-                module: &shadow_module,
-                entry_point: Some("fs"),
-                compilation_options: Default::default(),
-                targets: &color_target,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+                multisample: Default::default(),
+                fragment: with_color.then(|| wgpu::FragmentState {
+                    module: &shadow_module,
+                    entry_point: Some("fs"),
+                    compilation_options: Default::default(),
+                    targets: &color_target,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let shadow_pipeline = shadow_pipeline_for(normal_front);
+        let mirrored_pipeline = fault
+            .is_some_and(|f| (0..6).any(|k| f.face_mistake(k, cube).is_some_and(|(_, m)| m)))
+            .then(|| {
+                shadow_pipeline_for(match normal_front {
+                    wgpu::FrontFace::Cw => wgpu::FrontFace::Ccw,
+                    wgpu::FrontFace::Ccw => wgpu::FrontFace::Cw,
+                })
+            });
         let dummy = with_color.then(|| {
             d.create_texture(&wgpu::TextureDescriptor {
                 label: Some("dummy colour"),
@@ -261,6 +274,12 @@ impl Gpu {
         let mut face_buffers = Vec::new();
         for k in 0..faces {
             let mut m = run.light.views[k as usize].view_proj(conv);
+            // A face drawn with a wrong orientation (the self-test's Oriented fault), before
+            // the convention's flip so that it moves the content as on GL.
+            let mistake = fault.and_then(|f| f.face_mistake(k as usize, cube));
+            if let Some((wrong, _)) = mistake {
+                m = wrong * m;
+            }
             if cube {
                 m = conv.cube_face_render_flip() * m;
             }
@@ -329,7 +348,10 @@ impl Gpu {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&shadow_pipeline);
+            match (&mirrored_pipeline, mistake) {
+                (Some(p), Some((_, true))) => pass.set_pipeline(p),
+                _ => pass.set_pipeline(&shadow_pipeline),
+            }
             if is(umbra_case::fault::Fault::ShadowViewport) {
                 // The camera's viewport left in place (clipped to the map).
                 let [cw, ch] = run.camera.size;
@@ -458,7 +480,8 @@ impl Gpu {
             tex.push(m.texture);
         }
         let (pos, towards) = match run.light.kind {
-            LightKind::Directional { towards } => (glam::Vec3::ZERO, towards),
+            // A directional light's eye is read only by an N·L bias towards its position.
+            LightKind::Directional { towards, position } => (position, towards),
             LightKind::Spot { position } | LightKind::Point { position } => {
                 (position, glam::Vec3::ZERO)
             }

@@ -143,6 +143,7 @@ impl Dialect for Wgsl {
             Uniform::SlopeScale => "u.bias.y",
             Uniform::NdotLScale => "u.size.z",
             Uniform::NdotLMin => "u.size.w",
+            Uniform::LightPosition => "u.light_pos.xyz",
         }
     }
 

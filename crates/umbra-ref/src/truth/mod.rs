@@ -218,7 +218,7 @@ impl Scene<'_> {
 
     fn to_light(&self, p: DVec3) -> DVec3 {
         match self.light {
-            LightKind::Directional { towards } => towards.as_dvec3().normalize(),
+            LightKind::Directional { towards, .. } => towards.as_dvec3().normalize(),
             LightKind::Spot { position } | LightKind::Point { position } => {
                 (position.as_dvec3() - p).normalize()
             }
@@ -235,7 +235,9 @@ impl Scene<'_> {
     /// Whether the segment from `p` to the light crosses anything but face `own`.
     fn blocked(&self, p: DVec3, own: u32) -> bool {
         let (dir, t_max) = match self.light {
-            LightKind::Directional { towards } => (towards.as_dvec3().normalize(), f64::INFINITY),
+            LightKind::Directional { towards, .. } => {
+                (towards.as_dvec3().normalize(), f64::INFINITY)
+            }
             LightKind::Spot { position } | LightKind::Point { position } => {
                 let d = position.as_dvec3() - p;
                 let len = d.length();
@@ -270,7 +272,7 @@ impl Scene<'_> {
                     ),
                 );
                 let d = match self.light {
-                    LightKind::Directional { towards } => towards.as_dvec3(),
+                    LightKind::Directional { towards, .. } => towards.as_dvec3(),
                     LightKind::Spot { position } | LightKind::Point { position } => {
                         q - position.as_dvec3()
                     }

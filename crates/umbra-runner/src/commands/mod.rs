@@ -4,6 +4,7 @@
 pub mod bisect;
 pub mod conformance;
 pub mod drivers;
+pub mod orientations;
 pub mod reduce;
 pub mod render;
 pub mod selftest;

@@ -11,8 +11,11 @@
 //! - Up to [`SAMPLE`] of the points built to see the fault ([`aimed_at`]) and up to
 //!   [`SAMPLE`] others, each a spread, are run and every catch is counted, by the checks that
 //!   failed; if none catches, the rest are tried until one does.
-//! - A fault caught by one point only is a warning (one case away from going blind); one
-//!   that no point catches is missed, and a missed fault fails the self-test.
+//! - Every fault × backend must be caught by at least [`MIN_POINTS`] points: a check that
+//!   rests on one or two points is a case away from going blind. The hunt goes on past the
+//!   sample until that many catch; a pair caught by fewer fails the self-test, unless fewer
+//!   points than that exercise the fault on the backend at all (the output says so). One
+//!   that no point catches is missed, and fails too.
 //! - `--seed S --count N` runs the faults on N generated cases ([`umbra_case::generate`])
 //!   instead, every exercising point of each, and reports the catch rate per fault: how far
 //!   the judge's sensitivity carries beyond the cases it was developed against.
@@ -31,6 +34,9 @@ use crate::judge::expectations::Expectations;
 
 /// How many exercising points each fault × backend pair runs at least.
 pub const SAMPLE: usize = 6;
+
+/// How many points must catch each fault × backend pair.
+pub const MIN_POINTS: usize = 3;
 
 /// Whether `fault` means anything on backend `id`.
 pub fn applies(fault: Fault, id: &str) -> bool {
@@ -78,6 +84,7 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, id: &str) -> bool {
         Fault::SpecularUnshadowed => {
             c.shading.model == ShadingModel::Dimmed && c.shading.specular > 0.0
         }
+        Fault::Oriented { face, .. } => face.is_some() == matches!(c.light, Light::Point(_)),
         _ => true,
     }
 }
@@ -99,6 +106,8 @@ pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
         }
         Fault::NoGuard => &["guard-magnified", "behind-spot", "bias-matrix"],
         Fault::Repeat => &["outside"],
+        Fault::Oriented { face: Some(_), .. } => &["point-faces"],
+        Fault::Oriented { face: None, .. } => &["l-occluder", "map-orientation"],
         _ => &[],
     };
     cases.contains(&c.name.as_str())
@@ -111,6 +120,8 @@ pub struct Hunt {
     pub tried: usize,
     /// Points that caught the fault, each with its failed checks.
     pub caught: Vec<(String, String)>,
+    /// Points that exercise the fault on the backend (the most that could catch it).
+    pub exercising: usize,
     /// Why nothing was run or caught, when so.
     pub note: Option<String>,
     /// The worker refused the Mesa build asked for (`--mesa`): the self-test cannot stand.
@@ -150,6 +161,9 @@ pub fn main(args: &Args) -> i32 {
         Some(dir) => dir.clone(),
         None => PathBuf::from(args.value("cases").unwrap_or("cases")),
     };
+    if args.has("orientations") {
+        return super::orientations::main(&cases);
+    }
     let timeout = Duration::from_secs(
         args.value("timeout")
             .and_then(|t| t.parse().ok())
@@ -189,10 +203,14 @@ pub fn main(args: &Args) -> i32 {
         match Fault::parse(name) {
             Some(f) => faults.push(f),
             None => {
-                let all: Vec<&str> = Fault::ALL.iter().map(|f| f.name()).collect();
+                let all: Vec<String> = Fault::ALL.iter().map(|f| f.name()).collect();
                 eprintln!(
-                    "error: --fault {name:?} is not a fault; the faults are {}",
-                    all.join(", ")
+                    "error: --fault {name:?} is not a fault; the faults are {}, and any \
+                     face<0-5>-<orientation> or map-<orientation> (orientations: {})",
+                    all.join(", "),
+                    umbra_case::fault::Orientation::ALL
+                        .map(|o| o.name())
+                        .join(", ")
                 );
                 return 125;
             }
@@ -302,7 +320,7 @@ fn rates(results: &[(String, Fault, Hunt)]) -> i32 {
         "\ncatch rate on generated cases, per fault: points that caught it / points run (all backends)"
     );
     let (mut caught_all, mut tried_all) = (0, 0);
-    for f in Fault::ALL {
+    for f in faults_of(results) {
         let rs: Vec<_> = results.iter().filter(|r| r.1 == f).collect();
         if rs.is_empty() {
             continue;
@@ -339,6 +357,19 @@ fn rates(results: &[(String, Fault, Hunt)]) -> i32 {
     }
 }
 
+/// The faults of `results`, each once, in the order of [`Fault::ALL`] and then of their names.
+fn faults_of(results: &[(String, Fault, Hunt)]) -> Vec<Fault> {
+    let mut faults: Vec<Fault> = Vec::new();
+    for r in results {
+        if !faults.contains(&r.1) {
+            faults.push(r.1);
+        }
+    }
+    let rank = |f: &Fault| Fault::ALL.iter().position(|a| a == f).unwrap_or(usize::MAX);
+    faults.sort_by_key(|f| (rank(f), f.name()));
+    faults
+}
+
 /// One line per fault × backend.
 fn line(fault: Fault, backend: &str, h: &Hunt) -> String {
     let head = format!("{:<20} {:<18}", fault.name(), backend);
@@ -362,12 +393,41 @@ fn line(fault: Fault, backend: &str, h: &Hunt) -> String {
         h.tried,
         checks.join(", "),
         h.caught[0].0,
-        if h.caught.len() == 1 {
-            "  WARNING: one point only"
-        } else {
-            ""
+        match h.short() {
+            Short::No => String::new(),
+            Short::Impossible => format!(
+                "  (only {} points exercise it here: {MIN_POINTS} cannot catch it)",
+                h.exercising
+            ),
+            Short::Yes => format!(
+                "  SHORT: fewer than {MIN_POINTS} of its {} exercising points catch it",
+                h.exercising
+            ),
         }
     )
+}
+
+/// Whether a hunt fell short of [`MIN_POINTS`] catching points.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Short {
+    /// It did not.
+    No,
+    /// Fewer points than that exercise the fault on the backend at all.
+    Impossible,
+    /// It did: the check rests on too few points.
+    Yes,
+}
+
+impl Hunt {
+    fn short(&self) -> Short {
+        if self.caught.len() >= MIN_POINTS || self.caught.is_empty() {
+            Short::No
+        } else if self.exercising < MIN_POINTS {
+            Short::Impossible
+        } else {
+            Short::Yes
+        }
+    }
 }
 
 /// The per-fault table and the closing line; the exit code.
@@ -375,18 +435,10 @@ fn summary(results: &[(String, Fault, Hunt)]) -> i32 {
     println!(
         "\nper fault: subtlety, backends caught / applicable, fewest catching points on a backend"
     );
-    let mut by_fault: BTreeMap<&str, Vec<&(String, Fault, Hunt)>> = BTreeMap::new();
-    for r in results {
-        by_fault.entry(r.1.name()).or_default().push(r);
-    }
-    let mut warnings = 0;
-    for f in Fault::ALL {
-        let Some(rs) = by_fault.get(f.name()) else {
-            continue;
-        };
+    for f in faults_of(results) {
+        let rs: Vec<_> = results.iter().filter(|r| r.1 == f).collect();
         let caught = rs.iter().filter(|r| !r.2.caught.is_empty()).count();
         let fewest = rs.iter().map(|r| r.2.caught.len()).min().unwrap_or(0);
-        warnings += rs.iter().filter(|r| r.2.caught.len() == 1).count();
         println!(
             "  {:<20} {:<16} {caught}/{} backends, fewest {fewest} points",
             f.name(),
@@ -403,14 +455,44 @@ fn summary(results: &[(String, Fault, Hunt)]) -> i32 {
             h.note.clone().unwrap_or_default()
         );
     }
+    let short: Vec<_> = results
+        .iter()
+        .filter(|r| r.2.short() == Short::Yes)
+        .collect();
+    for (b, f, h) in &short {
+        println!(
+            "  short: {} on {b}: caught by {} of {} exercising points, fewer than {MIN_POINTS}",
+            f.name(),
+            h.caught.len(),
+            h.exercising
+        );
+    }
+    let impossible: Vec<_> = results
+        .iter()
+        .filter(|r| r.2.short() == Short::Impossible)
+        .collect();
+    for (b, f, h) in &impossible {
+        println!(
+            "  by fewer than {MIN_POINTS} points, as it must be: {} on {b}: only {} points exercise it",
+            f.name(),
+            h.exercising
+        );
+    }
     println!(
-        "selftest: {caught} of {} fault × backend pairs caught ({warnings} by one point only)",
-        results.len()
+        "selftest: {caught} of {} fault × backend pairs caught; {} by at least {MIN_POINTS} points, {} short, {} exercised by fewer than {MIN_POINTS} points",
+        results.len(),
+        caught - short.len() - impossible.len(),
+        short.len(),
+        impossible.len()
     );
-    println!("selftest: {caught} passed, {} failed", missed.len());
+    println!(
+        "selftest: {} passed, {} failed",
+        caught - short.len(),
+        missed.len() + short.len()
+    );
     if results.is_empty() || results.iter().any(|r| r.2.refused) {
         125
-    } else if missed.is_empty() {
+    } else if missed.is_empty() && short.is_empty() {
         0
     } else {
         1
@@ -448,7 +530,7 @@ fn hunt(
     let cache = cache.to_string_lossy().into_owned();
     env.extend([
         ("UMBRA_SELFTEST".into(), "1".into()),
-        ("UMBRA_FAULT".into(), fault.name().into()),
+        ("UMBRA_FAULT".into(), fault.name()),
         (crate::judge::judge_cache::ENV.into(), cache),
     ]);
     let mut worker = match Worker::start(backend, &env, timeout) {
@@ -474,6 +556,7 @@ fn hunt(
         .iter()
         .filter(|(_, _, p)| exercises(fault, &p.case, backend))
         .collect();
+    h.exercising = candidates.len();
     if candidates.is_empty() {
         h.note = Some("no case point exercises it".into());
         return h;
@@ -506,7 +589,7 @@ fn hunt(
         .collect();
     order.extend(rest);
     for (k, &i) in order.iter().enumerate() {
-        if k >= sampled && !h.caught.is_empty() && !every_point {
+        if k >= sampled && h.caught.len() >= MIN_POINTS && !every_point {
             break;
         }
         let (file, index, point) = candidates[i];
@@ -610,7 +693,7 @@ mod tests {
         assert!(
             Fault::ALL
                 .iter()
-                .all(|f| Fault::parse(f.name()) == Some(*f))
+                .all(|f| Fault::parse(&f.name()) == Some(*f))
         );
     }
 
