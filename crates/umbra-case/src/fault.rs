@@ -124,6 +124,89 @@ impl Orientation {
     }
 }
 
+/// A continuous parameter a driver (or a program) can get wrong by a little: the self-test's
+/// `--thresholds` sweep scales each by a relative error (or, for the shifts, moves it by a
+/// fraction of a texel) and finds the smallest error the catalogue catches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Param {
+    /// Polygon-offset units (`glPolygonOffset`'s second argument, Vulkan's constant factor).
+    OffsetUnits,
+    /// Polygon-offset factor (the slope term).
+    OffsetFactor,
+    /// Polygon-offset clamp.
+    OffsetClamp,
+    /// The shader's constant bias.
+    ConstantBias,
+    /// The slope bias's scale.
+    SlopeScale,
+    /// The slope bias's cap.
+    SlopeCap,
+    /// The normal offset.
+    NormalOffset,
+    /// The N·L bias's scale.
+    NdotLScale,
+    /// The N·L bias's least value.
+    NdotLMin,
+    /// The lookup coordinate along u, in texels.
+    LookupU,
+    /// The lookup coordinate along v, in texels.
+    LookupV,
+    /// The shadow pass's image along x, in texels.
+    ShadowShiftU,
+    /// The shadow pass's image along y, in texels.
+    ShadowShiftV,
+    /// A manual bilinear filter's weights about ½: a → ½ + (a − ½)(1 + e).
+    FilterWeights,
+}
+
+impl Param {
+    /// Every parameter.
+    pub const ALL: [Param; 14] = [
+        Param::OffsetUnits,
+        Param::OffsetFactor,
+        Param::OffsetClamp,
+        Param::ConstantBias,
+        Param::SlopeScale,
+        Param::SlopeCap,
+        Param::NormalOffset,
+        Param::NdotLScale,
+        Param::NdotLMin,
+        Param::LookupU,
+        Param::LookupV,
+        Param::ShadowShiftU,
+        Param::ShadowShiftV,
+        Param::FilterWeights,
+    ];
+
+    /// Name for fault names and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Param::OffsetUnits => "offset-units",
+            Param::OffsetFactor => "offset-factor",
+            Param::OffsetClamp => "offset-clamp",
+            Param::ConstantBias => "constant-bias",
+            Param::SlopeScale => "slope-scale",
+            Param::SlopeCap => "slope-cap",
+            Param::NormalOffset => "normal-offset",
+            Param::NdotLScale => "ndotl-scale",
+            Param::NdotLMin => "ndotl-min",
+            Param::LookupU => "lookup-u",
+            Param::LookupV => "lookup-v",
+            Param::ShadowShiftU => "shadow-shift-u",
+            Param::ShadowShiftV => "shadow-shift-v",
+            Param::FilterWeights => "filter-weights",
+        }
+    }
+
+    /// The error is a shift in texels, not a relative error of the parameter.
+    pub fn in_texels(self) -> bool {
+        matches!(
+            self,
+            Param::LookupU | Param::LookupV | Param::ShadowShiftU | Param::ShadowShiftV
+        )
+    }
+}
+
 /// A deliberate mistake of the kind real shadow-mapping code (or a driver) makes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Fault {
@@ -190,6 +273,15 @@ pub enum Fault {
         face: Option<u8>,
         /// The mistake.
         orientation: Orientation,
+    },
+    /// A continuous parameter off by `ppm` millionths: relative (the parameter × (1 + e)),
+    /// or for the shifts `e` texels ([`Param::in_texels`]). Named `PARAM@E`, e.g.
+    /// `offset-units@-0.05`; `umbra selftest --thresholds` sweeps them.
+    Scaled {
+        /// The parameter.
+        param: Param,
+        /// The error e, in millionths.
+        ppm: i32,
     },
 }
 
@@ -284,6 +376,9 @@ impl Fault {
                     None => format!("map-{}", orientation.name()),
                 };
             }
+            Fault::Scaled { param, ppm } => {
+                return format!("{}@{}", param.name(), f64::from(ppm) / 1e6);
+            }
         };
         name.to_string()
     }
@@ -302,16 +397,85 @@ impl Fault {
             | Fault::Vis4Bit => Subtlety::Filtered,
             Fault::ColourGamma | Fault::DimmingOff | Fault::SpecularUnshadowed => Subtlety::Colour,
             Fault::Oriented { .. } => Subtlety::Orientation,
+            Fault::Scaled { param, .. } if param.in_texels() => Subtlety::SubTexel,
+            Fault::Scaled {
+                param: Param::FilterWeights,
+                ..
+            } => Subtlety::Filtered,
+            Fault::Scaled { .. } => Subtlety::SubStep,
             _ => Subtlety::Gross,
         }
     }
 
     /// Parses a name.
     pub fn parse(s: &str) -> Option<Fault> {
+        if let Some((param, e)) = s.split_once('@') {
+            let param = Param::ALL.into_iter().find(|p| p.name() == param)?;
+            let e: f64 = e
+                .parse()
+                .ok()
+                .filter(|e: &f64| e.is_finite() && e.abs() <= 100.0)?;
+            return Some(Fault::scaled(param, e));
+        }
         Fault::ALL
             .into_iter()
             .chain(Fault::orientations())
             .find(|f| f.name() == s)
+    }
+
+    /// `param` off by `e` (relative, or texels for a shift), to a millionth.
+    pub fn scaled(param: Param, e: f64) -> Fault {
+        Fault::Scaled {
+            param,
+            ppm: (e * 1e6).round() as i32,
+        }
+    }
+
+    /// The error this fault gives `param`, if it is that parameter's.
+    pub fn error_of(self, param: Param) -> Option<f32> {
+        match self {
+            Fault::Scaled { param: p, ppm } if p == param => Some(ppm as f32 / 1e6),
+            _ => None,
+        }
+    }
+
+    /// The case's bias as a faulted backend applies it: units cut to a tenth
+    /// (OffsetUnitsLow), or one parameter × (1 + e) ([`Fault::Scaled`]). The shader's own
+    /// scale faults (NormalOffsetShort, SlopeShort) are written into the source instead.
+    pub fn bias(self, b: &crate::format::Bias) -> crate::format::Bias {
+        let mut b = b.clone();
+        if self == Fault::OffsetUnitsLow {
+            b.polygon_offset[1] *= 0.1;
+        }
+        let Fault::Scaled { param, .. } = self else {
+            return b;
+        };
+        let k = 1.0 + self.error_of(param).unwrap_or(0.0);
+        match param {
+            Param::OffsetUnits => b.polygon_offset[1] *= k,
+            Param::OffsetFactor => b.polygon_offset[0] *= k,
+            Param::OffsetClamp => b.polygon_offset_clamp *= k,
+            Param::ConstantBias => b.constant *= k,
+            Param::SlopeScale => b.slope.iter_mut().for_each(|s| s.scale *= k),
+            Param::SlopeCap => b.slope.iter_mut().for_each(|s| s.max *= k),
+            Param::NormalOffset => b.normal_offset *= k,
+            Param::NdotLScale => b.n_dot_l.iter_mut().for_each(|n| n.scale *= k),
+            Param::NdotLMin => b.n_dot_l.iter_mut().for_each(|n| n.min *= k),
+            _ => {}
+        }
+        b
+    }
+
+    /// Texels the shadow pass's image is moved by along x and y (ShadowHalfTexel: ½ along
+    /// x; the shadow-shift parameters).
+    pub fn shadow_shift_texels(self) -> [f32; 2] {
+        match self {
+            Fault::ShadowHalfTexel => [0.5, 0.0],
+            _ => [
+                self.error_of(Param::ShadowShiftU).unwrap_or(0.0),
+                self.error_of(Param::ShadowShiftV).unwrap_or(0.0),
+            ],
+        }
     }
 
     /// The matrix put in front of face `face`'s view-projection when the shadow pass renders
@@ -359,6 +523,29 @@ mod tests {
         }
         let mirrors = Orientation::ALL.iter().filter(|o| o.mirrors()).count();
         assert_eq!(mirrors, 4);
+    }
+
+    #[test]
+    fn scaled_faults_parse_and_apply_to_one_parameter() {
+        let f = Fault::parse("offset-units@-0.05").expect("a fault");
+        assert_eq!(f, Fault::scaled(Param::OffsetUnits, -0.05));
+        assert_eq!(Fault::parse(&f.name()), Some(f));
+        let b = crate::format::Bias {
+            polygon_offset: [2.0, 4.0],
+            constant: 0.001,
+            ..Default::default()
+        };
+        let faulted = f.bias(&b);
+        assert_eq!(faulted.polygon_offset, [2.0, 3.8]);
+        assert_eq!(faulted.constant, 0.001);
+        assert_eq!(Fault::OffsetUnitsLow.bias(&b).polygon_offset[1], 0.4);
+        assert_eq!(
+            Fault::scaled(Param::ShadowShiftV, 0.1).shadow_shift_texels(),
+            [0.0, 0.1]
+        );
+        assert_eq!(Fault::ShadowHalfTexel.shadow_shift_texels(), [0.5, 0.0]);
+        assert!(Fault::parse("offset-units@nan").is_none());
+        assert!(Fault::parse("no-such@0.1").is_none());
     }
 
     #[test]

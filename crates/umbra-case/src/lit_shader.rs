@@ -143,6 +143,11 @@ pub fn lit_fragment(d: &impl Dialect, t: &Technique) -> String {
     s
 }
 
+/// A float literal both languages read the same way (fixed point, nine decimals).
+fn literal(x: f32) -> String {
+    format!("{x:.9}")
+}
+
 /// `visibility(p, n)`: normal offset, face, coordinate, guard, outside test, bias,
 /// reference, taps.
 fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
@@ -160,6 +165,13 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
     }
     if c.u_nudge_texels != 0.0 {
         *s += &d.nudge_u(&c.u_nudge_texels.to_string());
+    }
+    if c.v_nudge_texels != 0.0 {
+        *s += &format!(
+            "  c.y = c.y + {} / {};\n",
+            literal(c.v_nudge_texels),
+            d.uniform(Uniform::MapHeight)
+        );
     }
     if t.guards() {
         *s += d.guard();
@@ -214,10 +226,22 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
         Taps::Nearest => {
             *s += &format!("  return tap(f, floor(c.x * {w}), floor(c.y * {h}), r);\n")
         }
-        Taps::Bilinear { coarse_weights } => {
+        Taps::Bilinear {
+            coarse_weights,
+            weight_gain_ppm,
+        } => {
             *s += d.bilinear_start();
             if coarse_weights {
                 *s += "  a = floor(a * 4.0) / 4.0;\n";
+            }
+            if weight_gain_ppm != 0 {
+                let k = 1.0 + weight_gain_ppm as f32 / 1e6;
+                // Kept in [0, 1] (`a * 0.0` is the zero vector in both languages): a wrong
+                // weight, not a negative one.
+                *s += &format!(
+                    "  a = min(max(0.5 + (a - 0.5) * {}, a * 0.0), a * 0.0 + 1.0);\n",
+                    literal(k)
+                );
             }
             *s += "  return (1.0 - a.x) * (1.0 - a.y) * tap(f, i0.x, i0.y, r) + a.x * (1.0 - a.y) * tap(f, i0.x + 1.0, i0.y, r)\n\
                     + (1.0 - a.x) * a.y * tap(f, i0.x, i0.y + 1.0, r) + a.x * a.y * tap(f, i0.x + 1.0, i0.y + 1.0, r);\n";

@@ -15,7 +15,7 @@
 //! The steps mirror `umbra_ref::lookup`: normal offset, cube face, coordinate (bias matrix
 //! before or after the divide), w > 0 guard, outside test, bias, the reference's clamp, filter.
 
-use crate::fault::Fault;
+use crate::fault::{Fault, Param};
 use crate::format::{
     BeyondFar, BiasMatrix, Compare, DepthOrder, Filter, LightVector, Outside, Shading,
 };
@@ -95,6 +95,8 @@ pub struct Coordinate {
     pub bias_again: bool,
     /// Texels added to u at the end.
     pub u_nudge_texels: f32,
+    /// Texels added to v at the end.
+    pub v_nudge_texels: f32,
 }
 
 /// A step of the lookup coordinate that a fault can leave out.
@@ -123,6 +125,9 @@ pub enum Taps {
     Bilinear {
         /// The weights are quantised to quarters.
         coarse_weights: bool,
+        /// The weights are moved about ½ by this many millionths of their distance from it
+        /// (the threshold sweep's filter-weights error; 0 = exact).
+        weight_gain_ppm: i32,
     },
     /// N × N nearest taps around c, averaged.
     Pcf {
@@ -174,6 +179,11 @@ impl Technique {
 
     fn is(&self, fault: Fault) -> bool {
         self.fault == Some(fault)
+    }
+
+    /// The threshold sweep's error of `param` (0 without it).
+    fn error(&self, param: Param) -> f32 {
+        self.fault.and_then(|f| f.error_of(param)).unwrap_or(0.0)
     }
 
     /// The shader compares (it reads depths itself).
@@ -235,8 +245,9 @@ impl Technique {
             u_nudge_texels: if self.is(Fault::QuarterTexel) {
                 0.25
             } else {
-                0.0
+                self.error(Param::LookupU)
             },
+            v_nudge_texels: self.error(Param::LookupV),
         }
     }
 
@@ -283,6 +294,13 @@ impl Technique {
             Filter::Nearest => Taps::Nearest,
             Filter::Linear => Taps::Bilinear {
                 coarse_weights: self.is(Fault::BilinearCoarse),
+                weight_gain_ppm: match self.fault {
+                    Some(Fault::Scaled {
+                        param: Param::FilterWeights,
+                        ppm,
+                    }) => ppm,
+                    _ => 0,
+                },
             },
             Filter::Pcf(n) => Taps::Pcf {
                 n,

@@ -294,6 +294,11 @@ impl Renderer {
         // A deliberate mistake, only under `cargo xtask selftest`.
         let fault = umbra_case::fault::Fault::active();
         let is = |f: umbra_case::fault::Fault| fault == Some(f);
+        // The case's bias as the (faulted) backend applies it.
+        let bias = fault.map_or_else(
+            || run.case().shadow.bias.clone(),
+            |f| f.bias(&run.case().shadow.bias),
+        );
         self.check("before the run")?;
 
         let verts = run.geometry.interleaved();
@@ -459,13 +464,8 @@ impl Renderer {
                         gl.cull_face(glow::FRONT);
                     }
                 }
-                let [factor, units] = s.bias.polygon_offset;
-                let units = if is(umbra_case::fault::Fault::OffsetUnitsLow) {
-                    0.1 * units
-                } else {
-                    units
-                };
-                let clamp = s.bias.polygon_offset_clamp;
+                let [factor, units] = bias.polygon_offset;
+                let clamp = bias.polygon_offset_clamp;
                 if es2 {
                     // Applied in the shader (see shaders::shadow_fragment), clamp included.
                     let sign = conv.toward_far();
@@ -558,11 +558,12 @@ impl Renderer {
                             },
                     );
                     let mut m = run.light.views[k].view_proj(conv);
-                    if is(umbra_case::fault::Fault::ShadowHalfTexel) {
-                        // Half a texel along x: 2 · ½ / width in NDC.
+                    let [sx, sy] = fault.map_or([0.0; 2], |f| f.shadow_shift_texels());
+                    if sx != 0.0 || sy != 0.0 {
+                        // Texels to NDC: 2 · t / size.
                         m = glam::Mat4::from_translation(glam::Vec3::new(
-                            1.0 / mw as f32,
-                            0.0,
+                            2.0 * sx / mw as f32,
+                            2.0 * sy / mh as f32,
                             0.0,
                         )) * m;
                     }
@@ -732,14 +733,14 @@ impl Renderer {
             let eye = run.camera.eye;
             gl.uniform_3_f32(loc("u_eye").as_ref(), eye.x, eye.y, eye.z);
             gl.uniform_2_f32(loc("u_size").as_ref(), mw as f32, mh as f32);
-            gl.uniform_1_f32(loc("u_constant").as_ref(), s.bias.constant);
-            let (scale, max) = s.bias.slope.map_or((0.0, 0.0), |sl| (sl.scale, sl.max));
+            gl.uniform_1_f32(loc("u_constant").as_ref(), bias.constant);
+            let (scale, max) = bias.slope.map_or((0.0, 0.0), |sl| (sl.scale, sl.max));
             gl.uniform_1_f32(loc("u_slope_scale").as_ref(), scale);
             gl.uniform_1_f32(loc("u_slope_max").as_ref(), max);
-            let (ndl_scale, ndl_min) = s.bias.n_dot_l.map_or((0.0, 0.0), |b| (b.scale, b.min));
+            let (ndl_scale, ndl_min) = bias.n_dot_l.map_or((0.0, 0.0), |b| (b.scale, b.min));
             gl.uniform_1_f32(loc("u_ndl_scale").as_ref(), ndl_scale);
             gl.uniform_1_f32(loc("u_ndl_min").as_ref(), ndl_min);
-            gl.uniform_1_f32(loc("u_normal_offset").as_ref(), s.bias.normal_offset);
+            gl.uniform_1_f32(loc("u_normal_offset").as_ref(), bias.normal_offset);
             gl.uniform_1_i32(loc("u_map").as_ref(), 0);
             gl.active_texture(glow::TEXTURE0);
             gl.bind_texture(target, Some(map));

@@ -206,6 +206,10 @@ pub const FLAGS: &[Flag] = &[
         "seed of the generated cases: the same seed gives the same cases everywhere [default: 1]",
     ),
     switch(
+        "thresholds",
+        "selftest: instead of the faults, sweep the magnitude of each continuous mistake (polygon offset, shader biases, normal offset, lookup and shadow-pass shifts, filter weights) per backend family and report the smallest error the catalogue catches, and which point catches it",
+    ),
+    switch(
         "orientations",
         "selftest: instead of the faults on the backends, the face/orientation table: every cube face and the 2D map drawn with each of the seven wrong orientations by the reference, and the catalogue points that catch each",
     ),
@@ -275,6 +279,7 @@ pub const COMMANDS: &[Spec] = &[
             "fault",
             "cases",
             "orientations",
+            "thresholds",
             "seed",
             "count",
             "out",

@@ -159,17 +159,14 @@ impl Gpu {
             bind_group_layouts: &[Some(&uniform_layout)],
             immediate_size: 0,
         });
-        let [factor, units] = s.bias.polygon_offset;
-        let units = if is(umbra_case::fault::Fault::OffsetUnitsLow) {
-            0.1 * units
-        } else {
-            units
-        };
+        // The case's bias as the (faulted) backend applies it.
+        let faulted_bias = fault.map_or_else(|| s.bias.clone(), |f| f.bias(&s.bias));
+        let [factor, units] = faulted_bias.polygon_offset;
         let sign = conv.toward_far();
         let bias = wgpu::DepthBiasState {
             constant: (sign * units) as i32,
             slope_scale: sign * factor,
-            clamp: sign * s.bias.polygon_offset_clamp,
+            clamp: sign * faulted_bias.polygon_offset_clamp,
         };
         let position_only = [wgpu::VertexAttribute {
             format: wgpu::VertexFormat::Float32x3,
@@ -283,9 +280,14 @@ impl Gpu {
             if cube {
                 m = conv.cube_face_render_flip() * m;
             }
-            if is(umbra_case::fault::Fault::ShadowHalfTexel) {
-                // Half a texel along x: 2 · ½ / width in NDC.
-                m = glam::Mat4::from_translation(glam::Vec3::new(1.0 / mw as f32, 0.0, 0.0)) * m;
+            let [sx, sy] = fault.map_or([0.0; 2], |f| f.shadow_shift_texels());
+            if sx != 0.0 || sy != 0.0 {
+                // Texels to NDC: 2 · t / size.
+                m = glam::Mat4::from_translation(glam::Vec3::new(
+                    2.0 * sx / mw as f32,
+                    2.0 * sy / mh as f32,
+                    0.0,
+                )) * m;
             }
             let ub = uniform_buffer(
                 d,
@@ -487,7 +489,7 @@ impl Gpu {
             }
         };
         let eye = run.camera.eye;
-        let b = &s.bias;
+        let b = &faulted_bias;
         let (slope_scale, slope_max) = b.slope.map_or((0.0, 0.0), |sl| (sl.scale, sl.max));
         let (ndl_scale, ndl_min) = b.n_dot_l.map_or((0.0, 0.0), |nl| (nl.scale, nl.min));
         let ub = uniform_buffer(

@@ -10,3 +10,4 @@ pub mod render;
 pub mod selftest;
 pub mod soak;
 pub mod sweep;
+pub mod thresholds;

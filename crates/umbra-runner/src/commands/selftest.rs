@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Duration;
 
-use umbra_case::fault::Fault;
+use umbra_case::fault::{Fault, Param};
 
 use crate::args::Args;
 use crate::harness::pool::{Reply, Worker};
@@ -54,7 +54,11 @@ pub fn applies(fault: Fault, id: &str) -> bool {
         Fault::ClampFloat => !es2,
         Fault::NoClamp => es2,
         // A manual LINEAR filter; wgpu's GL backend has no manual compare.
-        Fault::BilinearCoarse => !wgpu_gl,
+        Fault::BilinearCoarse
+        | Fault::Scaled {
+            param: Param::FilterWeights,
+            ..
+        } => !wgpu_gl,
         _ => true,
     }
 }
@@ -85,6 +89,21 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, id: &str) -> bool {
             c.shading.model == ShadingModel::Dimmed && c.shading.specular > 0.0
         }
         Fault::Oriented { face, .. } => face.is_some() == matches!(c.light, Light::Point(_)),
+        Fault::Scaled { param, .. } => {
+            let b = &s.bias;
+            match param {
+                Param::OffsetUnits => b.polygon_offset[1] != 0.0,
+                Param::OffsetFactor => b.polygon_offset[0] != 0.0,
+                Param::OffsetClamp => b.polygon_offset_clamp != 0.0 && b.polygon_offset[0] != 0.0,
+                Param::ConstantBias => b.constant != 0.0,
+                Param::SlopeScale | Param::SlopeCap => b.slope.is_some(),
+                Param::NormalOffset => b.normal_offset != 0.0,
+                Param::NdotLScale | Param::NdotLMin => b.n_dot_l.is_some(),
+                Param::LookupU | Param::LookupV => !matches!(c.light, Light::Point(_)),
+                Param::ShadowShiftU | Param::ShadowShiftV => true,
+                Param::FilterWeights => s.filter == Filter::Linear && s.compare == Compare::Manual,
+            }
+        }
         _ => true,
     }
 }
@@ -107,6 +126,20 @@ pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
         Fault::NoGuard => &["guard-magnified", "behind-spot", "bias-matrix"],
         Fault::Repeat => &["outside"],
         Fault::Oriented { face: Some(_), .. } => &["point-faces"],
+        Fault::Scaled { param, .. } if param.in_texels() => {
+            &["contact", "filters-magnified", "guard-magnified"]
+        }
+        Fault::Scaled {
+            param: Param::FilterWeights,
+            ..
+        } => &["filters-magnified", "filters", "outside-filtered"],
+        Fault::Scaled { .. } => &[
+            "bias-forms-magnified",
+            "offset-magnified",
+            "far-boundary",
+            "contact",
+            "grazing",
+        ],
         Fault::Oriented { face: None, .. } => &["l-occluder", "map-orientation"],
         _ => &[],
     };
@@ -164,6 +197,7 @@ pub fn main(args: &Args) -> i32 {
     if args.has("orientations") {
         return super::orientations::main(&cases);
     }
+    let thresholds = args.has("thresholds");
     let timeout = Duration::from_secs(
         args.value("timeout")
             .and_then(|t| t.parse().ok())
@@ -206,11 +240,14 @@ pub fn main(args: &Args) -> i32 {
                 let all: Vec<String> = Fault::ALL.iter().map(|f| f.name()).collect();
                 eprintln!(
                     "error: --fault {name:?} is not a fault; the faults are {}, and any \
-                     face<0-5>-<orientation> or map-<orientation> (orientations: {})",
+                     face<0-5>-<orientation> or map-<orientation> (orientations: {}), and \
+                     PARAM@E (a parameter off by a relative error E, or E texels for a shift; \
+                     parameters: {})",
                     all.join(", "),
                     umbra_case::fault::Orientation::ALL
                         .map(|o| o.name())
-                        .join(", ")
+                        .join(", "),
+                    Param::ALL.map(|p| p.name()).join(", ")
                 );
                 return 125;
             }
@@ -258,6 +295,10 @@ pub fn main(args: &Args) -> i32 {
         verbose,
         every_point: generated.is_some(),
     };
+    if thresholds {
+        let chosen = (!args.values("backend").is_empty()).then_some(&backends[..]);
+        return super::thresholds::main(&points, chosen, &how, jobs);
+    }
     let queue = Mutex::new(pairs.clone());
     let results = Mutex::new(Vec::new());
     std::thread::scope(|s| {
@@ -500,15 +541,127 @@ fn summary(results: &[(String, Fault, Hunt)]) -> i32 {
 }
 
 /// How every hunt runs.
-struct How<'a> {
-    expectations: &'a Expectations,
+pub(crate) struct How<'a> {
+    pub(crate) expectations: &'a Expectations,
     /// The shared judging cache.
-    cache: &'a Path,
-    timeout: Duration,
-    verbose: bool,
+    pub(crate) cache: &'a Path,
+    pub(crate) timeout: Duration,
+    pub(crate) verbose: bool,
     /// Run every exercising point (the catch rate on generated cases), not just until one
     /// catches after the sample.
-    every_point: bool,
+    pub(crate) every_point: bool,
+}
+
+/// A worker running `backend` with one fault on, and the expectations of its driver.
+pub(crate) struct Faulted {
+    backend: String,
+    env: Vec<(String, String)>,
+    worker: Worker,
+    expectations: Expectations,
+    timeout: Duration,
+    verbose: bool,
+    fault: Fault,
+}
+
+/// What one faulted point did.
+pub(crate) enum Seen {
+    /// The judge caught it: the failed checks (or the crash or timeout).
+    Caught(String),
+    /// It passed (or failed only as expected).
+    Passed,
+    /// The worker could not be restarted after a crash: stop.
+    Gone,
+}
+
+impl Faulted {
+    /// Starts the worker; `Err((why, refused))` when it cannot run (refused: the Mesa build
+    /// asked for was refused, and the self-test cannot stand).
+    pub(crate) fn start(backend: &str, fault: Fault, how: &How) -> Result<Faulted, (String, bool)> {
+        let mut env = crate::harness::registry::worker_env(backend);
+        env.extend([
+            ("UMBRA_SELFTEST".into(), "1".into()),
+            ("UMBRA_FAULT".into(), fault.name()),
+            (
+                crate::judge::judge_cache::ENV.into(),
+                how.cache.to_string_lossy().into_owned(),
+            ),
+        ]);
+        let worker = Worker::start(backend, &env, how.timeout)
+            .map_err(|e| (format!("no worker: {e}"), false))?;
+        if let Some(u) = worker.hello.get("unavailable") {
+            return Err((format!("backend unavailable: {u}"), false));
+        }
+        if let Some(why) = worker.hello.get("refused").and_then(|v| v.as_str()) {
+            return Err((format!("refused the Mesa build: {why}"), true));
+        }
+        let expectations =
+            how.expectations
+                .for_driver(&crate::judge::expectations::DriverFacts::from_hello(
+                    &worker.hello["ready"],
+                ));
+        Ok(Faulted {
+            backend: backend.to_string(),
+            env,
+            worker,
+            expectations,
+            timeout: how.timeout,
+            verbose: how.verbose,
+            fault,
+        })
+    }
+
+    /// Runs point `index` of `file` and judges it as a conformance run would.
+    pub(crate) fn run(&mut self, file: &Path, index: usize, point: &umbra_case::CasePoint) -> Seen {
+        let name = format!("{}/{}", self.backend, point.id());
+        let case = serde_json::to_value(&point.case).unwrap_or_default();
+        let req = Request {
+            file: file.to_path_buf(),
+            index,
+            failures: None,
+            golden: None,
+            repeat: None,
+            no_twins: true,
+            gallery: None,
+            deviation: Some(self.expectations.deviations(&name, &case).names())
+                .filter(|n| !n.is_empty()),
+        };
+        let restart =
+            |f: &mut Faulted, how: String| match Worker::start(&f.backend, &f.env, f.timeout) {
+                Ok(w) => {
+                    f.worker = w;
+                    Seen::Caught(how)
+                }
+                Err(_) => Seen::Gone,
+            };
+        match self.worker.run(&req, self.timeout) {
+            Reply::Report(r) if r.outcome == "fail" => {
+                let (status, _) = self.expectations.apply(
+                    &name,
+                    &case,
+                    umbra_report::Status::Fail,
+                    &r.failed,
+                    r.under_deviation.as_deref(),
+                );
+                let checks = crate::judge::expectations::signature(&r.failed);
+                if self.verbose {
+                    println!("  {} {name}: {status:?} [{checks}]", self.fault.name());
+                }
+                if status.is_regression() {
+                    Seen::Caught(checks)
+                } else {
+                    Seen::Passed
+                }
+            }
+            Reply::Report(r) => {
+                if self.verbose {
+                    println!("  {} {name}: {} {}", self.fault.name(), r.outcome, r.reason);
+                }
+                Seen::Passed
+            }
+            Reply::Crashed(how) => restart(self, format!("crash ({how})")),
+            Reply::TimedOut => restart(self, "timeout".into()),
+        }
+    }
 }
 
 /// Runs the points that exercise `fault` on a faulted `backend` worker and counts catches.
@@ -518,40 +671,15 @@ fn hunt(
     points: &[(PathBuf, usize, umbra_case::CasePoint)],
     how: &How,
 ) -> Hunt {
-    let How {
-        expectations,
-        cache,
-        timeout,
-        verbose,
-        every_point,
-    } = *how;
     let mut h = Hunt::default();
-    let mut env = crate::harness::registry::worker_env(backend);
-    let cache = cache.to_string_lossy().into_owned();
-    env.extend([
-        ("UMBRA_SELFTEST".into(), "1".into()),
-        ("UMBRA_FAULT".into(), fault.name()),
-        (crate::judge::judge_cache::ENV.into(), cache),
-    ]);
-    let mut worker = match Worker::start(backend, &env, timeout) {
-        Ok(w) => w,
-        Err(e) => {
-            h.note = Some(format!("no worker: {e}"));
+    let mut faulted = match Faulted::start(backend, fault, how) {
+        Ok(f) => f,
+        Err((note, refused)) => {
+            h.note = Some(note);
+            h.refused = refused;
             return h;
         }
     };
-    if let Some(u) = worker.hello.get("unavailable") {
-        h.note = Some(format!("backend unavailable: {u}"));
-        return h;
-    }
-    if let Some(why) = worker.hello.get("refused").and_then(|v| v.as_str()) {
-        h.note = Some(format!("refused the Mesa build: {why}"));
-        h.refused = true;
-        return h;
-    }
-    let expectations = expectations.for_driver(
-        &crate::judge::expectations::DriverFacts::from_hello(&worker.hello["ready"]),
-    );
     let candidates: Vec<&(PathBuf, usize, umbra_case::CasePoint)> = points
         .iter()
         .filter(|(_, _, p)| exercises(fault, &p.case, backend))
@@ -562,14 +690,37 @@ fn hunt(
         return h;
     }
     // A spread of up to SAMPLE of the points aimed at the fault, and a spread of SAMPLE
-    // over the others; then the rest in order until one catches.
+    // over the others; then the rest in order until enough catch.
+    let order = sample_order(fault, &candidates);
+    let sampled = order_sampled(fault, &candidates);
+    for (k, &i) in order.iter().enumerate() {
+        if k >= sampled && h.caught.len() >= MIN_POINTS && !how.every_point {
+            break;
+        }
+        let (file, index, point) = candidates[i];
+        h.tried += 1;
+        match faulted.run(file, *index, point) {
+            Seen::Caught(checks) => h.caught.push((point.id(), checks)),
+            Seen::Passed => {}
+            Seen::Gone => break,
+        }
+    }
+    h
+}
+
+/// The order `candidates` are tried in for `fault`: up to SAMPLE of the points aimed at it,
+/// round-robin over their cases so each aimed case gets its turn, then a spread of SAMPLE
+/// over the others, then the rest.
+pub(crate) fn sample_order(
+    fault: Fault,
+    candidates: &[&(PathBuf, usize, umbra_case::CasePoint)],
+) -> Vec<usize> {
     let (aimed, others): (Vec<usize>, Vec<usize>) =
         (0..candidates.len()).partition(|&i| aimed_at(fault, &candidates[i].2.case));
     let spread = |v: &[usize]| -> Vec<usize> {
         let step = (v.len() / SAMPLE).max(1);
         v.iter().copied().step_by(step).take(SAMPLE).collect()
     };
-    // The aimed points round-robin over their cases, so each aimed case gets its turn.
     let mut by_case: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
     for &i in &aimed {
         by_case
@@ -583,69 +734,20 @@ fn hunt(
         .collect();
     let mut order: Vec<usize> = aimed.iter().copied().take(SAMPLE).collect();
     order.extend(spread(&others));
-    let sampled = order.len();
     let rest: Vec<usize> = (0..candidates.len())
         .filter(|i| !order.contains(i))
         .collect();
     order.extend(rest);
-    for (k, &i) in order.iter().enumerate() {
-        if k >= sampled && h.caught.len() >= MIN_POINTS && !every_point {
-            break;
-        }
-        let (file, index, point) = candidates[i];
-        let name = format!("{backend}/{}", point.id());
-        let case = serde_json::to_value(&point.case).unwrap_or_default();
-        let req = Request {
-            file: file.clone(),
-            index: *index,
-            failures: None,
-            golden: None,
-            repeat: None,
-            no_twins: true,
-            gallery: None,
-            deviation: Some(expectations.deviations(&name, &case).names())
-                .filter(|n| !n.is_empty()),
-        };
-        h.tried += 1;
-        match worker.run(&req, timeout) {
-            Reply::Report(r) if r.outcome == "fail" => {
-                let (status, _) = expectations.apply(
-                    &name,
-                    &case,
-                    umbra_report::Status::Fail,
-                    &r.failed,
-                    r.under_deviation.as_deref(),
-                );
-                let checks = crate::judge::expectations::signature(&r.failed);
-                if verbose {
-                    println!("  {} {name}: {status:?} [{checks}]", fault.name());
-                }
-                if status.is_regression() {
-                    h.caught.push((point.id(), checks));
-                }
-            }
-            Reply::Report(r) => {
-                if verbose {
-                    println!("  {} {name}: {} {}", fault.name(), r.outcome, r.reason);
-                }
-            }
-            Reply::Crashed(how) => {
-                h.caught.push((point.id(), format!("crash ({how})")));
-                match Worker::start(backend, &env, timeout) {
-                    Ok(w) => worker = w,
-                    Err(_) => break,
-                }
-            }
-            Reply::TimedOut => {
-                h.caught.push((point.id(), "timeout".into()));
-                match Worker::start(backend, &env, timeout) {
-                    Ok(w) => worker = w,
-                    Err(_) => break,
-                }
-            }
-        }
-    }
-    h
+    order
+}
+
+/// How many of [`sample_order`]'s points are the sample (always run).
+fn order_sampled(fault: Fault, candidates: &[&(PathBuf, usize, umbra_case::CasePoint)]) -> usize {
+    let aimed = candidates
+        .iter()
+        .filter(|c| aimed_at(fault, &c.2.case))
+        .count();
+    aimed.min(SAMPLE) + (candidates.len() - aimed).min(SAMPLE)
 }
 
 #[cfg(test)]
