@@ -136,6 +136,7 @@ pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
         Fault::Scaled { .. } => &[
             "bias-forms-magnified",
             "offset-magnified",
+            "offset-clamp-magnified",
             "far-boundary",
             "contact",
             "grazing",
@@ -644,9 +645,15 @@ impl Faulted {
                 );
                 let checks = crate::judge::expectations::signature(&r.failed);
                 if self.verbose {
-                    println!("  {} {name}: {status:?} [{checks}]", self.fault.name());
+                    println!(
+                        "  {} {name}: {status:?} [{checks}] {}",
+                        self.fault.name(),
+                        r.reason
+                    );
                 }
-                if status.is_regression() {
+                // A run that failed with no check failed broke (a shader the driver refused,
+                // a GL error): the judge did not see the fault, so it is not a catch.
+                if status.is_regression() && !checks.is_empty() {
                     Seen::Caught(checks)
                 } else {
                     Seen::Passed
