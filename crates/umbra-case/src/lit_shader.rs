@@ -164,7 +164,9 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
         *s += d.bias_again();
     }
     if c.u_nudge_texels != 0.0 {
-        *s += &d.nudge_u(&c.u_nudge_texels.to_string());
+        // `{:?}` always writes a point or an exponent ("0.25", "1.0"): a float in both
+        // languages, where Display would write "1".
+        *s += &d.nudge_u(&format!("{:?}", c.u_nudge_texels));
     }
     if c.v_nudge_texels != 0.0 {
         *s += &format!(

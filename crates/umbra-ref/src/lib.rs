@@ -169,7 +169,7 @@ fn render_inner(
             }
             let kinds = adjacency
                 .as_ref()
-                .map(|a| a.edge_kinds(&run.geometry, vp, case.shadow.cull));
+                .map(|a| a.edge_kinds(&run.geometry, vp, shadow.cull));
             shadow_pass::render_face(
                 conv,
                 &shadow,

@@ -140,7 +140,7 @@ pub const FLAGS: &[Flag] = &[
     repeated(
         "fault",
         "NAME",
-        "inject only this fault (repeatable; default: every fault)",
+        "inject only this fault (repeatable; default: every fault in Fault::ALL): a named fault, face<0-5>-<orientation> or map-<orientation> (rot90, rot180, rot270, mirror-x, mirror-y, transpose, anti-transpose), or PARAM@E, a parameter off by E (relative, or texels for a shift), e.g. offset-units@-0.05",
     ),
     valued(
         "scene",

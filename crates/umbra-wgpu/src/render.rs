@@ -164,7 +164,9 @@ impl Gpu {
         let [factor, units] = faulted_bias.polygon_offset;
         let sign = conv.toward_far();
         let bias = wgpu::DepthBiasState {
-            constant: (sign * units) as i32,
+            // Whole numbers only (supports() refuses others); a threshold fault's units are
+            // rounded, and its sweep skips points that rounding would change.
+            constant: (sign * units).round() as i32,
             slope_scale: sign * factor,
             clamp: sign * faulted_bias.polygon_offset_clamp,
         };
@@ -277,17 +279,20 @@ impl Gpu {
             if let Some((wrong, _)) = mistake {
                 m = wrong * m;
             }
-            if cube {
-                m = conv.cube_face_render_flip() * m;
-            }
+            // A shift of the image (ShadowHalfTexel, the shadow-shift sweep) in texels along
+            // the map's u and v as GL lays them out: 2 · t / size in NDC, before the cube
+            // face's flip; a 2D map's rows run down here, so +v is −y.
             let [sx, sy] = fault.map_or([0.0; 2], |f| f.shadow_shift_texels());
             if sx != 0.0 || sy != 0.0 {
-                // Texels to NDC: 2 · t / size.
+                let sy = if cube { sy } else { -sy };
                 m = glam::Mat4::from_translation(glam::Vec3::new(
                     2.0 * sx / mw as f32,
                     2.0 * sy / mh as f32,
                     0.0,
                 )) * m;
+            }
+            if cube {
+                m = conv.cube_face_render_flip() * m;
             }
             let ub = uniform_buffer(
                 d,
