@@ -144,6 +144,7 @@ pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
             "bias-forms-magnified",
             "offset-magnified",
             "offset-clamp-magnified",
+            "offset-boundary",
             "far-boundary",
             "contact",
             "grazing",
