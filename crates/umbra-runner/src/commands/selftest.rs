@@ -203,9 +203,6 @@ pub fn main(args: &Args) -> i32 {
         Some(dir) => dir.clone(),
         None => PathBuf::from(args.value("cases").unwrap_or("cases")),
     };
-    if args.has("orientations") {
-        return super::orientations::main(&cases);
-    }
     let thresholds = args.has("thresholds");
     let timeout = Duration::from_secs(
         args.value("timeout")
@@ -279,6 +276,10 @@ pub fn main(args: &Args) -> i32 {
     if points.is_empty() {
         eprintln!("error: no case under {}", cases.display());
         return 125;
+    }
+    if args.has("orientations") {
+        let points: Vec<umbra_case::CasePoint> = points.into_iter().map(|p| p.2).collect();
+        return super::orientations::main(&points);
     }
     // The judging basis of each point does not depend on the fault: the self-test shares
     // conformance's content-addressed cache (judge_cache), and so reads what a conformance run
