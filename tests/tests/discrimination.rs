@@ -115,6 +115,18 @@ fn knobs() -> Vec<Knob> {
             values: vec![json!("depth_only"), json!("with_color")],
             prefer: &["color-attachment"],
         },
+        Knob {
+            path: "shadow.mipmaps",
+            values: vec![
+                json!(null),
+                json!({"levels": 6}),
+                json!({"levels": 6, "filter": "linear"}),
+                json!({"levels": 3}),
+                json!({"levels": 6, "source": "averaged"}),
+                json!({"levels": 6, "filter": "linear", "source": "averaged"}),
+            ],
+            prefer: &["mip-rendered", "mip-averaged"],
+        },
     ]
 }
 

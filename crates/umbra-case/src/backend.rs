@@ -54,6 +54,8 @@ pub struct Needs {
     /// Vulkan's depthBiasConstantFactor too, but wgpu's `DepthBiasState::constant` is an
     /// integer).
     pub fractional_offset_units: bool,
+    /// A mipmapped map (levels, their filter, how they are filled).
+    pub mipmaps: Option<crate::format::Mipmaps>,
 }
 
 impl Needs {
@@ -69,6 +71,7 @@ impl Needs {
             depth_order: s.depth_order,
             polygon_offset_clamp: s.bias.polygon_offset_clamp != 0.0,
             fractional_offset_units: s.bias.polygon_offset[1].fract() != 0.0,
+            mipmaps: s.mipmaps,
         }
     }
 }

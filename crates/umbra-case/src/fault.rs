@@ -266,6 +266,12 @@ pub enum Fault {
     DimmingOff,
     /// The specular term is not shadowed.
     SpecularUnshadowed,
+    /// A mipmapped map is sampled from level 0 alone (the sampler ignores the mip filter):
+    /// distant receivers read the finest level.
+    MipBaseOnly,
+    /// A mipmapped map's levels start one too coarse (level 1 read where level 0 is asked,
+    /// and so on: an LOD off by one).
+    MipLevelCoarse,
     /// One face of the map is drawn with a wrong orientation: cube face `face` (0–5 in the
     /// GL order +x, −x, +y, −y, +z, −z), or the 2D map when `face` is `None`.
     Oriented {
@@ -290,7 +296,7 @@ impl Fault {
     /// three stand for them here (a wrong handedness on the +x face, the one the
     /// four-fold symmetric point-light cases could not see; a wrong up vector on the −y face;
     /// a transposed 2D map), and `umbra selftest --fault` or `--orientations` runs any.
-    pub const ALL: [Fault; 29] = [
+    pub const ALL: [Fault; 31] = [
         Fault::CompareFlipped,
         Fault::NoDivide,
         Fault::NoGuard,
@@ -317,6 +323,8 @@ impl Fault {
         Fault::ColourGamma,
         Fault::DimmingOff,
         Fault::SpecularUnshadowed,
+        Fault::MipBaseOnly,
+        Fault::MipLevelCoarse,
         Fault::Oriented {
             face: Some(0),
             orientation: Orientation::MirrorX,
@@ -370,6 +378,8 @@ impl Fault {
             Fault::ColourGamma => "colour-gamma",
             Fault::DimmingOff => "dimming-off",
             Fault::SpecularUnshadowed => "specular-unshadowed",
+            Fault::MipBaseOnly => "mip-base-only",
+            Fault::MipLevelCoarse => "mip-level-coarse",
             Fault::Oriented { face, orientation } => {
                 return match face {
                     Some(f) => format!("face{f}-{}", orientation.name()),
@@ -394,7 +404,9 @@ impl Fault {
             Fault::PcfOffCentre
             | Fault::PcfDoubleCentre
             | Fault::BilinearCoarse
-            | Fault::Vis4Bit => Subtlety::Filtered,
+            | Fault::Vis4Bit
+            | Fault::MipBaseOnly
+            | Fault::MipLevelCoarse => Subtlety::Filtered,
             Fault::ColourGamma | Fault::DimmingOff | Fault::SpecularUnshadowed => Subtlety::Colour,
             Fault::Oriented { .. } => Subtlety::Orientation,
             Fault::Scaled { param, .. } if param.in_texels() => Subtlety::SubTexel,

@@ -364,6 +364,65 @@ pub struct Shadow {
     /// `forward`.
     #[serde(default)]
     pub depth_order: DepthOrder,
+    /// Mip levels of the map, sampled with a mipmapped compare filter (see [`Mipmaps`]).
+    /// Default: none (one level).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mipmaps: Option<Mipmaps>,
+}
+
+/// A mipmapped shadow map (EDGE_CASES 12): level k is ⌈size / 2ᵏ⌉ texels a side, and the
+/// sampler picks levels by the lookup's screen-space footprint (the LOD, λ = log₂ ρ), so a
+/// receiver far from the camera reads coarse levels. Only for 2D maps (spot and directional
+/// lights), the sampler's compare (`compare: hardware`), a `nearest` or `linear` filter
+/// within a level, and power-of-two sizes.
+///
+/// Two ways to fill the levels differ in what they mean: `rendered` draws every level with
+/// its own shadow pass at its own size, so each texel holds a real depth and the filter
+/// averages *comparisons*; `averaged` stores in each level the mean of 2 × 2 depths of the
+/// level above (what a generated mip chain holds; GL refuses `glGenerateMipmap` on a depth
+/// format, so a program does it with a shader), and a mean depth lies on no surface: the
+/// technique's error, shown against the truth.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mipmaps {
+    /// Levels including level 0, from 2 to log₂(the larger side) + 1. Required.
+    pub levels: u32,
+    /// Between levels: `nearest` (one level, GL's `*_MIPMAP_NEAREST`) or `linear` (the two
+    /// nearest levels blended, `*_MIPMAP_LINEAR`). Default `nearest`.
+    #[serde(default)]
+    pub filter: MipFilter,
+    /// How the levels below level 0 are filled: `rendered` or `averaged`. Default `rendered`.
+    #[serde(default)]
+    pub source: MipSource,
+}
+
+/// The filter between mip levels.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MipFilter {
+    /// The level nearest the LOD.
+    #[default]
+    Nearest,
+    /// The two levels around the LOD, weighted by its fraction.
+    Linear,
+}
+
+/// How a mip chain's lower levels are filled.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MipSource {
+    /// Each level by its own shadow pass at its own size.
+    #[default]
+    Rendered,
+    /// Each level the mean of 2 × 2 stored depths of the level above.
+    Averaged,
+}
+
+impl Mipmaps {
+    /// The size of level `k` of a map of `size`.
+    pub fn level_size(size: [u32; 2], k: u32) -> [u32; 2] {
+        size.map(|n| (n >> k).max(1))
+    }
 }
 
 /// Depth texture formats.
@@ -725,6 +784,7 @@ impl Default for Shadow {
             beyond_far: BeyondFar::default(),
             guard_behind_light: true,
             depth_order: DepthOrder::default(),
+            mipmaps: None,
         }
     }
 }

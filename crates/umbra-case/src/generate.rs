@@ -135,6 +135,25 @@ impl Gen {
                 agree: TwinAgree::Identical,
             });
         }
+        // Drawn last and only where the technique allows levels, so that every other case of
+        // a seed is the one it gave before mipmapped maps existed.
+        let s = &case.shadow;
+        if !point
+            && s.compare == Compare::Hardware
+            && !matches!(s.filter, Filter::Pcf(_))
+            && s.size.iter().all(|n| n.is_power_of_two())
+            && self.rng.chance(0.3)
+        {
+            case.shadow.mipmaps = Some(Mipmaps {
+                levels: self.rng.int(2, 6),
+                filter: self.rng.pick(&[MipFilter::Nearest, MipFilter::Linear]),
+                source: if self.rng.chance(0.25) {
+                    MipSource::Averaged
+                } else {
+                    MipSource::Rendered
+                },
+            });
+        }
         case.about = about(&case);
         case
     }
@@ -511,6 +530,7 @@ impl Gen {
             } else {
                 DepthOrder::Reversed
             },
+            mipmaps: None,
         }
     }
 
@@ -650,6 +670,13 @@ fn about(c: &Case) -> String {
         s.depth_order,
     )
     .to_lowercase()
+        + &s.mipmaps.map_or(String::new(), |m| {
+            format!(
+                ", {} mip levels {:?} between, {:?}",
+                m.levels, m.filter, m.source
+            )
+            .to_lowercase()
+        })
 }
 
 /// The bias forms a technique uses, as `constant+polygon_offset` (or `no`).

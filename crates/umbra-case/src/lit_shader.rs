@@ -90,6 +90,9 @@ pub trait Dialect {
     fn sample_projective(&self) -> &'static str;
     /// Returns the sampler's compare at `c` ([`Taps::Hardware`]).
     fn sample(&self) -> &'static str;
+    /// Declares `m`, the sampler's compare at `c` with implicit derivatives on a mipmapped
+    /// map ([`Taps::HardwareMipmapped`]).
+    fn sample_mipmapped(&self) -> &'static str;
     /// The bilinear position: `i0`, the first texel, and `a`, the weights.
     fn bilinear_start(&self) -> &'static str;
     /// `n` as a float.
@@ -175,19 +178,11 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
             d.uniform(Uniform::MapHeight)
         );
     }
-    if t.guards() {
-        *s += d.guard();
-    }
-    if t.tests_outside() {
-        *s += d.outside_test();
-    }
-    if t.beyond_far_lit {
-        // Tutorial code's `if (projCoords.z > 1.0) shadow = 0.0`, before any shader bias
-        // (umbra_ref::lookup, step 5).
-        *s += match t.order {
-            DepthOrder::Forward => "  if (c.z > 1.0) { return 1.0; }\n",
-            DepthOrder::Reversed => "  if (c.z < 0.0) { return 1.0; }\n",
-        };
+    // A mipmapped sample comes before the tests (uniform control flow for its derivatives)
+    // and is returned after them: the same value wherever the tests do not return lit.
+    let sample_first = t.taps() == Taps::HardwareMipmapped;
+    if !sample_first {
+        tests(s, d, t);
     }
     if t.cube {
         *s += d.cube_rows();
@@ -225,6 +220,11 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
         Taps::HardwareCube => *s += d.sample_cube(),
         Taps::HardwareProjective => *s += d.sample_projective(),
         Taps::Hardware => *s += d.sample(),
+        Taps::HardwareMipmapped => {
+            *s += d.sample_mipmapped();
+            tests(s, d, t);
+            *s += "  return m;\n";
+        }
         Taps::Nearest => {
             *s += &format!("  return tap(f, floor(c.x * {w}), floor(c.y * {h}), r);\n")
         }
@@ -267,6 +267,24 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
         }
     }
     *s += "}\n";
+}
+
+/// The guard, the outside test and the beyond-far test: each returns lit.
+fn tests(s: &mut String, d: &impl Dialect, t: &Technique) {
+    if t.guards() {
+        *s += d.guard();
+    }
+    if t.tests_outside() {
+        *s += d.outside_test();
+    }
+    if t.beyond_far_lit {
+        // Tutorial code's `if (projCoords.z > 1.0) shadow = 0.0`, before any shader bias
+        // (umbra_ref::lookup, step 5).
+        *s += match t.order {
+            DepthOrder::Forward => "  if (c.z > 1.0) { return 1.0; }\n",
+            DepthOrder::Reversed => "  if (c.z < 0.0) { return 1.0; }\n",
+        };
+    }
 }
 
 /// `shade(albedo, n, l, e, vis)` (umbra_ref::shading).

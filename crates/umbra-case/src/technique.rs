@@ -53,6 +53,8 @@ pub struct Technique {
     pub n_dot_l_from_position: bool,
     /// The shader reads lit beyond the light's far plane (`beyond_far: lit`).
     pub beyond_far_lit: bool,
+    /// The map has mip levels (the sampler picks them: [`Taps::HardwareMipmapped`]).
+    pub mipmapped: bool,
     /// The illumination model and its constants (written into the shader).
     pub shading: Shading,
     /// The self-test's fault: read by the methods below and nowhere else.
@@ -119,6 +121,11 @@ pub enum Taps {
     HardwareProjective,
     /// The sampler compares (and filters, NEAREST or LINEAR) once at c.
     Hardware,
+    /// The sampler compares at c on a mipmapped map, choosing levels by the implicit
+    /// derivatives of c: sampled before the guard and the outside tests, so that the
+    /// derivatives are taken in uniform control flow (GLSL 4.60 §8.9, WGSL's uniformity
+    /// rules for textureSampleCompare), and returned after them.
+    HardwareMipmapped,
     /// One tap at texel floor(c · size).
     Nearest,
     /// Four taps with bilinear weights.
@@ -162,6 +169,7 @@ impl Technique {
                     .n_dot_l
                     .is_some_and(|b| b.light == LightVector::Position),
             beyond_far_lit: s.beyond_far == BeyondFar::Lit,
+            mipmapped: s.mipmaps.is_some(),
             shading: case.shading.clone(),
             fault,
         }
@@ -284,6 +292,7 @@ impl Technique {
         let sampler_filters = !self.manual() && !matches!(self.filter, Filter::Pcf(_));
         match self.filter {
             _ if sampler_filters && self.cube => Taps::HardwareCube,
+            _ if sampler_filters && self.mipmapped => Taps::HardwareMipmapped,
             _ if sampler_filters
                 && self.bias_matrix == BiasMatrix::BeforeDivide
                 && self.fault.is_none() =>

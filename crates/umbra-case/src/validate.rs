@@ -406,6 +406,13 @@ impl Validator<'_> {
             Light::Point(p) => {
                 self.finite3("light.point.position", p.position);
                 self.near_far("light.point", p.near, p.far, true);
+                if shadow.mipmaps.is_some() {
+                    self.err(
+                        "shadow.mipmaps",
+                        "mipmapped maps are modelled for 2D maps only, not a point light's cube map",
+                        "use a spot or directional light, or remove shadow.mipmaps",
+                    );
+                }
                 if shadow.size[0] != shadow.size[1] {
                     self.err(
                         "shadow.size",
@@ -525,6 +532,9 @@ impl Validator<'_> {
                 );
             }
         }
+        if let Some(m) = s.mipmaps {
+            self.mipmaps(s, m);
+        }
         let b = &s.bias;
         self.finite("shadow.bias.constant", b.constant);
         self.finite("shadow.bias.polygon_offset[0]", b.polygon_offset[0]);
@@ -547,6 +557,41 @@ impl Validator<'_> {
             self.bias_distance("shadow.bias.n_dot_l.min", nl.min);
         }
         self.finite("shadow.bias.normal_offset", b.normal_offset);
+    }
+
+    fn mipmaps(&mut self, s: &Shadow, m: Mipmaps) {
+        let most = 32 - s.size[0].max(s.size[1]).max(1).leading_zeros();
+        if !(2..=most).contains(&m.levels) {
+            self.err(
+                "shadow.mipmaps.levels",
+                format!(
+                    "a {:?} map has from 2 to {most} levels, got {}",
+                    s.size, m.levels
+                ),
+                "give 2 or more levels, at most log2 of the larger side + 1",
+            );
+        }
+        if !s.size.iter().all(|n| n.is_power_of_two()) {
+            self.err(
+                "shadow.size",
+                format!("a mipmapped map needs power-of-two sides, got {:?}", s.size),
+                "use sides such as [256, 256] or [512, 128]",
+            );
+        }
+        if s.compare != Compare::Hardware {
+            self.err(
+                "shadow.compare",
+                "mip levels are chosen by the sampler: a mipmapped map needs `hardware`",
+                "set \"compare\": \"hardware\" or remove shadow.mipmaps",
+            );
+        }
+        if matches!(s.filter, Filter::Pcf(_)) {
+            self.err(
+                "shadow.filter",
+                "a mipmapped map is filtered by the sampler: `nearest` or `linear` within a level",
+                "use \"nearest\" or \"linear\", or remove shadow.mipmaps",
+            );
+        }
     }
 
     fn shading(&mut self, s: &Shading) {

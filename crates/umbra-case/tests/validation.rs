@@ -570,3 +570,49 @@ fn scene_offset_must_be_finite() {
         "not a finite f32",
     );
 }
+
+/// The base case with a mipmapped map of `levels` levels.
+fn mipmapped(levels: u32) -> Value {
+    set(base(), "/shadow/mipmaps", json!({ "levels": levels }))
+}
+
+#[test]
+fn mipmaps_validate_and_name_the_field_that_breaks_them() {
+    let ok = umbra_case::load_str(&mipmapped(9).to_string(), std::path::Path::new("m.json"));
+    assert!(ok.is_ok(), "{ok:?}");
+    assert_error(mipmapped(1), "shadow.mipmaps.levels", "from 2 to 9");
+    assert_error(mipmapped(10), "shadow.mipmaps.levels", "from 2 to 9");
+    assert_error(
+        set(mipmapped(3), "/shadow/size", json!([300, 256])),
+        "shadow.size",
+        "power-of-two",
+    );
+    assert_error(
+        set(mipmapped(3), "/shadow/compare", json!("manual")),
+        "shadow.compare",
+        "needs `hardware`",
+    );
+    assert_error(
+        set(mipmapped(3), "/shadow/filter", json!({ "pcf": 3 })),
+        "shadow.filter",
+        "`nearest` or `linear`",
+    );
+    assert_error(
+        set(
+            mipmapped(3),
+            "/light",
+            json!({ "point": { "position": [0, 5, 0] } }),
+        ),
+        "shadow.mipmaps",
+        "2D maps only",
+    );
+    assert_error(
+        set(
+            mipmapped(3),
+            "/shadow/mipmaps",
+            json!({ "levels": 3, "source": "generated" }),
+        ),
+        "shadow.mipmaps.source",
+        "expected `rendered` or `averaged`",
+    );
+}

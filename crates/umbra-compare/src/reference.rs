@@ -56,12 +56,16 @@ pub struct RefAgreement {
     /// Pixels where the backend shows another surface than the reference, legally (not
     /// compared further).
     pub legal_surface: u64,
+    /// Legal differences: a mipmapped lookup may read another level (the LOD's freedom:
+    /// derivatives, GL's and Vulkan's scale-factor bounds, precision).
+    #[serde(default)]
+    pub legal_lod: u64,
     /// Pixels where any answer would pass (interval ⊇ {0, 1}, or another surface legally).
     pub blind: u64,
     /// The blind pixels by the freedom that makes them so (same precedence as the legal
-    /// classes): `[tie, coverage, texel, filter, seam, position, other surface]`.
+    /// classes): `[tie, coverage, texel, filter, seam, position, other surface, mip level]`.
     #[serde(default)]
-    pub blind_by: [u64; 7],
+    pub blind_by: [u64; 8],
     /// Pixels whose value was held to an interval that excludes 0 or 1.
     pub value_checked: u64,
     /// The smallest distance of a checked value from its bound (None: nothing checked).
@@ -91,14 +95,19 @@ impl RefAgreement {
     /// The legal classes, as every message states them.
     pub fn legal_summary(&self) -> String {
         format!(
-            "legal: {} ties, {} coverage, {} texel, {} filter, {} seam, {} position, {} other surface",
+            "legal: {} ties, {} coverage, {} texel, {} filter, {} seam, {} position, {} other surface{}",
             self.legal_tie,
             self.legal_coverage,
             self.legal_texel,
             self.legal_filter,
             self.legal_seam,
             self.legal_position,
-            self.legal_surface
+            self.legal_surface,
+            if self.legal_lod > 0 {
+                format!(", {} mip level", self.legal_lod)
+            } else {
+                String::new()
+            }
         )
     }
 
@@ -146,7 +155,7 @@ pub enum PixelJudgement {
 }
 
 /// The names of [`RefAgreement::blind_by`]'s entries.
-pub const REASONS: [&str; 7] = [
+pub const REASONS: [&str; 8] = [
     "depth tie",
     "map coverage",
     "texel selection",
@@ -154,6 +163,7 @@ pub const REASONS: [&str; 7] = [
     "cube seam",
     "lookup position",
     "other surface",
+    "mip level",
 ];
 
 /// The index in [`REASONS`] of the first freedom a pixel's flags name (ties first).
@@ -170,6 +180,8 @@ pub fn reason_index(f: u8) -> usize {
         4
     } else if f & ambiguity::SURFACE != 0 {
         6
+    } else if f & ambiguity::LOD != 0 {
+        7
     } else {
         5
     }
@@ -272,6 +284,7 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
                     2 => &mut r.legal_texel,
                     3 => &mut r.legal_filter,
                     4 => &mut r.legal_seam,
+                    7 => &mut r.legal_lod,
                     _ => &mut r.legal_position,
                 };
                 *class += 1;

@@ -113,6 +113,13 @@ impl Backend for GlBackend {
             return Support::Unsupported("the GLES 2 path needs OES_standard_derivatives and EXT_frag_depth to apply the polygon offset to packed depth".into());
         }
         match api {
+            // OES_depth_texture (issue 1) gives GLES 2 no compare sampler, and its path keeps
+            // depth packed in RGBA8: a mip chain of packed depths would be filtered as
+            // colours, which is neither mipmapped compare nor anything a program relies on.
+            Api::Gles2 if needs.mipmaps.is_some() => Support::Unsupported(
+                "GLES 2 has no depth-compare sampler (OES_depth_texture, issue 1) and packs depth in RGBA8: no mipmapped compare filter to test"
+                    .into(),
+            ),
             Api::Gles2 if needs.format == DepthFormat::Depth32f => Support::Unsupported(
                 "GLES 2 has no float depth: the shadow pass packs depth into RGBA8 (about 24 bits)"
                     .into(),

@@ -23,7 +23,9 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use glow::HasContext;
-use umbra_case::format::{Attachments, Cull, DepthFormat, DepthOrder, Filter, Outside};
+use umbra_case::format::{
+    Attachments, Cull, DepthFormat, DepthOrder, Filter, MipFilter, MipSource, Mipmaps, Outside,
+};
 use umbra_case::technique::CompareOp;
 use umbra_case::{
     BackendError, Clock, Convention, DepthMap, Frame, LightKind, LookupMatrices, Prepared,
@@ -212,6 +214,78 @@ impl Renderer {
         Ok(program)
     }
 
+    /// Fills levels 1.. of the bound 2D `map` (`levels` in all, level 0 drawn) with the
+    /// mean of the level above, one down-sampling pass per level, as a program generating
+    /// depth mips does ([`shaders::average_fragment`]). The level read is the texture's only
+    /// level while the next is drawn (BASE_LEVEL = MAX_LEVEL), so no feedback loop forms.
+    fn average_levels(
+        &self,
+        program: glow::Program,
+        map: glow::Texture,
+        s: &umbra_case::format::Shadow,
+        levels: u32,
+        res: &mut Resources,
+    ) -> Result<(), BackendError> {
+        let gl = &self.ctx.gl;
+        // SAFETY: objects of the current context; the framebuffer's completeness is checked
+        // before each draw.
+        unsafe {
+            let fbo = gl
+                .create_framebuffer()
+                .map_err(|e| gl_err("mip levels", e))?;
+            res.framebuffers.push(fbo);
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+            gl.draw_buffers(&[glow::NONE]);
+            gl.read_buffer(glow::NONE);
+            gl.use_program(Some(program));
+            gl.uniform_1_i32(gl.get_uniform_location(program, "u_src").as_ref(), 0);
+            gl.active_texture(glow::TEXTURE0);
+            gl.bind_texture(glow::TEXTURE_2D, Some(map));
+            gl.tex_parameter_i32(
+                glow::TEXTURE_2D,
+                glow::TEXTURE_COMPARE_MODE,
+                glow::NONE as i32,
+            );
+            gl.enable(glow::DEPTH_TEST);
+            gl.depth_func(glow::ALWAYS);
+            gl.depth_mask(true);
+            for level in 1..levels {
+                let [lw, lh] = Mipmaps::level_size(s.size, level);
+                let above = level as i32 - 1;
+                gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_BASE_LEVEL, above);
+                gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_MAX_LEVEL, above);
+                gl.framebuffer_texture_2d(
+                    glow::FRAMEBUFFER,
+                    glow::DEPTH_ATTACHMENT,
+                    glow::TEXTURE_2D,
+                    Some(map),
+                    level as i32,
+                );
+                let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
+                if status != glow::FRAMEBUFFER_COMPLETE {
+                    return Err(gl_err(
+                        "mip levels",
+                        format!(
+                            "framebuffer of level {level} incomplete: {}",
+                            status_name(status)
+                        ),
+                    ));
+                }
+                gl.viewport(0, 0, lw as i32, lh as i32);
+                gl.draw_arrays(glow::TRIANGLES, 0, 3);
+                self.check(&format!("mip level {level} (averaged)"))?;
+            }
+            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_BASE_LEVEL, 0);
+            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_MAX_LEVEL, levels as i32 - 1);
+            gl.depth_func(if s.depth_order == DepthOrder::Forward {
+                glow::LESS
+            } else {
+                glow::GREATER
+            });
+        }
+        self.check("mip levels")
+    }
+
     /// Renders one run.
     pub fn render(&mut self, run: &Prepared) -> Result<Frame, BackendError> {
         self.render_run(run, None).map(|(f, _)| f)
@@ -341,6 +415,18 @@ impl Renderer {
             shaders::shadow_vertex(api),
             shaders::shadow_fragment(api, s.attachments == Attachments::WithColor),
         )?;
+        // A mipmapped map's levels, and how many of them shadow passes draw (the rest are
+        // averaged from the level above: MipSource::Averaged).
+        let levels = s.mipmaps.map_or(1, |m| m.levels);
+        let drawn_levels = match s.mipmaps {
+            Some(m) if m.source == MipSource::Averaged => 1,
+            _ => levels,
+        };
+        let average_program = if drawn_levels < levels {
+            Some(self.program(shaders::average_vertex(api), shaders::average_fragment(api))?)
+        } else {
+            None
+        };
         let gl = &self.ctx.gl;
         let timer = if self.timer_queries {
             Some(Timer::new(gl)?)
@@ -383,20 +469,29 @@ impl Renderer {
                     depth_format(s.format)
                 };
                 for &ft in &face_targets {
-                    gl.tex_image_2d(
-                        ft,
-                        0,
-                        internal,
-                        mw as i32,
-                        mh as i32,
-                        0,
-                        format,
-                        ty,
-                        glow::PixelUnpackData::Slice(None),
-                    );
+                    for level in 0..levels {
+                        let [lw, lh] = Mipmaps::level_size(s.size, level);
+                        gl.tex_image_2d(
+                            ft,
+                            level as i32,
+                            internal,
+                            lw as i32,
+                            lh as i32,
+                            0,
+                            format,
+                            ty,
+                            glow::PixelUnpackData::Slice(None),
+                        );
+                    }
                 }
                 for (p, v) in FRESH_MAP_SAMPLER {
                     gl.tex_parameter_i32(target, p, v as i32);
+                }
+                if levels > 1 {
+                    // Complete with exactly the case's levels (the default MAX_LEVEL, 1000,
+                    // would ask for levels below 1 × 1 that a non-square map lacks).
+                    gl.tex_parameter_i32(target, glow::TEXTURE_BASE_LEVEL, 0);
+                    gl.tex_parameter_i32(target, glow::TEXTURE_MAX_LEVEL, levels as i32 - 1);
                 }
                 self.check("shadow map storage")?;
                 let fbo = gl
@@ -439,12 +534,6 @@ impl Renderer {
                 }
                 gl.use_program(Some(shadow_program));
                 let vp_loc = gl.get_uniform_location(shadow_program, "u_view_proj");
-                if is(umbra_case::fault::Fault::ShadowViewport) {
-                    let [cw, ch] = run.camera.size;
-                    gl.viewport(0, 0, cw as i32, ch as i32);
-                } else {
-                    gl.viewport(0, 0, mw as i32, mh as i32);
-                }
                 gl.enable(glow::DEPTH_TEST);
                 gl.depth_func(if s.depth_order == DepthOrder::Forward {
                     glow::LESS
@@ -495,7 +584,19 @@ impl Renderer {
                 } else {
                     gl.disable(glow::POLYGON_OFFSET_FILL);
                 }
-                for (k, ft) in face_targets.iter().enumerate() {
+                // Every face, and on a mipmapped map every level its source draws.
+                let passes = face_targets
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(k, ft)| (0..drawn_levels).map(move |level| (k, ft, level)));
+                for (k, ft, level) in passes {
+                    let [lw, lh] = Mipmaps::level_size(s.size, level);
+                    if is(umbra_case::fault::Fault::ShadowViewport) {
+                        let [cw, ch] = run.camera.size;
+                        gl.viewport(0, 0, cw as i32, ch as i32);
+                    } else {
+                        gl.viewport(0, 0, lw as i32, lh as i32);
+                    }
                     if es2 {
                         gl.framebuffer_texture_2d(
                             glow::FRAMEBUFFER,
@@ -516,7 +617,7 @@ impl Renderer {
                             glow::DEPTH_ATTACHMENT,
                             *ft,
                             Some(map),
-                            0,
+                            level as i32,
                         );
                         if let Some(c) = dummy {
                             gl.framebuffer_texture_2d(
@@ -562,8 +663,8 @@ impl Renderer {
                     if sx != 0.0 || sy != 0.0 {
                         // Texels to NDC: 2 · t / size.
                         m = glam::Mat4::from_translation(glam::Vec3::new(
-                            2.0 * sx / mw as f32,
-                            2.0 * sy / mh as f32,
+                            2.0 * sx / lw as f32,
+                            2.0 * sy / lh as f32,
                             0.0,
                         )) * m;
                     }
@@ -577,12 +678,15 @@ impl Renderer {
                     gl.front_face(if mirrored { glow::CW } else { glow::CCW });
                     gl.uniform_matrix_4_f32_slice(vp_loc.as_ref(), false, &m.to_cols_array());
                     gl.draw_arrays(glow::TRIANGLES, 0, count);
-                    self.check(&format!("shadow pass (face {k})"))?;
+                    self.check(&format!("shadow pass (face {k}, level {level})"))?;
                 }
                 gl.disable(glow::POLYGON_OFFSET_FILL);
                 gl.disable(glow::CULL_FACE);
                 gl.front_face(glow::CCW);
                 gl.color_mask(true, true, true, true);
+                if let Some(program) = average_program {
+                    self.average_levels(program, map, s, levels, res)?;
+                }
                 map
             }
         };
@@ -661,7 +765,23 @@ impl Renderer {
             } else {
                 glow::NEAREST
             };
-            gl.tex_parameter_i32(target, glow::TEXTURE_MIN_FILTER, filter as i32);
+            let min_filter = match (s.mipmaps.map(|m| m.filter), filter) {
+                (None, f) => f,
+                (Some(MipFilter::Nearest), glow::LINEAR) => glow::LINEAR_MIPMAP_NEAREST,
+                (Some(MipFilter::Nearest), _) => glow::NEAREST_MIPMAP_NEAREST,
+                (Some(MipFilter::Linear), glow::LINEAR) => glow::LINEAR_MIPMAP_LINEAR,
+                (Some(MipFilter::Linear), _) => glow::NEAREST_MIPMAP_LINEAR,
+            };
+            let min_filter = if is(umbra_case::fault::Fault::MipBaseOnly) {
+                filter
+            } else {
+                min_filter
+            };
+            if s.mipmaps.is_some() {
+                let coarse = is(umbra_case::fault::Fault::MipLevelCoarse);
+                gl.tex_parameter_i32(target, glow::TEXTURE_BASE_LEVEL, i32::from(coarse));
+            }
+            gl.tex_parameter_i32(target, glow::TEXTURE_MIN_FILTER, min_filter as i32);
             gl.tex_parameter_i32(target, glow::TEXTURE_MAG_FILTER, filter as i32);
             if !es2 {
                 if manual {

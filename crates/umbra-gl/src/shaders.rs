@@ -63,6 +63,36 @@ pub fn shadow_vertex(api: Api) -> String {
     s
 }
 
+/// Vertex shader of a generated mip level's down-sampling pass: one triangle over the
+/// viewport, from gl_VertexID (no attributes).
+pub fn average_vertex(api: Api) -> String {
+    let mut s = header(api, false);
+    s.push_str(
+        "void main() {\n  vec2 c = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));\n\
+           gl_Position = vec4(c * 2.0 - 1.0, 0.0, 1.0);\n}\n",
+    );
+    s
+}
+
+/// Fragment shader of a generated mip level (`MipSource::Averaged`): the mean of the 2 × 2
+/// depths of the level above (the texture's base level while this level is drawn), written
+/// as the fragment's depth, in the order `umbra_ref::shadow_pass::averaged` computes it.
+/// GL refuses glGenerateMipmap on a depth format (GL 4.6 §8.14.4: the base level must be
+/// colour-renderable), so a program that wants averaged depth mips writes this pass.
+pub fn average_fragment(api: Api) -> String {
+    let mut s = header(api, true);
+    s.push_str(
+        "uniform sampler2D u_src;\n\
+         void main() {\n  ivec2 last = textureSize(u_src, 0) - 1;\n  ivec2 p = 2 * ivec2(gl_FragCoord.xy);\n\
+           float a = texelFetch(u_src, min(p, last), 0).r;\n\
+           float b = texelFetch(u_src, min(p + ivec2(1, 0), last), 0).r;\n\
+           float c = texelFetch(u_src, min(p + ivec2(0, 1), last), 0).r;\n\
+           float d = texelFetch(u_src, min(p + ivec2(1, 1), last), 0).r;\n\
+           gl_FragDepth = 0.25 * (a + b + c + d);\n}\n",
+    );
+    s
+}
+
 /// Fragment shader of the shadow pass: nothing (depth only), a constant (the dummy colour
 /// attachment), or packed depth (GLES 2).
 ///
@@ -360,6 +390,10 @@ impl Dialect for Glsl {
 
     fn sample(&self) -> &'static str {
         "  return texture(u_map, vec3(c.xy, r));\n"
+    }
+
+    fn sample_mipmapped(&self) -> &'static str {
+        "  float m = texture(u_map, vec3(c.xy, r));\n"
     }
 
     fn bilinear_start(&self) -> &'static str {

@@ -31,7 +31,7 @@ pub mod truth;
 use std::time::Instant;
 
 use umbra_case::fault::Fault;
-use umbra_case::format::{Case, Cull};
+use umbra_case::format::{Case, Cull, MipSource, Mipmaps, Shadow};
 use umbra_case::{
     Backend, BackendError, BackendId, ClipDepth, Clock, Convention, DepthMap, DriverInfo, Frame,
     Needs, Prepared, Profile, Support, Timings, VisibilityStorage,
@@ -99,7 +99,7 @@ pub fn explain(
         Judged {
             frame,
             legal,
-            quantum: lookup::quantum(run.case().shadow.filter),
+            quantum: lookup::quantum(&run.case().shadow),
             profile,
             map,
         },
@@ -179,8 +179,12 @@ fn render_inner(
             )
         })
         .collect();
+    let (level_shadows, below) = mip_levels(run, conv, &layers, profile, fault);
     let shadow_done = Instant::now();
-    let lookup = lookup::Lookup::new(run, conv, &layers, profile.unwrap_or_default());
+    let mut lookup = lookup::Lookup::new(run, conv, &layers, profile.unwrap_or_default());
+    if !level_shadows.is_empty() {
+        lookup = lookup.with_levels(&level_shadows, &below);
+    }
     let camera_kinds = adjacency.as_ref().map(|a| {
         a.edge_kinds(
             &run.geometry,
@@ -249,6 +253,68 @@ fn render_inner(
         ..frame
     };
     (frame, legal, map, lit.trace)
+}
+
+/// A mipmapped map's levels below level 0 (`layers`, a 2D map's only face): the technique
+/// at every level (its size, no levels) and the layers of levels 1 and on, each rendered by
+/// its own shadow pass at its own size or averaged from the level above
+/// ([`umbra_case::format::MipSource`]); nothing for a map with one level.
+pub(crate) fn mip_levels(
+    run: &Prepared,
+    conv: Convention,
+    layers: &[shadow_pass::DepthLayer],
+    profile: Option<Profile>,
+    fault: Option<Fault>,
+) -> (Vec<Shadow>, Vec<shadow_pass::DepthLayer>) {
+    let case = run.case();
+    let Some(m) = case.shadow.mipmaps else {
+        return (Vec::new(), Vec::new());
+    };
+    let shadows: Vec<Shadow> = (0..m.levels)
+        .map(|k| Shadow {
+            size: Mipmaps::level_size(case.shadow.size, k),
+            mipmaps: None,
+            ..case.shadow.clone()
+        })
+        .collect();
+    let mut vp = run.light.views[0].view_proj(conv);
+    let mut cull = case.shadow.cull;
+    if let Some((wrong, mirrors)) = fault.and_then(|f| f.face_mistake(0, false)) {
+        vp = wrong * vp;
+        if mirrors {
+            // As for level 0 (render_inner): the front face turns with the mirror.
+            cull = match cull {
+                Cull::Back => Cull::Front,
+                Cull::Front => Cull::Back,
+                Cull::None => Cull::None,
+            };
+        }
+    }
+    let kinds = profile
+        .map(|_| adjacency::Adjacency::new(&run.geometry).edge_kinds(&run.geometry, vp, cull));
+    let mut below: Vec<shadow_pass::DepthLayer> = Vec::new();
+    for k in 1..m.levels as usize {
+        let level = match m.source {
+            MipSource::Rendered => shadow_pass::render_face(
+                conv,
+                &Shadow {
+                    cull,
+                    ..shadows[k].clone()
+                },
+                vp,
+                &run.geometry,
+                kinds.as_deref().zip(profile),
+            ),
+            MipSource::Averaged => shadow_pass::averaged(
+                below.last().unwrap_or(&layers[0]),
+                shadows[k - 1].size,
+                case.shadow.format,
+                profile.is_some(),
+            ),
+        };
+        below.push(level);
+    }
+    (shadows, below)
 }
 
 /// Rows in top-first order: reversed in place when the raster's row 0 is the bottom (the one

@@ -20,7 +20,7 @@ use umbra_case::format::Cull;
 use umbra_case::{Convention, Geometry, Prepared, Profile};
 
 use crate::bands::for_each_band;
-use crate::lookup::{Legal, Lookup, ambiguity, position_freedom};
+use crate::lookup::{Legal, Lookup, Neighbours, ambiguity, position_freedom};
 use crate::raster::{Coverage, EdgeKind, Rasterizer, Tri};
 use crate::shading::{BACKGROUND, shade_linear, shade_run, shade_tolerance};
 use crate::shadow_pass::setup_all;
@@ -156,7 +156,11 @@ pub fn render(
         let snap = tri.reach() as f32;
         let moves = [(px_ - p) * snap, (py_ - p) * snap];
         let normal_moves = ((nx - n).length() + (ny - n).length()) * snap;
-        let (vis, l): (f32, Legal) = lookup.judged(p, n, moves);
+        let (vis, l): (f32, Legal) = if lookup.mipmapped() {
+            lookup.judged_mip(p, n, moves, &neighbours(tri, geo, pt.x, pt.y))
+        } else {
+            lookup.judged(p, n, moves)
+        };
         let (albedo, to_light, to_eye) = (pt.albedo, pt.to_light, pt.to_eye);
         let c0 = shade_linear(&case.shading, albedo, n, to_light, to_eye, 0.0);
         let c1 = shade_linear(&case.shading, albedo, n, to_light, to_eye, 1.0);
@@ -236,7 +240,7 @@ pub fn render(
                     let t = tri.source as usize;
                     surfaces.fill(tri, geo, xs.start as i32, y as i32, len, eye, &run.light);
                     let vis = &mut v_row[xs.clone()];
-                    if surface_free.is_none() && explain.is_none() {
+                    if surface_free.is_none() && explain.is_none() && !lookup.mipmapped() {
                         lookup.visibility_run(surfaces, vis, coords);
                     } else {
                         for (k, x) in xs.clone().enumerate() {
@@ -253,6 +257,14 @@ pub fn render(
                             };
                             let look = || match &surface_free {
                                 Some(_) => judge(&pt, free(x)),
+                                None if lookup.mipmapped() => (
+                                    lookup.visibility_mip(
+                                        pt.p,
+                                        pt.n,
+                                        &neighbours(tri, geo, pt.x, pt.y),
+                                    ),
+                                    PixelLegal::default(),
+                                ),
                                 None => (lookup.visibility(pt.p, pt.n), PixelLegal::default()),
                             };
                             let (v, l) = if explain == Some(y * wu + x) {
@@ -290,6 +302,20 @@ pub fn render(
         legal,
         trace: trace.into_inner().unwrap_or_default(),
     }
+}
+
+/// The points of `tri`'s surface at the centres of pixel (x, y) and its eight neighbours,
+/// the triangle's plane extrapolated beyond its edges as a quad's helper invocations
+/// extrapolate its varyings: what a mipmapped lookup's derivatives are taken over.
+fn neighbours(tri: &Tri, geo: &Geometry, x: i32, y: i32) -> Neighbours {
+    let t = tri.source as usize;
+    let (cx, cy) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
+    Neighbours(std::array::from_fn(|j| {
+        std::array::from_fn(|i| {
+            let w = tri.source_weights_at(cx + i as f64 - 1.0, cy + j as f64 - 1.0);
+            interpolate(geo, t, w).0
+        })
+    }))
 }
 
 /// Per pixel, [`ambiguity::SURFACE`] where another implementation may show another surface

@@ -35,8 +35,10 @@
 //! combines the taps' possibilities with the weights the spec allows; and the lookup point
 //! itself may move by [`position_freedom`], over which the interval is the hull.
 
-use glam::Vec3;
-use umbra_case::format::{BeyondFar, BiasMatrix, Compare, Filter, LightVector, Outside, Shadow};
+use glam::{DVec2, Vec3};
+use umbra_case::format::{
+    BeyondFar, BiasMatrix, Compare, Filter, LightVector, MipFilter, Outside, Shadow,
+};
 use umbra_case::{Convention, LightKind, LightSetup, LookupMatrices, Profile, ShadowCoord, Spec};
 
 use crate::rounding::{floor_f32, floor_i64};
@@ -87,6 +89,9 @@ pub struct Lookup<'a> {
     pub reach: f32,
     /// The profile the legal intervals are computed for (judged renders).
     pub profile: Profile,
+    /// A mipmapped map's levels, level 0 first, each a lookup of one level with no levels of
+    /// its own (see [`Lookup::with_levels`]); empty for a map with one level.
+    pub levels: Vec<Lookup<'a>>,
 }
 
 /// Why a pixel's legal interval is wider than one value (bit flags, kept per pixel).
@@ -110,6 +115,9 @@ pub mod ambiguity {
     pub const SEAM: u8 = 32;
     /// The camera pixel itself may show another surface (set by the lit pass).
     pub const SURFACE: u8 = 64;
+    /// A mipmapped lookup may read another level: the LOD's freedom
+    /// ([`super::Lookup::lod_range`]) reaches it.
+    pub const LOD: u8 = 128;
 }
 
 /// The values a conformant implementation may return for one lookup, before the target
@@ -141,9 +149,15 @@ impl Legal {
 }
 
 /// The step between the values a filter can produce: NEAREST returns 0 or 1, PCF N sums of
-/// N² results over N², LINEAR anything (0).
-pub fn quantum(filter: Filter) -> f32 {
-    match filter {
+/// N² results over N², LINEAR anything (0); a blend of two mip levels anything too.
+pub fn quantum(shadow: &Shadow) -> f32 {
+    if shadow
+        .mipmaps
+        .is_some_and(|m| m.filter == MipFilter::Linear)
+    {
+        return 0.0;
+    }
+    match shadow.filter {
         Filter::Nearest => 1.0,
         Filter::Linear => 0.0,
         Filter::Pcf(n) => 1.0 / (n * n) as f32,
@@ -165,6 +179,16 @@ pub fn quantum(filter: Filter) -> f32 {
 pub fn position_freedom(p: Vec3, reach: f32) -> f32 {
     16.0 * (f32::EPSILON * 0.5) * (p.abs().max_element() + reach)
 }
+
+/// The LOD's precision the judge allows each way ([`Lookup::lod_range`]): 2⁻⁴, Vulkan's
+/// least mipmapPrecisionBits.
+const LOD_SLACK: f64 = 1.0 / 16.0;
+
+/// A camera pixel's neighbours on the surface it shows, for a mipmapped lookup's
+/// derivatives: `.0[j][i]` is the point at pixel (x + i − 1, y + j − 1), on the plane of the
+/// pixel's own triangle (as a quad's helper invocations extrapolate the varyings).
+#[derive(Clone, Copy, Debug)]
+pub struct Neighbours(pub [[Vec3; 3]; 3]);
 
 /// How many times [`Lookup::judged`] halves the region of a lookup whose position matters
 /// (each level four quarters, only where a quarter is still wider than its centre).
@@ -270,7 +294,31 @@ impl<'a> Lookup<'a> {
             layers,
             reach,
             profile,
+            levels: Vec::new(),
         }
+    }
+
+    /// The lookup of a mipmapped map: `shadows[k]` is the technique at level k (its size,
+    /// no levels), `below[k − 1]` the rendered (or averaged) layer of level k ≥ 1; level 0
+    /// is this lookup's own layer.
+    pub fn with_levels(mut self, shadows: &'a [Shadow], below: &'a [DepthLayer]) -> Lookup<'a> {
+        let top = self.layers;
+        self.levels = shadows
+            .iter()
+            .enumerate()
+            .map(|(k, shadow)| Lookup {
+                conv: self.conv,
+                shadow,
+                light: self.light,
+                matrices: self.matrices.clone(),
+                wide: self.wide.clone(),
+                layers: if k == 0 { top } else { &below[k - 1..k] },
+                reach: self.reach,
+                profile: self.profile,
+                levels: Vec::new(),
+            })
+            .collect();
+        self
     }
 }
 
@@ -289,6 +337,161 @@ impl Lookup<'_> {
             None => 1.0,
             Some(st) => self.filter_value(&st),
         }
+    }
+
+    /// Whether the map has mip levels: its lookups need the pixel's [`Neighbours`]
+    /// ([`Lookup::visibility_mip`], [`Lookup::judged_mip`]).
+    pub fn mipmapped(&self) -> bool {
+        !self.levels.is_empty()
+    }
+
+    /// The level-0 texel coordinates (u·width, v·height) at the nine points of `nb`.
+    fn footprint(&self, n: Vec3, nb: &Neighbours) -> [[DVec2; 3]; 3] {
+        let [w, h] = self.shadow.size;
+        nb.0.map(|row| {
+            row.map(|q| {
+                let c = self.probe_on(q, n, 0).0;
+                DVec2::new(f64::from(c.u) * f64::from(w), f64::from(c.v) * f64::from(h))
+            })
+        })
+    }
+
+    /// The LOD the reference's sampler computes: λ = log₂ ρ with the specs' own
+    /// ρ = max(|∂(s, t)/∂x|, |∂(s, t)/∂y|) in level-0 texels (GL 4.6 §8.14.1 eq. 8.7,
+    /// Vulkan "Scale Factor Operation"), the derivatives as forward differences to the next
+    /// pixel of the row and of the column.
+    pub fn lod(&self, n: Vec3, nb: &Neighbours) -> f64 {
+        let t = self.footprint(n, nb);
+        let dx = t[1][2] - t[1][1];
+        let dy = t[2][1] - t[1][1];
+        dx.length().max(dy.length()).log2()
+    }
+
+    /// The LODs a conformant sampler may compute at this pixel (a closed interval):
+    ///
+    /// - **Derivatives.** dFdx may be the difference to either horizontal neighbour in the
+    ///   pixel's 2 × 2 quad ("fine"), or one difference shared by the quad, taken in either
+    ///   of its rows ("coarse"); likewise dFdy (GLSL 4.60 §8.14.1, SPIR-V DPdx/DPdxFine/
+    ///   DPdxCoarse, WGSL dpdx). Here every forward and backward difference of the pixel's
+    ///   row and of the rows above and below (columns for y): each component of ∂s/∂x, ∂t/∂x,
+    ///   ∂s/∂y, ∂t/∂y at its smallest and largest magnitude over them, independently.
+    /// - **Scale factor.** GL lets ρ be any f with max(m_u, m_v) ≤ f ≤ m_u + m_v,
+    ///   m_u = max(|∂s/∂x|, |∂s/∂y|), m_v likewise for t (GL 4.6 §8.14.1, eq. 8.8 and the
+    ///   bounds below it; GLES 3.2 §8.14.1 the same); Vulkan lets ρ_x be any f_x with
+    ///   max(|∂s/∂x|, |∂t/∂x|) ≤ f_x ≤ √2·(|∂s/∂x| + |∂t/∂x|), likewise ρ_y, and ρ = max
+    ///   (Vulkan 1.3 §16.6.7, "Scale Factor Operation"). The lower bounds agree.
+    /// - **Precision.** Neither spec bounds log₂'s own error; Vulkan's mipmapPrecisionBits
+    ///   (at least 4) quantises the fraction between levels to 2⁻⁴, and dEQP's texture
+    ///   verifiers (tcu::LodPrecision's lodBits) hold the LOD to a stated number of bits:
+    ///   λ ± 2⁻⁴ ([`LOD_SLACK`]).
+    pub fn lod_range(&self, n: Vec3, nb: &Neighbours) -> (f64, f64) {
+        let t = self.footprint(n, nb);
+        let mut dx = Vec::with_capacity(6);
+        let mut dy = Vec::with_capacity(6);
+        for (k, row) in t.iter().enumerate() {
+            dx.push(row[2] - row[1]);
+            dx.push(row[1] - row[0]);
+            dy.push(t[2][k] - t[1][k]);
+            dy.push(t[1][k] - t[0][k]);
+        }
+        let span = |v: &[DVec2], pick: fn(DVec2) -> f64| {
+            v.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), d| {
+                let a = pick(*d).abs();
+                (lo.min(a), hi.max(a))
+            })
+        };
+        let (sx, tx) = (span(&dx, |d| d.x), span(&dx, |d| d.y));
+        let (sy, ty) = (span(&dy, |d| d.x), span(&dy, |d| d.y));
+        let lo = sx.0.max(tx.0).max(sy.0).max(ty.0);
+        let hi = match self.profile.spec {
+            Spec::Gl => sx.1.max(sy.1) + tx.1.max(ty.1),
+            Spec::Vulkan => std::f64::consts::SQRT_2 * (sx.1 + tx.1).max(sy.1 + ty.1),
+        };
+        (lo.log2() - LOD_SLACK, hi.log2() + LOD_SLACK)
+    }
+
+    /// The level the reference reads for NEAREST between levels at LOD `lod`, or the two it
+    /// blends and the second's weight for LINEAR: level 0 (the magnification filter, the
+    /// same filter here) for λ ≤ ½ or λ ≤ 0; otherwise GL's d = ⌈λ + ½⌉ − 1 (ties down)
+    /// and ⌊λ⌋, ⌊λ⌋ + 1 with weight frac(λ) (GL 4.6 §8.14.3), clamped to the last level.
+    fn levels_at(&self, lod: f64) -> (usize, usize, f32) {
+        let last = self.levels.len() - 1;
+        let Some(m) = self.shadow.mipmaps else {
+            return (0, 0, 0.0);
+        };
+        match m.filter {
+            MipFilter::Nearest => {
+                let d = if lod <= 0.5 {
+                    0
+                } else {
+                    ((lod + 0.5).ceil() - 1.0) as usize
+                };
+                (d.min(last), d.min(last), 0.0)
+            }
+            MipFilter::Linear => {
+                let lod = lod.max(0.0);
+                let d = (lod.floor() as usize).min(last);
+                if d == last {
+                    (last, last, 0.0)
+                } else {
+                    (d, d + 1, (lod - lod.floor()) as f32)
+                }
+            }
+        }
+    }
+
+    /// Every level a conformant sampler may read for a LOD in `range` (first, last).
+    fn levels_between(&self, (lo, hi): (f64, f64)) -> (usize, usize) {
+        let last = self.levels.len() - 1;
+        let Some(m) = self.shadow.mipmaps else {
+            return (0, 0);
+        };
+        let (a, b) = match m.filter {
+            // Either rounding of a tie (Vulkan allows both; GL prefers down).
+            MipFilter::Nearest => (
+                ((lo + 0.5).ceil() - 1.0).max(0.0),
+                (hi + 0.5).floor().max(0.0),
+            ),
+            MipFilter::Linear => (lo.max(0.0).floor(), hi.max(0.0).floor() + 1.0),
+        };
+        ((a as usize).min(last), (b as usize).min(last))
+    }
+
+    /// [`Lookup::visibility`] of a mipmapped map at a pixel whose neighbours are `nb`.
+    pub fn visibility_mip(&self, p: Vec3, n: Vec3, nb: &Neighbours) -> f32 {
+        let (a, b, f) = self.levels_at(self.lod(n, nb));
+        let va = self.levels[a].visibility(p, n);
+        if f == 0.0 {
+            return va;
+        }
+        (1.0 - f) * va + f * self.levels[b].visibility(p, n)
+    }
+
+    /// [`Lookup::judged`] of a mipmapped map: the hull of every level the LOD's freedom
+    /// reaches ([`Lookup::lod_range`]), each judged as a one-level map; a blend of two levels
+    /// lies between their intervals.
+    pub fn judged_mip(&self, p: Vec3, n: Vec3, snap: [Vec3; 2], nb: &Neighbours) -> (f32, Legal) {
+        let vis = self.visibility_mip(p, n, nb);
+        let range = self.lod_range(n, nb);
+        let (a, b) = self.levels_between(range);
+        note(|| {
+            format!(
+                "mipmapped: LOD {} in [{}, {}], levels {a}..={b}",
+                self.lod(n, nb),
+                range.0,
+                range.1
+            )
+        });
+        let mut out: Option<Legal> = None;
+        for k in a..=b {
+            let l = self.levels[k].judged(p, n, snap).1;
+            out = Some(out.map_or(l, |o| o.hull(l)));
+        }
+        let mut l = out.unwrap_or(Legal::LIT);
+        if b > a {
+            l.flags |= ambiguity::LOD;
+        }
+        (vis, l)
     }
 
     /// [`Lookup::visibility`] of every point of a run (`out[k]` for point k of `surfaces`), the
@@ -1341,5 +1544,123 @@ mod tests {
             }
         }
         assert!(checked > 50_000, "{checked}");
+    }
+}
+
+#[cfg(test)]
+mod mip_tests {
+    use super::*;
+    use umbra_case::format::Mipmaps;
+
+    fn points() -> Vec<umbra_case::Prepared> {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../cases/mipmaps/rendered.json");
+        umbra_case::load_file(&file)
+            .expect("the mipmapped case loads")
+            .into_iter()
+            .map(umbra_case::Prepared::new)
+            .collect()
+    }
+
+    /// The LOD's freedom ([`Lookup::lod_range`]) holds every LOD the specs let a sampler
+    /// compute: each derivative a forward or backward difference of the pixel's row or of
+    /// the next rows (fine or coarse), and each scale factor the bounds of GL 4.6 §8.14.1 and
+    /// Vulkan's "Scale Factor Operation" allow, at the bounds themselves; and the reference's
+    /// own choice of levels lies among the levels the judge allows.
+    #[test]
+    fn every_lod_the_specs_allow_lies_in_the_judged_freedom() {
+        let mut rand = crate::test_rng::uniform(0x1A0D);
+        let mut checked = 0;
+        for run in points() {
+            let clip = umbra_case::ClipDepth::MinusOneToOne;
+            let conv = crate::convention(run.case(), clip);
+            for profile in [Profile::GL, Profile::VULKAN] {
+                let layers = crate::judged_layers(&run, clip, profile);
+                let (shadows, below) = crate::mip_levels(&run, conv, &layers, Some(profile), None);
+                let lookup =
+                    Lookup::new(&run, conv, &layers, profile).with_levels(&shadows, &below);
+                assert!(lookup.mipmapped());
+                for _ in 0..400 {
+                    // A ground point, and a pixel footprint of a few centimetres to a metre.
+                    let p = Vec3::new(rand() * 40.0 - 20.0, 0.0, rand() * -50.0 + 10.0);
+                    let n = Vec3::Y;
+                    let k = 0.02 + rand();
+                    let ex = Vec3::new(rand() - 0.5, 0.0, rand() - 0.5).normalize_or_zero() * k;
+                    let ey = Vec3::new(rand() - 0.5, 0.0, rand() - 0.5).normalize_or_zero() * k;
+                    let curve = (rand() - 0.5) * 0.2;
+                    let nb = Neighbours(std::array::from_fn(|j| {
+                        std::array::from_fn(|i| {
+                            let (a, b) = (i as f32 - 1.0, j as f32 - 1.0);
+                            // Perspective bends the footprint from pixel to pixel.
+                            p + ex * a * (1.0 + curve * b) + ey * b * (1.0 + curve * a)
+                        })
+                    }));
+                    let range = lookup.lod_range(n, &nb);
+                    let t = lookup.footprint(n, &nb);
+                    for row in 0..3 {
+                        for col in 0..3 {
+                            for dx in [t[row][2] - t[row][1], t[row][1] - t[row][0]] {
+                                for dy in [t[2][col] - t[1][col], t[1][col] - t[0][col]] {
+                                    let (mu, mv) =
+                                        (dx.x.abs().max(dy.x.abs()), dx.y.abs().max(dy.y.abs()));
+                                    let mut rho = vec![dx.length().max(dy.length()), mu.max(mv)];
+                                    match profile.spec {
+                                        Spec::Gl => rho.push(mu + mv),
+                                        Spec::Vulkan => rho.push(
+                                            std::f64::consts::SQRT_2
+                                                * (dx.x.abs() + dx.y.abs())
+                                                    .max(dy.x.abs() + dy.y.abs()),
+                                        ),
+                                    }
+                                    for r in rho {
+                                        let lod = r.log2();
+                                        assert!(
+                                            range.0 <= lod && lod <= range.1,
+                                            "LOD {lod} outside [{}, {}]",
+                                            range.0,
+                                            range.1
+                                        );
+                                        checked += 1;
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    let (a, b, _) = lookup.levels_at(lookup.lod(n, &nb));
+                    let (lo, hi) = lookup.levels_between(range);
+                    assert!(lo <= a && b <= hi, "levels {a}, {b} outside {lo}..={hi}");
+                }
+            }
+        }
+        assert!(checked > 100_000, "{checked}");
+    }
+
+    /// A level of a generated chain holds the mean of the four texels above it, and its
+    /// judged range holds the mean of any values within theirs.
+    #[test]
+    fn an_averaged_level_holds_the_mean_of_the_level_above() {
+        let format = umbra_case::format::DepthFormat::Depth24;
+        let values = vec![0.25f32, 0.5, 0.75, 1.0, 0.0, 0.0, 0.5, 0.5];
+        let prev = crate::shadow_pass::DepthLayer {
+            lo: values.iter().map(|v| v - 0.01).collect(),
+            hi: values.iter().map(|v| v + 0.01).collect(),
+            maybe: vec![false; 8],
+            values: values.clone(),
+        };
+        // A 4 × 2 level: two texels below it.
+        let next = crate::shadow_pass::averaged(&prev, [4, 2], format, true);
+        assert_eq!(Mipmaps::level_size([4, 2], 1), [2, 1]);
+        assert_eq!(next.values.len(), 2);
+        assert_eq!(
+            next.values[0],
+            format.store(0.25 * (0.25 + 0.5 + 0.0 + 0.0))
+        );
+        assert_eq!(
+            next.values[1],
+            format.store(0.25 * (0.75 + 1.0 + 0.5 + 0.5))
+        );
+        for k in 0..2 {
+            assert!(next.lo[k] <= next.values[k] - 0.009 && next.values[k] + 0.009 <= next.hi[k]);
+        }
     }
 }

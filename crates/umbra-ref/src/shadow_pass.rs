@@ -603,6 +603,45 @@ pub fn depth_error(conv: Convention, z_row: Row, w_row: Row, w: f64, z: f32) -> 
     own.max(other)
 }
 
+/// The next level of a generated (averaged) mip chain: each texel the mean of the 2 × 2
+/// stored depths of `prev` (a `size` map) above it, as a program's down-sampling shader
+/// computes it (`0.25 * (a + b + c + d)` in f32, written as the fragment's depth and stored
+/// in `format`). With `judged`, the range a conformant implementation may store: the mean of
+/// the four ranges, widened by the sum's and the product's f32 roundings (3 ULP of a sum ≤ 4
+/// and the scaling, below 2⁻²¹ absolute) and rounded out to the format's codes.
+pub fn averaged(
+    prev: &DepthLayer,
+    size: [u32; 2],
+    format: DepthFormat,
+    judged: bool,
+) -> DepthLayer {
+    let [w, h] = size;
+    let [nw, nh] = size.map(|n| (n / 2).max(1));
+    let w = w as usize;
+    let at = |i: usize, j: usize| {
+        [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
+            .map(|(a, b)| b.min(h as usize - 1) * w + a.min(w - 1))
+    };
+    let mut out = DepthLayer::default();
+    for j in 0..nh as usize {
+        for i in 0..nw as usize {
+            let k = at(2 * i, 2 * j);
+            let [a, b, c, d] = k.map(|k| prev.values[k]);
+            out.values.push(format.store(0.25 * (a + b + c + d)));
+            if judged {
+                let lo: f64 = k.iter().map(|&k| f64::from(prev.lo[k])).sum::<f64>() * 0.25;
+                let hi: f64 = k.iter().map(|&k| f64::from(prev.hi[k])).sum::<f64>() * 0.25;
+                let e = 1.0 / f64::from(1u32 << 21);
+                let (lo, hi) = format.code_range(lo - e, hi + e);
+                out.lo.push(down(lo));
+                out.hi.push(up(hi));
+                out.maybe.push(k.iter().any(|&k| prev.maybe[k]));
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -330,7 +330,8 @@ fn twins_section(results: &[RunResult]) -> String {
             row.texel += t.pair.legal_texel
                 + t.pair.legal_filter
                 + t.pair.legal_position
-                + t.pair.legal_seam;
+                + t.pair.legal_seam
+                + t.pair.legal_lod;
             row.coverage += t.pair.legal_coverage;
             row.surface += t.pair.legal_surface;
             row.illegal += t.pair.illegal;
@@ -352,7 +353,7 @@ fn twins_section(results: &[RunResult]) -> String {
          same judge as a backend's frame against the case's reference; <i>no_worse</i>: the twin's interior error is not larger. Pixel counts are summed \
          over runs. <i>Shared shadow pass</i>: rendered over the case's own shadow map, where the twin changes only the lit pass and the \
          backend kept the map (the twin then tests the lit pass alone; its time is the lit pass's).</p><table><tr><th>twin</th><th>agree</th><th>backend</th><th>runs</th><th>not run</th><th>same render by construction</th><th>shared shadow pass</th><th>failed</th>\
-         <th>px differ</th><th>ties</th><th>texel/filter/position</th><th>map coverage</th><th>other surface</th><th>illegal</th>\
+         <th>px differ</th><th>ties</th><th>texel/filter/position/mip level</th><th>map coverage</th><th>other surface</th><th>illegal</th>\
          <th>interior error: case → twin</th><th>twin ms / case ms</th><th>first failing run</th></tr>",
     );
     for ((name, agree, backend), r) in &rows {

@@ -197,7 +197,14 @@ fn faults() -> impl Iterator<Item = Option<Fault>> {
     std::iter::once(None).chain(
         Fault::ALL
             .into_iter()
-            .filter(|f| !matches!(f, Fault::Oriented { .. }))
+            // Faults that act on the passes' state, not on any source (orientations, the
+            // mipmapped sampler's levels), leave the sources as they were.
+            .filter(|f| {
+                !matches!(
+                    f,
+                    Fault::Oriented { .. } | Fault::MipBaseOnly | Fault::MipLevelCoarse
+                )
+            })
             .map(Some),
     )
 }

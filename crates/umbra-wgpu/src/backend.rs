@@ -72,6 +72,13 @@ impl Backend for WgpuBackend {
         if needs.compare == Compare::Manual && self.kind == Kind::GlLlvmpipe {
             return Support::Unsupported("manual compare needs textureLoad from a depth texture, which naga's GLSL output (wgpu's GL backend) does not support".into());
         }
+        if needs
+            .mipmaps
+            .is_some_and(|m| m.source == umbra_case::format::MipSource::Averaged)
+            && self.kind == Kind::GlLlvmpipe
+        {
+            return Support::Unsupported("averaged mip levels are made by a shader that reads the level above, and naga's GLSL output (wgpu's GL backend) declares every depth texture as sampler2DShadow: textureLoad from a depth texture is refused, and a NEAREST sample at the texel's centre becomes textureLod(sampler2DShadow, vec2), which does not compile".into());
+        }
         if needs.outside == Outside::Border
             && needs.compare == Compare::Hardware
             && !needs.cube_map

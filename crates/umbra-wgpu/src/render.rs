@@ -8,7 +8,9 @@
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use umbra_case::format::{Attachments, Cull, DepthFormat, DepthOrder, Filter, Outside};
+use umbra_case::format::{
+    Attachments, Cull, DepthFormat, DepthOrder, Filter, MipFilter, MipSource, Mipmaps, Outside,
+};
 use umbra_case::technique::CompareOp;
 use umbra_case::{
     BackendError, Clock, Convention, DepthMap, Frame, LightKind, LookupMatrices, Prepared,
@@ -125,6 +127,13 @@ impl Gpu {
         let faces = run.light.views.len() as u32;
         let format = texture_format(s.format);
         let copyable = self.depth_copies && format != wgpu::TextureFormat::Depth24Plus;
+        // A mipmapped map's levels, and how many of them shadow passes draw (the rest are
+        // averaged from the level above: MipSource::Averaged).
+        let levels = s.mipmaps.map_or(1, |m| m.levels);
+        let drawn_levels = match s.mipmaps {
+            Some(m) if m.source == MipSource::Averaged => 1,
+            _ => levels,
+        };
         let map = d.create_texture(&wgpu::TextureDescriptor {
             label: Some("shadow map"),
             size: wgpu::Extent3d {
@@ -132,7 +141,7 @@ impl Gpu {
                 height: mh,
                 depth_or_array_layers: faces,
             },
-            mip_level_count: 1,
+            mip_level_count: levels,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format,
@@ -239,6 +248,7 @@ impl Gpu {
                     wgpu::FrontFace::Ccw => wgpu::FrontFace::Cw,
                 })
             });
+        // As many levels as the map: a pass's attachments must have one size.
         let dummy = with_color.then(|| {
             d.create_texture(&wgpu::TextureDescriptor {
                 label: Some("dummy colour"),
@@ -247,7 +257,7 @@ impl Gpu {
                     height: mh,
                     depth_or_array_layers: 1,
                 },
-                mip_level_count: 1,
+                mip_level_count: levels,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
                 format: wgpu::TextureFormat::Rgba8Unorm,
@@ -255,7 +265,20 @@ impl Gpu {
                 view_formats: &[],
             })
         });
-        let dummy_view = dummy.as_ref().map(|t| t.create_view(&Default::default()));
+        let dummy_views: Vec<wgpu::TextureView> = dummy
+            .as_ref()
+            .map(|t| {
+                (0..levels)
+                    .map(|level| {
+                        t.create_view(&wgpu::TextureViewDescriptor {
+                            base_mip_level: level,
+                            mip_level_count: Some(1),
+                            ..Default::default()
+                        })
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
         let timestamps = self
             .features
             .contains(wgpu::Features::TIMESTAMP_QUERY)
@@ -271,7 +294,13 @@ impl Gpu {
             label: Some("shadow"),
         });
         let mut face_buffers = Vec::new();
-        for k in 0..faces {
+        // Every face, and on a mipmapped map every level its source draws.
+        let passes: Vec<(u32, u32)> = (0..faces)
+            .flat_map(|k| (0..drawn_levels).map(move |level| (k, level)))
+            .collect();
+        let last_pass = passes.len() - 1;
+        for (pass_index, &(k, level)) in passes.iter().enumerate() {
+            let [lw, lh] = Mipmaps::level_size(s.size, level);
             let mut m = run.light.views[k as usize].view_proj(conv);
             // A face drawn with a wrong orientation (the self-test's Oriented fault), before
             // the convention's flip so that it moves the content as on GL.
@@ -286,8 +315,8 @@ impl Gpu {
             if sx != 0.0 || sy != 0.0 {
                 let sy = if cube { sy } else { -sy };
                 m = glam::Mat4::from_translation(glam::Vec3::new(
-                    2.0 * sx / mw as f32,
-                    2.0 * sy / mh as f32,
+                    2.0 * sx / lw as f32,
+                    2.0 * sy / lh as f32,
                     0.0,
                 )) * m;
             }
@@ -318,10 +347,12 @@ impl Gpu {
                 dimension: Some(wgpu::TextureViewDimension::D2),
                 base_array_layer: k,
                 array_layer_count: Some(1),
+                base_mip_level: level,
+                mip_level_count: Some(1),
                 ..Default::default()
             });
-            let color = dummy_view
-                .as_ref()
+            let color = dummy_views
+                .get(level as usize)
                 .map(|v| wgpu::RenderPassColorAttachment {
                     view: v,
                     depth_slice: None,
@@ -346,11 +377,11 @@ impl Gpu {
                 // The shadow pass spans all faces: stamp the start of the first, the end of the last.
                 timestamp_writes: timestamps
                     .as_ref()
-                    .filter(|_| k == 0 || k == faces - 1)
+                    .filter(|_| pass_index == 0 || pass_index == last_pass)
                     .map(|q| wgpu::RenderPassTimestampWrites {
                         query_set: q,
-                        beginning_of_pass_write_index: (k == 0).then_some(0),
-                        end_of_pass_write_index: (k == faces - 1).then_some(1),
+                        beginning_of_pass_write_index: (pass_index == 0).then_some(0),
+                        end_of_pass_write_index: (pass_index == last_pass).then_some(1),
                     }),
                 occlusion_query_set: None,
                 multiview_mask: None,
@@ -362,13 +393,16 @@ impl Gpu {
             if is(umbra_case::fault::Fault::ShadowViewport) {
                 // The camera's viewport left in place (clipped to the map).
                 let [cw, ch] = run.camera.size;
-                pass.set_viewport(0.0, 0.0, cw.min(mw) as f32, ch.min(mh) as f32, 0.0, 1.0);
+                pass.set_viewport(0.0, 0.0, cw.min(lw) as f32, ch.min(lh) as f32, 0.0, 1.0);
             }
             pass.set_bind_group(0, &bg, &[]);
             pass.set_vertex_buffer(0, vbo.slice(..));
             pass.draw(0..count, 0..1);
             drop(pass);
             face_buffers.push((ub, bg));
+        }
+        if drawn_levels < levels {
+            self.average_levels(&mut encoder, &map, format, levels);
         }
         self.queue.submit([encoder.finish()]);
         self.wait()?;
@@ -509,13 +543,22 @@ impl Gpu {
             [mw as f32, mh as f32, ndl_scale, ndl_min],
             [b.constant, slope_scale, slope_max, b.normal_offset],
         );
+        // The mip faults: level 0 alone, or the levels from 1 on.
+        let (base_mip_level, mip_level_count) = match fault {
+            Some(umbra_case::fault::Fault::MipBaseOnly) => (0, Some(1)),
+            Some(umbra_case::fault::Fault::MipLevelCoarse) if levels > 1 => (1, None),
+            _ => (0, None),
+        };
         let map_view = map.create_view(&wgpu::TextureViewDescriptor {
             dimension: Some(view_dimension),
+            base_mip_level,
+            mip_level_count,
             ..Default::default()
         });
         let sampler = (!manual).then(|| {
             self.sampler(
                 s.filter,
+                s.mipmaps.map(|m| m.filter),
                 technique.texel_wrap(),
                 technique.compare_op(),
                 cube,
@@ -749,9 +792,119 @@ impl Gpu {
         })
     }
 
+    /// Records the passes that fill levels 1.. of the 2D `map` (`levels` in all, level 0
+    /// drawn) with the mean of the level above ([`shaders::AVERAGE`]), as a program
+    /// generating depth mips does: each pass reads one level through a view of that level
+    /// alone and writes the next as its depth attachment.
+    fn average_levels(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        map: &wgpu::Texture,
+        format: wgpu::TextureFormat,
+        levels: u32,
+    ) {
+        let d = &self.device;
+        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("mip average"),
+            source: wgpu::ShaderSource::Wgsl(shaders::AVERAGE.into()),
+        });
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("mip average"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Depth,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            }],
+        });
+        let pipeline_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("mip average"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("mip average"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let level_view = |level: u32| {
+            map.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2),
+                base_array_layer: 0,
+                array_layer_count: Some(1),
+                base_mip_level: level,
+                mip_level_count: Some(1),
+                ..Default::default()
+            })
+        };
+        for level in 1..levels {
+            let src = level_view(level - 1);
+            let dst = level_view(level);
+            let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("mip average"),
+                layout: &layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&src),
+                }],
+            });
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("mip average"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &dst,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &bg, &[]);
+            pass.draw(0..3, 0..1);
+        }
+    }
+
     /// The compare sampler. A border reads as far for the compare in use (1 for `<=`, 0 for
     /// `>=`); a cube map clamps to the edge whatever the wrap.
-    fn sampler(&self, filter: Filter, wrap: Outside, op: CompareOp, cube: bool) -> wgpu::Sampler {
+    fn sampler(
+        &self,
+        filter: Filter,
+        mip: Option<MipFilter>,
+        wrap: Outside,
+        op: CompareOp,
+        cube: bool,
+    ) -> wgpu::Sampler {
         let far_is_one = matches!(op, CompareOp::LessEqual | CompareOp::Less);
         let (address, border) = match (cube, wrap) {
             (true, _) | (false, Outside::Lit | Outside::ClampToEdge) => {
@@ -779,6 +932,10 @@ impl Gpu {
             address_mode_w: address,
             mag_filter: f,
             min_filter: f,
+            mipmap_filter: match mip {
+                Some(MipFilter::Linear) => wgpu::MipmapFilterMode::Linear,
+                _ => wgpu::MipmapFilterMode::Nearest,
+            },
             compare: Some(match op {
                 CompareOp::LessEqual => wgpu::CompareFunction::LessEqual,
                 CompareOp::GreaterEqual => wgpu::CompareFunction::GreaterEqual,

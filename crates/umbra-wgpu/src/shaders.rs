@@ -38,6 +38,26 @@ pub fn shadow(with_color: bool) -> String {
     s
 }
 
+/// A generated mip level (`MipSource::Averaged`): one triangle over the level, each
+/// fragment's depth the mean of the 2 × 2 depths of the level above (bound alone as `src`),
+/// in the order `umbra_ref::shadow_pass::averaged` computes it.
+/// wgpu's GL backend cannot run it: see the backend's `supports`.
+pub const AVERAGE: &str = "@group(0) @binding(0) var src: texture_depth_2d;
+@vertex fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+  let c = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+  return vec4<f32>(c * 2.0 - 1.0, 0.0, 1.0);
+}
+@fragment fn fs(@builtin(position) pos: vec4<f32>) -> @builtin(frag_depth) f32 {
+  let last = vec2<i32>(textureDimensions(src)) - 1;
+  let p = 2 * vec2<i32>(pos.xy);
+  let a = textureLoad(src, min(p, last), 0);
+  let b = textureLoad(src, min(p + vec2<i32>(1, 0), last), 0);
+  let c = textureLoad(src, min(p + vec2<i32>(0, 1), last), 0);
+  let d = textureLoad(src, min(p + vec2<i32>(1, 1), last), 0);
+  return 0.25 * (a + b + c + d);
+}
+";
+
 /// The lit pass: its vertex stage and the shared lookup and shading
 /// ([`umbra_case::lit_shader`]) in WGSL.
 pub fn lit(t: &Technique) -> String {
@@ -233,6 +253,10 @@ impl Dialect for Wgsl {
 
     fn sample(&self) -> &'static str {
         "  return textureSampleCompareLevel(map, samp, c.xy, r);\n"
+    }
+
+    fn sample_mipmapped(&self) -> &'static str {
+        "  let m = textureSampleCompare(map, samp, c.xy, r);\n"
     }
 
     fn bilinear_start(&self) -> &'static str {

@@ -275,6 +275,7 @@ fn flag_names(flags: u8) -> String {
         (a::COVERAGE, "coverage"),
         (a::SEAM, "seam"),
         (a::SURFACE, "other surface"),
+        (a::LOD, "mip level"),
     ]
     .into_iter()
     .filter(|(f, _)| flags & f != 0)

@@ -53,6 +53,8 @@ pub fn applies(fault: Fault, id: &str) -> bool {
         // The GLES 2 path has no float depth, and is the only one that clamps in the shader.
         Fault::ClampFloat => !es2,
         Fault::NoClamp => es2,
+        // GLES 2 has no mipmapped compare (it skips every mipmapped case).
+        Fault::MipBaseOnly | Fault::MipLevelCoarse => !es2,
         // A manual LINEAR filter; wgpu's GL backend has no manual compare.
         Fault::BilinearCoarse
         | Fault::Scaled {
@@ -91,6 +93,7 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, id: &str) -> bool {
             c.shading.model == ShadingModel::Dimmed && c.shading.specular > 0.0
         }
         Fault::Oriented { face, .. } => face.is_some() == matches!(c.light, Light::Point(_)),
+        Fault::MipBaseOnly | Fault::MipLevelCoarse => s.mipmaps.is_some(),
         Fault::Scaled { param, .. } => {
             let b = &s.bias;
             match param {
