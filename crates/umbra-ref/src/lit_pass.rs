@@ -304,7 +304,7 @@ pub fn render(
     }
 }
 
-/// The points of `tri`'s surface at the centres of pixel (x, y) and its eight neighbours,
+/// The points (and normals) of `tri`'s surface at the centres of pixel (x, y) and its eight neighbours,
 /// the triangle's plane extrapolated beyond its edges as a quad's helper invocations
 /// extrapolate its varyings: what a mipmapped lookup's derivatives are taken over.
 fn neighbours(tri: &Tri, geo: &Geometry, x: i32, y: i32) -> Neighbours {
@@ -313,7 +313,7 @@ fn neighbours(tri: &Tri, geo: &Geometry, x: i32, y: i32) -> Neighbours {
     Neighbours(std::array::from_fn(|j| {
         std::array::from_fn(|i| {
             let w = tri.source_weights_at(cx + i as f64 - 1.0, cy + j as f64 - 1.0);
-            interpolate(geo, t, w).0
+            interpolate(geo, t, w)
         })
     }))
 }
