@@ -370,11 +370,11 @@ pub struct Shadow {
     pub mipmaps: Option<Mipmaps>,
 }
 
-/// A mipmapped shadow map (EDGE_CASES 12): level k is ⌈size / 2ᵏ⌉ texels a side, and the
-/// sampler picks levels by the lookup's screen-space footprint (the LOD, λ = log₂ ρ), so a
-/// receiver far from the camera reads coarse levels. Only for 2D maps (spot and directional
-/// lights), the sampler's compare (`compare: hardware`), a `nearest` or `linear` filter
-/// within a level, and power-of-two sizes.
+/// A mipmapped shadow map (EDGE_CASES 12): level k is max(1, ⌊size / 2ᵏ⌋) texels a side,
+/// and the sampler picks levels by the lookup's screen-space footprint (the LOD,
+/// λ = log₂ ρ), so a receiver far from the camera reads coarse levels. Only for 2D maps
+/// (spot and directional lights), the sampler's compare (`compare: hardware`), a `nearest`
+/// or `linear` filter within a level, and power-of-two sizes.
 ///
 /// Two ways to fill the levels differ in what they mean: `rendered` draws every level with
 /// its own shadow pass at its own size, so each texel holds a real depth and the filter
