@@ -765,17 +765,17 @@ impl Renderer {
             } else {
                 glow::NEAREST
             };
-            let min_filter = match (s.mipmaps.map(|m| m.filter), filter) {
+            // MipBaseOnly: the sampler ignores the levels (a non-mipmapped min filter).
+            let mip_filter = s
+                .mipmaps
+                .map(|m| m.filter)
+                .filter(|_| !is(umbra_case::fault::Fault::MipBaseOnly));
+            let min_filter = match (mip_filter, filter) {
                 (None, f) => f,
                 (Some(MipFilter::Nearest), glow::LINEAR) => glow::LINEAR_MIPMAP_NEAREST,
                 (Some(MipFilter::Nearest), _) => glow::NEAREST_MIPMAP_NEAREST,
                 (Some(MipFilter::Linear), glow::LINEAR) => glow::LINEAR_MIPMAP_LINEAR,
                 (Some(MipFilter::Linear), _) => glow::NEAREST_MIPMAP_LINEAR,
-            };
-            let min_filter = if is(umbra_case::fault::Fault::MipBaseOnly) {
-                filter
-            } else {
-                min_filter
             };
             if s.mipmaps.is_some() {
                 let coarse = is(umbra_case::fault::Fault::MipLevelCoarse);

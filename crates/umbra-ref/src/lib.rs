@@ -146,40 +146,30 @@ fn render_inner(
     let case = run.case();
     let conv = convention(case, clip);
     let adjacency = profile.map(|_| adjacency::Adjacency::new(&run.geometry));
-    let cube = run.light.views.len() == 6;
     let layers: Vec<_> = run
         .light
         .views
         .iter()
         .enumerate()
-        .map(|(k, v)| {
-            let mut vp = v.view_proj(conv);
-            let mut shadow = std::borrow::Cow::Borrowed(&case.shadow);
-            if let Some((wrong, mirrors)) = fault.and_then(|f| f.face_mistake(k, cube)) {
-                vp = wrong * vp;
-                if mirrors {
-                    // The front face turns with the mirror: the same triangles are culled.
-                    let s = shadow.to_mut();
-                    s.cull = match s.cull {
-                        Cull::Back => Cull::Front,
-                        Cull::Front => Cull::Back,
-                        Cull::None => Cull::None,
-                    };
-                }
-            }
+        .map(|(k, _)| {
+            let (vp, cull) = face_view(run, conv, k, fault);
             let kinds = adjacency
                 .as_ref()
-                .map(|a| a.edge_kinds(&run.geometry, vp, shadow.cull));
+                .map(|a| a.edge_kinds(&run.geometry, vp, cull));
             shadow_pass::render_face(
                 conv,
-                &shadow,
+                &Shadow {
+                    cull,
+                    ..case.shadow.clone()
+                },
                 vp,
                 &run.geometry,
                 kinds.as_deref().zip(profile),
             )
         })
         .collect();
-    let (level_shadows, below) = mip_levels(run, conv, &layers, profile, fault);
+    let (level_shadows, below) =
+        mip_levels(run, conv, &layers, adjacency.as_ref().zip(profile), fault);
     let shadow_done = Instant::now();
     let mut lookup = lookup::Lookup::new(run, conv, &layers, profile.unwrap_or_default());
     if !level_shadows.is_empty() {
@@ -255,15 +245,42 @@ fn render_inner(
     (frame, legal, map, lit.trace)
 }
 
+/// Face `k`'s view-projection in `conv` and the cull its shadow pass uses: with a
+/// geometric `fault` ([`Fault::face_mistake`]) the face drawn with a wrong orientation, and a
+/// mirror turning the front face with it, so that the same triangles are culled.
+fn face_view(
+    run: &Prepared,
+    conv: Convention,
+    k: usize,
+    fault: Option<Fault>,
+) -> (glam::Mat4, Cull) {
+    let cube = run.light.views.len() == 6;
+    let vp = run.light.views[k].view_proj(conv);
+    let cull = run.case().shadow.cull;
+    match fault.and_then(|f| f.face_mistake(k, cube)) {
+        None => (vp, cull),
+        Some((wrong, false)) => (wrong * vp, cull),
+        Some((wrong, true)) => (
+            wrong * vp,
+            match cull {
+                Cull::Back => Cull::Front,
+                Cull::Front => Cull::Back,
+                Cull::None => Cull::None,
+            },
+        ),
+    }
+}
+
 /// A mipmapped map's levels below level 0 (`layers`, a 2D map's only face): the technique
 /// at every level (its size, no levels) and the layers of levels 1 and on, each rendered by
 /// its own shadow pass at its own size or averaged from the level above
-/// ([`umbra_case::format::MipSource`]); nothing for a map with one level.
+/// ([`umbra_case::format::MipSource`]); nothing for a map with one level. `judged`: the
+/// scene's adjacency and the profile, for the levels' stored ranges.
 pub(crate) fn mip_levels(
     run: &Prepared,
     conv: Convention,
     layers: &[shadow_pass::DepthLayer],
-    profile: Option<Profile>,
+    judged: Option<(&adjacency::Adjacency, Profile)>,
     fault: Option<Fault>,
 ) -> (Vec<Shadow>, Vec<shadow_pass::DepthLayer>) {
     let case = run.case();
@@ -277,21 +294,9 @@ pub(crate) fn mip_levels(
             ..case.shadow.clone()
         })
         .collect();
-    let mut vp = run.light.views[0].view_proj(conv);
-    let mut cull = case.shadow.cull;
-    if let Some((wrong, mirrors)) = fault.and_then(|f| f.face_mistake(0, false)) {
-        vp = wrong * vp;
-        if mirrors {
-            // As for level 0 (render_inner): the front face turns with the mirror.
-            cull = match cull {
-                Cull::Back => Cull::Front,
-                Cull::Front => Cull::Back,
-                Cull::None => Cull::None,
-            };
-        }
-    }
-    let kinds = profile
-        .map(|_| adjacency::Adjacency::new(&run.geometry).edge_kinds(&run.geometry, vp, cull));
+    let (vp, cull) = face_view(run, conv, 0, fault);
+    let kinds = judged.map(|(a, _)| a.edge_kinds(&run.geometry, vp, cull));
+    let profile = judged.map(|(_, p)| p);
     let mut below: Vec<shadow_pass::DepthLayer> = Vec::new();
     for k in 1..m.levels as usize {
         let level = match m.source {
@@ -309,7 +314,7 @@ pub(crate) fn mip_levels(
                 below.last().unwrap_or(&layers[0]),
                 shadows[k - 1].size,
                 case.shadow.format,
-                profile.is_some(),
+                judged.is_some(),
             ),
         };
         below.push(level);

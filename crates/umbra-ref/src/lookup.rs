@@ -1593,7 +1593,9 @@ mod mip_tests {
             };
             for profile in [Profile::GL, Profile::VULKAN] {
                 let layers = crate::judged_layers(&run, clip, profile);
-                let (shadows, below) = crate::mip_levels(&run, conv, &layers, Some(profile), None);
+                let adjacency = crate::adjacency::Adjacency::new(&run.geometry);
+                let (shadows, below) =
+                    crate::mip_levels(&run, conv, &layers, Some((&adjacency, profile)), None);
                 let lookup =
                     Lookup::new(&run, conv, &layers, profile).with_levels(&shadows, &below);
                 assert!(lookup.mipmapped());
