@@ -17,8 +17,10 @@ pub const PACKAGES: &[&str] = &[
 ];
 
 /// What the test suite needs beyond the backends: a real browser for report.html's test
-/// (`umbra-report/tests/gallery_browser.rs`).
-pub const TEST_PACKAGES: &[&str] = &["chromium"];
+/// (`umbra-report/tests/gallery_browser.rs`); a C compiler, EGL's headers and link library,
+/// and apitrace for `umbra repro`'s test (`umbra-runner/tests/repro.rs`: the bundle's
+/// `repro.c` is compiled with `cc … -lEGL`, and its capture replayed with eglretrace).
+pub const TEST_PACKAGES: &[&str] = &["chromium", "gcc", "libegl-dev", "apitrace"];
 
 /// Installs the Mesa packages that are missing, when allowed; never fails the caller.
 pub fn ensure() {

@@ -140,4 +140,19 @@ pub trait Backend {
         let _ = of;
         self.render(twin).map(|f| (f, false))
     }
+
+    /// Renders `run` as [`Backend::render`] does while recording every API call, and returns
+    /// the frame with a standalone C program making the same calls (`umbra repro`): given a
+    /// header comment and the probes' C, the builder returns the whole source. Only backends
+    /// that can emit one override this; the default says why there is none.
+    fn render_recorded(&mut self, run: &Prepared) -> Result<(Frame, ReproProgram), BackendError> {
+        let _ = run;
+        Err(BackendError::Unsupported(format!(
+            "{} records no API calls as a standalone program (only the GL backends do)",
+            self.id()
+        )))
+    }
 }
+
+/// A recorded run's standalone C program: `(header comment, probes' C) -> source`.
+pub type ReproProgram = Box<dyn Fn(&str, &str) -> String>;

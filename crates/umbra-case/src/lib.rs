@@ -42,7 +42,7 @@ pub mod technique;
 pub mod twin;
 pub mod validate;
 
-pub use backend::{Backend, BackendError, BackendId, DriverInfo, Needs, Support};
+pub use backend::{Backend, BackendError, BackendId, DriverInfo, Needs, ReproProgram, Support};
 pub use conventions::{ClipDepth, Convention, LookupMatrices, ShadowCoord};
 pub use error::{CaseError, CaseErrors};
 pub use format::Case;

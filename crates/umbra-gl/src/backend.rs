@@ -4,7 +4,8 @@
 use glow::HasContext;
 use umbra_case::format::{Compare, DepthFormat, Outside};
 use umbra_case::{
-    Backend, BackendError, BackendId, DriverInfo, Frame, Needs, Prepared, Profile, Support,
+    Backend, BackendError, BackendId, DriverInfo, Frame, Needs, Prepared, Profile, ReproProgram,
+    Support,
 };
 
 use crate::api::Api;
@@ -154,5 +155,14 @@ impl Backend for GlBackend {
         of: &Prepared,
     ) -> Result<(Frame, bool), BackendError> {
         self.renderer.render_twin(twin, of)
+    }
+
+    fn render_recorded(&mut self, run: &Prepared) -> Result<(Frame, ReproProgram), BackendError> {
+        let api = self.renderer.api;
+        let (frame, rec) = self.renderer.render_recorded(run)?;
+        Ok((
+            frame,
+            Box::new(move |header, probes| crate::repro_c::program(&rec, api, header, probes)),
+        ))
     }
 }

@@ -27,6 +27,8 @@ pub struct GlContext {
     /// `glPolygonOffsetClampEXT` (EXT_polygon_offset_clamp, also on GLES), loaded by name
     /// because glow does not carry it; None when the driver advertises neither.
     pub polygon_offset_clamp: Option<PolygonOffsetClamp>,
+    /// The name `polygon_offset_clamp` was loaded by.
+    pub polygon_offset_clamp_name: Option<&'static str>,
     egl: egl::DynamicInstance<egl::EGL1_5>,
     display: egl::Display,
     context: egl::Context,
@@ -137,6 +139,7 @@ impl GlContext {
         Ok(GlContext {
             gl,
             polygon_offset_clamp,
+            polygon_offset_clamp_name: clamp_name.filter(|_| polygon_offset_clamp.is_some()),
             egl,
             display,
             context,

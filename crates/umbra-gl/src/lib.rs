@@ -6,6 +6,7 @@
 //! - [`driver`]: one Mesa driver per process, selected by environment before EGL loads.
 //! - [`shaders`]: GLSL per API and technique, mirroring the reference's lookup.
 //! - [`render`]: both passes, checks after every stage, readback with the one row flip.
+//! - [`record`] and [`repro_c`]: a run's GL calls as a standalone C program (`umbra repro`).
 //! - [`backend`]: the `Backend` trait, with what each API supports.
 //!
 //! Conventions come from `umbra_case::conventions` (GL clip range, the case's depth order);
@@ -16,7 +17,9 @@ pub mod api;
 pub mod backend;
 pub mod context;
 pub mod driver;
+pub mod record;
 pub mod render;
+pub mod repro_c;
 pub mod shaders;
 
 pub use api::Api;

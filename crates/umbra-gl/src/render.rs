@@ -34,6 +34,7 @@ use umbra_case::{
 
 use crate::api::Api;
 use crate::context::{GlContext, Unavailable};
+use crate::record::{Gl, Readback, Recorder, Recording};
 use crate::shaders;
 
 /// Floats per vertex of `Geometry::interleaved`.
@@ -51,6 +52,10 @@ pub struct Renderer {
     /// The shadow map of the last run rendered by [`Renderer::render`], kept for its twins
     /// ([`Renderer::render_twin`]) and deleted by the next run.
     kept: Option<KeptMap>,
+    /// Whether `Renderer::new` turned KHR_debug's output on.
+    debug_output: bool,
+    /// Attached while [`Renderer::render_recorded`] runs.
+    recorder: Option<std::cell::RefCell<Recorder>>,
 }
 
 /// A run's shadow map, kept for the twins that share its shadow pass.
@@ -121,7 +126,36 @@ impl Renderer {
             debug,
             timer_queries,
             kept: None,
+            debug_output: exts.contains("GL_KHR_debug"),
+            recorder: None,
         })
+    }
+
+    /// The GL calls of this renderer, recorded while a recorder is attached.
+    fn g(&self) -> Gl<'_> {
+        Gl::new(&self.ctx.gl, self.recorder.as_ref())
+    }
+
+    /// Renders `run` as [`Renderer::render`] does, recording every GL call as C
+    /// ([`crate::record`]). Cached programs are dropped first, so that the recording compiles
+    /// its own; the run has no twin, so no map is reused.
+    pub fn render_recorded(&mut self, run: &Prepared) -> Result<(Frame, Recording), BackendError> {
+        self.release_kept();
+        for (_, p) in self.programs.drain() {
+            // SAFETY: a program of this context, in use by no pending draw.
+            unsafe { self.ctx.gl.delete_program(p) };
+        }
+        self.recorder = Some(std::cell::RefCell::new(Recorder::default()));
+        let out = self.render_run(run, None);
+        self.release_kept();
+        let mut rec = self
+            .recorder
+            .take()
+            .map(|r| r.into_inner().finish())
+            .unwrap_or_default();
+        rec.debug_output = self.debug_output;
+        rec.polygon_offset_clamp = self.ctx.polygon_offset_clamp_name;
+        out.map(|(f, _)| (f, rec))
     }
 
     /// The GL function table.
@@ -145,6 +179,7 @@ impl Renderer {
 
     /// Fails with every pending GL error and debug message of `stage`.
     pub fn check(&self, stage: &str) -> Result<(), BackendError> {
+        self.g().checkpoint(stage);
         let gl = self.gl();
         let mut errors = Vec::new();
         // SAFETY: glGetError on the current context.
@@ -171,7 +206,7 @@ impl Renderer {
         if let Some(p) = self.programs.get(&(vs.clone(), fs.clone())) {
             return Ok(*p);
         }
-        let gl = &self.ctx.gl;
+        let gl = &self.g();
         // SAFETY: shader objects of the current context, checked after each step.
         let program = unsafe {
             let program = gl.create_program().map_err(|e| gl_err("compile", e))?;
@@ -226,7 +261,7 @@ impl Renderer {
         levels: u32,
         res: &mut Resources,
     ) -> Result<(), BackendError> {
-        let gl = &self.ctx.gl;
+        let gl = &self.g();
         // SAFETY: objects of the current context; the framebuffer's completeness is checked
         // before each draw.
         unsafe {
@@ -337,7 +372,7 @@ impl Renderer {
                 }
             }
         }
-        res.delete(self.gl());
+        res.delete(&self.g());
         // A failed run must not leave errors behind for the next one.
         let _ = self.check("cleanup");
         out.map(|f| (f, reuse.is_some()))
@@ -348,7 +383,7 @@ impl Renderer {
         if let Some(k) = self.kept.take() {
             // SAFETY: a texture this renderer created on its own context, bound to nothing
             // that outlives a run.
-            unsafe { self.ctx.gl.delete_texture(k.texture) };
+            unsafe { self.g().delete_texture(k.texture) };
         }
     }
 
@@ -377,7 +412,7 @@ impl Renderer {
 
         let verts = run.geometry.interleaved();
         let count = (verts.len() / STRIDE) as i32;
-        let gl = &self.ctx.gl;
+        let gl = &self.g();
         // SAFETY: buffers and vertex arrays of the current context.
         unsafe {
             let vbo = gl.create_buffer().map_err(|e| gl_err("upload", e))?;
@@ -427,7 +462,7 @@ impl Renderer {
         } else {
             None
         };
-        let gl = &self.ctx.gl;
+        let gl = &self.g();
         let timer = if self.timer_queries {
             Some(Timer::new(gl)?)
         } else {
@@ -572,7 +607,15 @@ impl Renderer {
                     match (clamp != 0.0, self.ctx.polygon_offset_clamp) {
                         // SAFETY: the entry point of an advertised extension, on the current
                         // context, with the GL signature (factor, units, clamp).
-                        (true, Some(f)) => f(sign * factor, sign * units, sign * clamp),
+                        (true, Some(f)) => {
+                            gl.extension_call(
+                                self.ctx
+                                    .polygon_offset_clamp_name
+                                    .unwrap_or("glPolygonOffsetClamp"),
+                                &[sign * factor, sign * units, sign * clamp],
+                            );
+                            f(sign * factor, sign * units, sign * clamp)
+                        }
                         (true, None) => {
                             return Err(gl_err(
                                 "shadow pass",
@@ -716,6 +759,7 @@ impl Renderer {
                         0,
                     );
                     let mut bytes = vec![0u8; (mw * mh * 4) as usize];
+                    gl.tag_readback(Readback::MapLayer(k as u32));
                     gl.read_pixels(
                         0,
                         0,
@@ -750,7 +794,7 @@ impl Renderer {
             shaders::lit_vertex(api),
             shaders::lit_fragment(api, &technique),
         )?;
-        let gl = &self.ctx.gl;
+        let gl = &self.g();
         let [w, h] = run.camera.size;
         let lit_start = Instant::now();
         if let Some(t) = &timer {
@@ -966,6 +1010,12 @@ impl Renderer {
                         gl.read_buffer(glow::COLOR_ATTACHMENT0 + a);
                     }
                     let mut bytes = vec![0u8; (w * h * 4) as usize];
+                    // GL: attachment 0 colour, 1 visibility; GLES 2: pass 0 colour, 1 visibility.
+                    gl.tag_readback(if a + pass as u32 == 0 {
+                        Readback::Color
+                    } else {
+                        Readback::Visibility
+                    });
                     gl.read_pixels(
                         0,
                         0,
@@ -1048,7 +1098,7 @@ struct Resources {
 }
 
 impl Resources {
-    fn delete(self, gl: &glow::Context) {
+    fn delete(self, gl: &Gl) {
         // SAFETY: deleting objects this run created on the current context.
         unsafe {
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
@@ -1077,7 +1127,7 @@ struct Timer {
 }
 
 impl Timer {
-    fn new(gl: &glow::Context) -> Result<Timer, BackendError> {
+    fn new(gl: &Gl) -> Result<Timer, BackendError> {
         // SAFETY: query objects of the current context.
         unsafe {
             Ok(Timer {
@@ -1088,15 +1138,15 @@ impl Timer {
             })
         }
     }
-    fn begin(&self, gl: &glow::Context, i: usize) {
+    fn begin(&self, gl: &Gl, i: usize) {
         // SAFETY: one query active at a time.
         unsafe { gl.begin_query(glow::TIME_ELAPSED, self.queries[i]) }
     }
-    fn end(&self, gl: &glow::Context) {
+    fn end(&self, gl: &Gl) {
         // SAFETY: ends the active query.
         unsafe { gl.end_query(glow::TIME_ELAPSED) }
     }
-    fn read(&self, gl: &glow::Context) -> (Duration, Duration) {
+    fn read(&self, gl: &Gl) -> (Duration, Duration) {
         // SAFETY: the queries have ended; the result waits for them.
         let ns = |q| unsafe { gl.get_query_parameter_u64(q, glow::QUERY_RESULT) };
         (
@@ -1104,7 +1154,7 @@ impl Timer {
             Duration::from_nanos(ns(self.queries[1])),
         )
     }
-    fn delete(self, gl: &glow::Context) {
+    fn delete(self, gl: &Gl) {
         // SAFETY: deleting this timer's queries.
         unsafe {
             for q in self.queries {

@@ -89,6 +89,10 @@ pub fn section(results: &[RunResult], pictures: &Path) -> String {
             "r": r.reason,
             "d": r.diagnosis.as_ref().map(|d| d.message.clone()),
             "x": r.reproduce,
+            // A failed frame's bug report for the driver's developers (`umbra repro`).
+            "y": (r.status == crate::model::Status::Fail && r.backend != "ref").then(|| {
+                crate::names::repro_command(&r.name, crate::names::mesa_of(&r.reproduce).as_deref())
+            }),
             "g": r.golden,
         }));
     }
@@ -118,6 +122,7 @@ pub fn section(results: &[RunResult], pictures: &Path) -> String {
          <div id=\"g-grid\"></div>\
          <div id=\"g-detail\" hidden><div class=\"g-box\"><button id=\"g-close\" type=\"button\">close (Esc)</button>\
          <h3 id=\"g-title\"></h3><p id=\"g-reason\"></p><p>reproduce: <code id=\"g-reproduce\"></code></p>\
+         <p id=\"g-repro-line\" hidden>bug report for the driver's developers (reduced case, standalone repro.c, API capture, issue.md): <code id=\"g-repro\"></code></p>\
          <div id=\"g-pictures\"></div></div></div>\
          <script type=\"application/json\" id=\"g-data\">{data}</script><script>{SCRIPT}</script>",
         n = results.len(),
@@ -195,6 +200,8 @@ const SCRIPT: &str = r#"(function () {
     document.getElementById('g-title').textContent = r.s + ' ' + r.n;
     document.getElementById('g-reason').textContent = (r.r || '') + (r.d ? ' | consensus: ' + r.d : '');
     document.getElementById('g-reproduce').textContent = r.x;
+    document.getElementById('g-repro').textContent = r.y || '';
+    document.getElementById('g-repro-line').hidden = !r.y;
     var box = document.getElementById('g-pictures');
     box.textContent = '';
     r.p.forEach(function (pic, i) {

@@ -78,7 +78,7 @@ pub fn report(
         let dir = failures_dir.join(crate::names::file_name(&r.name));
         let _ = write!(
             s,
-            "<div class=\"failure\"><h3><span class=\"{}\">{}</span> {}</h3><p>{}</p>{}<p>reproduce: <code>{}</code></p>{}{}{}{}{}</div>",
+            "<div class=\"failure\"><h3><span class=\"{}\">{}</span> {}</h3><p>{}</p>{}<p>reproduce: <code>{}</code></p>{}{}{}{}{}{}</div>",
             r.status.name(),
             r.status,
             esc(&r.name),
@@ -89,6 +89,17 @@ pub fn report(
                 esc(&d.message)
             )),
             esc(&r.reproduce),
+            if r.status == Status::Fail && r.backend != "ref" {
+                format!(
+                    "<p class=\"repro\">bug report for the driver's developers (reduced case, standalone <code>repro.c</code>, API capture, issue.md): <code>{}</code></p>",
+                    esc(&crate::names::repro_command(
+                        &r.name,
+                        crate::names::mesa_of(&r.reproduce).as_deref()
+                    ))
+                )
+            } else {
+                String::new()
+            },
             img(&dir, "reference.png", "reference"),
             img(&dir, "color.png", "backend"),
             img(&dir, "visibility.png", "backend visibility"),

@@ -21,6 +21,38 @@ pub fn file_name(id: &str) -> String {
     }
 }
 
+/// The `umbra repro` command that turns a failed run into a bug report for the driver's
+/// developers, written into `target/umbra/repro/NAME` (on the Mesa build `mesa`, when the run
+/// used one).
+pub fn repro_command(run: &str, mesa: Option<&str>) -> String {
+    let mut c = format!(
+        "cargo run --bin umbra -- repro {} -o target/umbra/repro/{}",
+        crate::escape::shell_word(run),
+        file_name(run)
+    );
+    if let Some(m) = mesa {
+        c.push_str(" --mesa ");
+        c.push_str(&crate::escape::shell_word(m));
+    }
+    c
+}
+
+/// The `--mesa` value of a reproduce command (`RunResult::reproduce`), as the shell reads
+/// the word [`crate::escape::shell_word`] wrote.
+pub fn mesa_of(reproduce: &str) -> Option<String> {
+    let rest = reproduce.split_once(" --mesa ")?.1;
+    let (mut word, mut quoted, mut chars) = (String::new(), false, rest.chars());
+    while let Some(c) = chars.next() {
+        match c {
+            '\'' => quoted = !quoted,
+            '\\' if !quoted => word.extend(chars.next()),
+            c if c.is_whitespace() && !quoted => break,
+            c => word.push(c),
+        }
+    }
+    (!word.is_empty()).then_some(word)
+}
+
 /// 32-bit FNV-1a of a name: a stable short tag for file names.
 pub fn fnv1a(name: &str) -> u32 {
     name.bytes().fold(0x811c_9dc5u32, |h, b| {
@@ -34,4 +66,27 @@ pub fn fnv64(bytes: impl IntoIterator<Item = u8>) -> String {
         (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
     });
     format!("{h:016x}")
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn repro_commands_carry_the_runs_mesa_build() {
+        let r = super::repro_command("gl33/softpipe/a@x=1", None);
+        assert_eq!(
+            r,
+            "cargo run --bin umbra -- repro gl33/softpipe/a@x=1 -o target/umbra/repro/gl33_softpipe_a@x=1"
+        );
+        for m in ["/opt/mesa", "/opt/my mesa", "/opt/it's"] {
+            let reproduce = format!(
+                "cargo run --bin umbra -- render c.json --backend gl33/zink --point p --mesa {}",
+                crate::escape::shell_word(m)
+            );
+            assert_eq!(super::mesa_of(&reproduce).as_deref(), Some(m));
+        }
+        assert_eq!(
+            super::mesa_of("cargo run --bin umbra -- render c.json"),
+            None
+        );
+    }
 }

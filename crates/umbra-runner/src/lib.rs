@@ -12,4 +12,5 @@ pub mod commands;
 pub mod glob;
 pub mod harness;
 pub mod judge;
+pub mod repro;
 pub mod run_dir;

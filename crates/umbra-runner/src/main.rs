@@ -4,7 +4,9 @@
 
 use std::process::ExitCode;
 
-use umbra_runner::commands::{bisect, conformance, drivers, reduce, render, selftest, soak, sweep};
+use umbra_runner::commands::{
+    bisect, conformance, drivers, reduce, render, repro, selftest, soak, sweep,
+};
 use umbra_runner::{cli, harness};
 
 fn main() -> ExitCode {
@@ -25,6 +27,7 @@ fn main() -> ExitCode {
             "drivers" => drivers::main(&args),
             "bisect" => bisect::main(&args),
             "reduce" => reduce::main(&args),
+            "repro" => repro::main(&args),
             "worker" => harness::worker::main(&args),
             "bisect-step" => bisect::step(&args),
             "completions" => cli::completions(args.positional.first().map_or("", String::as_str)),

@@ -229,6 +229,10 @@ fn fake_tree(src: &Path, n: usize, broken: &[usize], fault_from: usize) -> Vec<S
 
 /// `umbra bisect` over a fake tree, on fake/mesa and the l-occluder case.
 fn bisect(src: &Path, good: &str, bad: &str, work: &Path) -> Output {
+    bisect_with(src, good, bad, work, &[])
+}
+
+fn bisect_with(src: &Path, good: &str, bad: &str, work: &Path, extra: &[&str]) -> Output {
     let no_exp = scratch(&format!(
         "{}-exp",
         work.file_name()
@@ -254,7 +258,10 @@ fn bisect(src: &Path, good: &str, bad: &str, work: &Path) -> Output {
             work.to_str().unwrap_or_default(),
             "--expectations",
             no_exp.to_str().unwrap_or_default(),
-        ],
+        ]
+        .into_iter()
+        .chain(extra.iter().copied())
+        .collect::<Vec<_>>(),
         &[("UMBRA_FAKE_BACKENDS", "1")],
     )
 }
@@ -278,6 +285,37 @@ fn bisect_names_the_first_bad_commit_of_a_fake_tree_and_skips_one_that_does_not_
     assert!(steps.lines().any(|l| l.contains(",good,")), "{steps}");
     // The tree is left as it was.
     assert_eq!(git(&src, &["rev-parse", "HEAD"]), commits[7]);
+}
+
+#[test]
+fn bisect_ends_with_the_repro_bundle_of_the_first_bad_commit() {
+    let src = scratch("bisect-repro-src");
+    let commits = fake_tree(&src, 4, &[], 3);
+    let work = scratch("bisect-repro-work");
+    let bundle = scratch("bisect-repro-bundle");
+    let _ = std::fs::remove_dir_all(&bundle);
+    let o = bisect_with(
+        &src,
+        &commits[0],
+        &commits[3],
+        &work,
+        &["--repro", bundle.to_str().unwrap_or_default()],
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    let issue = std::fs::read_to_string(bundle.join("issue.md")).expect("issue.md");
+    // The commit named by its full hash, the log carried inline and as a file, and the
+    // command that bisects again.
+    assert!(
+        issue.contains(&format!("First bad commit: **{}**", commits[2])),
+        "{issue}"
+    );
+    assert!(issue.contains("git bisect start"), "{issue}");
+    assert!(issue.contains("umbra bisect --mesa-src"), "{issue}");
+    assert!(bundle.join("bisect.log").is_file());
+    assert!(bundle.join("case.json").is_file());
+    // The fake driver records no GL calls: the bundle says so instead of a program.
+    assert!(issue.contains("records no GL calls"), "{issue}");
 }
 
 #[test]
@@ -371,5 +409,49 @@ fn a_golden_blessed_on_another_version_fails_and_names_both_versions() {
     assert!(
         t.contains("differ and were blessed on another driver version"),
         "{t}"
+    );
+}
+
+#[test]
+fn the_drivers_page_offers_a_bug_report_for_each_regression() {
+    // Two fake builds: 1.0.1 right, 1.0.2 with the inverted compare.
+    let build = |name: &str, marker: serde_json::Value| {
+        let p = scratch(name);
+        std::fs::write(p.join("umbra-fake-mesa.json"), marker.to_string()).expect("write");
+        p
+    };
+    let good = build("ab-good", serde_json::json!({"version": "1.0.1"}));
+    let bad = build(
+        "ab-bad",
+        serde_json::json!({"version": "1.0.2", "fault": "invert"}),
+    );
+    let out = scratch("ab-out");
+    let no_exp = scratch("ab-exp");
+    let o = umbra(
+        &[
+            "drivers",
+            "--baseline",
+            good.to_str().unwrap_or_default(),
+            "--candidate",
+            bad.to_str().unwrap_or_default(),
+            "--backend",
+            "fake/mesa",
+            "--filter",
+            "l-occluder",
+            "--expectations",
+            no_exp.to_str().unwrap_or_default(),
+            "--out",
+            out.to_str().unwrap_or_default(),
+        ],
+        &[("UMBRA_FAKE_BACKENDS", "1")],
+    );
+    let t = text(&o);
+    let html = std::fs::read_to_string(out.join("report.html")).expect("report.html");
+    assert!(
+        html.contains(&format!(
+            "bug report: <code>cargo run --bin umbra -- repro fake/mesa/l-occluder -o target/umbra/repro/fake_mesa_l-occluder --mesa {}</code>",
+            bad.display()
+        )),
+        "{t}\n{html}"
     );
 }

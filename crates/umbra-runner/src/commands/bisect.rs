@@ -252,7 +252,12 @@ pub fn main(args: &Args) -> i32 {
     let bisect_log = git(&src, &["bisect", "log"]).unwrap_or_default();
     let _ = git(&src, &["bisect", "reset"]);
     if let Ok(mut f) = std::fs::File::create(&log_path) {
-        let _ = write!(f, "{transcript}\n# git bisect log\n{bisect_log}\n");
+        let command: Vec<String> = std::env::args().skip(1).collect();
+        let _ = write!(
+            f,
+            "# umbra {}\n{transcript}\n# git bisect log\n{bisect_log}\n",
+            command.join(" ")
+        );
     }
     // The steps, as the step processes recorded them.
     let steps = std::fs::read_to_string(work.join("steps.csv")).unwrap_or_default();
@@ -299,6 +304,22 @@ pub fn main(args: &Args) -> i32 {
                         );
                     }
                 }
+                if let Some(dir) = args.value("repro") {
+                    return repro_first_bad(
+                        args,
+                        &r,
+                        &sha,
+                        &work.join("prefixes").join(&short),
+                        &log_path,
+                        dir,
+                    );
+                }
+            } else if args.value("repro").is_some() {
+                eprintln!(
+                    "error: --repro: no report of the first bad commit at {}",
+                    report.display()
+                );
+                return 125;
             }
             0
         }
@@ -309,6 +330,52 @@ pub fn main(args: &Args) -> i32 {
                 tail.into_iter().rev().collect::<Vec<_>>().join("\n")
             );
             1
+        }
+    }
+}
+
+/// `--repro DIR`: the bundle of the first bad commit's first failed run (`umbra repro` on
+/// its prefix), its issue.md naming the commit and carrying the bisection log.
+fn repro_first_bad(
+    args: &Args,
+    report: &serde_json::Value,
+    sha: &str,
+    prefix: &Path,
+    log: &Path,
+    dir: &str,
+) -> i32 {
+    let Some(run) = report["runs"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .find(|r| r["status"] == "Fail")
+        .and_then(|r| r["name"].as_str())
+    else {
+        eprintln!(
+            "error: --repro: the first bad commit's report has no failed run to reproduce (a crash or timeout has no frame to probe)"
+        );
+        return 125;
+    };
+    println!("bisect: the repro bundle of {run} on {sha}: {dir}");
+    let Ok(exe) = std::env::current_exe() else {
+        return 125;
+    };
+    let mut cmd = Command::new(exe);
+    cmd.args(["repro", run, "--out", dir, "--first-bad", sha])
+        .arg("--mesa")
+        .arg(prefix)
+        .arg("--bisect-log")
+        .arg(log);
+    for k in ["cases", "expectations"] {
+        if let Some(v) = args.value(k) {
+            cmd.arg(format!("--{k}")).arg(absolute(v));
+        }
+    }
+    match cmd.status() {
+        Ok(s) => s.code().unwrap_or(125),
+        Err(e) => {
+            eprintln!("error: cannot start umbra repro: {e}");
+            125
         }
     }
 }

@@ -950,10 +950,17 @@ fn run_group(
             golden,
             time_s: t0.elapsed().as_secs_f64(),
             reproduce: format!(
-                "cargo run --bin umbra -- render {} --backend {} --point {}",
+                "cargo run --bin umbra -- render {} --backend {} --point {}{}",
                 shell_word(&p.file.display().to_string()),
                 p.backend,
-                shell_word(&p.id)
+                shell_word(&p.id),
+                // The run's Mesa build, so that the command reproduces it on that build.
+                crate::harness::mesa_build::selected()
+                    .filter(|_| crate::harness::mesa_build::is_mesa_backed(&p.backend))
+                    .map_or(String::new(), |b| format!(
+                        " --mesa {}",
+                        shell_word(&b.root.display().to_string())
+                    ))
             ),
             diagnosis: None,
             fingerprint,

@@ -367,7 +367,7 @@ pub fn main(args: &Args) -> i32 {
             };
         }
     }
-    if let Err(e) = write_outputs(&out, &changes, &la, &lb, &reports) {
+    if let Err(e) = write_outputs(&out, &changes, &la, &lb, &reports, cand) {
         eprintln!("error: cannot write under {}: {e}", out.display());
         return 125;
     }
@@ -527,6 +527,7 @@ fn write_outputs(
     la: &str,
     lb: &str,
     reports: &[Value],
+    candidate: &str,
 ) -> std::io::Result<()> {
     std::fs::create_dir_all(out)?;
     let q = |s: &str| {
@@ -618,9 +619,22 @@ fn write_outputs(
     );
     for c in changes {
         let cls = c.kind.replace(' ', "-");
+        // A regression whose candidate frame fails gets the command for its bug report, on
+        // the candidate's Mesa.
+        let repro = if c.kind == "regression" && c.candidate.kind == "fail" {
+            format!(
+                "<br>bug report: <code>{}</code>",
+                esc(&umbra_report::names::repro_command(
+                    &c.name,
+                    (candidate != "system").then_some(candidate)
+                ))
+            )
+        } else {
+            String::new()
+        };
         let _ = write!(
             h,
-            "<tr><td class=\"{cls}\">{}</td><td><a href=\"#{}\">{}</a></td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td class=\"{cls}\">{}</td><td><a href=\"#{}\">{}</a></td><td>{}</td><td>{}</td><td>{}{repro}</td></tr>",
             c.kind,
             esc(&crate::judge::golden::stem(&c.name)),
             esc(&c.name),

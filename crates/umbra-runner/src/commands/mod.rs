@@ -7,6 +7,7 @@ pub mod drivers;
 pub mod orientations;
 pub mod reduce;
 pub mod render;
+pub mod repro;
 pub mod selftest;
 pub mod soak;
 pub mod sweep;

@@ -1,0 +1,185 @@
+//! `umbra repro`'s bundle: what a failing run becomes so that a driver developer who has
+//! never heard of umbra can see, run and bisect it.
+//!
+//! - [`emit`] runs in the driver's process, on the already reduced case: it renders the run
+//!   once judged (pictures, failed checks) and once recorded (every GL call, as
+//!   [`umbra_gl::record`] writes it), selects the [`probes`] and writes `repro.c`, the
+//!   pictures and `facts.json` (what the parent needs for issue.md).
+//! - [`issue`] writes `issue.md` (Mesa's bug template) and `README.md` from those facts and
+//!   from what the parent measured: `repro`'s exit codes on the driver and on a conforming
+//!   one, and the API capture's replays.
+//!
+//! A repro is only as good as its intervals: the probes are the judge's own numbers at the
+//! pixels and texels the judge failed ([`probes`]), so the program cannot pass where umbra
+//! fails nor fail where umbra passes (on the same frame), and `umbra repro` runs it on both
+//! drivers before it calls the bundle done.
+
+pub mod issue;
+pub mod pictures;
+pub mod probes;
+pub mod state;
+
+use std::path::Path;
+
+use serde_json::json;
+use umbra_case::{BackendError, Prepared};
+
+/// The spec text each probe kind is held to (the judge's derivation lives in cases/README.md
+/// and NUMERICS.md; these are the clauses a driver developer looks up).
+pub const VALUE_CLAUSE: &str = "GL 4.6 §8.23.1 depth texture comparison with the freedoms of §8.14 (texel selection, LINEAR weights), §14.5 (rasterization's sub-pixel precision) and §14.6.5 (depth offset); Vulkan 1.3 \"Depth Compare Operation\"";
+/// The clause of the map's texels.
+pub const MAP_CLAUSE: &str = "GL 4.6 §14.6.5 depth offset (o = m·factor + r·units added to each fragment's depth, then clamped to [0, 1] per fragment), §13.8 clipping and the viewport transform, §2.3.5.2 fixed-point depth conversion";
+
+/// Writes the driver-side half of the bundle for the reduced `case_file` on `backend` into
+/// `out`. Returns the exit code: 0 written, 1 nothing to reproduce, 125 could not run.
+pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> i32 {
+    let mut backend = match crate::harness::registry::create(backend_id) {
+        Ok(b) => b,
+        Err(e) => {
+            eprintln!("error: {backend_id}: {e}");
+            return 125;
+        }
+    };
+    let point = match umbra_case::load_file(case_file).map(|mut p| p.remove(0)) {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 125;
+        }
+    };
+    let profile = backend.profile();
+    let info = backend.info();
+    let judged = match crate::judge::run::run_point(backend.as_mut(), point.clone(), false) {
+        crate::judge::run::Outcome::Done(j) => j,
+        crate::judge::run::Outcome::Skip(why) => {
+            eprintln!("error: {backend_id} skips the reduced case: {why}");
+            return 125;
+        }
+        crate::judge::run::Outcome::Error(e) => {
+            eprintln!("error: {backend_id} fails to render the reduced case: {e}");
+            return 125;
+        }
+    };
+    let prepared = Prepared::new(point.clone());
+    let crate::judge::judge_cache::Basis { judged: basis, .. } =
+        crate::judge::judge_cache::basis(&prepared, profile);
+    let (frame, program) = match backend.render_recorded(&prepared) {
+        Ok(r) => (Some(r.0), Some(r.1)),
+        Err(BackendError::Unsupported(why)) => {
+            println!("  no repro.c: {why}");
+            (None, None)
+        }
+        Err(e) => {
+            eprintln!("error: the recorded render failed: {e}");
+            return 125;
+        }
+    };
+    // The recorded frame is the one probed; it must be the judged one, or the driver is not
+    // deterministic on this case and the probes would test another frame than umbra judged.
+    let frame = frame.unwrap_or_else(|| judged.frame.clone());
+    let same = frame.color == judged.frame.color
+        && frame.visibility.iter().map(|v| v.to_bits()).eq(judged
+            .frame
+            .visibility
+            .iter()
+            .map(|v| v.to_bits()))
+        && frame.shadow_map.as_ref().map(|m| &m.values)
+            == judged.frame.shadow_map.as_ref().map(|m| &m.values);
+    let (_, pixels) = umbra_compare::reference::judge(&basis, &frame);
+    let probes = probes::select(&basis, &frame, &pixels);
+    if probes.is_empty() && program.is_some() {
+        eprintln!(
+            "error: the reduced case passes the value, coverage, colour and map checks on {backend_id} (it fails {}): a standalone program has nothing to probe",
+            crate::judge::expectations::signature(&judged.failed)
+        );
+        return 1;
+    }
+    if let Err(e) = std::fs::create_dir_all(out) {
+        eprintln!("error: cannot create {}: {e}", out.display());
+        return 125;
+    }
+    let profile_name = basis.profile.name();
+    let mut wrote_c = false;
+    if let Some(program) = program {
+        let env: Vec<String> = crate::harness::registry::driver_env(backend_id)
+            .unwrap_or_default()
+            .iter()
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect();
+        let header = issue::c_header(backend_id, &env.join(" "), &info, &probes);
+        let source = program(
+            &header,
+            &probes.c_source(&profile_name, VALUE_CLAUSE, MAP_CLAUSE),
+        );
+        if let Err(e) = std::fs::write(out.join("repro.c"), source) {
+            eprintln!("error: cannot write {}: {e}", out.join("repro.c").display());
+            return 125;
+        }
+        wrote_c = true;
+    }
+    let crop = match pictures::write(out, &judged, &pixels, &probes) {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!(
+                "error: cannot write the pictures into {}: {e}",
+                out.display()
+            );
+            return 125;
+        }
+    };
+    let size =
+        crate::commands::reduce::Size::of(&serde_json::to_value(&point.case).unwrap_or_default())
+            .unwrap_or_default();
+    let facts = json!({
+        "backend": backend_id,
+        "profile": profile_name,
+        "vendor": info.vendor,
+        "renderer": info.renderer,
+        "version": info.version,
+        "extensions": info.extensions,
+        "failed": judged.failed.iter().map(|f| json!({"check": f.check, "count": f.count})).collect::<Vec<_>>(),
+        "problems": judged.problems,
+        "pixels": probes.pixels.len(),
+        "pixels_total": probes.pixels_total,
+        "texels": probes.texels.len(),
+        "texels_total": probes.texels_total,
+        "frame": probes.frame,
+        "map": probes.map,
+        "triangles": size.triangles,
+        "crop": crop,
+        "deterministic": same,
+        "repro_c": wrote_c,
+        "probe_lines": probes_text(&probes),
+    });
+    if let Err(e) = std::fs::write(
+        out.join("facts.json"),
+        serde_json::to_string_pretty(&facts).unwrap_or_default(),
+    ) {
+        eprintln!("error: cannot write facts.json: {e}");
+        return 125;
+    }
+    0
+}
+
+/// The probes as umbra saw them on the driver's run, one line each (issue.md's table).
+fn probes_text(p: &probes::Probes) -> Vec<String> {
+    let mut lines = Vec::new();
+    for q in &p.pixels {
+        let got = if q.got.0.is_nan() {
+            "no surface".to_string()
+        } else {
+            format!("{:.4} (surface {})", q.got.0, q.got.1)
+        };
+        lines.push(format!(
+            "pixel ({}, {}): visibility {got}; allowed [{:.4}, {:.4}] ± {:.4} on surface {}",
+            q.x, q.y, q.lo, q.hi, p.eps, q.surface
+        ));
+    }
+    for t in &p.texels {
+        lines.push(format!(
+            "texel ({}, {}) of face {}: depth {:.9}; allowed [{:.9}, {:.9}]",
+            t.x, t.y, t.layer, t.got, t.lo, t.hi
+        ));
+    }
+    lines
+}
