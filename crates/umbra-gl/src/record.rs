@@ -10,10 +10,11 @@
 //! from the case. Results the renderer branches on become checks that end the program with
 //! 125 (a shader that does not compile, an incomplete framebuffer, a GL error at one of
 //! umbra's checkpoints), and each pixel readback becomes a call to `readback()`, which the
-//! probes of `umbra repro` define. A uniform set through no location (a uniform the
-//! compiler dropped) is no call in glow, and none in the program either. Checked against
-//! apitrace: the program's call sequence is umbra's (`apitrace dump` of both), apart from the
-//! debug-output setup, which the program makes once its context is current.
+//! probes of `umbra repro` define. Checked against apitrace: the program's calls are umbra's,
+//! argument for argument (`apitrace dump` of both), apart from the debug-output setup, which
+//! the program makes once its context is current, and uniforms umbra's driver compiled away:
+//! glow makes no call for them, the program sets them by name at location -1 (a no-op), so
+//! that the program run on another driver that keeps them sets them as umbra would there.
 
 use std::cell::RefCell;
 use std::collections::{BTreeMap, HashMap};
@@ -72,6 +73,9 @@ pub struct Recorder {
     /// (program, location) → uniform name, from glGetUniformLocation.
     uniforms: HashMap<(u32, u32), String>,
     program: u32,
+    /// The name of the latest glGetUniformLocation, found or not: the uniform call that
+    /// follows it sets that name.
+    last_lookup: Option<String>,
     next_readback: Option<Readback>,
     blobs: usize,
 }
@@ -130,8 +134,16 @@ impl Recorder {
         }
     }
 
+    /// A uniform's location as the program looks it up, by name. A uniform umbra's driver
+    /// compiled away (no location: glow makes no call) is still set by name, at location -1
+    /// there (a no-op, GL 4.6 §7.6.1), so that a driver that keeps it gets the value umbra
+    /// would give it.
     fn location(&self, loc: Option<u32>) -> String {
-        match loc.and_then(|l| self.uniforms.get(&(self.program, l))) {
+        let name = match loc {
+            Some(l) => self.uniforms.get(&(self.program, l)),
+            None => self.last_lookup.as_ref(),
+        };
+        match name {
             Some(name) => format!(
                 "glGetUniformLocation({}, \"{name}\")",
                 self.object("program", Some(self.program))
@@ -387,6 +399,7 @@ impl<'a> Gl<'a> {
         let loc = unsafe { self.raw.get_uniform_location(p, name) };
         log!(self, |r| {
             r.func("glGetUniformLocation");
+            r.last_lookup = Some(name.to_string());
             if let Some(l) = &loc {
                 r.uniforms.insert((p.0.get(), l.0), name.to_string());
             }
@@ -394,21 +407,21 @@ impl<'a> Gl<'a> {
         loc
     }
     pub unsafe fn uniform_1_f32(&self, l: Option<&glow::UniformLocation>, x: f32) {
-        log!(self, |r| if l.is_some() {
+        log!(self, |r| {
             let a = [r.location(l.map(|l| l.0)), hex_f32(x)];
             r.call("glUniform1f", &a);
         });
         unsafe { self.raw.uniform_1_f32(l, x) }
     }
     pub unsafe fn uniform_2_f32(&self, l: Option<&glow::UniformLocation>, x: f32, y: f32) {
-        log!(self, |r| if l.is_some() {
+        log!(self, |r| {
             let a = [r.location(l.map(|l| l.0)), hex_f32(x), hex_f32(y)];
             r.call("glUniform2f", &a);
         });
         unsafe { self.raw.uniform_2_f32(l, x, y) }
     }
     pub unsafe fn uniform_3_f32(&self, l: Option<&glow::UniformLocation>, x: f32, y: f32, z: f32) {
-        log!(self, |r| if l.is_some() {
+        log!(self, |r| {
             let a = [
                 r.location(l.map(|l| l.0)),
                 hex_f32(x),
@@ -420,7 +433,7 @@ impl<'a> Gl<'a> {
         unsafe { self.raw.uniform_3_f32(l, x, y, z) }
     }
     pub unsafe fn uniform_1_i32(&self, l: Option<&glow::UniformLocation>, x: i32) {
-        log!(self, |r| if l.is_some() {
+        log!(self, |r| {
             let a = [r.location(l.map(|l| l.0)), x.to_string()];
             r.call("glUniform1i", &a);
         });
@@ -432,7 +445,7 @@ impl<'a> Gl<'a> {
         transpose: bool,
         v: &[f32],
     ) {
-        log!(self, |r| if l.is_some() {
+        log!(self, |r| {
             let a = [
                 r.location(l.map(|l| l.0)),
                 (v.len() / 16).to_string(),

@@ -6,7 +6,7 @@
 //!
 //! Exit codes follow `git bisect run`: 0 every probe inside its interval, 1 one outside, 125
 //! the program could not run (no display, no context, a shader that does not compile, a GL
-//! error at a checkpoint).
+//! error or a KHR_debug error message at a checkpoint).
 //!
 //! The probes' C (from `umbra repro`) defines `readback(kind, layer, pixels, w, h)`, called
 //! after each `glReadPixels`, and `probes_result()`, the exit code.
@@ -139,6 +139,7 @@ int main(void)
 
 const INCLUDES: &str = r#"
 #include <EGL/egl.h>
+#include <float.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -147,7 +148,16 @@ const INCLUDES: &str = r#"
 #include <string.h>
 "#;
 
-const TYPES: &str = r#"typedef unsigned int GLenum;
+const TYPES: &str = r#"/* The probes repeat umbra's f32 arithmetic: no fused multiply-adds (the pragma for clang;
+ * for gcc, which ignores it, the probes round each product through a volatile float) and no
+ * extended precision. */
+#ifdef __clang__
+#pragma STDC FP_CONTRACT OFF
+#endif
+#if defined(FLT_EVAL_METHOD) && FLT_EVAL_METHOD != 0
+#error "the probes need float arithmetic in float (FLT_EVAL_METHOD 0): build for x86-64 or aarch64, or with -msse2 -mfpmath=sse"
+#endif
+typedef unsigned int GLenum;
 typedef unsigned int GLuint;
 typedef unsigned int GLbitfield;
 typedef int GLint;
@@ -193,12 +203,17 @@ static const char *gl_error_name(GLenum e)
     }
 }
 
+/* The driver's error and high-severity messages fail the next checkpoint, as they fail
+ * umbra's run. */
+static int debug_errors;
 static void on_debug(GLenum source, GLenum type, GLuint id, GLenum severity, GLsizei length,
                      const GLchar *message, const void *user)
 {
     (void)source; (void)id; (void)length; (void)user;
-    if (type == GL_DEBUG_TYPE_ERROR || severity == GL_DEBUG_SEVERITY_HIGH)
+    if (type == GL_DEBUG_TYPE_ERROR || severity == GL_DEBUG_SEVERITY_HIGH) {
         fprintf(stderr, "repro: driver says: %s\n", message);
+        debug_errors++;
+    }
 }
 "#;
 
@@ -211,6 +226,10 @@ static void check_gl(const char *stage)
     GLenum e = glGetError();
     if (e != GL_NO_ERROR) {
         fprintf(stderr, "repro: %s after stage \"%s\"\n", gl_error_name(e), stage);
+        exit(125);
+    }
+    if (debug_errors) {
+        fprintf(stderr, "repro: the driver reported an error by KHR_debug in stage \"%s\"\n", stage);
         exit(125);
     }
 }

@@ -95,8 +95,14 @@ fn the_softpipe_offset_clamp_bundle_fails_on_softpipe_and_passes_on_llvmpipe_wit
             .filter(|l| l.starts_with("pixel (") || l.starts_with("texel ("))
             .count()
     };
-    assert!(probes(&st) > 0);
-    assert_eq!(probes(&st), probes(&lt));
+    let n = probes(&st);
+    assert!(n > 0);
+    assert_eq!(n, probes(&lt));
+    // Every probe is a pixel or texel the judge failed on softpipe: the program must find
+    // each one outside (an interval wider than the judge's would let some pass), and none on
+    // llvmpipe, which the judge passes.
+    assert!(st.contains(&format!("{n} of {n} probes outside")), "{st}");
+    assert!(lt.contains(&format!("0 of {n} probes outside")), "{lt}");
     // issue.md: the violated rule in its title, the driver strings, both exit codes, the
     // capture's replays on both drivers.
     let issue = std::fs::read_to_string(dir.join("issue.md")).expect("issue.md");

@@ -163,13 +163,18 @@ pub fn issue_md(facts: &Value, m: &Measured) -> String {
     }
     let _ = writeln!(
         o,
-        "Found by umbra's conformance run (a shadow-mapping conformance harness judging drivers against the specs' bounds) as `{}` ({} point `{}`), reduced to {} triangles, a {}×{} frame and a {}×{} shadow map ({}).\n",
+        "Found by umbra's conformance run (a shadow-mapping conformance harness judging drivers against the specs' bounds) as `{}` ({} point `{}`), reduced to {} triangles, a {}×{} frame and a {}{}×{} shadow map ({}).\n",
         m.run,
         m.case_file,
         m.point,
         facts["triangles"],
         facts["frame"][0],
         facts["frame"][1],
+        if facts["faces"].as_u64().unwrap_or(1) == 6 {
+            "cube "
+        } else {
+            ""
+        },
         facts["map"][0],
         facts["map"][1],
         m.reduced
@@ -208,7 +213,8 @@ pub fn issue_md(facts: &Value, m: &Measured) -> String {
                     .trim();
                 let _ = writeln!(
                     o,
-                    "\nTo run the bisection again: `{command}` (or `git bisect replay` the log below). To bisect with the program alone, from the Mesa tree: `git bisect run sh -c 'ninja -C build && meson install -C build --destdir /tmp/p && LD_LIBRARY_PATH=/tmp/p/usr/lib/x86_64-linux-gnu LIBGL_DRIVERS_PATH=/tmp/p/usr/lib/x86_64-linux-gnu/dri __EGL_VENDOR_LIBRARY_FILENAMES=/tmp/p/usr/share/glvnd/egl_vendor.d/50_mesa.json GALLIUM_DRIVER=... /path/to/repro'` (125 skips a commit that cannot run it).\n\n```\n{git_log}\n```\n\nThe full transcript is `bisect.log`.\n"
+                    "\nTo run the bisection again: `{command}` (or `git bisect replay` the log below). To bisect with the program alone: {}\n\n```\n{git_log}\n```\n\nThe full transcript is `bisect.log`.\n",
+                    bisect_hint(m)
                 );
             } else {
                 let _ = writeln!(o);
@@ -217,10 +223,11 @@ pub fn issue_md(facts: &Value, m: &Measured) -> String {
         None => {
             let _ = writeln!(
                 o,
-                "Not bisected. The same program passes on {}; to bisect a Mesa tree with it: `git bisect run sh -c 'meson compile -C build && LD_LIBRARY_PATH=build/... ./repro'` (exit 125 skips a commit that cannot run it), or umbra's `cargo xtask bisect --repro DIR`.\n",
+                "Not bisected. The same program passes on {}. To bisect a Mesa tree with it: {} Or umbra's `cargo xtask bisect --mesa-src DIR --good A --bad B --backend {backend} --repro DIR`, which also writes this bundle for the first bad commit.\n",
                 m.runs
                     .get(1)
-                    .map_or("llvmpipe".to_string(), |r| r.backend.clone())
+                    .map_or("llvmpipe".to_string(), |r| r.backend.clone()),
+                bisect_hint(m)
             );
         }
     }
@@ -317,6 +324,26 @@ pub fn issue_md(facts: &Value, m: &Measured) -> String {
         m.command
     );
     o
+}
+
+/// How to bisect a Mesa tree with the program alone (a meson build directory `build`
+/// configured with the drivers; each commit installed into a scratch prefix).
+fn bisect_hint(m: &Measured) -> String {
+    let driver_env = m.runs.first().map_or(String::new(), |r| {
+        r.env
+            .split_whitespace()
+            .filter(|kv| {
+                !kv.starts_with("LD_LIBRARY_PATH=")
+                    && !kv.contains("_PATH=")
+                    && !kv.contains("FILENAMES=")
+                    && !kv.starts_with("VK_")
+            })
+            .collect::<Vec<_>>()
+            .join(" ")
+    });
+    format!(
+        "from the Mesa tree, `git bisect run sh -c 'ninja -C build && rm -rf /tmp/p && meson install -C build --destdir /tmp/p || exit 125; L=/tmp/p/usr/local/lib/x86_64-linux-gnu; LD_LIBRARY_PATH=$L LIBGL_DRIVERS_PATH=$L/dri __EGL_VENDOR_LIBRARY_FILENAMES=/tmp/p/usr/local/share/glvnd/egl_vendor.d/50_mesa.json {driver_env} /path/to/repro'` (adjust the prefix to the build's `--prefix`/`--libdir`; exit 125 skips a commit that cannot run it)."
+    )
 }
 
 /// The last `n` lines of `text`, ending in a newline.

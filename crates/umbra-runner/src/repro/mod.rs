@@ -33,6 +33,12 @@ pub const MAP_CLAUSE: &str = "GL 4.6 §14.6.5 depth offset (o = m·factor + r·u
 /// Writes the driver-side half of the bundle for the reduced `case_file` on `backend` into
 /// `out`. Returns the exit code: 0 written, 1 nothing to reproduce, 125 could not run.
 pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> i32 {
+    if umbra_case::fault::Fault::active() == Some(umbra_case::fault::Fault::NoYFlip) {
+        eprintln!(
+            "error: the no-y-flip self-test fault acts on umbra's readback, not on its GL calls: a standalone program cannot carry it"
+        );
+        return 125;
+    }
     let mut backend = match crate::harness::registry::create(backend_id) {
         Ok(b) => b,
         Err(e) => {
@@ -83,6 +89,7 @@ pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> i32 {
             .visibility
             .iter()
             .map(|v| v.to_bits()))
+        && frame.surface == judged.frame.surface
         && frame.shadow_map.as_ref().map(|m| &m.values)
             == judged.frame.shadow_map.as_ref().map(|m| &m.values);
     let (_, pixels) = umbra_compare::reference::judge(&basis, &frame);
@@ -144,7 +151,8 @@ pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> i32 {
         "texels": probes.texels.len(),
         "texels_total": probes.texels_total,
         "frame": probes.frame,
-        "map": probes.map,
+        "map": point.case.shadow.size,
+        "faces": prepared.light.views.len(),
         "triangles": size.triangles,
         "crop": crop,
         "deterministic": same,

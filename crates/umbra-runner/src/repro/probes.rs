@@ -319,7 +319,7 @@ static int value_ok(float v, float lo, float hi)
 {
     if (!(lo - EPS <= v && v <= hi + EPS)) return 0;
     if (QUANTUM <= 0.0f) return 1;
-    float k = round_f32(v / QUANTUM) * QUANTUM;
+    volatile float k = round_f32(v / QUANTUM) * QUANTUM; /* rounded before v - k: no FMA */
     return fabsf(v - k) <= EPS + 4.0f * 1.1920929e-7f && lo - EPS <= k && k <= hi + EPS;
 }
 
@@ -331,8 +331,11 @@ static int colour_ok(const unsigned char *rgb, float v, const struct pixel_probe
 {
     float v0 = clamp01(v - EPS), v1 = clamp01(v + EPS);
     for (int c = 0; c < 3; c++) {
-        float a = p->c0[c] + (p->c1[c] - p->c0[c]) * v0;
-        float b = p->c0[c] + (p->c1[c] - p->c0[c]) * v1;
+        /* Each product rounded to float before the sum, as Rust computes it: a compiler
+         * that fuses a*b+c (gcc on aarch64 by default) would round once. */
+        volatile float pa = (p->c1[c] - p->c0[c]) * v0, pb = (p->c1[c] - p->c0[c]) * v1;
+        float a = p->c0[c] + pa;
+        float b = p->c0[c] + pb;
         float lo = clamp01((a < b ? a : b) - p->ctol);
         float hi = clamp01((a > b ? a : b) + p->ctol);
         float code = (float)rgb[c];
