@@ -190,6 +190,35 @@ macro_rules! log {
     };
 }
 
+/// A glow `create_*` whose GL call is `glGen*(1, &name)`.
+macro_rules! generated {
+    ($method:ident, $ty:ty, $kind:literal, $gen:literal) => {
+        pub unsafe fn $method(&self) -> Result<$ty, String> {
+            let object = unsafe { self.raw.$method() }?;
+            log!(self, |r| {
+                let v = r.new_object($kind, object.0.get());
+                r.func($gen);
+                r.stmt(&format!("{}(1, &{v});", $gen));
+            });
+            Ok(object)
+        }
+    };
+}
+
+/// A glow `delete_*` whose GL call is `glDelete*(1, &name)`.
+macro_rules! deleted {
+    ($method:ident, $ty:ty, $kind:literal, $gl:literal) => {
+        pub unsafe fn $method(&self, object: $ty) {
+            log!(self, |r| {
+                let v = r.object($kind, Some(object.0.get()));
+                r.func($gl);
+                r.stmt(&format!("{}(1, &{v});", $gl));
+            });
+            unsafe { self.raw.$method(object) }
+        }
+    };
+}
+
 // Every method has glow's name, signature, documentation and safety contract: it forwards
 // the call unchanged (and records it).
 #[allow(missing_docs, clippy::missing_safety_doc, clippy::too_many_arguments)]
@@ -217,60 +246,27 @@ impl<'a> Gl<'a> {
     pub unsafe fn get_error(&self) -> u32 {
         unsafe { self.raw.get_error() }
     }
-    pub unsafe fn create_buffer(&self) -> Result<glow::Buffer, String> {
-        let b = unsafe { self.raw.create_buffer() }?;
-        log!(self, |r| {
-            let v = r.new_object("buffer", b.0.get());
-            r.func("glGenBuffers");
-            r.stmt(&format!("glGenBuffers(1, &{v});"));
-        });
-        Ok(b)
-    }
-    pub unsafe fn create_vertex_array(&self) -> Result<glow::VertexArray, String> {
-        let b = unsafe { self.raw.create_vertex_array() }?;
-        log!(self, |r| {
-            let v = r.new_object("vao", b.0.get());
-            r.func("glGenVertexArrays");
-            r.stmt(&format!("glGenVertexArrays(1, &{v});"));
-        });
-        Ok(b)
-    }
-    pub unsafe fn create_texture(&self) -> Result<glow::Texture, String> {
-        let b = unsafe { self.raw.create_texture() }?;
-        log!(self, |r| {
-            let v = r.new_object("texture", b.0.get());
-            r.func("glGenTextures");
-            r.stmt(&format!("glGenTextures(1, &{v});"));
-        });
-        Ok(b)
-    }
-    pub unsafe fn create_framebuffer(&self) -> Result<glow::Framebuffer, String> {
-        let b = unsafe { self.raw.create_framebuffer() }?;
-        log!(self, |r| {
-            let v = r.new_object("framebuffer", b.0.get());
-            r.func("glGenFramebuffers");
-            r.stmt(&format!("glGenFramebuffers(1, &{v});"));
-        });
-        Ok(b)
-    }
-    pub unsafe fn create_renderbuffer(&self) -> Result<glow::Renderbuffer, String> {
-        let b = unsafe { self.raw.create_renderbuffer() }?;
-        log!(self, |r| {
-            let v = r.new_object("renderbuffer", b.0.get());
-            r.func("glGenRenderbuffers");
-            r.stmt(&format!("glGenRenderbuffers(1, &{v});"));
-        });
-        Ok(b)
-    }
-    pub unsafe fn create_query(&self) -> Result<glow::Query, String> {
-        let b = unsafe { self.raw.create_query() }?;
-        log!(self, |r| {
-            let v = r.new_object("query", b.0.get());
-            r.func("glGenQueries");
-            r.stmt(&format!("glGenQueries(1, &{v});"));
-        });
-        Ok(b)
-    }
+    generated!(create_buffer, glow::Buffer, "buffer", "glGenBuffers");
+    generated!(
+        create_vertex_array,
+        glow::VertexArray,
+        "vao",
+        "glGenVertexArrays"
+    );
+    generated!(create_texture, glow::Texture, "texture", "glGenTextures");
+    generated!(
+        create_framebuffer,
+        glow::Framebuffer,
+        "framebuffer",
+        "glGenFramebuffers"
+    );
+    generated!(
+        create_renderbuffer,
+        glow::Renderbuffer,
+        "renderbuffer",
+        "glGenRenderbuffers"
+    );
+    generated!(create_query, glow::Query, "query", "glGenQueries");
     pub unsafe fn create_program(&self) -> Result<glow::Program, String> {
         let b = unsafe { self.raw.create_program() }?;
         log!(self, |r| {
@@ -860,54 +856,27 @@ impl<'a> Gl<'a> {
         });
         unsafe { self.raw.get_query_parameter_u64(q, p) }
     }
-    pub unsafe fn delete_texture(&self, t: glow::Texture) {
-        log!(self, |r| {
-            let v = r.object("texture", Some(t.0.get()));
-            r.func("glDeleteTextures");
-            r.stmt(&format!("glDeleteTextures(1, &{v});"));
-        });
-        unsafe { self.raw.delete_texture(t) }
-    }
-    pub unsafe fn delete_framebuffer(&self, f: glow::Framebuffer) {
-        log!(self, |r| {
-            let v = r.object("framebuffer", Some(f.0.get()));
-            r.func("glDeleteFramebuffers");
-            r.stmt(&format!("glDeleteFramebuffers(1, &{v});"));
-        });
-        unsafe { self.raw.delete_framebuffer(f) }
-    }
-    pub unsafe fn delete_renderbuffer(&self, b: glow::Renderbuffer) {
-        log!(self, |r| {
-            let v = r.object("renderbuffer", Some(b.0.get()));
-            r.func("glDeleteRenderbuffers");
-            r.stmt(&format!("glDeleteRenderbuffers(1, &{v});"));
-        });
-        unsafe { self.raw.delete_renderbuffer(b) }
-    }
-    pub unsafe fn delete_vertex_array(&self, b: glow::VertexArray) {
-        log!(self, |r| {
-            let v = r.object("vao", Some(b.0.get()));
-            r.func("glDeleteVertexArrays");
-            r.stmt(&format!("glDeleteVertexArrays(1, &{v});"));
-        });
-        unsafe { self.raw.delete_vertex_array(b) }
-    }
-    pub unsafe fn delete_buffer(&self, b: glow::Buffer) {
-        log!(self, |r| {
-            let v = r.object("buffer", Some(b.0.get()));
-            r.func("glDeleteBuffers");
-            r.stmt(&format!("glDeleteBuffers(1, &{v});"));
-        });
-        unsafe { self.raw.delete_buffer(b) }
-    }
-    pub unsafe fn delete_query(&self, q: glow::Query) {
-        log!(self, |r| {
-            let v = r.object("query", Some(q.0.get()));
-            r.func("glDeleteQueries");
-            r.stmt(&format!("glDeleteQueries(1, &{v});"));
-        });
-        unsafe { self.raw.delete_query(q) }
-    }
+    deleted!(delete_texture, glow::Texture, "texture", "glDeleteTextures");
+    deleted!(
+        delete_framebuffer,
+        glow::Framebuffer,
+        "framebuffer",
+        "glDeleteFramebuffers"
+    );
+    deleted!(
+        delete_renderbuffer,
+        glow::Renderbuffer,
+        "renderbuffer",
+        "glDeleteRenderbuffers"
+    );
+    deleted!(
+        delete_vertex_array,
+        glow::VertexArray,
+        "vao",
+        "glDeleteVertexArrays"
+    );
+    deleted!(delete_buffer, glow::Buffer, "buffer", "glDeleteBuffers");
+    deleted!(delete_query, glow::Query, "query", "glDeleteQueries");
 }
 
 /// Texture parameters whose value is an enum (printed by name).
