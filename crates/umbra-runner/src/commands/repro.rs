@@ -762,9 +762,8 @@ fn list_files(dir: &Path) -> Vec<(String, u64)> {
             }
         }
     }
-    out.push(("README.md".into(), 0));
+    out.retain(|(name, _)| name != "README.md");
     out.sort();
-    out.dedup_by(|a, b| a.0 == b.0);
     out
 }
 

@@ -374,6 +374,7 @@ pub fn readme(facts: &Value, m: &Measured, files: &[(String, u64)]) -> String {
         let what = match name.as_str() {
             "issue.md" => "the bug report draft (Mesa's template)",
             "repro.c" => "standalone program: EGL + GL, the exact calls, the judge's probes",
+            "repro" => "repro.c as compiled here (rebuild it on your machine)",
             "case.json" => "the reduced umbra case",
             "facts.json" => "what umbra measured on the driver (strings, checks, probes)",
             "expected.png" | "actual.png" | "difference.png" => "crop of the failing area",
