@@ -1,7 +1,6 @@
 //! [`GlBackend`]: the [`Backend`] trait over a [`Renderer`], with the driver's strings and
 //! what each API can and cannot do, decided before a run starts.
 
-use glow::HasContext;
 use umbra_case::format::{Compare, DepthFormat, Outside};
 use umbra_case::{
     Backend, BackendError, BackendId, DriverInfo, Frame, Needs, Prepared, Profile, ReproProgram,
@@ -58,10 +57,9 @@ impl GlBackend {
                 driver.name()
             )));
         }
-        let exts = renderer.gl().supported_extensions();
         let mut extensions: Vec<String> = NOTABLE
             .iter()
-            .filter(|e| exts.contains(**e))
+            .filter(|e| renderer.caps.has(e))
             .map(|e| e.to_string())
             .collect();
         extensions.push(format!("EGL {egl}"));
@@ -76,10 +74,6 @@ impl GlBackend {
             id: BackendId(format!("{}/{}", api.name(), driver.name())),
             info,
         })
-    }
-
-    fn has(&self, ext: &str) -> bool {
-        self.renderer.gl().supported_extensions().contains(ext)
     }
 }
 
@@ -105,12 +99,11 @@ impl Backend for GlBackend {
         let api = self.renderer.api;
         // GLES 2 applies the offset (and its clamp) in the shader; the others need the
         // extension's entry point, loaded by name (glow does not carry it).
-        if needs.polygon_offset_clamp && api != Api::Gles2 && !self.renderer.has_offset_clamp() {
+        let caps = &self.renderer.caps;
+        if needs.polygon_offset_clamp && api != Api::Gles2 && caps.offset_clamp.is_none() {
             return Support::Unsupported("a polygon-offset clamp needs glPolygonOffsetClamp (GL 4.6, ARB_polygon_offset_clamp) or glPolygonOffsetClampEXT (EXT_polygon_offset_clamp), which this driver does not advertise".into());
         }
-        if api == Api::Gles2
-            && !(self.has("GL_OES_standard_derivatives") && self.has("GL_EXT_frag_depth"))
-        {
+        if api == Api::Gles2 && !caps.shader_offset {
             return Support::Unsupported("the GLES 2 path needs OES_standard_derivatives and EXT_frag_depth to apply the polygon offset to packed depth".into());
         }
         match api {
@@ -130,9 +123,7 @@ impl Backend for GlBackend {
                     && needs.compare == Compare::Hardware
                     && !needs.cube_map =>
             {
-                if self.has("GL_EXT_texture_border_clamp")
-                    || self.has("GL_OES_texture_border_clamp")
-                {
+                if caps.border_clamp {
                     Support::Supported
                 } else {
                     Support::Unsupported(

@@ -4,6 +4,7 @@
 //! - [`context`]: EGL loaded at run time; a missing library or driver is
 //!   [`context::Unavailable`] with the package to install, never a panic.
 //! - [`driver`]: one Mesa driver per process, selected by environment before EGL loads.
+//! - [`caps`]: what the driver can do, probed once; the only place its differences live.
 //! - [`shaders`]: GLSL per API and technique, mirroring the reference's lookup.
 //! - [`render`]: both passes, checks after every stage, readback with the one row flip.
 //! - [`record`] and [`repro_c`]: a run's GL calls as a standalone C program (`umbra repro`).
@@ -15,6 +16,7 @@
 
 pub mod api;
 pub mod backend;
+pub mod caps;
 pub mod context;
 pub mod driver;
 pub mod record;

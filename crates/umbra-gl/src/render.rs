@@ -17,25 +17,30 @@
 //! - **Timings.** `GL_TIME_ELAPSED` queries on GL 3.3; CPU wall time around `glFinish`
 //!   elsewhere.
 //! - **Readback.** GL rows are bottom first: every image is flipped once, in [`flip_rows`].
+//!
+//! [`Renderer::render`] runs the stages in order over a [`RunPlan`] (what every stage reads,
+//! decided once): `upload`, [`shadow_pass`], [`readback`] of the map, [`lit_pass`], the frame.
+//! Every GL call goes through [`crate::record::Gl`], so `umbra repro` can record a run.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use glow::HasContext;
-use umbra_case::format::{
-    Attachments, Cull, DepthFormat, DepthOrder, Filter, MipFilter, MipSource, Mipmaps, Outside,
-};
-use umbra_case::technique::CompareOp;
+use umbra_case::fault::Fault;
+use umbra_case::format::MipSource;
 use umbra_case::{
-    BackendError, Clock, Convention, DepthMap, Frame, LightKind, LookupMatrices, Prepared,
-    Technique, Timings, VisibilityStorage,
+    BackendError, Clock, Convention, Frame, LightKind, Prepared, Timings, VisibilityStorage,
 };
 
 use crate::api::Api;
+use crate::caps::Caps;
 use crate::context::{GlContext, Unavailable};
-use crate::record::{Gl, Readback, Recorder, Recording};
-use crate::shaders;
+use crate::record::{Gl, Recorder, Recording};
+
+mod lit_pass;
+mod readback;
+mod shadow_pass;
 
 /// Floats per vertex of `Geometry::interleaved`.
 const STRIDE: usize = umbra_case::Geometry::VERTEX_FLOATS;
@@ -45,15 +50,13 @@ pub struct Renderer {
     ctx: GlContext,
     /// The API flavour.
     pub api: Api,
+    /// What the driver can do, probed once.
+    pub caps: Caps,
     programs: HashMap<(String, String), glow::Program>,
     debug: Arc<Mutex<Vec<String>>>,
-    /// Whether GL_TIME_ELAPSED queries work.
-    pub timer_queries: bool,
     /// The shadow map of the last run rendered by [`Renderer::render`], kept for its twins
     /// ([`Renderer::render_twin`]) and deleted by the next run.
     kept: Option<KeptMap>,
-    /// Whether `Renderer::new` turned KHR_debug's output on.
-    debug_output: bool,
     /// Attached while [`Renderer::render_recorded`] runs.
     recorder: Option<std::cell::RefCell<Recorder>>,
 }
@@ -77,13 +80,6 @@ const FRESH_MAP_SAMPLER: [(u32, u32); 4] = [
 /// rendered again for the twin rather than held in memory between runs.
 const KEEP_LIMIT: u64 = 256 << 20;
 
-impl Renderer {
-    /// Whether glPolygonOffsetClamp[EXT] was loaded.
-    pub fn has_offset_clamp(&self) -> bool {
-        self.ctx.polygon_offset_clamp.is_some()
-    }
-}
-
 fn gl_err(stage: &str, message: impl Into<String>) -> BackendError {
     BackendError::Api {
         stage: stage.into(),
@@ -100,9 +96,9 @@ impl Renderer {
     /// Creates a context for `api` in this process's driver.
     pub fn new(api: Api) -> Result<Renderer, Unavailable> {
         let mut ctx = GlContext::new(api)?;
+        let caps = Caps::probe(&ctx.gl, api, ctx.polygon_offset_clamp_name);
         let debug = Arc::new(Mutex::new(Vec::new()));
-        let exts = ctx.gl.supported_extensions().clone();
-        if exts.contains("GL_KHR_debug") {
+        if caps.debug_output {
             let sink = Arc::clone(&debug);
             // SAFETY: the context is current; the callback only copies the message.
             unsafe {
@@ -118,15 +114,13 @@ impl Renderer {
                     });
             }
         }
-        let timer_queries = api == Api::Gl33;
         Ok(Renderer {
             ctx,
             api,
+            caps,
             programs: HashMap::new(),
             debug,
-            timer_queries,
             kept: None,
-            debug_output: exts.contains("GL_KHR_debug"),
             recorder: None,
         })
     }
@@ -153,8 +147,8 @@ impl Renderer {
             .take()
             .map(|r| r.into_inner().finish())
             .unwrap_or_default();
-        rec.debug_output = self.debug_output;
-        rec.polygon_offset_clamp = self.ctx.polygon_offset_clamp_name;
+        rec.debug_output = self.caps.debug_output;
+        rec.polygon_offset_clamp = self.caps.offset_clamp;
         out.map(|(f, _)| (f, rec))
     }
 
@@ -249,78 +243,6 @@ impl Renderer {
         Ok(program)
     }
 
-    /// Fills levels 1.. of the bound 2D `map` (`levels` in all, level 0 drawn) with the
-    /// mean of the level above, one down-sampling pass per level, as a program generating
-    /// depth mips does ([`shaders::average_fragment`]). The level read is the texture's only
-    /// level while the next is drawn (BASE_LEVEL = MAX_LEVEL), so no feedback loop forms.
-    fn average_levels(
-        &self,
-        program: glow::Program,
-        map: glow::Texture,
-        s: &umbra_case::format::Shadow,
-        levels: u32,
-        res: &mut Resources,
-    ) -> Result<(), BackendError> {
-        let gl = &self.g();
-        // SAFETY: objects of the current context; the framebuffer's completeness is checked
-        // before each draw.
-        unsafe {
-            let fbo = gl
-                .create_framebuffer()
-                .map_err(|e| gl_err("mip levels", e))?;
-            res.framebuffers.push(fbo);
-            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-            gl.draw_buffers(&[glow::NONE]);
-            gl.read_buffer(glow::NONE);
-            gl.use_program(Some(program));
-            gl.uniform_1_i32(gl.get_uniform_location(program, "u_src").as_ref(), 0);
-            gl.active_texture(glow::TEXTURE0);
-            gl.bind_texture(glow::TEXTURE_2D, Some(map));
-            gl.tex_parameter_i32(
-                glow::TEXTURE_2D,
-                glow::TEXTURE_COMPARE_MODE,
-                glow::NONE as i32,
-            );
-            gl.enable(glow::DEPTH_TEST);
-            gl.depth_func(glow::ALWAYS);
-            gl.depth_mask(true);
-            for level in 1..levels {
-                let [lw, lh] = Mipmaps::level_size(s.size, level);
-                let above = level as i32 - 1;
-                gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_BASE_LEVEL, above);
-                gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_MAX_LEVEL, above);
-                gl.framebuffer_texture_2d(
-                    glow::FRAMEBUFFER,
-                    glow::DEPTH_ATTACHMENT,
-                    glow::TEXTURE_2D,
-                    Some(map),
-                    level as i32,
-                );
-                let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
-                if status != glow::FRAMEBUFFER_COMPLETE {
-                    return Err(gl_err(
-                        "mip levels",
-                        format!(
-                            "framebuffer of level {level} incomplete: {}",
-                            status_name(status)
-                        ),
-                    ));
-                }
-                gl.viewport(0, 0, lw as i32, lh as i32);
-                gl.draw_arrays(glow::TRIANGLES, 0, 3);
-                self.check(&format!("mip level {level} (averaged)"))?;
-            }
-            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_BASE_LEVEL, 0);
-            gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_MAX_LEVEL, levels as i32 - 1);
-            gl.depth_func(if s.depth_order == DepthOrder::Forward {
-                glow::LESS
-            } else {
-                glow::GREATER
-            });
-        }
-        self.check("mip levels")
-    }
-
     /// Renders one run.
     pub fn render(&mut self, run: &Prepared) -> Result<Frame, BackendError> {
         self.render_run(run, None).map(|(f, _)| f)
@@ -387,6 +309,8 @@ impl Renderer {
         }
     }
 
+    /// One run, in stages: upload, the shadow pass (timed), the map's readback (GL 3.3), the
+    /// lit pass (timed, read back), the frame.
     fn render_with(
         &mut self,
         run: &Prepared,
@@ -394,30 +318,86 @@ impl Renderer {
         start: Instant,
         reuse: Option<glow::Texture>,
     ) -> Result<Frame, BackendError> {
-        let case = run.case();
-        let s = &case.shadow;
-        let api = self.api;
-        let conv = Convention::GL.with_order(s.depth_order);
-        let cube = matches!(run.light.kind, LightKind::Point { .. });
-        let es2 = api == Api::Gles2;
-        // A deliberate mistake, only under `cargo xtask selftest`.
-        let fault = umbra_case::fault::Fault::active();
-        let is = |f: umbra_case::fault::Fault| fault == Some(f);
-        // The case's bias as the (faulted) backend applies it.
-        let bias = fault.map_or_else(
-            || run.case().shadow.bias.clone(),
-            |f| f.bias(&run.case().shadow.bias),
-        );
+        let p = RunPlan::new(run, self.api);
         self.check("before the run")?;
+        self.upload(&p, res)?;
+        let shadow_programs = self.shadow_programs(&p)?;
+        let timer = if self.caps.timer_queries {
+            Some(Timer::new(&self.g())?)
+        } else {
+            None
+        };
+        let shadow_start = Instant::now();
+        if let Some(t) = &timer {
+            t.begin(&self.g(), 0);
+        }
+        let map = self.shadow_map(&p, &shadow_programs, res, reuse)?;
+        let shadow_wall = self.end_stage(timer.as_ref(), shadow_start);
+        let shadow_map = if p.api == Api::Gl33 && reuse.is_none() {
+            Some(self.read_map(&p, map)?)
+        } else {
+            None
+        };
+        let (technique, lit_program) = self.lit_program(&p)?;
+        let lit_start = Instant::now();
+        if let Some(t) = &timer {
+            t.begin(&self.g(), 1);
+        }
+        let (color, vis) = self.lit_pass(&p, &technique, lit_program, map, res)?;
+        let lit_wall = self.end_stage(timer.as_ref(), lit_start);
+        let gl = &self.g();
+        // A GPU interval cannot exceed the wall time we waited for it (llvmpipe's first query
+        // of a context can return garbage): fall back to the CPU clock rather than report it.
+        let (shadow_pass, lit_pass, clock) = match timer.as_ref().map(|t| t.read(gl)) {
+            Some((a, b)) if a <= shadow_wall && b <= lit_wall => (a, b, Clock::Gpu),
+            _ => (shadow_wall, lit_wall, Clock::CpuWall),
+        };
+        if let Some(t) = timer {
+            t.delete(gl);
+        }
+        self.check("timer queries")?;
+        let [w, h] = run.camera.size;
+        let (visibility, surface) = readback::decode_visibility(&vis);
+        Ok(Frame {
+            width: w,
+            height: h,
+            color,
+            visibility,
+            surface: Some(surface),
+            shadow_map,
+            // The visibility target is RGBA8 on every GL flavour.
+            visibility_storage: VisibilityStorage::Unorm8,
+            timings: Timings {
+                shadow_pass,
+                lit_pass,
+                readback: Duration::ZERO,
+                total: start.elapsed(),
+                clock: Some(clock),
+            },
+        })
+    }
 
-        let verts = run.geometry.interleaved();
-        let count = (verts.len() / STRIDE) as i32;
+    /// Ends a timed stage: its query, then glFinish for the CPU clock; the wall time.
+    fn end_stage(&self, timer: Option<&Timer>, since: Instant) -> Duration {
+        let gl = &self.g();
+        if let Some(t) = timer {
+            t.end(gl);
+        }
+        // SAFETY: waiting for the stage to finish, for the CPU clock.
+        unsafe { gl.finish() };
+        since.elapsed()
+    }
+
+    /// The run's vertices into a buffer, with the four attributes of
+    /// `Geometry::interleaved` (position, normal, albedo, face id).
+    fn upload(&self, p: &RunPlan, res: &mut Resources) -> Result<(), BackendError> {
+        let verts = p.run.geometry.interleaved();
         let gl = &self.g();
         // SAFETY: buffers and vertex arrays of the current context.
         unsafe {
             let vbo = gl.create_buffer().map_err(|e| gl_err("upload", e))?;
             res.buffers.push(vbo);
-            if api != Api::Gles2 {
+            if p.api != Api::Gles2 {
                 let vao = gl.create_vertex_array().map_err(|e| gl_err("upload", e))?;
                 res.vaos.push(vao);
                 gl.bind_vertex_array(Some(vao));
@@ -436,652 +416,80 @@ impl Renderer {
                 );
             }
         }
-        self.check("upload")?;
+        self.check("upload")
+    }
+}
 
-        // Shadow pass.
-        let [mw, mh] = s.size;
-        let faces = run.light.views.len();
-        let target = if cube {
-            glow::TEXTURE_CUBE_MAP
-        } else {
-            glow::TEXTURE_2D
-        };
-        let shadow_program = self.program(
-            shaders::shadow_vertex(api),
-            shaders::shadow_fragment(api, s.attachments == Attachments::WithColor),
-        )?;
-        // A mipmapped map's levels, and how many of them shadow passes draw (the rest are
-        // averaged from the level above: MipSource::Averaged).
+/// What every stage of a run reads, decided once from the case and the API.
+struct RunPlan<'a> {
+    run: &'a Prepared,
+    s: &'a umbra_case::format::Shadow,
+    api: Api,
+    /// GL's clip range in the case's depth order.
+    conv: Convention,
+    /// A cube map (point light).
+    cube: bool,
+    es2: bool,
+    /// A deliberate mistake, only under `cargo xtask selftest`.
+    fault: Option<Fault>,
+    /// The case's bias as the (faulted) backend applies it.
+    bias: umbra_case::format::Bias,
+    /// Faces (views) of the light.
+    faces: usize,
+    /// TEXTURE_2D or TEXTURE_CUBE_MAP.
+    target: u32,
+    /// Vertices drawn.
+    count: i32,
+    /// The map's mip levels, and how many of them shadow passes draw (the rest are averaged
+    /// from the level above: MipSource::Averaged).
+    levels: u32,
+    drawn_levels: u32,
+}
+
+impl<'a> RunPlan<'a> {
+    fn new(run: &'a Prepared, api: Api) -> RunPlan<'a> {
+        let s = &run.case().shadow;
+        let fault = Fault::active();
+        let cube = matches!(run.light.kind, LightKind::Point { .. });
         let levels = s.mipmaps.map_or(1, |m| m.levels);
-        let drawn_levels = match s.mipmaps {
-            Some(m) if m.source == MipSource::Averaged => 1,
-            _ => levels,
-        };
-        let average_program = if drawn_levels < levels {
-            Some(self.program(shaders::average_vertex(api), shaders::average_fragment(api))?)
-        } else {
-            None
-        };
-        let gl = &self.g();
-        let timer = if self.timer_queries {
-            Some(Timer::new(gl)?)
-        } else {
-            None
-        };
-        let shadow_start = Instant::now();
-        if let Some(t) = &timer {
-            t.begin(gl, 0);
-        }
-        // SAFETY: objects of the current context; completeness is checked before drawing.
-        let map = if let Some(map) = reuse {
-            // The twin's shadow pass is the case's: its map, with a fresh map's sampler state.
-            unsafe {
-                gl.bind_texture(target, Some(map));
-                for (p, v) in FRESH_MAP_SAMPLER {
-                    gl.tex_parameter_i32(target, p, v as i32);
-                }
-                if !es2 {
-                    gl.tex_parameter_i32(target, glow::TEXTURE_COMPARE_MODE, glow::NONE as i32);
-                }
-            }
-            self.check("kept shadow map")?;
-            map
-        } else {
-            unsafe {
-                let map = gl.create_texture().map_err(|e| gl_err("shadow map", e))?;
-                res.shadow_map = Some(map);
-                gl.bind_texture(target, Some(map));
-                let face_targets: Vec<u32> = if cube {
-                    (0..6)
-                        .map(|k| glow::TEXTURE_CUBE_MAP_POSITIVE_X + k)
-                        .collect()
-                } else {
-                    vec![glow::TEXTURE_2D]
-                };
-                let (internal, format, ty) = if es2 {
-                    (glow::RGBA as i32, glow::RGBA, glow::UNSIGNED_BYTE)
-                } else {
-                    depth_format(s.format)
-                };
-                for &ft in &face_targets {
-                    for level in 0..levels {
-                        let [lw, lh] = Mipmaps::level_size(s.size, level);
-                        gl.tex_image_2d(
-                            ft,
-                            level as i32,
-                            internal,
-                            lw as i32,
-                            lh as i32,
-                            0,
-                            format,
-                            ty,
-                            glow::PixelUnpackData::Slice(None),
-                        );
-                    }
-                }
-                for (p, v) in FRESH_MAP_SAMPLER {
-                    gl.tex_parameter_i32(target, p, v as i32);
-                }
-                if levels > 1 {
-                    // Complete with exactly the case's levels (the default MAX_LEVEL, 1000,
-                    // would ask for levels below 1 × 1 that a non-square map lacks).
-                    gl.tex_parameter_i32(target, glow::TEXTURE_BASE_LEVEL, 0);
-                    gl.tex_parameter_i32(target, glow::TEXTURE_MAX_LEVEL, levels as i32 - 1);
-                }
-                self.check("shadow map storage")?;
-                let fbo = gl
-                    .create_framebuffer()
-                    .map_err(|e| gl_err("shadow pass", e))?;
-                res.framebuffers.push(fbo);
-                gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-                let mut depth_rb = None;
-                if es2 {
-                    let rb = gl
-                        .create_renderbuffer()
-                        .map_err(|e| gl_err("shadow pass", e))?;
-                    res.renderbuffers.push(rb);
-                    gl.bind_renderbuffer(glow::RENDERBUFFER, Some(rb));
-                    gl.renderbuffer_storage(
-                        glow::RENDERBUFFER,
-                        es2_depth(s.format),
-                        mw as i32,
-                        mh as i32,
-                    );
-                    depth_rb = Some(rb);
-                }
-                let mut dummy = None;
-                if s.attachments == Attachments::WithColor && !es2 {
-                    let c = gl.create_texture().map_err(|e| gl_err("shadow pass", e))?;
-                    res.textures.push(c);
-                    gl.bind_texture(glow::TEXTURE_2D, Some(c));
-                    gl.tex_image_2d(
-                        glow::TEXTURE_2D,
-                        0,
-                        glow::RGBA8 as i32,
-                        mw as i32,
-                        mh as i32,
-                        0,
-                        glow::RGBA,
-                        glow::UNSIGNED_BYTE,
-                        glow::PixelUnpackData::Slice(None),
-                    );
-                    dummy = Some(c);
-                }
-                gl.use_program(Some(shadow_program));
-                let vp_loc = gl.get_uniform_location(shadow_program, "u_view_proj");
-                gl.enable(glow::DEPTH_TEST);
-                gl.depth_func(if s.depth_order == DepthOrder::Forward {
-                    glow::LESS
-                } else {
-                    glow::GREATER
-                });
-                gl.depth_mask(true);
-                gl.front_face(glow::CCW);
-                match s.cull {
-                    Cull::None => gl.disable(glow::CULL_FACE),
-                    Cull::Back => {
-                        gl.enable(glow::CULL_FACE);
-                        gl.cull_face(glow::BACK);
-                    }
-                    Cull::Front => {
-                        gl.enable(glow::CULL_FACE);
-                        gl.cull_face(glow::FRONT);
-                    }
-                }
-                let [factor, units] = bias.polygon_offset;
-                let clamp = bias.polygon_offset_clamp;
-                if es2 {
-                    // Applied in the shader (see shaders::shadow_fragment), clamp included.
-                    let sign = conv.toward_far();
-                    let r = s.format.offset_unit(0.0);
-                    gl.uniform_3_f32(
-                        gl.get_uniform_location(shadow_program, "u_offset").as_ref(),
-                        sign * factor,
-                        sign * r * units,
-                        sign * clamp,
-                    );
-                    gl.disable(glow::POLYGON_OFFSET_FILL);
-                } else if factor != 0.0 || units != 0.0 {
-                    let sign = conv.toward_far();
-                    gl.enable(glow::POLYGON_OFFSET_FILL);
-                    match (clamp != 0.0, self.ctx.polygon_offset_clamp) {
-                        // SAFETY: the entry point of an advertised extension, on the current
-                        // context, with the GL signature (factor, units, clamp).
-                        (true, Some(f)) => {
-                            gl.extension_call(
-                                self.ctx
-                                    .polygon_offset_clamp_name
-                                    .unwrap_or("glPolygonOffsetClamp"),
-                                &[sign * factor, sign * units, sign * clamp],
-                            );
-                            f(sign * factor, sign * units, sign * clamp)
-                        }
-                        (true, None) => {
-                            return Err(gl_err(
-                                "shadow pass",
-                                "a polygon-offset clamp without glPolygonOffsetClamp (supports() should have refused it)",
-                            ));
-                        }
-                        (false, _) => gl.polygon_offset(sign * factor, sign * units),
-                    }
-                } else {
-                    gl.disable(glow::POLYGON_OFFSET_FILL);
-                }
-                // Every face, and on a mipmapped map every level its source draws.
-                let passes = face_targets
-                    .iter()
-                    .enumerate()
-                    .flat_map(|(k, ft)| (0..drawn_levels).map(move |level| (k, ft, level)));
-                for (k, ft, level) in passes {
-                    let [lw, lh] = Mipmaps::level_size(s.size, level);
-                    if is(umbra_case::fault::Fault::ShadowViewport) {
-                        let [cw, ch] = run.camera.size;
-                        gl.viewport(0, 0, cw as i32, ch as i32);
-                    } else {
-                        gl.viewport(0, 0, lw as i32, lh as i32);
-                    }
-                    if es2 {
-                        gl.framebuffer_texture_2d(
-                            glow::FRAMEBUFFER,
-                            glow::COLOR_ATTACHMENT0,
-                            *ft,
-                            Some(map),
-                            0,
-                        );
-                        gl.framebuffer_renderbuffer(
-                            glow::FRAMEBUFFER,
-                            glow::DEPTH_ATTACHMENT,
-                            glow::RENDERBUFFER,
-                            depth_rb,
-                        );
-                    } else {
-                        gl.framebuffer_texture_2d(
-                            glow::FRAMEBUFFER,
-                            glow::DEPTH_ATTACHMENT,
-                            *ft,
-                            Some(map),
-                            level as i32,
-                        );
-                        if let Some(c) = dummy {
-                            gl.framebuffer_texture_2d(
-                                glow::FRAMEBUFFER,
-                                glow::COLOR_ATTACHMENT0,
-                                glow::TEXTURE_2D,
-                                Some(c),
-                                0,
-                            );
-                            gl.draw_buffers(&[glow::COLOR_ATTACHMENT0]);
-                            gl.color_mask(true, true, true, true);
-                        } else {
-                            gl.draw_buffers(&[glow::NONE]);
-                            gl.read_buffer(glow::NONE);
-                            gl.color_mask(false, false, false, false);
-                        }
-                    }
-                    let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
-                    if status != glow::FRAMEBUFFER_COMPLETE {
-                        return Err(gl_err(
-                            "shadow pass",
-                            format!(
-                                "framebuffer incomplete: {} (format {}, {:?})",
-                                status_name(status),
-                                s.format.name(),
-                                s.attachments
-                            ),
-                        ));
-                    }
-                    let clear = conv.clear_depth();
-                    gl.clear_depth_f32(clear);
-                    gl.clear_color(clear, clear, clear, clear); // GLES 2: packed far plane (1.0 unpacks past 1)
-                    gl.clear(
-                        glow::DEPTH_BUFFER_BIT
-                            | if es2 || dummy.is_some() {
-                                glow::COLOR_BUFFER_BIT
-                            } else {
-                                0
-                            },
-                    );
-                    let mut m = run.light.views[k].view_proj(conv);
-                    let [sx, sy] = fault.map_or([0.0; 2], |f| f.shadow_shift_texels());
-                    if sx != 0.0 || sy != 0.0 {
-                        // Texels to NDC: 2 · t / size.
-                        m = glam::Mat4::from_translation(glam::Vec3::new(
-                            2.0 * sx / lw as f32,
-                            2.0 * sy / lh as f32,
-                            0.0,
-                        )) * m;
-                    }
-                    // A face drawn with a wrong orientation (mirrors flip the front face
-                    // with it, so that only the face's content moves).
-                    let mistake = fault.and_then(|f| f.face_mistake(k, cube));
-                    if let Some((wrong, _)) = mistake {
-                        m = wrong * m;
-                    }
-                    let mirrored = mistake.is_some_and(|(_, mirrors)| mirrors);
-                    gl.front_face(if mirrored { glow::CW } else { glow::CCW });
-                    gl.uniform_matrix_4_f32_slice(vp_loc.as_ref(), false, &m.to_cols_array());
-                    gl.draw_arrays(glow::TRIANGLES, 0, count);
-                    self.check(&format!("shadow pass (face {k}, level {level})"))?;
-                }
-                gl.disable(glow::POLYGON_OFFSET_FILL);
-                gl.disable(glow::CULL_FACE);
-                gl.front_face(glow::CCW);
-                gl.color_mask(true, true, true, true);
-                if let Some(program) = average_program {
-                    self.average_levels(program, map, s, levels, res)?;
-                }
-                map
-            }
-        };
-        if let Some(t) = &timer {
-            t.end(gl);
-        }
-        // SAFETY: waiting for the pass to finish, for the CPU clock.
-        unsafe { gl.finish() };
-        let shadow_wall = shadow_start.elapsed();
-
-        // Depth map readback (GL only: GLES cannot read depth with glReadPixels).
-        let shadow_map = if api == Api::Gl33 && reuse.is_none() {
-            let mut values = Vec::with_capacity((mw * mh) as usize * faces);
-            // SAFETY: reading DEPTH_COMPONENT as FLOAT from the complete shadow framebuffer.
-            unsafe {
-                for k in 0..faces {
-                    let ft = if cube {
-                        glow::TEXTURE_CUBE_MAP_POSITIVE_X + k as u32
-                    } else {
-                        glow::TEXTURE_2D
-                    };
-                    gl.framebuffer_texture_2d(
-                        glow::FRAMEBUFFER,
-                        glow::DEPTH_ATTACHMENT,
-                        ft,
-                        Some(map),
-                        0,
-                    );
-                    let mut bytes = vec![0u8; (mw * mh * 4) as usize];
-                    gl.tag_readback(Readback::MapLayer(k as u32));
-                    gl.read_pixels(
-                        0,
-                        0,
-                        mw as i32,
-                        mh as i32,
-                        glow::DEPTH_COMPONENT,
-                        glow::FLOAT,
-                        glow::PixelPackData::Slice(Some(&mut bytes)),
-                    );
-                    let layer: Vec<f32> = bytes
-                        .chunks_exact(4)
-                        .map(|b| f32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
-                        .collect();
-                    values.extend(flip_rows(&layer, mw as usize));
-                }
-            }
-            self.check("shadow map readback")?;
-            Some(DepthMap {
-                width: mw,
-                height: mh,
-                layers: faces as u32,
-                format: s.format,
-                values,
-            })
-        } else {
-            None
-        };
-
-        // Lit pass.
-        let technique = api.technique(Technique::new(run, fault));
-        let lit_program = self.program(
-            shaders::lit_vertex(api),
-            shaders::lit_fragment(api, &technique),
-        )?;
-        let gl = &self.g();
-        let [w, h] = run.camera.size;
-        let lit_start = Instant::now();
-        if let Some(t) = &timer {
-            t.begin(gl, 1);
-        }
-        let manual = technique.manual();
-        // SAFETY: as above.
-        let (color, vis) = unsafe {
-            gl.bind_texture(target, Some(map));
-            let filter = if s.filter == Filter::Linear && !manual {
-                glow::LINEAR
+        RunPlan {
+            run,
+            s,
+            api,
+            conv: Convention::GL.with_order(s.depth_order),
+            cube,
+            es2: api == Api::Gles2,
+            fault,
+            bias: fault.map_or_else(|| s.bias.clone(), |f| f.bias(&s.bias)),
+            faces: run.light.views.len(),
+            target: if cube {
+                glow::TEXTURE_CUBE_MAP
             } else {
-                glow::NEAREST
-            };
-            // MipBaseOnly: the sampler ignores the levels (a non-mipmapped min filter).
-            let mip_filter = s
-                .mipmaps
-                .map(|m| m.filter)
-                .filter(|_| !is(umbra_case::fault::Fault::MipBaseOnly));
-            let min_filter = match (mip_filter, filter) {
-                (None, f) => f,
-                (Some(MipFilter::Nearest), glow::LINEAR) => glow::LINEAR_MIPMAP_NEAREST,
-                (Some(MipFilter::Nearest), _) => glow::NEAREST_MIPMAP_NEAREST,
-                (Some(MipFilter::Linear), glow::LINEAR) => glow::LINEAR_MIPMAP_LINEAR,
-                (Some(MipFilter::Linear), _) => glow::NEAREST_MIPMAP_LINEAR,
-            };
-            if s.mipmaps.is_some() {
-                let coarse = is(umbra_case::fault::Fault::MipLevelCoarse);
-                gl.tex_parameter_i32(target, glow::TEXTURE_BASE_LEVEL, i32::from(coarse));
-            }
-            gl.tex_parameter_i32(target, glow::TEXTURE_MIN_FILTER, min_filter as i32);
-            gl.tex_parameter_i32(target, glow::TEXTURE_MAG_FILTER, filter as i32);
-            if !es2 {
-                if manual {
-                    gl.tex_parameter_i32(target, glow::TEXTURE_COMPARE_MODE, glow::NONE as i32);
-                } else {
-                    gl.tex_parameter_i32(
-                        target,
-                        glow::TEXTURE_COMPARE_MODE,
-                        glow::COMPARE_REF_TO_TEXTURE as i32,
-                    );
-                    let func = match technique.compare_op() {
-                        CompareOp::LessEqual => glow::LEQUAL,
-                        CompareOp::GreaterEqual => glow::GEQUAL,
-                        CompareOp::Less => glow::LESS,
-                        CompareOp::Greater => glow::GREATER,
-                    };
-                    gl.tex_parameter_i32(target, glow::TEXTURE_COMPARE_FUNC, func as i32);
-                }
-            }
-            if !cube && !manual {
-                let wrap = match technique.texel_wrap() {
-                    Outside::Lit | Outside::ClampToEdge => glow::CLAMP_TO_EDGE,
-                    Outside::Repeat => glow::REPEAT,
-                    Outside::Border => {
-                        let c = conv.clear_depth();
-                        gl.tex_parameter_f32_slice(
-                            target,
-                            glow::TEXTURE_BORDER_COLOR,
-                            &[c, c, c, c],
-                        );
-                        glow::CLAMP_TO_BORDER
-                    }
-                };
-                gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_S, wrap as i32);
-                gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_T, wrap as i32);
-            }
-            self.check("shadow sampler")?;
-
-            gl.use_program(Some(lit_program));
-            let loc = |name: &str| gl.get_uniform_location(lit_program, name);
-            let cam = run.camera.view_proj(conv);
-            gl.uniform_matrix_4_f32_slice(loc("u_view_proj").as_ref(), false, &cam.to_cols_array());
-            let mut light = Vec::with_capacity(16 * faces);
-            let mut tex = Vec::with_capacity(16 * faces);
-            for v in &run.light.views {
-                let m = LookupMatrices::new(conv, v.view_proj(conv));
-                light.extend_from_slice(&m.light.to_cols_array());
-                tex.extend_from_slice(&m.texture.to_cols_array());
-            }
-            gl.uniform_matrix_4_f32_slice(
-                loc("u_light[0]").or_else(|| loc("u_light")).as_ref(),
-                false,
-                &light,
-            );
-            gl.uniform_matrix_4_f32_slice(
-                loc("u_tex[0]").or_else(|| loc("u_tex")).as_ref(),
-                false,
-                &tex,
-            );
-            let (pos, towards) = match run.light.kind {
-                // A directional light's eye is read only by an N·L bias towards its position.
-                LightKind::Directional { towards, position } => (position, towards),
-                LightKind::Spot { position } | LightKind::Point { position } => {
-                    (position, glam::Vec3::ZERO)
-                }
-            };
-            gl.uniform_3_f32(loc("u_light_pos").as_ref(), pos.x, pos.y, pos.z);
-            gl.uniform_3_f32(loc("u_towards").as_ref(), towards.x, towards.y, towards.z);
-            let eye = run.camera.eye;
-            gl.uniform_3_f32(loc("u_eye").as_ref(), eye.x, eye.y, eye.z);
-            gl.uniform_2_f32(loc("u_size").as_ref(), mw as f32, mh as f32);
-            gl.uniform_1_f32(loc("u_constant").as_ref(), bias.constant);
-            let (scale, max) = bias.slope.map_or((0.0, 0.0), |sl| (sl.scale, sl.max));
-            gl.uniform_1_f32(loc("u_slope_scale").as_ref(), scale);
-            gl.uniform_1_f32(loc("u_slope_max").as_ref(), max);
-            let (ndl_scale, ndl_min) = bias.n_dot_l.map_or((0.0, 0.0), |b| (b.scale, b.min));
-            gl.uniform_1_f32(loc("u_ndl_scale").as_ref(), ndl_scale);
-            gl.uniform_1_f32(loc("u_ndl_min").as_ref(), ndl_min);
-            gl.uniform_1_f32(loc("u_normal_offset").as_ref(), bias.normal_offset);
-            gl.uniform_1_i32(loc("u_map").as_ref(), 0);
-            gl.active_texture(glow::TEXTURE0);
-            gl.bind_texture(target, Some(map));
-            self.check("lit pass uniforms")?;
-
-            let targets = if es2 { 2 } else { 1 };
-            let mut images = Vec::new();
-            for pass in 0..targets {
-                let fbo = gl.create_framebuffer().map_err(|e| gl_err("lit pass", e))?;
-                res.framebuffers.push(fbo);
-                gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-                let outputs = if es2 { 1 } else { 2 };
-                let mut color_textures = Vec::new();
-                for a in 0..outputs {
-                    let t = gl.create_texture().map_err(|e| gl_err("lit pass", e))?;
-                    res.textures.push(t);
-                    gl.bind_texture(glow::TEXTURE_2D, Some(t));
-                    let internal = if es2 { glow::RGBA } else { glow::RGBA8 };
-                    gl.tex_image_2d(
-                        glow::TEXTURE_2D,
-                        0,
-                        internal as i32,
-                        w as i32,
-                        h as i32,
-                        0,
-                        glow::RGBA,
-                        glow::UNSIGNED_BYTE,
-                        glow::PixelUnpackData::Slice(None),
-                    );
-                    gl.tex_parameter_i32(
-                        glow::TEXTURE_2D,
-                        glow::TEXTURE_MIN_FILTER,
-                        glow::NEAREST as i32,
-                    );
-                    gl.framebuffer_texture_2d(
-                        glow::FRAMEBUFFER,
-                        glow::COLOR_ATTACHMENT0 + a,
-                        glow::TEXTURE_2D,
-                        Some(t),
-                        0,
-                    );
-                    color_textures.push(t);
-                }
-                if is(umbra_case::fault::Fault::WrongTextureUnit) {
-                    // glActiveTexture(GL_TEXTURE0 + 1) while the sampler uniform says 0.
-                    gl.active_texture(glow::TEXTURE0);
-                    gl.bind_texture(target, None);
-                    gl.active_texture(glow::TEXTURE1);
-                } else {
-                    gl.active_texture(glow::TEXTURE0);
-                }
-                gl.bind_texture(target, Some(map));
-                let rb = gl
-                    .create_renderbuffer()
-                    .map_err(|e| gl_err("lit pass", e))?;
-                res.renderbuffers.push(rb);
-                gl.bind_renderbuffer(glow::RENDERBUFFER, Some(rb));
-                let camera_depth = if es2 {
-                    es2_depth(DepthFormat::Depth24)
-                } else {
-                    glow::DEPTH_COMPONENT32F
-                };
-                gl.renderbuffer_storage(glow::RENDERBUFFER, camera_depth, w as i32, h as i32);
-                gl.framebuffer_renderbuffer(
-                    glow::FRAMEBUFFER,
-                    glow::DEPTH_ATTACHMENT,
-                    glow::RENDERBUFFER,
-                    Some(rb),
-                );
-                if !es2 {
-                    gl.draw_buffers(&[glow::COLOR_ATTACHMENT0, glow::COLOR_ATTACHMENT1]);
-                }
-                let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
-                if status != glow::FRAMEBUFFER_COMPLETE {
-                    return Err(gl_err(
-                        "lit pass",
-                        format!("framebuffer incomplete: {}", status_name(status)),
-                    ));
-                }
-                gl.viewport(0, 0, w as i32, h as i32);
-                gl.enable(glow::DEPTH_TEST);
-                gl.depth_func(glow::LESS);
-                gl.depth_mask(true);
-                gl.clear_depth_f32(1.0);
-                if es2 {
-                    let bg = if pass == 0 {
-                        [0.0, 0.0, 0.0, 1.0]
-                    } else {
-                        [0.0; 4]
-                    };
-                    gl.clear_color(bg[0], bg[1], bg[2], bg[3]);
-                    gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
-                    gl.uniform_1_f32(loc("u_output").as_ref(), pass as f32);
-                } else {
-                    gl.clear_buffer_f32_slice(glow::COLOR, 0, &[0.0, 0.0, 0.0, 1.0]);
-                    gl.clear_buffer_f32_slice(glow::COLOR, 1, &[0.0, 0.0, 0.0, 0.0]);
-                    gl.clear(glow::DEPTH_BUFFER_BIT);
-                }
-                gl.draw_arrays(glow::TRIANGLES, 0, count);
-                self.check("lit pass")?;
-                for a in 0..outputs {
-                    if !es2 {
-                        gl.read_buffer(glow::COLOR_ATTACHMENT0 + a);
-                    }
-                    let mut bytes = vec![0u8; (w * h * 4) as usize];
-                    // GL: attachment 0 colour, 1 visibility; GLES 2: pass 0 colour, 1 visibility.
-                    gl.tag_readback(if a + pass as u32 == 0 {
-                        Readback::Color
-                    } else {
-                        Readback::Visibility
-                    });
-                    gl.read_pixels(
-                        0,
-                        0,
-                        w as i32,
-                        h as i32,
-                        glow::RGBA,
-                        glow::UNSIGNED_BYTE,
-                        glow::PixelPackData::Slice(Some(&mut bytes)),
-                    );
-                    images.push(if is(umbra_case::fault::Fault::NoYFlip) {
-                        bytes
-                    } else {
-                        flip_rows(&bytes, (w * 4) as usize)
-                    });
-                }
-                self.check("readback")?;
-            }
-            let vis = images.pop().unwrap_or_default();
-            let color = images.pop().unwrap_or_default();
-            (color, vis)
-        };
-        if let Some(t) = &timer {
-            t.end(gl);
-        }
-        // SAFETY: as above.
-        unsafe { gl.finish() };
-        let lit_wall = lit_start.elapsed();
-        let mut visibility = Vec::with_capacity((w * h) as usize);
-        let mut surface = Vec::with_capacity((w * h) as usize);
-        for px in vis.chunks_exact(4) {
-            let id = u32::from(px[1]) + 256 * u32::from(px[2]) + 65536 * u32::from(px[3]);
-            surface.push(id);
-            visibility.push(if id == 0 {
-                f32::NAN
-            } else {
-                f32::from(px[0]) / 255.0
-            });
-        }
-        // A GPU interval cannot exceed the wall time we waited for it (llvmpipe's first query
-        // of a context can return garbage): fall back to the CPU clock rather than report it.
-        let (shadow_pass, lit_pass, clock) = match timer.as_ref().map(|t| t.read(gl)) {
-            Some((a, b)) if a <= shadow_wall && b <= lit_wall => (a, b, Clock::Gpu),
-            _ => (shadow_wall, lit_wall, Clock::CpuWall),
-        };
-        if let Some(t) = timer {
-            t.delete(gl);
-        }
-        self.check("timer queries")?;
-        let total = start.elapsed();
-        Ok(Frame {
-            width: w,
-            height: h,
-            color,
-            visibility,
-            surface: Some(surface),
-            shadow_map,
-            // The visibility target is RGBA8 on every GL flavour.
-            visibility_storage: VisibilityStorage::Unorm8,
-            timings: Timings {
-                shadow_pass,
-                lit_pass,
-                readback: Duration::ZERO,
-                total,
-                clock: Some(clock),
+                glow::TEXTURE_2D
             },
-        })
+            count: (run.geometry.interleaved().len() / STRIDE) as i32,
+            levels,
+            drawn_levels: match s.mipmaps {
+                Some(m) if m.source == MipSource::Averaged => 1,
+                _ => levels,
+            },
+        }
+    }
+
+    /// Whether `f` is the active self-test fault.
+    fn is(&self, f: Fault) -> bool {
+        self.fault == Some(f)
+    }
+
+    /// The texture target of each face: the six cube faces in GL's order, or TEXTURE_2D.
+    fn face_targets(&self) -> Vec<u32> {
+        if self.cube {
+            (0..6)
+                .map(|k| glow::TEXTURE_CUBE_MAP_POSITIVE_X + k)
+                .collect()
+        } else {
+            vec![glow::TEXTURE_2D]
+        }
     }
 }
 
@@ -1161,40 +569,6 @@ impl Timer {
                 gl.delete_query(q);
             }
         }
-    }
-}
-
-/// (internal format, format, type) of a depth texture.
-fn depth_format(f: DepthFormat) -> (i32, u32, u32) {
-    match f {
-        DepthFormat::Unsized => (
-            glow::DEPTH_COMPONENT as i32,
-            glow::DEPTH_COMPONENT,
-            glow::UNSIGNED_INT,
-        ),
-        DepthFormat::Depth16 => (
-            glow::DEPTH_COMPONENT16 as i32,
-            glow::DEPTH_COMPONENT,
-            glow::UNSIGNED_SHORT,
-        ),
-        DepthFormat::Depth24 => (
-            glow::DEPTH_COMPONENT24 as i32,
-            glow::DEPTH_COMPONENT,
-            glow::UNSIGNED_INT,
-        ),
-        DepthFormat::Depth32f => (
-            glow::DEPTH_COMPONENT32F as i32,
-            glow::DEPTH_COMPONENT,
-            glow::FLOAT,
-        ),
-    }
-}
-
-/// GLES 2 depth renderbuffer: 16 bits, or 24 with OES_depth24 (Mesa has it).
-fn es2_depth(f: DepthFormat) -> u32 {
-    match f {
-        DepthFormat::Depth16 => glow::DEPTH_COMPONENT16,
-        _ => glow::DEPTH_COMPONENT24,
     }
 }
 

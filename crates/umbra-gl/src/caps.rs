@@ -1,0 +1,70 @@
+//! What a GL driver can do, probed once when its context is made, in the style of wgpu-hal's
+//! gles backend: the renderer and `GlBackend::supports` read these fields, never the
+//! driver's name, so a driver's differences have one home. Each field says which version or
+//! extension grants it; a case needing what a driver lacks is a skip that names it.
+
+use std::collections::HashSet;
+
+use glow::HasContext as _;
+
+use crate::api::Api;
+
+/// A GL context's capabilities.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Caps {
+    /// The API flavour the context was made for.
+    pub api: Api,
+    /// Every extension the context advertises.
+    pub extensions: HashSet<String>,
+    /// KHR_debug: the driver's error messages fail a run's stage.
+    pub debug_output: bool,
+    /// GL_TIME_ELAPSED queries (GL 3.3 core, ARB_timer_query). GLES has them only through
+    /// EXT_disjoint_timer_query, whose results a disjoint event voids: umbra times GLES with
+    /// the CPU clock around glFinish instead.
+    pub timer_queries: bool,
+    /// The polygon-offset clamp's entry point name (glPolygonOffsetClamp, GL 4.6 or
+    /// ARB_polygon_offset_clamp; glPolygonOffsetClampEXT, EXT_polygon_offset_clamp), when
+    /// the context advertises one and EGL returned its pointer.
+    pub offset_clamp: Option<&'static str>,
+    /// CLAMP_TO_BORDER: core in GL 3.3; GLES 3.0 needs EXT/OES_texture_border_clamp.
+    pub border_clamp: bool,
+    /// Depth textures with a compare sampler: GL 3.3 and GLES 3.0 core. GLES 2 has neither
+    /// (OES_depth_texture, issue 1), so it packs depth into RGBA8 and compares in the shader.
+    pub depth_compare: bool,
+    /// GLES 2's packed-depth path: the polygon offset applied in the shader needs
+    /// OES_standard_derivatives (the depth slope) and EXT_frag_depth.
+    pub shader_offset: bool,
+    /// Seamless cube filtering: GLES 3.0 always; GL 3.3 only when enabled
+    /// (ARB_seamless_cube_map), which umbra leaves off (the GL profile models it off).
+    pub seamless_cube_always: bool,
+    /// Depth clamping (ARB_depth_clamp, core in GL 3.2; EXT_depth_clamp on GLES): recorded,
+    /// not used (umbra's cases keep geometry within the clip volume or test its clipping).
+    pub depth_clamp: bool,
+}
+
+impl Caps {
+    /// Probes the current context.
+    pub fn probe(gl: &glow::Context, api: Api, offset_clamp: Option<&'static str>) -> Caps {
+        let extensions = gl.supported_extensions().clone();
+        let has = |e: &str| extensions.contains(e);
+        Caps {
+            api,
+            debug_output: has("GL_KHR_debug"),
+            timer_queries: api == Api::Gl33,
+            offset_clamp,
+            border_clamp: api == Api::Gl33
+                || has("GL_EXT_texture_border_clamp")
+                || has("GL_OES_texture_border_clamp"),
+            depth_compare: api != Api::Gles2,
+            shader_offset: has("GL_OES_standard_derivatives") && has("GL_EXT_frag_depth"),
+            seamless_cube_always: api == Api::Gles3,
+            depth_clamp: api == Api::Gl33 || has("GL_EXT_depth_clamp"),
+            extensions,
+        }
+    }
+
+    /// Whether the context advertises `ext`.
+    pub fn has(&self, ext: &str) -> bool {
+        self.extensions.contains(ext)
+    }
+}

@@ -1,0 +1,328 @@
+//! The lit pass: the map's sampler state (filter, mip filter, compare function, wrap or
+//! border), the lookup's uniforms, and the draw into colour and visibility (two render
+//! targets; GLES 2 draws the pass twice, once per output, a uniform choosing which), each
+//! read back right after its draw.
+
+use umbra_case::fault::Fault;
+use umbra_case::format::{DepthFormat, Filter, MipFilter, Outside};
+use umbra_case::technique::CompareOp;
+use umbra_case::{BackendError, LightKind, LookupMatrices, Technique};
+
+use super::shadow_pass::es2_depth;
+use super::{Renderer, Resources, RunPlan, flip_rows, gl_err, status_name};
+use crate::record::Readback;
+use crate::shaders;
+
+impl Renderer {
+    /// The run's technique as this API runs it, and its compiled lit program.
+    pub(super) fn lit_program(
+        &mut self,
+        p: &RunPlan,
+    ) -> Result<(Technique, glow::Program), BackendError> {
+        let technique = self.api.technique(Technique::new(p.run, p.fault));
+        let program = self.program(
+            shaders::lit_vertex(self.api),
+            shaders::lit_fragment(self.api, &technique),
+        )?;
+        Ok((technique, program))
+    }
+
+    /// Draws the lit pass over `map`; the colour and visibility images, rows top first.
+    pub(super) fn lit_pass(
+        &self,
+        p: &RunPlan,
+        technique: &Technique,
+        program: glow::Program,
+        map: glow::Texture,
+        res: &mut Resources,
+    ) -> Result<(Vec<u8>, Vec<u8>), BackendError> {
+        self.map_sampler(p, technique, map)?;
+        self.lit_uniforms(p, program, map)?;
+        let mut images = Vec::new();
+        for pass in 0..if p.es2 { 2 } else { 1 } {
+            images.extend(self.draw_lit(p, program, map, res, pass)?);
+        }
+        let vis = images.pop().unwrap_or_default();
+        let color = images.pop().unwrap_or_default();
+        Ok((color, vis))
+    }
+
+    /// The map's sampler state for the technique: filters (MIPMAP ones on a mip chain),
+    /// depth compare or none (manual compare reads depths), and wrap or border on 2D maps.
+    fn map_sampler(
+        &self,
+        p: &RunPlan,
+        technique: &Technique,
+        map: glow::Texture,
+    ) -> Result<(), BackendError> {
+        let gl = &self.g();
+        let (s, target) = (p.s, p.target);
+        let manual = technique.manual();
+        // SAFETY: a texture of the current context.
+        unsafe {
+            gl.bind_texture(target, Some(map));
+            let filter = if s.filter == Filter::Linear && !manual {
+                glow::LINEAR
+            } else {
+                glow::NEAREST
+            };
+            // MipBaseOnly: the sampler ignores the levels (a non-mipmapped min filter).
+            let mip_filter = s
+                .mipmaps
+                .map(|m| m.filter)
+                .filter(|_| !p.is(Fault::MipBaseOnly));
+            let min_filter = match (mip_filter, filter) {
+                (None, f) => f,
+                (Some(MipFilter::Nearest), glow::LINEAR) => glow::LINEAR_MIPMAP_NEAREST,
+                (Some(MipFilter::Nearest), _) => glow::NEAREST_MIPMAP_NEAREST,
+                (Some(MipFilter::Linear), glow::LINEAR) => glow::LINEAR_MIPMAP_LINEAR,
+                (Some(MipFilter::Linear), _) => glow::NEAREST_MIPMAP_LINEAR,
+            };
+            if s.mipmaps.is_some() {
+                let coarse = p.is(Fault::MipLevelCoarse);
+                gl.tex_parameter_i32(target, glow::TEXTURE_BASE_LEVEL, i32::from(coarse));
+            }
+            gl.tex_parameter_i32(target, glow::TEXTURE_MIN_FILTER, min_filter as i32);
+            gl.tex_parameter_i32(target, glow::TEXTURE_MAG_FILTER, filter as i32);
+            if !p.es2 {
+                if manual {
+                    gl.tex_parameter_i32(target, glow::TEXTURE_COMPARE_MODE, glow::NONE as i32);
+                } else {
+                    gl.tex_parameter_i32(
+                        target,
+                        glow::TEXTURE_COMPARE_MODE,
+                        glow::COMPARE_REF_TO_TEXTURE as i32,
+                    );
+                    let func = match technique.compare_op() {
+                        CompareOp::LessEqual => glow::LEQUAL,
+                        CompareOp::GreaterEqual => glow::GEQUAL,
+                        CompareOp::Less => glow::LESS,
+                        CompareOp::Greater => glow::GREATER,
+                    };
+                    gl.tex_parameter_i32(target, glow::TEXTURE_COMPARE_FUNC, func as i32);
+                }
+            }
+            if !p.cube && !manual {
+                let wrap = match technique.texel_wrap() {
+                    Outside::Lit | Outside::ClampToEdge => glow::CLAMP_TO_EDGE,
+                    Outside::Repeat => glow::REPEAT,
+                    Outside::Border => {
+                        let c = p.conv.clear_depth();
+                        gl.tex_parameter_f32_slice(
+                            target,
+                            glow::TEXTURE_BORDER_COLOR,
+                            &[c, c, c, c],
+                        );
+                        glow::CLAMP_TO_BORDER
+                    }
+                };
+                gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_S, wrap as i32);
+                gl.tex_parameter_i32(target, glow::TEXTURE_WRAP_T, wrap as i32);
+            }
+        }
+        self.check("shadow sampler")
+    }
+
+    /// The lit program's uniforms: camera, each face's light and texture matrices (the bias
+    /// matrix applied before or after the divide is the shader's choice), the light, the
+    /// bias terms, the map's size and unit.
+    fn lit_uniforms(
+        &self,
+        p: &RunPlan,
+        program: glow::Program,
+        map: glow::Texture,
+    ) -> Result<(), BackendError> {
+        let gl = &self.g();
+        let (run, conv, bias) = (p.run, p.conv, &p.bias);
+        let [mw, mh] = p.s.size;
+        // SAFETY: uniforms of the current context's program.
+        unsafe {
+            gl.use_program(Some(program));
+            let loc = |name: &str| gl.get_uniform_location(program, name);
+            let cam = run.camera.view_proj(conv);
+            gl.uniform_matrix_4_f32_slice(loc("u_view_proj").as_ref(), false, &cam.to_cols_array());
+            let mut light = Vec::with_capacity(16 * p.faces);
+            let mut tex = Vec::with_capacity(16 * p.faces);
+            for v in &run.light.views {
+                let m = LookupMatrices::new(conv, v.view_proj(conv));
+                light.extend_from_slice(&m.light.to_cols_array());
+                tex.extend_from_slice(&m.texture.to_cols_array());
+            }
+            gl.uniform_matrix_4_f32_slice(
+                loc("u_light[0]").or_else(|| loc("u_light")).as_ref(),
+                false,
+                &light,
+            );
+            gl.uniform_matrix_4_f32_slice(
+                loc("u_tex[0]").or_else(|| loc("u_tex")).as_ref(),
+                false,
+                &tex,
+            );
+            let (pos, towards) = match run.light.kind {
+                // A directional light's eye is read only by an N·L bias towards its position.
+                LightKind::Directional { towards, position } => (position, towards),
+                LightKind::Spot { position } | LightKind::Point { position } => {
+                    (position, glam::Vec3::ZERO)
+                }
+            };
+            gl.uniform_3_f32(loc("u_light_pos").as_ref(), pos.x, pos.y, pos.z);
+            gl.uniform_3_f32(loc("u_towards").as_ref(), towards.x, towards.y, towards.z);
+            let eye = run.camera.eye;
+            gl.uniform_3_f32(loc("u_eye").as_ref(), eye.x, eye.y, eye.z);
+            gl.uniform_2_f32(loc("u_size").as_ref(), mw as f32, mh as f32);
+            gl.uniform_1_f32(loc("u_constant").as_ref(), bias.constant);
+            let (scale, max) = bias.slope.map_or((0.0, 0.0), |sl| (sl.scale, sl.max));
+            gl.uniform_1_f32(loc("u_slope_scale").as_ref(), scale);
+            gl.uniform_1_f32(loc("u_slope_max").as_ref(), max);
+            let (ndl_scale, ndl_min) = bias.n_dot_l.map_or((0.0, 0.0), |b| (b.scale, b.min));
+            gl.uniform_1_f32(loc("u_ndl_scale").as_ref(), ndl_scale);
+            gl.uniform_1_f32(loc("u_ndl_min").as_ref(), ndl_min);
+            gl.uniform_1_f32(loc("u_normal_offset").as_ref(), bias.normal_offset);
+            gl.uniform_1_i32(loc("u_map").as_ref(), 0);
+            gl.active_texture(glow::TEXTURE0);
+            gl.bind_texture(p.target, Some(map));
+        }
+        self.check("lit pass uniforms")
+    }
+
+    /// One draw of the lit pass into its framebuffer (GL: colour and visibility as two
+    /// targets; GLES 2: pass 0 colour, pass 1 visibility) and the readback of its outputs,
+    /// rows flipped to top first.
+    fn draw_lit(
+        &self,
+        p: &RunPlan,
+        program: glow::Program,
+        map: glow::Texture,
+        res: &mut Resources,
+        pass: usize,
+    ) -> Result<Vec<Vec<u8>>, BackendError> {
+        let gl = &self.g();
+        let es2 = p.es2;
+        let [w, h] = p.run.camera.size;
+        let outputs = if es2 { 1 } else { 2 };
+        let mut images = Vec::new();
+        // SAFETY: objects of the current context; completeness is checked before drawing.
+        unsafe {
+            let fbo = gl.create_framebuffer().map_err(|e| gl_err("lit pass", e))?;
+            res.framebuffers.push(fbo);
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+            for a in 0..outputs {
+                let t = gl.create_texture().map_err(|e| gl_err("lit pass", e))?;
+                res.textures.push(t);
+                gl.bind_texture(glow::TEXTURE_2D, Some(t));
+                let internal = if es2 { glow::RGBA } else { glow::RGBA8 };
+                gl.tex_image_2d(
+                    glow::TEXTURE_2D,
+                    0,
+                    internal as i32,
+                    w as i32,
+                    h as i32,
+                    0,
+                    glow::RGBA,
+                    glow::UNSIGNED_BYTE,
+                    glow::PixelUnpackData::Slice(None),
+                );
+                gl.tex_parameter_i32(
+                    glow::TEXTURE_2D,
+                    glow::TEXTURE_MIN_FILTER,
+                    glow::NEAREST as i32,
+                );
+                gl.framebuffer_texture_2d(
+                    glow::FRAMEBUFFER,
+                    glow::COLOR_ATTACHMENT0 + a,
+                    glow::TEXTURE_2D,
+                    Some(t),
+                    0,
+                );
+            }
+            if p.is(Fault::WrongTextureUnit) {
+                // glActiveTexture(GL_TEXTURE0 + 1) while the sampler uniform says 0.
+                gl.active_texture(glow::TEXTURE0);
+                gl.bind_texture(p.target, None);
+                gl.active_texture(glow::TEXTURE1);
+            } else {
+                gl.active_texture(glow::TEXTURE0);
+            }
+            gl.bind_texture(p.target, Some(map));
+            let rb = gl
+                .create_renderbuffer()
+                .map_err(|e| gl_err("lit pass", e))?;
+            res.renderbuffers.push(rb);
+            gl.bind_renderbuffer(glow::RENDERBUFFER, Some(rb));
+            let camera_depth = if es2 {
+                es2_depth(DepthFormat::Depth24)
+            } else {
+                glow::DEPTH_COMPONENT32F
+            };
+            gl.renderbuffer_storage(glow::RENDERBUFFER, camera_depth, w as i32, h as i32);
+            gl.framebuffer_renderbuffer(
+                glow::FRAMEBUFFER,
+                glow::DEPTH_ATTACHMENT,
+                glow::RENDERBUFFER,
+                Some(rb),
+            );
+            if !es2 {
+                gl.draw_buffers(&[glow::COLOR_ATTACHMENT0, glow::COLOR_ATTACHMENT1]);
+            }
+            let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
+            if status != glow::FRAMEBUFFER_COMPLETE {
+                return Err(gl_err(
+                    "lit pass",
+                    format!("framebuffer incomplete: {}", status_name(status)),
+                ));
+            }
+            gl.viewport(0, 0, w as i32, h as i32);
+            gl.enable(glow::DEPTH_TEST);
+            gl.depth_func(glow::LESS);
+            gl.depth_mask(true);
+            gl.clear_depth_f32(1.0);
+            if es2 {
+                let bg = if pass == 0 {
+                    [0.0, 0.0, 0.0, 1.0]
+                } else {
+                    [0.0; 4]
+                };
+                gl.clear_color(bg[0], bg[1], bg[2], bg[3]);
+                gl.clear(glow::COLOR_BUFFER_BIT | glow::DEPTH_BUFFER_BIT);
+                gl.uniform_1_f32(
+                    gl.get_uniform_location(program, "u_output").as_ref(),
+                    pass as f32,
+                );
+            } else {
+                gl.clear_buffer_f32_slice(glow::COLOR, 0, &[0.0, 0.0, 0.0, 1.0]);
+                gl.clear_buffer_f32_slice(glow::COLOR, 1, &[0.0, 0.0, 0.0, 0.0]);
+                gl.clear(glow::DEPTH_BUFFER_BIT);
+            }
+            gl.draw_arrays(glow::TRIANGLES, 0, p.count);
+            self.check("lit pass")?;
+            for a in 0..outputs {
+                if !es2 {
+                    gl.read_buffer(glow::COLOR_ATTACHMENT0 + a);
+                }
+                let mut bytes = vec![0u8; (w * h * 4) as usize];
+                // GL: attachment 0 colour, 1 visibility; GLES 2: pass 0 colour, 1 visibility.
+                gl.tag_readback(if a + pass as u32 == 0 {
+                    Readback::Color
+                } else {
+                    Readback::Visibility
+                });
+                gl.read_pixels(
+                    0,
+                    0,
+                    w as i32,
+                    h as i32,
+                    glow::RGBA,
+                    glow::UNSIGNED_BYTE,
+                    glow::PixelPackData::Slice(Some(&mut bytes)),
+                );
+                images.push(if p.is(Fault::NoYFlip) {
+                    bytes
+                } else {
+                    flip_rows(&bytes, (w * 4) as usize)
+                });
+            }
+        }
+        self.check("readback")?;
+        Ok(images)
+    }
+}
