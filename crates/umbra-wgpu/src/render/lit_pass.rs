@@ -1,0 +1,366 @@
+//! The lit pass: its pipeline (the technique's WGSL, three targets: colour, visibility, face
+//! id), its bind group (uniforms, the map's view, the compare sampler unless the technique
+//! compares by hand), its targets, and the recorded pass with its timestamps.
+
+use umbra_case::format::{Filter, MipFilter, Outside};
+use umbra_case::technique::CompareOp;
+use umbra_case::{LightKind, LookupMatrices, Technique};
+
+use super::{Encoding, RunPlan, STRIDE, uniform_buffer, uniform_entry};
+use crate::render::Gpu;
+use crate::shaders;
+
+/// The lit pipeline and what its bind group is made against.
+pub(super) struct LitPipeline {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    view_dimension: wgpu::TextureViewDimension,
+}
+
+/// The lit pass's bind group and the uniform buffer it references.
+pub(super) struct LitBindings {
+    group: wgpu::BindGroup,
+    _uniforms: wgpu::Buffer,
+}
+
+/// The lit pass's targets.
+pub(super) struct LitTargets {
+    /// Colour (RGBA8), visibility (the adapter's visibility format), face id (R32Uint).
+    pub(super) color: wgpu::Texture,
+    pub(super) vis: wgpu::Texture,
+    pub(super) face: wgpu::Texture,
+    views: [wgpu::TextureView; 3],
+    depth_view: wgpu::TextureView,
+}
+
+impl Gpu {
+    /// The lit pipeline for `technique`: its map binding is a cube, a 2D array (a cube read
+    /// by hand) or 2D, and a compare sampler only when the hardware compares.
+    pub(super) fn lit_pipeline(&self, p: &RunPlan, technique: &Technique) -> LitPipeline {
+        let d = &self.device;
+        let manual = technique.manual();
+        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("lit"),
+            source: wgpu::ShaderSource::Wgsl(shaders::lit(technique).into()),
+        });
+        let view_dimension = match (p.cube, manual) {
+            (false, _) => wgpu::TextureViewDimension::D2,
+            (true, false) => wgpu::TextureViewDimension::Cube,
+            (true, true) => wgpu::TextureViewDimension::D2Array,
+        };
+        let mut entries = vec![
+            uniform_entry(wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT),
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Depth,
+                    view_dimension,
+                    multisampled: false,
+                },
+                count: None,
+            },
+        ];
+        if !manual {
+            entries.push(wgpu::BindGroupLayoutEntry {
+                binding: 2,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                count: None,
+            });
+        }
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lit"),
+            entries: &entries,
+        });
+        let pipeline_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("lit"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let attributes = [
+            (wgpu::VertexFormat::Float32x3, 0),
+            (wgpu::VertexFormat::Float32x3, 12),
+            (wgpu::VertexFormat::Float32x3, 24),
+            (wgpu::VertexFormat::Float32, 36),
+        ]
+        .into_iter()
+        .enumerate()
+        .map(|(i, (format, offset))| wgpu::VertexAttribute {
+            format,
+            offset,
+            shader_location: i as u32,
+        })
+        .collect::<Vec<_>>();
+        let targets = [
+            Some(wgpu::ColorTargetState::from(
+                wgpu::TextureFormat::Rgba8Unorm,
+            )),
+            Some(wgpu::ColorTargetState::from(self.vis_format)),
+            Some(wgpu::ColorTargetState::from(wgpu::TextureFormat::R32Uint)),
+        ];
+        let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("lit"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: STRIDE,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &attributes,
+                })],
+            },
+            primitive: wgpu::PrimitiveState {
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: wgpu::TextureFormat::Depth32Float,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        LitPipeline {
+            pipeline,
+            layout,
+            view_dimension,
+        }
+    }
+
+    /// The lit pass's uniforms (camera, each face's light and texture matrices, the light,
+    /// the bias terms, the map's size), the map's view (the mip faults narrow its levels) and
+    /// the compare sampler.
+    pub(super) fn lit_bindings(
+        &self,
+        p: &RunPlan,
+        technique: &Technique,
+        lit: &LitPipeline,
+        map: &wgpu::Texture,
+    ) -> LitBindings {
+        let (run, conv, b) = (p.run, p.conv, &p.bias);
+        let [mw, mh] = p.s.size;
+        let mut light = Vec::new();
+        let mut tex = Vec::new();
+        for v in &run.light.views {
+            let m = LookupMatrices::new(conv, v.view_proj(conv));
+            light.push(m.light);
+            tex.push(m.texture);
+        }
+        let (pos, towards) = match run.light.kind {
+            // A directional light's eye is read only by an N·L bias towards its position.
+            LightKind::Directional { towards, position } => (position, towards),
+            LightKind::Spot { position } | LightKind::Point { position } => {
+                (position, glam::Vec3::ZERO)
+            }
+        };
+        let eye = run.camera.eye;
+        let (slope_scale, slope_max) = b.slope.map_or((0.0, 0.0), |sl| (sl.scale, sl.max));
+        let (ndl_scale, ndl_min) = b.n_dot_l.map_or((0.0, 0.0), |nl| (nl.scale, nl.min));
+        let uniforms = uniform_buffer(
+            &self.device,
+            &self.queue,
+            run.camera.view_proj(conv),
+            &light,
+            &tex,
+            [pos.x, pos.y, pos.z, 0.0],
+            [towards.x, towards.y, towards.z, 0.0],
+            [eye.x, eye.y, eye.z, 0.0],
+            [mw as f32, mh as f32, ndl_scale, ndl_min],
+            [b.constant, slope_scale, slope_max, b.normal_offset],
+        );
+        // The mip faults: level 0 alone, or the levels from 1 on.
+        let (base_mip_level, mip_level_count) = match p.fault {
+            Some(umbra_case::fault::Fault::MipBaseOnly) => (0, Some(1)),
+            Some(umbra_case::fault::Fault::MipLevelCoarse) if p.levels > 1 => (1, None),
+            _ => (0, None),
+        };
+        let map_view = map.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(lit.view_dimension),
+            base_mip_level,
+            mip_level_count,
+            ..Default::default()
+        });
+        let sampler = (!technique.manual()).then(|| {
+            self.sampler(
+                p.s.filter,
+                p.s.mipmaps.map(|m| m.filter),
+                technique.texel_wrap(),
+                technique.compare_op(),
+                p.cube,
+            )
+        });
+        let mut entries = vec![
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniforms.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::TextureView(&map_view),
+            },
+        ];
+        if let Some(samp) = &sampler {
+            entries.push(wgpu::BindGroupEntry {
+                binding: 2,
+                resource: wgpu::BindingResource::Sampler(samp),
+            });
+        }
+        let group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("lit"),
+            layout: &lit.layout,
+            entries: &entries,
+        });
+        LitBindings {
+            group,
+            _uniforms: uniforms,
+        }
+    }
+
+    /// The camera-sized targets: colour, visibility, face id, and a Depth32Float depth.
+    pub(super) fn lit_targets(&self, p: &RunPlan) -> LitTargets {
+        let [w, h] = p.run.camera.size;
+        let target = |format, label| {
+            self.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: w,
+                    height: h,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let color = target(wgpu::TextureFormat::Rgba8Unorm, "colour");
+        let vis = target(self.vis_format, "visibility");
+        let face = target(wgpu::TextureFormat::R32Uint, "face");
+        let depth = target(wgpu::TextureFormat::Depth32Float, "camera depth");
+        let views = [&color, &vis, &face].map(|t| t.create_view(&Default::default()));
+        LitTargets {
+            color,
+            vis,
+            face,
+            views,
+            depth_view: depth.create_view(&Default::default()),
+        }
+    }
+
+    /// Records the lit pass (timestamps 2 and 3) into `encoder`.
+    pub(super) fn encode_lit(
+        &self,
+        p: &RunPlan,
+        lit: &LitPipeline,
+        bindings: &LitBindings,
+        targets: &LitTargets,
+        enc: &mut Encoding,
+    ) {
+        let (vbo, timestamps) = (enc.vbo, enc.timestamps);
+        let attach = |i: usize, c: wgpu::Color| {
+            Some(wgpu::RenderPassColorAttachment {
+                view: &targets.views[i],
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(c),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        let mut pass = enc.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("lit pass"),
+            color_attachments: &[
+                attach(0, wgpu::Color::BLACK),
+                attach(1, wgpu::Color::TRANSPARENT),
+                attach(2, wgpu::Color::TRANSPARENT),
+            ],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &targets.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timestamps.map(|q| wgpu::RenderPassTimestampWrites {
+                query_set: q,
+                beginning_of_pass_write_index: Some(2),
+                end_of_pass_write_index: Some(3),
+            }),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&lit.pipeline);
+        pass.set_bind_group(0, &bindings.group, &[]);
+        pass.set_vertex_buffer(0, vbo.slice(..));
+        pass.draw(0..p.count, 0..1);
+    }
+
+    /// The compare sampler. A border reads as far for the compare in use (1 for `<=`, 0 for
+    /// `>=`); a cube map clamps to the edge whatever the wrap.
+    fn sampler(
+        &self,
+        filter: Filter,
+        mip: Option<MipFilter>,
+        wrap: Outside,
+        op: CompareOp,
+        cube: bool,
+    ) -> wgpu::Sampler {
+        let far_is_one = matches!(op, CompareOp::LessEqual | CompareOp::Less);
+        let (address, border) = match (cube, wrap) {
+            (true, _) | (false, Outside::Lit | Outside::ClampToEdge) => {
+                (wgpu::AddressMode::ClampToEdge, None)
+            }
+            (false, Outside::Repeat) => (wgpu::AddressMode::Repeat, None),
+            (false, Outside::Border) => (
+                wgpu::AddressMode::ClampToBorder,
+                Some(if far_is_one {
+                    wgpu::SamplerBorderColor::OpaqueWhite
+                } else {
+                    wgpu::SamplerBorderColor::TransparentBlack
+                }),
+            ),
+        };
+        let f = if filter == Filter::Linear {
+            wgpu::FilterMode::Linear
+        } else {
+            wgpu::FilterMode::Nearest
+        };
+        self.device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("shadow compare"),
+            address_mode_u: address,
+            address_mode_v: address,
+            address_mode_w: address,
+            mag_filter: f,
+            min_filter: f,
+            mipmap_filter: match mip {
+                Some(MipFilter::Linear) => wgpu::MipmapFilterMode::Linear,
+                _ => wgpu::MipmapFilterMode::Nearest,
+            },
+            compare: Some(match op {
+                CompareOp::LessEqual => wgpu::CompareFunction::LessEqual,
+                CompareOp::GreaterEqual => wgpu::CompareFunction::GreaterEqual,
+                CompareOp::Less => wgpu::CompareFunction::Less,
+                CompareOp::Greater => wgpu::CompareFunction::Greater,
+            }),
+            border_color: border,
+            ..Default::default()
+        })
+    }
+}
