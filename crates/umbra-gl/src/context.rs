@@ -1,5 +1,6 @@
-//! EGL on Mesa's surfaceless platform: no window system, no display server, one context per
-//! process (../shared/PLATFORM.md, "EGL facts").
+//! EGL without a window system or display server, one context per process: Mesa's
+//! surfaceless platform, or an EGL device ([`crate::platform`]; ../shared/PLATFORM.md, "EGL
+//! facts").
 //!
 //! libEGL is loaded at run time (khronos-egl's `dynamic` feature), so a machine without Mesa
 //! builds and tests umbra and reports the GL backends as unsupported, naming the package to
@@ -11,9 +12,7 @@ use glow::HasContext as _;
 use khronos_egl as egl;
 
 use crate::api::Api;
-
-/// `EGL_PLATFORM_SURFACELESS_MESA`.
-const PLATFORM_SURFACELESS_MESA: egl::Enum = 0x31DD;
+use crate::platform::Platform;
 
 /// Why a context could not be made: always a reason a person can act on.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -32,12 +31,15 @@ pub struct GlContext {
     egl: egl::DynamicInstance<egl::EGL1_5>,
     display: egl::Display,
     context: egl::Context,
-    /// EGL's vendor and version strings.
+    /// EGL's vendor and version strings (and the device, on the device platform).
     pub egl_info: String,
+    /// How EGL reached the driver.
+    pub platform: Platform,
 }
 
 impl GlContext {
-    /// Creates and makes current a context for `api` on the surfaceless platform.
+    /// Creates and makes current a context for `api` on this process's EGL platform
+    /// ([`Platform::choose`]).
     pub fn new(api: Api) -> Result<GlContext, Unavailable> {
         // SAFETY: loading libEGL runs its initialisers; it is the system's EGL library.
         let egl = unsafe { egl::DynamicInstance::<egl::EGL1_5>::load_required() }.map_err(|e| {
@@ -45,22 +47,24 @@ impl GlContext {
                 "cannot load libEGL 1.5 ({e}); install the Debian packages libegl1 and libegl-mesa0"
             ))
         })?;
-        // SAFETY: the surfaceless platform takes the default (null) native display.
-        let display = unsafe { egl.get_platform_display(PLATFORM_SURFACELESS_MESA, egl::DEFAULT_DISPLAY, &[egl::ATTRIB_NONE]) }
-            .map_err(|e| Unavailable(format!("no surfaceless EGL display ({e}); install libegl-mesa0 (Mesa's EGL) and libgl1-mesa-dri")))?;
+        let platform = Platform::choose(&egl)?;
+        let (display, device) = platform.display(&egl)?;
         egl.initialize(display).map_err(|e| {
             Unavailable(format!(
                 "eglInitialize failed ({e}); install libgl1-mesa-dri (Mesa's drivers)"
             ))
         })?;
         let egl_info = format!(
-            "{} {}",
+            "{} {}{}",
             egl.query_string(Some(display), egl::VENDOR)
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_default(),
             egl.query_string(Some(display), egl::VERSION)
                 .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default()
+                .unwrap_or_default(),
+            device
+                .as_ref()
+                .map_or(String::new(), |d| format!(" on {}", d.describe()))
         );
         let (bind, renderable) = match api {
             Api::Gl33 => (egl::OPENGL_API, egl::OPENGL_BIT),
@@ -144,6 +148,7 @@ impl GlContext {
             display,
             context,
             egl_info,
+            platform,
         })
     }
 }

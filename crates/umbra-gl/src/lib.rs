@@ -1,6 +1,7 @@
 //! umbra's OpenGL backend: GL 3.3 core, GLES 3.0 and GLES 2.0 through EGL on Mesa's
 //! surfaceless platform, on the drivers llvmpipe, softpipe and zink.
 //!
+//! - [`platform`]: how EGL reaches the driver, surfaceless or an EGL device.
 //! - [`context`]: EGL loaded at run time; a missing library or driver is
 //!   [`context::Unavailable`] with the package to install, never a panic.
 //! - [`driver`]: one Mesa driver per process, selected by environment before EGL loads.
@@ -19,6 +20,7 @@ pub mod backend;
 pub mod caps;
 pub mod context;
 pub mod driver;
+pub mod platform;
 pub mod record;
 pub mod render;
 pub mod repro_c;

@@ -61,6 +61,9 @@ pub struct Recording {
     pub debug_output: bool,
     /// The polygon-offset clamp entry point umbra loaded, if any.
     pub polygon_offset_clamp: Option<&'static str>,
+    /// The EGL device umbra's context was made on (EGL_EXT_platform_device), or None for
+    /// Mesa's surfaceless platform.
+    pub egl_device: Option<usize>,
 }
 
 /// Writes calls as C while a run renders.

@@ -149,6 +149,10 @@ impl Renderer {
             .unwrap_or_default();
         rec.debug_output = self.caps.debug_output;
         rec.polygon_offset_clamp = self.caps.offset_clamp;
+        rec.egl_device = match self.ctx.platform {
+            crate::platform::Platform::Device(i) => Some(i),
+            crate::platform::Platform::Surfaceless => None,
+        };
         out.map(|(f, _)| (f, rec))
     }
 

@@ -97,16 +97,18 @@ pub fn program(rec: &Recording, api: Api, header: &str, probes: &str) -> String 
     } else {
         String::new()
     };
+    let display = match rec.egl_device {
+        None => "    /* Mesa's surfaceless platform, as umbra opens it (crates/umbra-gl/src/platform.rs).\n     * Mesa's variables choose the driver (GALLIUM_DRIVER=softpipe, llvmpipe or zink). */\n    EGLDisplay dpy = eglGetPlatformDisplay(0x31DD /* EGL_PLATFORM_SURFACELESS_MESA */, EGL_DEFAULT_DISPLAY, NULL);\n    if (dpy == EGL_NO_DISPLAY) fail(\"no surfaceless EGL display (Mesa's libegl-mesa0 missing?)\");\n".to_string(),
+        Some(index) => format!(
+            "    /* EGL device {index} (EGL_EXT_platform_device), as umbra opened it\n     * (crates/umbra-gl/src/platform.rs). */\n    EGLBoolean (*query_devices)(EGLint, void **, EGLint *) =\n        (EGLBoolean (*)(EGLint, void **, EGLint *))eglGetProcAddress(\"eglQueryDevicesEXT\");\n    void *devices[64];\n    EGLint n_devices = 0;\n    if (!query_devices || !query_devices(64, devices, &n_devices) || n_devices <= {index})\n        fail(\"no EGL device {index} (EGL_EXT_device_enumeration)\");\n    EGLDisplay dpy = eglGetPlatformDisplay(0x313F /* EGL_PLATFORM_DEVICE_EXT */, devices[{index}], NULL);\n    if (dpy == EGL_NO_DISPLAY) fail(\"no EGL display on device {index}\");\n"
+        ),
+    };
     let _ = write!(
         c,
         r#"
 int main(void)
 {{
-    /* Mesa's surfaceless platform, as umbra opens it (crates/umbra-gl/src/context.rs). The
-     * driver is chosen by the environment: LIBGL_ALWAYS_SOFTWARE=1 GALLIUM_DRIVER=softpipe,
-     * llvmpipe, or zink (with MESA_LOADER_DRIVER_OVERRIDE=zink). */
-    EGLDisplay dpy = eglGetPlatformDisplay(0x31DD /* EGL_PLATFORM_SURFACELESS_MESA */, EGL_DEFAULT_DISPLAY, NULL);
-    if (dpy == EGL_NO_DISPLAY) fail("no surfaceless EGL display (Mesa's libegl-mesa0 missing?)");
+{display}
     if (!eglInitialize(dpy, NULL, NULL)) fail("eglInitialize failed");
     if (!eglBindAPI({bind})) fail("eglBindAPI failed");
     const EGLint config_attribs[] = {{EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE, {renderable}, EGL_NONE}};
