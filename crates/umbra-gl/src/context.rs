@@ -41,13 +41,17 @@ impl GlContext {
     /// Creates and makes current a context for `api` on this process's EGL platform
     /// ([`Platform::choose`]).
     pub fn new(api: Api) -> Result<GlContext, Unavailable> {
-        // SAFETY: loading libEGL runs its initialisers; it is the system's EGL library.
-        let egl = unsafe { egl::DynamicInstance::<egl::EGL1_5>::load_required() }.map_err(|e| {
-            Unavailable(format!(
-                "cannot load libEGL 1.5 ({e}); install the Debian packages libegl1 and libegl-mesa0"
-            ))
-        })?;
+        let egl = load_egl()?;
         let platform = Platform::choose(&egl)?;
+        GlContext::on(egl, api, platform)
+    }
+
+    /// Creates and makes current a context for `api` on `platform`.
+    pub fn on(
+        egl: egl::DynamicInstance<egl::EGL1_5>,
+        api: Api,
+        platform: Platform,
+    ) -> Result<GlContext, Unavailable> {
         let (display, device) = platform.display(&egl)?;
         egl.initialize(display).map_err(|e| {
             Unavailable(format!(
@@ -153,10 +157,28 @@ impl GlContext {
     }
 }
 
+/// Loads libEGL (1.5), or says which packages to install.
+pub fn load_egl() -> Result<egl::DynamicInstance<egl::EGL1_5>, Unavailable> {
+    // SAFETY: loading libEGL runs its initialisers; it is the system's EGL library.
+    unsafe { egl::DynamicInstance::<egl::EGL1_5>::load_required() }.map_err(|e| {
+        Unavailable(format!(
+            "cannot load libEGL 1.5 ({e}); install the Debian packages libegl1 and libegl-mesa0"
+        ))
+    })
+}
+
 /// The signature of `glPolygonOffsetClamp[EXT]`.
 pub type PolygonOffsetClamp = unsafe extern "system" fn(f32, f32, f32);
 
 impl GlContext {
+    /// GL_VENDOR, GL_RENDERER and GL_VERSION.
+    pub fn strings(&self) -> [String; 3] {
+        // SAFETY: plain queries on this process's current context.
+        unsafe {
+            [glow::VENDOR, glow::RENDERER, glow::VERSION].map(|s| self.gl.get_parameter_string(s))
+        }
+    }
+
     /// Makes this context current on the calling thread again: another library in the same
     /// process (wgpu's GL backend uses EGL too) may have made its own current meanwhile.
     pub fn make_current(&self) -> Result<(), Unavailable> {

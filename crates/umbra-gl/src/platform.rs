@@ -225,3 +225,38 @@ pub fn devices(
         })
         .collect())
 }
+
+/// What a context made on one EGL device reports.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DeviceContext {
+    /// The API asked for.
+    pub api: crate::api::Api,
+    /// GL_VENDOR, GL_RENDERER, GL_VERSION, or why no context could be made.
+    pub strings: Result<[String; 3], String>,
+}
+
+/// Every EGL device this process's EGL library lists, each with the GL 3.3 core, GLES 3 and
+/// GLES 2 contexts it can make (`umbra backends`). Mesa's software device renders with the
+/// driver this process's environment selects (llvmpipe by default).
+pub fn discover() -> Result<Vec<(EglDevice, Vec<DeviceContext>)>, Unavailable> {
+    let egl = crate::context::load_egl()?;
+    let list: Vec<EglDevice> = devices(&egl)?.into_iter().map(|(d, _)| d).collect();
+    Ok(list
+        .into_iter()
+        .map(|d| {
+            let contexts = crate::api::Api::ALL
+                .into_iter()
+                .map(|api| DeviceContext {
+                    api,
+                    strings: crate::context::load_egl()
+                        .and_then(|egl| {
+                            crate::context::GlContext::on(egl, api, Platform::Device(d.index))
+                        })
+                        .map(|ctx| ctx.strings())
+                        .map_err(|e| e.0),
+                })
+                .collect();
+            (d, contexts)
+        })
+        .collect())
+}

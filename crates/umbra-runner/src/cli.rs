@@ -213,6 +213,7 @@ pub const FLAGS: &[Flag] = &[
         "orientations",
         "selftest: instead of the faults on the backends, the face/orientation table: every cube face and the 2D map drawn with each of the seven wrong orientations by the reference, and the catalogue points that catch each",
     ),
+    switch("json", "print JSON for scripts instead of text"),
     valued(
         "case",
         "CASE.json",
@@ -431,6 +432,14 @@ pub const COMMANDS: &[Spec] = &[
             "emit",
         ],
         required: &["out"],
+        hidden: false,
+    },
+    Spec {
+        name: "backends",
+        about: "List what this machine can run: every backend id with its driver's strings and how it is reached, every EGL device with the contexts it makes, every wgpu adapter (--json for scripts)",
+        positional: None,
+        flags: &["json", "mesa"],
+        required: &[],
         hidden: false,
     },
     Spec {

@@ -5,7 +5,7 @@
 use std::process::ExitCode;
 
 use umbra_runner::commands::{
-    bisect, conformance, drivers, reduce, render, repro, selftest, soak, sweep,
+    backends, bisect, conformance, drivers, reduce, render, repro, selftest, soak, sweep,
 };
 use umbra_runner::{cli, harness};
 
@@ -28,6 +28,7 @@ fn main() -> ExitCode {
             "bisect" => bisect::main(&args),
             "reduce" => reduce::main(&args),
             "repro" => repro::main(&args),
+            "backends" => backends::main(&args),
             "worker" => harness::worker::main(&args),
             "bisect-step" => bisect::step(&args),
             "completions" => cli::completions(args.positional.first().map_or("", String::as_str)),

@@ -142,3 +142,50 @@ fn a_device_that_does_not_exist_is_a_skip_with_its_reason() {
     );
     assert!(!dir.join("color.png").exists(), "{t}");
 }
+
+#[test]
+fn umbra_backends_lists_the_backends_the_egl_devices_and_the_adapters() {
+    let o = umbra(&["backends", "--json"], None);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: serde_json::Value =
+        serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {}", text(&o)));
+    let backend = |id: &str| {
+        v["backends"]
+            .as_array()
+            .and_then(|a| a.iter().find(|b| b["id"] == id))
+            .cloned()
+            .unwrap_or_else(|| panic!("{id} not listed: {v}"))
+    };
+    let llvm = backend("gl33/llvmpipe");
+    assert_eq!(llvm["available"], true, "{llvm}");
+    assert!(
+        llvm["renderer"]
+            .as_str()
+            .is_some_and(|r| r.starts_with("llvmpipe")),
+        "{llvm}"
+    );
+    assert!(
+        llvm["version"].as_str().is_some_and(|r| r.contains("Mesa")),
+        "{llvm}"
+    );
+    assert_eq!(backend("gl33/softpipe")["renderer"], "softpipe");
+    // Mesa's software device, with a context of each API.
+    let devices = v["egl_devices"].as_array().expect("EGL devices listed");
+    let software = devices
+        .iter()
+        .find(|d| d["software"] == true)
+        .unwrap_or_else(|| panic!("no software device: {v}"));
+    let contexts = software["contexts"].as_array().expect("contexts");
+    assert_eq!(contexts.len(), 3, "{software}");
+    assert!(
+        contexts.iter().all(|c| c["renderer"].is_string()),
+        "{software}"
+    );
+    // lavapipe among wgpu's Vulkan adapters.
+    assert!(
+        v["wgpu_adapters"].as_array().is_some_and(|a| a
+            .iter()
+            .any(|x| x["backend"] == "Vulkan" && x["device_type"] == "Cpu")),
+        "{v}"
+    );
+}

@@ -116,3 +116,16 @@ pub fn open(kind: Kind) -> Result<Gpu, Unavailable> {
         depth_bias_clamp,
     })
 }
+
+/// Every adapter wgpu enumerates on Vulkan and on its GL backend, as it describes itself
+/// (`umbra backends`).
+pub fn adapters() -> Vec<wgpu::AdapterInfo> {
+    let backends = wgpu::Backends::VULKAN | wgpu::Backends::GL;
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = backends;
+    let instance = wgpu::Instance::new(desc);
+    pollster::block_on(instance.enumerate_adapters(backends))
+        .into_iter()
+        .map(|a| a.get_info())
+        .collect()
+}

@@ -1,6 +1,7 @@
 //! The `umbra` subcommands, one module each: each takes its parsed options (the command line is
 //! parsed in `cli`) and calls into the harness, the judge and `umbra_report`.
 
+pub mod backends;
 pub mod bisect;
 pub mod conformance;
 pub mod drivers;

@@ -1,0 +1,225 @@
+//! `umbra backends [--json]`: what this machine can run, and how each backend reaches its
+//! driver.
+//!
+//! - **Backend ids** (what `--backend` takes): each is opened in its own process, as a run
+//!   would open it (`umbra worker`), and reports its vendor, renderer and version strings, or
+//!   why it is unavailable.
+//! - **EGL devices** (EGL_EXT_device_enumeration): each with the GL 3.3 core, GLES 3 and
+//!   GLES 2 contexts it can make and their strings; the GL backend reaches a device with
+//!   `UMBRA_EGL_PLATFORM=device:N`.
+//! - **wgpu adapters** on Vulkan and on wgpu's GL backend, as wgpu describes them.
+//!
+//! Hardware devices and other vendors' drivers are listed here for discovery; their own
+//! backend ids (from the driver's strings) are the next step of issue 25, so today a device
+//! that is not Mesa's software rasterizer has no id `--backend` takes, and the listing says so.
+
+use serde_json::{Value, json};
+
+use crate::args::Args;
+use crate::harness::registry;
+
+/// Runs `umbra backends`.
+pub fn main(args: &Args) -> i32 {
+    // The Vulkan loader's device-select layer complains about XDG_RUNTIME_DIR on a machine
+    // without a session: enumerate in a process that has it quiet, as the workers do.
+    if std::env::var_os("NODEVICE_SELECT").is_none() {
+        let again: Vec<String> = std::env::args().skip(1).collect();
+        return crate::harness::child::rerun(&again, &[("NODEVICE_SELECT".into(), "1".into())]);
+    }
+    if let Err(e) = crate::harness::mesa_build::select(args.value("mesa")) {
+        eprintln!("error: {e}");
+        return 125;
+    }
+    let listing = json!({
+        "backends": registry::known().iter().filter(|id| *id != "ref").map(|id| backend(id)).collect::<Vec<_>>(),
+        "egl_devices": egl_devices(),
+        "wgpu_adapters": umbra_wgpu::device::adapters().iter().map(|a| json!({
+            "backend": format!("{:?}", a.backend),
+            "name": a.name,
+            "driver": a.driver,
+            "driver_info": a.driver_info,
+            "device_type": format!("{:?}", a.device_type),
+            "vendor": format!("0x{:04x}", a.vendor),
+            "device": format!("0x{:04x}", a.device),
+        })).collect::<Vec<_>>(),
+    });
+    if args.has("json") {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&listing).unwrap_or_default()
+        );
+    } else {
+        print!("{}", text(&listing));
+    }
+    0
+}
+
+/// One backend id, opened in its own process: its strings, or why it is unavailable.
+fn backend(id: &str) -> Value {
+    let env = registry::worker_env(id);
+    let reach = reach(id);
+    let out = std::env::current_exe().and_then(|exe| {
+        std::process::Command::new(exe)
+            .args(["worker", "--backend", id])
+            .envs(env)
+            .stdin(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .output()
+    });
+    let hello: Value = out
+        .ok()
+        .and_then(|o| {
+            String::from_utf8_lossy(&o.stdout)
+                .lines()
+                .next()
+                .and_then(|l| serde_json::from_str(l).ok())
+        })
+        .unwrap_or(Value::Null);
+    let (api, driver) = id.split_once('/').unwrap_or((id, ""));
+    match (&hello["ready"], &hello["unavailable"]) {
+        (Value::Object(r), _) => json!({
+            "id": id, "api": api, "driver": driver, "available": true, "reached": reach,
+            "vendor": r.get("vendor"), "renderer": r.get("renderer"), "version": r.get("version"),
+            "egl": r.get("extensions").and_then(Value::as_array)
+                .and_then(|e| e.iter().filter_map(Value::as_str).find(|s| s.starts_with("EGL ")))
+                .map(|s| s.trim_start_matches("EGL ")),
+        }),
+        (_, Value::String(why)) => json!({
+            "id": id, "api": api, "driver": driver, "available": false, "reached": reach, "why": why,
+        }),
+        _ => json!({
+            "id": id, "api": api, "driver": driver, "available": false, "reached": reach,
+            "why": "its worker did not start or said nothing",
+        }),
+    }
+}
+
+/// How a backend id reaches its driver, in words.
+fn reach(id: &str) -> String {
+    let env: Vec<String> = registry::driver_env(id)
+        .unwrap_or_default()
+        .iter()
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect();
+    let how = match umbra_wgpu::Kind::parse(id) {
+        Some(umbra_wgpu::Kind::VulkanLavapipe) => "wgpu on Vulkan, the CPU adapter",
+        Some(umbra_wgpu::Kind::GlLlvmpipe) => "wgpu's GL backend on EGL",
+        None => match std::env::var(umbra_gl::platform::ENV).ok().as_deref() {
+            Some(p) if p.starts_with("device") => "EGL device (UMBRA_EGL_PLATFORM)",
+            _ => "EGL surfaceless (or the first EGL device where surfaceless is not offered)",
+        },
+    };
+    if env.is_empty() {
+        how.to_string()
+    } else {
+        format!("{how}, {}", env.join(" "))
+    }
+}
+
+/// Every EGL device with the contexts it makes.
+fn egl_devices() -> Value {
+    match umbra_gl::platform::discover() {
+        Err(e) => json!({ "unavailable": e.0 }),
+        Ok(list) => Value::Array(
+            list.into_iter()
+                .map(|(d, contexts)| {
+                    json!({
+                        "index": d.index,
+                        "reached": d.describe(),
+                        "software": d.software(),
+                        "render_node": d.render_node,
+                        "drm_device": d.drm_device,
+                        "extensions": d.extensions,
+                        "contexts": contexts.iter().map(|c| match &c.strings {
+                            Ok([vendor, renderer, version]) => json!({
+                                "api": c.api.name(), "vendor": vendor, "renderer": renderer, "version": version,
+                            }),
+                            Err(why) => json!({ "api": c.api.name(), "unavailable": why }),
+                        }).collect::<Vec<_>>(),
+                    })
+                })
+                .collect(),
+        ),
+    }
+}
+
+/// The listing as text for a terminal.
+fn text(l: &Value) -> String {
+    let s = |v: &Value| v.as_str().unwrap_or("").to_string();
+    let mut o = String::from("Backends (ids for --backend; each opened in its own process):\n");
+    for b in l["backends"].as_array().into_iter().flatten() {
+        if b["available"] == true {
+            let egl = if b["egl"].is_string() {
+                format!("; EGL {}", s(&b["egl"]))
+            } else {
+                String::new()
+            };
+            o.push_str(&format!(
+                "  {:<18} {} | {} | {}\n  {:<18} reached: {}{egl}\n",
+                s(&b["id"]),
+                s(&b["vendor"]),
+                s(&b["renderer"]),
+                s(&b["version"]),
+                "",
+                s(&b["reached"]),
+            ));
+        } else {
+            o.push_str(&format!(
+                "  {:<18} unavailable: {}\n",
+                s(&b["id"]),
+                s(&b["why"])
+            ));
+        }
+    }
+    o.push_str("\nEGL devices (UMBRA_EGL_PLATFORM=device:N reaches one):\n");
+    match l["egl_devices"].as_array() {
+        None => o.push_str(&format!(
+            "  none: {}\n",
+            s(&l["egl_devices"]["unavailable"])
+        )),
+        Some(devs) => {
+            for d in devs {
+                o.push_str(&format!(
+                    "  {}{}\n",
+                    s(&d["reached"]),
+                    if d["software"] == true {
+                        ""
+                    } else {
+                        " (a hardware device: no backend id for it yet)"
+                    }
+                ));
+                for c in d["contexts"].as_array().into_iter().flatten() {
+                    if c["unavailable"].is_string() {
+                        o.push_str(&format!(
+                            "    {:<6} no context: {}\n",
+                            s(&c["api"]),
+                            s(&c["unavailable"])
+                        ));
+                    } else {
+                        o.push_str(&format!(
+                            "    {:<6} {} | {} | {}\n",
+                            s(&c["api"]),
+                            s(&c["vendor"]),
+                            s(&c["renderer"]),
+                            s(&c["version"])
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    o.push_str("\nwgpu adapters:\n");
+    for a in l["wgpu_adapters"].as_array().into_iter().flatten() {
+        o.push_str(&format!(
+            "  {:<7} {} (driver {}, {}; {}, vendor {} device {})\n",
+            s(&a["backend"]),
+            s(&a["name"]),
+            s(&a["driver"]),
+            s(&a["driver_info"]),
+            s(&a["device_type"]),
+            s(&a["vendor"]),
+            s(&a["device"])
+        ));
+    }
+    o
+}
