@@ -319,14 +319,21 @@ pub fn map_failures(basis: &Judged, frame: &Frame) -> Option<Failed> {
     if map.values.len() != basis.map.len() || basis.map.is_empty() {
         return None;
     }
-    let slack = |x: f32| umbra_case::depth::f32_spacing(x);
     let mut failed = Failed::default();
-    for (k, (v, (lo, hi))) in map.values.iter().zip(&basis.map).enumerate() {
-        if !(lo - slack(*lo) <= *v && *v <= hi + slack(*hi)) {
-            failed.push(k, *v > *hi);
+    for (k, (v, &(lo, hi))) in map.values.iter().zip(&basis.map).enumerate() {
+        let (lo, hi) = map_range(lo, hi);
+        if !(lo <= *v && *v <= hi) {
+            failed.push(k, *v > hi);
         }
     }
     Some(failed)
+}
+
+/// A texel's legal range as [`map_failures`] holds it: the basis's [lo, hi] widened by one
+/// f32 spacing at each end (`umbra repro`'s probes embed exactly these bounds).
+pub fn map_range(lo: f32, hi: f32) -> (f32, f32) {
+    let slack = umbra_case::depth::f32_spacing;
+    (lo - slack(lo), hi + slack(hi))
 }
 
 /// The pixels [`judge`] found illegal (`px`), side = shadowed: a fingerprint's frame part.

@@ -471,7 +471,7 @@ impl<'a> RunPlan<'a> {
             } else {
                 glow::TEXTURE_2D
             },
-            count: (run.geometry.interleaved().len() / STRIDE) as i32,
+            count: (run.geometry.triangles.len() * 3) as i32,
             levels,
             drawn_levels: match s.mipmaps {
                 Some(m) if m.source == MipSource::Averaged => 1,

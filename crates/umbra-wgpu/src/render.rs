@@ -264,7 +264,7 @@ impl<'a> RunPlan<'a> {
                 Some(m) if m.source == MipSource::Averaged => 1,
                 _ => levels,
             },
-            count: (run.geometry.interleaved().len() / umbra_case::Geometry::VERTEX_FLOATS) as u32,
+            count: (run.geometry.triangles.len() * 3) as u32,
             bias: fault.map_or_else(|| s.bias.clone(), |f| f.bias(&s.bias)),
         }
     }

@@ -7,15 +7,15 @@
 //! interval [lo, hi] widened by the target's rounding ε, and for a discrete filter within ε of
 //! a multiple of the quantum) and the colour must be the shading of that visibility
 //! (`colour_ok`). A texel probe repeats [`umbra_compare::reference::map_failures`]: the stored
-//! depth within [lo, hi] widened by one f32 spacing at each end, both ends precomputed here in
-//! f32 so the C compares the same floats. The C ports each test line for line, so a probe can
+//! depth within [`map_range`] (the judge's one function for it), both ends embedded as f32
+//! so the C compares the same floats. The C ports each test line for line, so a probe can
 //! be neither wider nor narrower than the judge; `tests/repro.rs` checks the exit codes on a
 //! deviating driver and a conforming one.
 
 use std::fmt::Write as _;
 
 use umbra_case::Frame;
-use umbra_compare::reference::PixelJudgement;
+use umbra_compare::reference::{PixelJudgement, map_range};
 use umbra_gl::record::hex_f32;
 use umbra_ref::Judged;
 
@@ -136,13 +136,15 @@ pub fn select(basis: &Judged, frame: &Frame, pixels: &[PixelJudgement]) -> Probe
     if let Some(m) = frame.shadow_map.as_ref() {
         if m.values.len() == basis.map.len() && !basis.map.is_empty() {
             map = [m.width, m.height];
-            let slack = |x: f32| umbra_case::depth::f32_spacing(x);
             let bad: Vec<usize> = m
                 .values
                 .iter()
                 .zip(&basis.map)
                 .enumerate()
-                .filter(|(_, (v, (lo, hi)))| !(lo - slack(*lo) <= **v && **v <= hi + slack(*hi)))
+                .filter(|(_, (v, (lo, hi)))| {
+                    let (lo, hi) = map_range(*lo, *hi);
+                    !(lo <= **v && **v <= hi)
+                })
                 .map(|(k, _)| k)
                 .collect();
             texels_total = bad.len();
@@ -150,14 +152,14 @@ pub fn select(basis: &Judged, frame: &Frame, pixels: &[PixelJudgement]) -> Probe
             texels = spread(&bad, MAX_PROBES)
                 .into_iter()
                 .map(|k| {
-                    let (lo, hi) = basis.map[k];
+                    let (lo, hi) = map_range(basis.map[k].0, basis.map[k].1);
                     let at = k % per_layer;
                     TexelProbe {
                         layer: (k / per_layer) as u32,
                         x: at as u32 % m.width,
                         y: at as u32 / m.width,
-                        lo: lo - slack(lo),
-                        hi: hi + slack(hi),
+                        lo,
+                        hi,
                         got: m.values[k],
                     }
                 })
