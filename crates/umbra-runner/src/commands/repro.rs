@@ -85,13 +85,20 @@ fn steps(args: &Args) -> Result<i32, i32> {
     m.diagnosis = diagnosis(args, &t.run, &reduced);
     m.mesa_build = crate::harness::mesa_build::selected().map(|b| b.describe());
     if let Some(commit) = args.value("first-bad") {
-        let log = args.value("bisect-log").and_then(|l| {
-            let _ = std::fs::copy(l, t.out.join("bisect.log"));
-            std::fs::read_to_string(l).ok()
-        });
+        let log = match args.value("bisect-log") {
+            Some(l) => {
+                let text = std::fs::read_to_string(l).map_err(|e| {
+                    eprintln!("error: --bisect-log {l}: {e}");
+                    125
+                })?;
+                save(&t.out.join("bisect.log"), &text)?;
+                Some(text)
+            }
+            None => None,
+        };
         m.bisect = Some((commit.to_string(), log));
     }
-    Ok(finish(&t.out, &facts, &mut m))
+    finish(&t.out, &facts, &mut m)
 }
 
 /// The run named on the command line, its case file and an empty bundle directory.
@@ -161,7 +168,7 @@ fn reduce_step(args: &Args, t: &Target) -> Result<(PathBuf, String), i32> {
         eprintln!("error: cannot start the reducer: {e}");
         125
     })?;
-    let _ = std::fs::write(t.out.join("reduce.log"), &log);
+    save(&t.out.join("reduce.log"), &log)?;
     if code != Some(0) {
         let last = log
             .lines()
@@ -245,10 +252,10 @@ fn run_programs(
     })?;
     for b in std::iter::once(t.backend.as_str()).chain(control) {
         let r = run_program(binary, b, &t.out);
-        let _ = std::fs::write(
-            t.out.join(format!("repro-{}.txt", b.replace('/', "-"))),
+        save(
+            &t.out.join(format!("repro-{}.txt", b.replace('/', "-"))),
             &r.output,
-        );
+        )?;
         println!(
             "  repro on {}: exit {}",
             r.backend,
@@ -260,8 +267,8 @@ fn run_programs(
 }
 
 /// Writes issue.md and README.md; the exit code: 0 only when the program fails on the driver
-/// and passes on the control (or none was run), 1 otherwise.
-fn finish(out: &Path, facts: &serde_json::Value, m: &mut Measured) -> i32 {
+/// and passes on the control (or none was run), 1 otherwise (Err: 125, a file not written).
+fn finish(out: &Path, facts: &serde_json::Value, m: &mut Measured) -> Result<i32, i32> {
     let reproduces = match (m.runs.first(), m.runs.get(1)) {
         (Some(d), c) => Some(d.code == Some(1) && c.is_none_or(|c| c.code == Some(0))),
         (None, _) => None,
@@ -276,17 +283,17 @@ fn finish(out: &Path, facts: &serde_json::Value, m: &mut Measured) -> i32 {
         }
         None => "No program was run.".into(),
     };
-    let _ = std::fs::write(
-        out.join("issue.md"),
-        crate::repro::issue::issue_md(facts, m),
-    );
+    save(
+        &out.join("issue.md"),
+        &crate::repro::issue::issue_md(facts, m),
+    )?;
     let files = list_files(out);
-    let _ = std::fs::write(
-        out.join("README.md"),
-        crate::repro::issue::readme(facts, m, &files),
-    );
+    save(
+        &out.join("README.md"),
+        &crate::repro::issue::readme(facts, m, &files),
+    )?;
     println!("  wrote {} (its README.md lists the files)", out.display());
-    match reproduces {
+    Ok(match reproduces {
         Some(true) => 0,
         Some(false) => {
             let codes: Vec<String> = m
@@ -314,7 +321,7 @@ fn finish(out: &Path, facts: &serde_json::Value, m: &mut Measured) -> i32 {
             );
             0
         }
-    }
+    })
 }
 
 /// The driver-side step (in the backend's process).
@@ -765,6 +772,15 @@ fn list_files(dir: &Path) -> Vec<(String, u64)> {
     out.retain(|(name, _)| name != "README.md");
     out.sort();
     out
+}
+
+/// Writes one bundle file, atomically; a file that cannot be written (a full disk) ends the
+/// command with 125 and says which, rather than leave a bundle that silently lacks it.
+fn save(path: &Path, text: &str) -> Result<(), i32> {
+    crate::atomic_file::write(path, text.as_bytes()).map_err(|e| {
+        eprintln!("error: cannot write {}: {e}", path.display());
+        125
+    })
 }
 
 fn usage(msg: &str) -> i32 {
