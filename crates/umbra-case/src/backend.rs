@@ -30,6 +30,9 @@ pub struct DriverInfo {
     pub version: String,
     /// Extensions or features that matter to umbra.
     pub extensions: Vec<String>,
+    /// The device and how it is reached (EGL device and DRM node, Vulkan adapter), with its
+    /// PCI id where the driver gives one; drivers.txt records it.
+    pub device: String,
 }
 
 /// What a case asks of a backend; derived from the case, so a case asks only for what its
@@ -56,6 +59,10 @@ pub struct Needs {
     pub fractional_offset_units: bool,
     /// A mipmapped map (levels, their filter, how they are filled).
     pub mipmaps: Option<crate::format::Mipmaps>,
+    /// The shadow map's larger side (each cube face's, for a point light).
+    pub map_size: u32,
+    /// The camera image's larger side.
+    pub image_size: u32,
 }
 
 impl Needs {
@@ -72,6 +79,8 @@ impl Needs {
             polygon_offset_clamp: s.bias.polygon_offset_clamp != 0.0,
             fractional_offset_units: s.bias.polygon_offset[1].fract() != 0.0,
             mipmaps: s.mipmaps,
+            map_size: s.size[0].max(s.size[1]),
+            image_size: case.camera.size[0].max(case.camera.size[1]),
         }
     }
 }

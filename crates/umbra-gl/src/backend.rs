@@ -50,30 +50,65 @@ impl GlBackend {
             )));
         }
         let renderer = Renderer::new(api)?;
-        let (vendor, renderer_name, version, egl) = renderer.strings();
+        let (_, renderer_name, _, _) = renderer.strings();
         if !driver.matches_renderer(&renderer_name) {
             return Err(Unavailable(format!(
                 "asked for {} but the driver reports {renderer_name:?}",
                 driver.name()
             )));
         }
+        Ok(GlBackend::with(
+            renderer,
+            BackendId(format!("{}/{}", api.name(), driver.name())),
+        ))
+    }
+
+    /// Opens `api` on the EGL device whose backend-id name is `name`
+    /// ([`crate::platform::named_devices`]): no environment is set and no driver assumed;
+    /// the device's own driver answers, whatever vendor's it is.
+    pub fn on_device(api: Api, name: &str) -> Result<GlBackend, Unavailable> {
+        let egl = crate::context::load_egl()?;
+        let devices = crate::platform::named_devices(&egl)?;
+        let Some(found) = devices.iter().find(|d| d.name == name) else {
+            let have: Vec<String> = devices
+                .iter()
+                .map(|d| format!("{}/{} ({})", api.name(), d.name, d.device.describe()))
+                .collect();
+            return Err(Unavailable(format!(
+                "no EGL device is named {name:?} on this machine; it has {} (`umbra backends` lists them)",
+                if have.is_empty() {
+                    "none".to_string()
+                } else {
+                    have.join(", ")
+                }
+            )));
+        };
+        let renderer = Renderer::on(api, crate::platform::Platform::Device(found.device.index))?;
+        Ok(GlBackend::with(
+            renderer,
+            BackendId(format!("{}/{name}", api.name())),
+        ))
+    }
+
+    fn with(renderer: Renderer, id: BackendId) -> GlBackend {
+        let (vendor, renderer_name, version, egl) = renderer.strings();
         let mut extensions: Vec<String> = NOTABLE
             .iter()
             .filter(|e| renderer.caps.has(e))
             .map(|e| e.to_string())
             .collect();
+        if let Some(bits) = renderer.caps.unsized_depth_bits {
+            extensions.push(format!("DEPTH_COMPONENT={bits}bit"));
+        }
         extensions.push(format!("EGL {egl}"));
         let info = DriverInfo {
             vendor,
             renderer: renderer_name,
             version,
             extensions,
+            device: renderer.reached(),
         };
-        Ok(GlBackend {
-            renderer,
-            id: BackendId(format!("{}/{}", api.name(), driver.name())),
-            info,
-        })
+        GlBackend { renderer, id, info }
     }
 }
 
@@ -100,6 +135,31 @@ impl Backend for GlBackend {
         // GLES 2 applies the offset (and its clamp) in the shader; the others need the
         // extension's entry point, loaded by name (glow does not carry it).
         let caps = &self.renderer.caps;
+        let (map_limit, map_name) = if needs.cube_map {
+            (caps.max_cube, "GL_MAX_CUBE_MAP_TEXTURE_SIZE")
+        } else {
+            (caps.max_texture, "GL_MAX_TEXTURE_SIZE")
+        };
+        if needs.map_size > map_limit {
+            return Support::Unsupported(format!(
+                "the shadow map is {} texels on a side and this driver's {map_name} is {map_limit}",
+                needs.map_size
+            ));
+        }
+        if needs.image_size > caps.max_renderbuffer.min(caps.max_texture) {
+            return Support::Unsupported(format!(
+                "the camera image is {} pixels on a side and this driver's GL_MAX_RENDERBUFFER_SIZE/GL_MAX_TEXTURE_SIZE is {}",
+                needs.image_size,
+                caps.max_renderbuffer.min(caps.max_texture)
+            ));
+        }
+        if needs.format == DepthFormat::Unsized {
+            if let Some(bits) = caps.unsized_depth_bits.filter(|b| ![24, 32].contains(b)) {
+                return Support::Unsupported(format!(
+                    "this driver stores an unsized DEPTH_COMPONENT map in {bits} bits (GL_TEXTURE_DEPTH_SIZE); GL 4.6 §8.5 lets it choose, and umbra models 24- and 32-bit storage only, so judging it would fail a correct driver"
+                ));
+            }
+        }
         if needs.polygon_offset_clamp && api != Api::Gles2 && caps.offset_clamp.is_none() {
             return Support::Unsupported("a polygon-offset clamp needs glPolygonOffsetClamp (GL 4.6, ARB_polygon_offset_clamp) or glPolygonOffsetClampEXT (EXT_polygon_offset_clamp), which this driver does not advertise".into());
         }

@@ -40,6 +40,20 @@ pub struct Caps {
     /// Depth clamping (ARB_depth_clamp, core in GL 3.2; EXT_depth_clamp on GLES): recorded,
     /// not used (umbra's cases keep geometry within the clip volume or test its clipping).
     pub depth_clamp: bool,
+    /// GL_MAX_TEXTURE_SIZE, GL_MAX_CUBE_MAP_TEXTURE_SIZE and GL_MAX_RENDERBUFFER_SIZE: a
+    /// case whose map or image is larger is a skip (umbra's own limits, 16384 and 8192, are
+    /// llvmpipe's; other drivers may stop lower).
+    pub max_texture: u32,
+    /// See `max_texture`.
+    pub max_cube: u32,
+    /// See `max_texture`.
+    pub max_renderbuffer: u32,
+    /// The depth bits the driver chose for an unsized `DEPTH_COMPONENT` texture uploaded as
+    /// UNSIGNED_INT (GL_TEXTURE_DEPTH_SIZE; GL 3.3 and GLES 3.1 can ask, GLES 3.0 cannot):
+    /// GL 4.6 §8.5 leaves the resolution to the GL, and umbra's model covers 24 and 32 bits
+    /// (`DepthFormat::offset_unit_range`), so another answer makes unsized cases a skip that
+    /// names it rather than a failure of a correct driver. None where it cannot be asked.
+    pub unsized_depth_bits: Option<u32>,
 }
 
 impl Caps {
@@ -47,7 +61,17 @@ impl Caps {
     pub fn probe(gl: &glow::Context, api: Api, offset_clamp: Option<&'static str>) -> Caps {
         let extensions = gl.supported_extensions().clone();
         let has = |e: &str| extensions.contains(e);
+        // SAFETY: plain queries on the current context.
+        let limit = |name| unsafe { gl.get_parameter_i32(name) }.max(0) as u32;
+        let version = gl.version();
+        let can_ask_level = !version.is_embedded || (version.major, version.minor) >= (3, 1);
         Caps {
+            max_texture: limit(glow::MAX_TEXTURE_SIZE),
+            max_cube: limit(glow::MAX_CUBE_MAP_TEXTURE_SIZE),
+            max_renderbuffer: limit(glow::MAX_RENDERBUFFER_SIZE),
+            unsized_depth_bits: (api != Api::Gles2 && can_ask_level)
+                .then(|| unsized_depth_bits(gl))
+                .flatten(),
             api,
             debug_output: has("GL_KHR_debug"),
             timer_queries: api == Api::Gl33,
@@ -66,5 +90,33 @@ impl Caps {
     /// Whether the context advertises `ext`.
     pub fn has(&self, ext: &str) -> bool {
         self.extensions.contains(ext)
+    }
+}
+
+/// GL_TEXTURE_DEPTH_SIZE of a 1×1 unsized DEPTH_COMPONENT texture uploaded as UNSIGNED_INT,
+/// as the shadow pass makes it; None if the driver refuses (the error is cleared).
+fn unsized_depth_bits(gl: &glow::Context) -> Option<u32> {
+    // SAFETY: a texture of this context, made, queried and deleted here; the previous
+    // binding of TEXTURE_2D on unit 0 is restored (nothing is bound yet at probe time).
+    unsafe {
+        let tex = gl.create_texture().ok()?;
+        gl.bind_texture(glow::TEXTURE_2D, Some(tex));
+        gl.tex_image_2d(
+            glow::TEXTURE_2D,
+            0,
+            glow::DEPTH_COMPONENT as i32,
+            1,
+            1,
+            0,
+            glow::DEPTH_COMPONENT,
+            glow::UNSIGNED_INT,
+            glow::PixelUnpackData::Slice(None),
+        );
+        let bits = gl.get_tex_level_parameter_i32(glow::TEXTURE_2D, 0, glow::TEXTURE_DEPTH_SIZE);
+        let ok = gl.get_error() == glow::NO_ERROR;
+        while gl.get_error() != glow::NO_ERROR {}
+        gl.bind_texture(glow::TEXTURE_2D, None);
+        gl.delete_texture(tex);
+        (ok && bits > 0).then_some(bits as u32)
     }
 }

@@ -35,6 +35,10 @@ pub struct GlContext {
     pub egl_info: String,
     /// How EGL reached the driver.
     pub platform: Platform,
+    /// The EGL device, on the device platform.
+    pub device: Option<crate::platform::EglDevice>,
+    /// The API the context is for.
+    pub api: Api,
 }
 
 impl GlContext {
@@ -153,6 +157,8 @@ impl GlContext {
             context,
             egl_info,
             platform,
+            device,
+            api,
         })
     }
 }
@@ -171,6 +177,15 @@ pub fn load_egl() -> Result<egl::DynamicInstance<egl::EGL1_5>, Unavailable> {
 pub type PolygonOffsetClamp = unsafe extern "system" fn(f32, f32, f32);
 
 impl GlContext {
+    /// How EGL reached the driver, in words, for drivers.txt: the device with its DRM node
+    /// and PCI id, or the surfaceless platform.
+    pub fn reached(&self) -> String {
+        match &self.device {
+            Some(d) => d.describe_with_pci(),
+            None => "EGL surfaceless platform (Mesa)".into(),
+        }
+    }
+
     /// GL_VENDOR, GL_RENDERER and GL_VERSION.
     pub fn strings(&self) -> [String; 3] {
         // SAFETY: plain queries on this process's current context.

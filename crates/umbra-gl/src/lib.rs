@@ -30,10 +30,23 @@ pub use api::Api;
 pub use backend::GlBackend;
 pub use driver::Driver;
 
-/// Parses a backend id such as `gles3/softpipe`.
+/// Parses a backend id of a Mesa software driver such as `gles3/softpipe`.
 pub fn parse_id(id: &str) -> Option<(Api, Driver)> {
     let (api, driver) = id.split_once('/')?;
     Some((Api::parse(api)?, Driver::parse(driver)?))
+}
+
+/// Parses a backend id of an EGL device such as `gl33/radeonsi`, `gles3/iris.2` or
+/// `gl33/nvidia` (its name from [`platform::named_devices`]): an API, then a name that is
+/// not one of the Mesa software drivers' (those are [`parse_id`]'s, chosen by environment).
+/// Whether such a device exists is only known by listing the devices.
+pub fn parse_device_id(id: &str) -> Option<(Api, &str)> {
+    let (api, name) = id.split_once('/')?;
+    let plain = !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || "-_.".contains(c));
+    (plain && Driver::parse(name).is_none()).then_some((Api::parse(api)?, name))
 }
 
 /// Every GL backend id, in report order.

@@ -56,6 +56,28 @@ impl EglDevice {
             .any(|e| e == "EGL_MESA_device_software")
     }
 
+    /// The PCI vendor and device ids of its DRM node (`0x10de:0x2330`), read from sysfs
+    /// (`/sys/class/drm/NODE/device/{vendor,device}`); None for a device without a node
+    /// (Mesa's software device) or where sysfs does not say.
+    pub fn pci_id(&self) -> Option<String> {
+        let node = self.render_node.as_ref().or(self.drm_device.as_ref())?;
+        let name = std::path::Path::new(node).file_name()?.to_str()?;
+        let read = |f: &str| {
+            std::fs::read_to_string(format!("/sys/class/drm/{name}/device/{f}"))
+                .ok()
+                .map(|s| s.trim().to_string())
+        };
+        Some(format!("{}:{}", read("vendor")?, read("device")?))
+    }
+
+    /// How it is reached, in words, with its PCI id where it has one.
+    pub fn describe_with_pci(&self) -> String {
+        match self.pci_id() {
+            Some(pci) => format!("{}, PCI {pci}", self.describe()),
+            None => self.describe(),
+        }
+    }
+
     /// How it is reached, in words.
     pub fn describe(&self) -> String {
         match (&self.render_node, &self.drm_device, self.software()) {
@@ -259,4 +281,164 @@ pub fn discover() -> Result<Vec<(EglDevice, Vec<DeviceContext>)>, Unavailable> {
             (d, contexts)
         })
         .collect())
+}
+
+/// `EGL_MESA_query_driver`'s `eglGetDisplayDriverName`.
+type GetDisplayDriverName = unsafe extern "system" fn(egl::EGLDisplay) -> *const std::ffi::c_char;
+
+/// An EGL device with the name its backend ids carry (`gl33/NAME`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct NamedDevice {
+    /// The device.
+    pub device: EglDevice,
+    /// Its name in backend ids: the driver's own name, `.2`, `.3` … for a second and third
+    /// device of one driver ([`names`]).
+    pub name: String,
+    /// The display's EGL_VENDOR.
+    pub vendor: String,
+    /// What `eglGetDisplayDriverName` (EGL_MESA_query_driver) says, where the display has it.
+    pub driver: Option<String>,
+}
+
+/// The name of a device's driver as backend ids carry it, from what the driver reports:
+/// the DRI driver's name where EGL_MESA_query_driver gives one (`radeonsi`, `iris`, `swrast`
+/// for Mesa's software device), else the first word of the display's EGL_VENDOR (`nvidia`
+/// for "NVIDIA"), lower case, letters, digits, `-` and `_` only.
+pub fn driver_slug(driver: Option<&str>, vendor: &str) -> String {
+    let raw = match driver {
+        Some(d) if !d.trim().is_empty() => d.trim().to_string(),
+        _ => vendor
+            .split_whitespace()
+            .next()
+            .unwrap_or("unknown")
+            .to_string(),
+    };
+    let slug: String = raw
+        .to_ascii_lowercase()
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '-'
+            }
+        })
+        .collect();
+    if slug.is_empty() {
+        "unknown".into()
+    } else {
+        slug
+    }
+}
+
+/// Names for devices whose driver slugs are `slugs` (in list order), with the keys that
+/// order two devices of one driver (their DRM node path, so the names stay with the nodes
+/// whatever order EGL lists them in): the first keeps the slug, the next get `.2`, `.3` ….
+pub fn names(slugs: &[(String, String)]) -> Vec<String> {
+    slugs
+        .iter()
+        .enumerate()
+        .map(|(i, (slug, key))| {
+            let before = slugs
+                .iter()
+                .enumerate()
+                .filter(|(j, (s, k))| s == slug && (k, *j) < (key, i))
+                .count();
+            if before == 0 {
+                slug.clone()
+            } else {
+                format!("{slug}.{}", before + 1)
+            }
+        })
+        .collect()
+}
+
+/// Every EGL device with its backend-id name ([`driver_slug`], [`names`]). Each device's
+/// display is initialised to ask its driver's name and vendor, then terminated; a device
+/// whose display does not initialise is named `unknown` and listed, so that its index still
+/// reaches it.
+pub fn named_devices(
+    egl: &egl::DynamicInstance<egl::EGL1_5>,
+) -> Result<Vec<NamedDevice>, Unavailable> {
+    let get_name = egl.get_proc_address("eglGetDisplayDriverName");
+    let listed = devices(egl)?;
+    let mut found = Vec::new();
+    for (device, handle) in listed {
+        // SAFETY: a device handle from eglQueryDevicesEXT.
+        let display =
+            unsafe { egl.get_platform_display(PLATFORM_DEVICE_EXT, handle, &[egl::ATTRIB_NONE]) }
+                .ok();
+        let mut vendor = String::new();
+        let mut driver = None;
+        if let Some(d) = display.filter(|d| egl.initialize(*d).is_ok()) {
+            vendor = egl
+                .query_string(Some(d), egl::VENDOR)
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let exts = egl
+                .query_string(Some(d), egl::EXTENSIONS)
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            if let Some(f) = get_name.filter(|_| has(&exts, "EGL_MESA_query_driver")) {
+                // SAFETY: the entry point EGL returned for this name, with its signature
+                // (const char *(EGLDisplay)); the display is initialised.
+                let p = unsafe {
+                    std::mem::transmute::<extern "system" fn(), GetDisplayDriverName>(f)(d.as_ptr())
+                };
+                if !p.is_null() {
+                    // SAFETY: a NUL-terminated string the driver owns.
+                    driver = Some(
+                        unsafe { std::ffi::CStr::from_ptr(p) }
+                            .to_string_lossy()
+                            .into_owned(),
+                    );
+                }
+            }
+            let _ = egl.terminate(d);
+        }
+        found.push((device, vendor, driver));
+    }
+    let keys: Vec<(String, String)> = found
+        .iter()
+        .map(|(d, v, drv)| {
+            (
+                driver_slug(drv.as_deref(), v),
+                d.render_node
+                    .clone()
+                    .or_else(|| d.drm_device.clone())
+                    .unwrap_or_else(|| format!("~{:04}", d.index)),
+            )
+        })
+        .collect();
+    Ok(found
+        .into_iter()
+        .zip(names(&keys))
+        .map(|((device, vendor, driver), name)| NamedDevice {
+            device,
+            name,
+            vendor,
+            driver,
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod naming_tests {
+    use super::*;
+
+    #[test]
+    fn a_driver_names_its_devices_and_two_of_one_driver_stay_apart_by_node() {
+        assert_eq!(driver_slug(Some("radeonsi"), "Mesa Project"), "radeonsi");
+        assert_eq!(driver_slug(Some("swrast"), "Mesa Project"), "swrast");
+        assert_eq!(driver_slug(None, "NVIDIA"), "nvidia");
+        assert_eq!(driver_slug(Some(""), "Some Vendor Inc."), "some");
+        assert_eq!(driver_slug(None, ""), "unknown");
+        // Listed out of node order: the names follow the nodes, not the list.
+        let keys = [
+            ("radeonsi".to_string(), "/dev/dri/renderD129".to_string()),
+            ("iris".to_string(), "/dev/dri/renderD130".to_string()),
+            ("radeonsi".to_string(), "/dev/dri/renderD128".to_string()),
+        ];
+        assert_eq!(names(&keys), ["radeonsi.2", "iris", "radeonsi"]);
+    }
 }

@@ -95,7 +95,21 @@ pub fn flip_rows<T: Clone>(data: &[T], row_len: usize) -> Vec<T> {
 impl Renderer {
     /// Creates a context for `api` in this process's driver.
     pub fn new(api: Api) -> Result<Renderer, Unavailable> {
-        let mut ctx = GlContext::new(api)?;
+        Renderer::with(GlContext::new(api)?)
+    }
+
+    /// Creates a context for `api` on `platform` (an EGL device named by its backend id).
+    pub fn on(api: Api, platform: crate::platform::Platform) -> Result<Renderer, Unavailable> {
+        Renderer::with(GlContext::on(crate::context::load_egl()?, api, platform)?)
+    }
+
+    /// How EGL reached the driver ([`GlContext::reached`]).
+    pub fn reached(&self) -> String {
+        self.ctx.reached()
+    }
+
+    fn with(mut ctx: GlContext) -> Result<Renderer, Unavailable> {
+        let api = ctx.api;
         let caps = Caps::probe(&ctx.gl, api, ctx.polygon_offset_clamp_name);
         let debug = Arc::new(Mutex::new(Vec::new()));
         if caps.debug_output {

@@ -351,6 +351,7 @@ impl Backend for RefBackend {
             renderer: format!("CPU reference ({} threads)", rayon::current_num_threads()),
             version: env!("CARGO_PKG_VERSION").into(),
             extensions: Vec::new(),
+            device: "this process's CPU".into(),
         }
     }
 

@@ -214,6 +214,10 @@ pub const FLAGS: &[Flag] = &[
         "selftest: instead of the faults on the backends, the face/orientation table: every cube face and the 2D map drawn with each of the seven wrong orientations by the reference, and the catalogue points that catch each",
     ),
     switch("json", "print JSON for scripts instead of text"),
+    switch(
+        "ids",
+        "backends: print only this machine's device ids, one JSON object per line (what --backend hw and all expand to)",
+    ),
     valued(
         "case",
         "CASE.json",
@@ -438,7 +442,7 @@ pub const COMMANDS: &[Spec] = &[
         name: "backends",
         about: "List what this machine can run: every backend id with its driver's strings and how it is reached, every EGL device with the contexts it makes, every wgpu adapter (--json for scripts)",
         positional: None,
-        flags: &["json", "mesa"],
+        flags: &["json", "ids", "mesa"],
         required: &[],
         hidden: false,
     },

@@ -3,6 +3,11 @@
 //! llvmpipe, every picture of these cases on GL 3.3, GLES 3 and GLES 2 is byte-identical
 //! either way (colour, visibility, the judge's pictures and the read-back shadow map). A
 //! device that does not exist is a skip that says so, not a failure or a fallback.
+//!
+//! A device umbra has never seen: Mesa's software EGL device under the id its driver gives
+//! (`gl33/swrast`: llvmpipe, renamed), with no goldens and no expectation naming it, is judged
+//! by the specs and the reference alone and passes; the same runs with a self-test fault on
+//! (polygon-offset units a step low) fail.
 
 mod common;
 
@@ -12,6 +17,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn umbra(args: &[&str], platform: Option<&str>) -> Output {
+    umbra_with(args, platform, &[])
+}
+
+fn umbra_with(args: &[&str], platform: Option<&str>, env: &[(&str, &str)]) -> Output {
     let mut c = Command::new(env!("CARGO_BIN_EXE_umbra"));
     c.args(args)
         .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
@@ -22,6 +31,7 @@ fn umbra(args: &[&str], platform: Option<&str>) -> Output {
     if let Some(p) = platform {
         c.env("UMBRA_EGL_PLATFORM", p);
     }
+    c.envs(env.iter().copied());
     c.output().expect("run umbra")
 }
 
@@ -169,6 +179,25 @@ fn umbra_backends_lists_the_backends_the_egl_devices_and_the_adapters() {
         "{llvm}"
     );
     assert_eq!(backend("gl33/softpipe")["renderer"], "softpipe");
+    // The software EGL device under its driver's name, reached through the device platform,
+    // run only when named; wgpu's lavapipe found by its name.
+    let swrast = backend("gl33/swrast");
+    assert_eq!(swrast["available"], true, "{swrast}");
+    assert_eq!(swrast["kind"], "software device", "{swrast}");
+    assert!(
+        swrast["device"]
+            .as_str()
+            .is_some_and(|d| d.starts_with("EGL device")),
+        "{swrast}"
+    );
+    let lavapipe = backend("wgpu-vk/lavapipe");
+    assert_eq!(lavapipe["available"], true, "{lavapipe}");
+    assert!(
+        lavapipe["renderer"]
+            .as_str()
+            .is_some_and(|r| r.starts_with("llvmpipe")),
+        "{lavapipe}"
+    );
     // Mesa's software device, with a context of each API.
     let devices = v["egl_devices"].as_array().expect("EGL devices listed");
     let software = devices
@@ -188,4 +217,112 @@ fn umbra_backends_lists_the_backends_the_egl_devices_and_the_adapters() {
             .any(|x| x["backend"] == "Vulkan" && x["device_type"] == "Cpu")),
         "{v}"
     );
+}
+
+#[test]
+fn a_device_umbra_has_never_seen_is_judged_by_the_specs_alone_and_a_fault_on_it_fails() {
+    let ids = ["gl33/swrast", "gles3/swrast", "gles2/swrast"];
+    let run = |out: &Path, env: &[(&str, &str)]| {
+        let mut args = vec!["conformance", "--filter", "formats*", "--out"];
+        args.push(out.to_str().unwrap_or_default());
+        for id in ids {
+            args.extend(["--backend", id]);
+        }
+        umbra_with(&args, None, &[&[("CI", "true")], env].concat())
+    };
+    let clean = scratch("never-seen");
+    let o = run(&clean, &[]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    for id in ids {
+        assert!(
+            t.contains(&format!(
+                "{id}: no goldens for this backend: judged by the specs and the reference"
+            )),
+            "{t}"
+        );
+    }
+    let summary = t.lines().last().unwrap_or("");
+    assert!(
+        summary.starts_with("conformance: 22 passed, 0 failed"),
+        "{t}"
+    );
+    let drivers = std::fs::read_to_string(clean.join("latest/drivers.txt")).unwrap_or_default();
+    assert_eq!(
+        drivers
+            .matches("goldens: no goldens for this backend: judged by the specs and the reference")
+            .count(),
+        3,
+        "{drivers}"
+    );
+    assert_eq!(
+        drivers.matches("device: EGL device 0").count(),
+        3,
+        "{drivers}"
+    );
+    let html = std::fs::read_to_string(clean.join("latest/report.html")).unwrap_or_default();
+    assert!(
+        html.contains("no goldens for this backend"),
+        "report.html says so"
+    );
+    // No golden was written for them.
+    let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../golden");
+    assert!(
+        std::fs::read_dir(&golden)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .all(|e| !e.file_name().to_string_lossy().contains("swrast")),
+        "a golden for swrast appeared"
+    );
+
+    let faulted = scratch("never-seen-fault");
+    let o = run(
+        &faulted,
+        &[("UMBRA_SELFTEST", "1"), ("UMBRA_FAULT", "offset-units-low")],
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    let failed: Vec<&str> = t.lines().filter(|l| l.contains("] Fail ")).collect();
+    assert!(!failed.is_empty(), "{t}");
+    assert!(failed.iter().all(|l| l.contains("/swrast/")), "{t}");
+}
+
+#[test]
+fn device_ids_and_the_hw_alias_name_what_this_machine_has() {
+    let dir = scratch("hw-alias");
+    let out = dir.to_str().unwrap_or_default();
+    let o = umbra(&["backends", "--ids"], None);
+    let ids = text(&o);
+    assert!(ids.contains(r#""id":"gles2/swrast""#), "{ids}");
+    assert!(ids.contains(r#""id":"gl33/swrast","reached""#) || ids.contains("gl33/swrast"));
+    if ids.contains(r#""hardware":true"#) {
+        println!("this machine has a hardware device; the no-GPU errors are not checked: {ids}");
+        return;
+    }
+    // No GPU here: `hw` is an error that lists the devices there are, as is a device the
+    // machine lacks; neither runs anything.
+    for (id, says) in [
+        ("hw", "--backend hw: this machine has no hardware device"),
+        (
+            "gl33/radeonsi",
+            "--backend gl33/radeonsi: no such device on this machine",
+        ),
+    ] {
+        let o = umbra(
+            &[
+                "conformance",
+                "--backend",
+                id,
+                "--filter",
+                "formats*",
+                "--out",
+                out,
+            ],
+            None,
+        );
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(125), "{t}");
+        assert!(t.contains(says) && t.contains("gl33/swrast"), "{t}");
+    }
 }

@@ -5,24 +5,26 @@ use umbra_case::{
     Backend, BackendError, BackendId, DriverInfo, Frame, Needs, Prepared, Profile, Support,
 };
 
-use crate::device::{Kind, Unavailable, open};
+use crate::device::{Kind, Target, Unavailable, open};
 use crate::render::Gpu;
 
 /// A wgpu backend.
 pub struct WgpuBackend {
     gpu: Gpu,
+    target: Target,
     kind: Kind,
     depth24plus: String,
 }
 
 impl WgpuBackend {
-    /// Opens the device for `kind`.
-    pub fn new(kind: Kind) -> Result<WgpuBackend, Unavailable> {
-        let gpu = open(kind)?;
+    /// Opens the device on the adapter `target` names.
+    pub fn new(target: Target) -> Result<WgpuBackend, Unavailable> {
+        let gpu = open(&target)?;
         let depth24plus = crate::probe::depth24plus(&gpu);
         Ok(WgpuBackend {
             gpu,
-            kind,
+            kind: target.kind,
+            target,
             depth24plus,
         })
     }
@@ -30,7 +32,7 @@ impl WgpuBackend {
 
 impl Backend for WgpuBackend {
     fn id(&self) -> BackendId {
-        BackendId(self.kind.id().into())
+        BackendId(self.target.id())
     }
 
     fn info(&self) -> DriverInfo {
@@ -54,28 +56,41 @@ impl Backend for WgpuBackend {
         DriverInfo {
             vendor: format!("{:#06x}", i.vendor),
             renderer: i.name.clone(),
-            version: i.driver.clone(),
+            // The driver's version (wgpu's driver_info: "Mesa 22.3.6 (LLVM 15.0.6)" on
+            // lavapipe, GL_VERSION on its GL backend).
+            version: i.driver_info.clone(),
             extensions,
+            device: format!(
+                "{:?} adapter, driver {:?}, {:?}, vendor {:#06x} device {:#06x} (PCI ids on a PCI GPU)",
+                i.backend, i.driver, i.device_type, i.vendor, i.device
+            ),
         }
     }
 
     fn profile(&self) -> Profile {
         match self.kind {
-            Kind::VulkanLavapipe => Profile::VULKAN,
+            Kind::Vulkan => Profile::VULKAN,
             // wgpu's GL backend drives an OpenGL ES 3 context: GL's sampler rules, cube maps
             // always seamless.
-            Kind::GlLlvmpipe => Profile::GLES3,
+            Kind::Gl => Profile::GLES3,
         }
     }
 
     fn supports(&self, needs: &Needs) -> Support {
-        if needs.compare == Compare::Manual && self.kind == Kind::GlLlvmpipe {
+        let max = self.gpu.device.limits().max_texture_dimension_2d;
+        if needs.map_size.max(needs.image_size) > max {
+            return Support::Unsupported(format!(
+                "the case needs a {}-texel texture side and this adapter's max_texture_dimension_2d is {max}",
+                needs.map_size.max(needs.image_size)
+            ));
+        }
+        if needs.compare == Compare::Manual && self.kind == Kind::Gl {
             return Support::Unsupported("manual compare needs textureLoad from a depth texture, which naga's GLSL output (wgpu's GL backend) does not support".into());
         }
         if needs
             .mipmaps
             .is_some_and(|m| m.source == umbra_case::format::MipSource::Averaged)
-            && self.kind == Kind::GlLlvmpipe
+            && self.kind == Kind::Gl
         {
             return Support::Unsupported("averaged mip levels are made by a shader that reads the level above, and naga's GLSL output (wgpu's GL backend) declares every depth texture as sampler2DShadow: textureLoad from a depth texture is refused, and a NEAREST sample at the texel's centre becomes textureLod(sampler2DShadow, vec2), which does not compile".into());
         }

@@ -1,9 +1,12 @@
 //! Choosing the adapter for a backend id and opening a device on it, once per process.
 //!
-//! - `wgpu-vk/lavapipe`: `Backends::VULKAN`, the CPU adapter (Mesa's lavapipe).
-//! - `wgpu-gl/llvmpipe`: `Backends::GL`, which finds Mesa's surfaceless EGL display by itself.
+//! - `wgpu-vk/NAME`: `Backends::VULKAN`, the adapter named NAME ([`adapter_slug`]):
+//!   `lavapipe` for Mesa's CPU adapter, `radv`, `anv`, `nvidia` … on a GPU.
+//! - `wgpu-gl/NAME`: `Backends::GL`, which finds the EGL display by itself (Mesa's
+//!   surfaceless one here, `llvmpipe`).
 //!
-//! No adapter is [`Unavailable`] with the packages to install. Optional features
+//! Adapters are chosen by their names, which come from what the driver reports; no driver is
+//! assumed. No adapter is [`Unavailable`] with the packages to install. Optional features
 //! (timestamp queries, clamp-to-border) are enabled when the adapter has them and their absence
 //! turns the runs that need them into skips.
 
@@ -15,66 +18,200 @@ use crate::render::Gpu;
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Unavailable(pub String);
 
-/// A wgpu backend kind.
+/// The API a wgpu backend drives: the first part of its id.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Kind {
-    /// Vulkan on lavapipe.
-    VulkanLavapipe,
-    /// wgpu's GL backend on llvmpipe.
-    GlLlvmpipe,
+    /// wgpu on Vulkan (`wgpu-vk/…`).
+    Vulkan,
+    /// wgpu's GL backend, OpenGL ES 3 through EGL (`wgpu-gl/…`).
+    Gl,
 }
 
 impl Kind {
-    /// Every kind, in report order.
-    pub const ALL: [Kind; 2] = [Kind::VulkanLavapipe, Kind::GlLlvmpipe];
+    /// Both kinds, in report order.
+    pub const ALL: [Kind; 2] = [Kind::Vulkan, Kind::Gl];
 
-    /// The backend id.
-    pub fn id(self) -> &'static str {
+    /// The id's first part.
+    pub fn prefix(self) -> &'static str {
         match self {
-            Kind::VulkanLavapipe => "wgpu-vk/lavapipe",
-            Kind::GlLlvmpipe => "wgpu-gl/llvmpipe",
+            Kind::Vulkan => "wgpu-vk",
+            Kind::Gl => "wgpu-gl",
         }
     }
 
-    /// Parses a backend id.
+    /// The kind of a wgpu backend id (`wgpu-vk/radv` is Vulkan), whatever its adapter.
     pub fn parse(id: &str) -> Option<Kind> {
-        Kind::ALL.into_iter().find(|k| k.id() == id)
+        let (prefix, _) = id.split_once('/')?;
+        Kind::ALL.into_iter().find(|k| k.prefix() == prefix)
     }
 
     fn backends(self) -> wgpu::Backends {
         match self {
-            Kind::VulkanLavapipe => wgpu::Backends::VULKAN,
-            Kind::GlLlvmpipe => wgpu::Backends::GL,
+            Kind::Vulkan => wgpu::Backends::VULKAN,
+            Kind::Gl => wgpu::Backends::GL,
         }
     }
 
     fn packages(self) -> &'static str {
         match self {
-            Kind::VulkanLavapipe => "mesa-vulkan-drivers and libvulkan1",
-            Kind::GlLlvmpipe => "libegl1, libegl-mesa0 and libgl1-mesa-dri",
+            Kind::Vulkan => "mesa-vulkan-drivers and libvulkan1 (or the GPU's Vulkan driver)",
+            Kind::Gl => "libegl1, libegl-mesa0 and libgl1-mesa-dri (or the GPU's EGL driver)",
         }
     }
 }
 
-/// Opens a device of `kind`.
-pub fn open(kind: Kind) -> Result<Gpu, Unavailable> {
+/// A wgpu backend id: a kind and the name of an adapter ([`adapter_slug`]).
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct Target {
+    /// Vulkan or wgpu's GL backend.
+    pub kind: Kind,
+    /// The adapter's name in ids: `lavapipe`, `radv`, `nvidia`, `radv.2` ….
+    pub adapter: String,
+}
+
+impl Target {
+    /// Mesa's software adapters, the ids a machine without a GPU has: Vulkan on lavapipe
+    /// and wgpu's GL backend on llvmpipe.
+    pub fn software() -> [Target; 2] {
+        [
+            Target {
+                kind: Kind::Vulkan,
+                adapter: "lavapipe".into(),
+            },
+            Target {
+                kind: Kind::Gl,
+                adapter: "llvmpipe".into(),
+            },
+        ]
+    }
+
+    /// Parses `wgpu-vk/NAME` or `wgpu-gl/NAME`.
+    pub fn parse(id: &str) -> Option<Target> {
+        let kind = Kind::parse(id)?;
+        let (_, adapter) = id.split_once('/')?;
+        let plain = !adapter.is_empty()
+            && adapter
+                .chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || "-_.".contains(c));
+        plain.then(|| Target {
+            kind,
+            adapter: adapter.to_string(),
+        })
+    }
+
+    /// The backend id.
+    pub fn id(&self) -> String {
+        format!("{}/{}", self.kind.prefix(), self.adapter)
+    }
+
+    /// Whether this is one of Mesa's software adapters ([`Target::software`]).
+    pub fn is_software(&self) -> bool {
+        Target::software().contains(self)
+    }
+}
+
+/// An adapter's name in backend ids, from what its driver reports. Vulkan: Mesa's CPU
+/// adapter (driver `llvmpipe`) is `lavapipe`, Mesa's own name for its Vulkan driver; ANV
+/// reports "Intel open-source Mesa driver" and is `anv`; any other driver's name is its
+/// first word (`radv`, `nvidia` for "NVIDIA", `nvk` for "NVK"). wgpu's GL backend reports
+/// no driver name: the first word of GL_RENDERER (`llvmpipe`, `nvidia`). Lower case,
+/// letters, digits, `-` and `_` only; `unknown` when nothing is reported.
+pub fn adapter_slug(kind: Kind, driver: &str, name: &str, cpu: bool) -> String {
+    let driver_l = driver.to_ascii_lowercase();
+    let raw = match kind {
+        Kind::Vulkan if cpu && driver_l == "llvmpipe" => "lavapipe".to_string(),
+        Kind::Vulkan if driver_l.starts_with("intel open-source mesa") => "anv".to_string(),
+        Kind::Vulkan if !driver_l.trim().is_empty() => {
+            driver_l.split_whitespace().next().unwrap_or("").to_string()
+        }
+        _ => name
+            .to_ascii_lowercase()
+            .split_whitespace()
+            .next()
+            .unwrap_or("")
+            .to_string(),
+    };
+    let slug: String = raw
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '-'
+            }
+        })
+        .collect();
+    if slug.is_empty() {
+        "unknown".into()
+    } else {
+        slug
+    }
+}
+
+/// Every adapter of `kind` with its name in ids: [`adapter_slug`], and `.2`, `.3` … for a
+/// second and third adapter of one driver, in wgpu's enumeration order (the loader's
+/// physical-device order, stable for a machine's set of GPUs).
+pub fn named_adapters(kind: Kind) -> Vec<(String, wgpu::Adapter)> {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = kind.backends();
     let instance = wgpu::Instance::new(desc);
     let adapters = pollster::block_on(instance.enumerate_adapters(kind.backends()));
-    let adapter = adapters
+    let mut seen: std::collections::HashMap<String, usize> = Default::default();
+    adapters
         .into_iter()
-        .find(|a| {
+        .map(|a| {
             let i = a.get_info();
-            i.device_type == wgpu::DeviceType::Cpu || i.name.contains("llvmpipe")
+            let slug = adapter_slug(
+                kind,
+                &i.driver,
+                &i.name,
+                i.device_type == wgpu::DeviceType::Cpu,
+            );
+            let n = seen.entry(slug.clone()).or_default();
+            *n += 1;
+            let name = if *n == 1 { slug } else { format!("{slug}.{n}") };
+            (name, a)
         })
-        .ok_or_else(|| {
-            Unavailable(format!(
-                "no CPU adapter on {:?}; install the Debian packages {}",
+        .collect()
+}
+
+/// Whether the adapter is a hardware device (not a CPU adapter such as lavapipe), and how
+/// it is reached, in words, with its PCI ids.
+pub fn describe(adapter: &wgpu::Adapter) -> (bool, String) {
+    let i = adapter.get_info();
+    (
+        i.device_type != wgpu::DeviceType::Cpu,
+        format!(
+            "{:?} adapter {:?}, driver {:?} {:?}, vendor {:#06x} device {:#06x}",
+            i.backend, i.name, i.driver, i.driver_info, i.vendor, i.device
+        ),
+    )
+}
+
+/// Opens a device on the adapter `target` names.
+pub fn open(target: &Target) -> Result<Gpu, Unavailable> {
+    let kind = target.kind;
+    let named = named_adapters(kind);
+    let have: Vec<String> = named
+        .iter()
+        .map(|(n, _)| format!("{}/{n}", kind.prefix()))
+        .collect();
+    let Some((_, adapter)) = named.into_iter().find(|(n, _)| *n == target.adapter) else {
+        return Err(Unavailable(if have.is_empty() {
+            format!(
+                "no adapter on {:?}; install the Debian packages {}",
                 kind.backends(),
                 kind.packages()
-            ))
-        })?;
+            )
+        } else {
+            format!(
+                "no adapter named {:?} on {:?}; this machine has {} (`umbra backends` lists them)",
+                target.adapter,
+                kind.backends(),
+                have.join(", ")
+            )
+        }));
+    };
     let wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::ADDRESS_MODE_CLAMP_TO_BORDER;
     let features = adapter.features() & wanted;
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {

@@ -17,4 +17,4 @@ pub mod render;
 pub mod shaders;
 
 pub use backend::WgpuBackend;
-pub use device::Kind;
+pub use device::{Kind, Target};

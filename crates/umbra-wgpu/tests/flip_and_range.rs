@@ -7,7 +7,7 @@
 //! test can tell a flip from a match.
 
 use umbra_case::{Backend, ClipDepth, Prepared};
-use umbra_wgpu::{Kind, WgpuBackend};
+use umbra_wgpu::{Target, WgpuBackend};
 
 fn l_case() -> umbra_case::CasePoint {
     let path =
@@ -31,8 +31,9 @@ fn the_l_shaped_shadow_lands_where_the_reference_puts_it() {
         }
     }
     let mirrored_run = Prepared::new(mirrored);
-    for kind in Kind::ALL {
-        let mut backend = WgpuBackend::new(kind).unwrap_or_else(|e| {
+    for target in Target::software() {
+        let kind = &target;
+        let mut backend = WgpuBackend::new(target.clone()).unwrap_or_else(|e| {
             panic!(
                 "{}: {} (`cargo xtask test` installs the Mesa packages)",
                 kind.id(),
@@ -76,4 +77,71 @@ fn the_l_shaped_shadow_lands_where_the_reference_puts_it() {
             kind.id()
         );
     }
+}
+
+#[test]
+fn adapters_are_chosen_by_the_name_their_driver_gives_and_lavapipe_is_found() {
+    let named = umbra_wgpu::device::named_adapters(umbra_wgpu::Kind::Vulkan);
+    assert!(
+        named.iter().any(|(n, _)| n == "lavapipe"),
+        "lavapipe among {:?}",
+        named.iter().map(|(n, _)| n).collect::<Vec<_>>()
+    );
+    let target = Target::parse("wgpu-vk/lavapipe").expect("an id");
+    let backend = WgpuBackend::new(target).unwrap_or_else(|e| panic!("{}", e.0));
+    let info = backend.info();
+    assert!(info.renderer.starts_with("llvmpipe"), "{info:?}");
+    assert!(info.version.contains("Mesa"), "{info:?}");
+    let missing = WgpuBackend::new(Target::parse("wgpu-vk/nonesuch").expect("an id"));
+    let why = missing.err().map(|e| e.0).unwrap_or_default();
+    assert!(
+        why.contains("no adapter named \"nonesuch\"") && why.contains("wgpu-vk/lavapipe"),
+        "{why}"
+    );
+}
+
+#[test]
+fn adapter_names_come_from_what_the_driver_reports() {
+    use umbra_wgpu::Kind;
+    use umbra_wgpu::device::adapter_slug;
+    assert_eq!(
+        adapter_slug(Kind::Vulkan, "llvmpipe", "llvmpipe (LLVM 15)", true),
+        "lavapipe"
+    );
+    assert_eq!(
+        adapter_slug(
+            Kind::Vulkan,
+            "radv",
+            "AMD Radeon RX 6800 (RADV NAVI21)",
+            false
+        ),
+        "radv"
+    );
+    assert_eq!(
+        adapter_slug(
+            Kind::Vulkan,
+            "Intel open-source Mesa driver",
+            "Intel(R) UHD",
+            false
+        ),
+        "anv"
+    );
+    assert_eq!(
+        adapter_slug(Kind::Vulkan, "NVIDIA", "NVIDIA H100 PCIe", false),
+        "nvidia"
+    );
+    assert_eq!(
+        adapter_slug(Kind::Gl, "", "llvmpipe (LLVM 15.0.6, 256 bits)", true),
+        "llvmpipe"
+    );
+    assert_eq!(
+        adapter_slug(Kind::Gl, "", "NVIDIA H100 PCIe/PCIe/SSE2", false),
+        "nvidia"
+    );
+    assert_eq!(adapter_slug(Kind::Vulkan, "", "", false), "unknown");
+    assert_eq!(
+        Target::parse("wgpu-vk/radv.2").map(|t| t.id()),
+        Some("wgpu-vk/radv.2".into())
+    );
+    assert_eq!(Target::parse("wgpu-vk/Bad Name"), None);
 }

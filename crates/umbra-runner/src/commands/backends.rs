@@ -1,17 +1,16 @@
 //! `umbra backends [--json]`: what this machine can run, and how each backend reaches its
 //! driver.
 //!
-//! - **Backend ids** (what `--backend` takes): each is opened in its own process, as a run
-//!   would open it (`umbra worker`), and reports its vendor, renderer and version strings, or
-//!   why it is unavailable.
-//! - **EGL devices** (EGL_EXT_device_enumeration): each with the GL 3.3 core, GLES 3 and
-//!   GLES 2 contexts it can make and their strings; the GL backend reaches a device with
-//!   `UMBRA_EGL_PLATFORM=device:N`.
+//! - **Backend ids** (what `--backend` takes): this build's ids and this machine's device ids
+//!   ([`crate::harness::registry`]), each opened in its own process, as a run would open it
+//!   (`umbra worker`), with its vendor, renderer and version strings and how it is reached,
+//!   or why it is unavailable; which of them the aliases `hw` and `all` take.
+//! - **EGL devices** (EGL_EXT_device_enumeration): each with its backend-id name and the GL
+//!   3.3 core, GLES 3 and GLES 2 contexts it can make.
 //! - **wgpu adapters** on Vulkan and on wgpu's GL backend, as wgpu describes them.
 //!
-//! Hardware devices and other vendors' drivers are listed here for discovery; their own
-//! backend ids (from the driver's strings) are the next step of issue 25, so today a device
-//! that is not Mesa's software rasterizer has no id `--backend` takes, and the listing says so.
+//! `--ids` prints only the device ids, one JSON object per line: what `--backend hw` and
+//! `all` read ([`crate::harness::registry::discover`]).
 
 use serde_json::{Value, json};
 
@@ -26,12 +25,29 @@ pub fn main(args: &Args) -> i32 {
         let again: Vec<String> = std::env::args().skip(1).collect();
         return crate::harness::child::rerun(&again, &[("NODEVICE_SELECT".into(), "1".into())]);
     }
+    if args.has("ids") {
+        for d in registry::discover_here() {
+            println!(
+                "{}",
+                json!({ "id": d.id, "hardware": d.hardware, "reached": d.reached })
+            );
+        }
+        return 0;
+    }
     if let Err(e) = crate::harness::mesa_build::select(args.value("mesa")) {
         eprintln!("error: {e}");
         return 125;
     }
+    let devices = registry::discover_here();
     let listing = json!({
-        "backends": registry::known().iter().filter(|id| *id != "ref").map(|id| backend(id)).collect::<Vec<_>>(),
+        "backends": registry::known().iter().filter(|id| *id != "ref")
+            .map(|id| backend(id, "this build's", Some("all")))
+            .chain(devices.iter().map(|d| backend(
+                &d.id,
+                if d.hardware { "hardware device" } else { "software device" },
+                d.hardware.then_some("hw, all"),
+            )))
+            .collect::<Vec<_>>(),
         "egl_devices": egl_devices(),
         "wgpu_adapters": umbra_wgpu::device::adapters().iter().map(|a| json!({
             "backend": format!("{:?}", a.backend),
@@ -54,8 +70,9 @@ pub fn main(args: &Args) -> i32 {
     0
 }
 
-/// One backend id, opened in its own process: its strings, or why it is unavailable.
-fn backend(id: &str) -> Value {
+/// One backend id, opened in its own process: its strings, or why it is unavailable; `what`
+/// it is and which aliases take it.
+fn backend(id: &str, what: &str, aliases: Option<&str>) -> Value {
     let env = registry::worker_env(id);
     let reach = reach(id);
     let out = std::env::current_exe().and_then(|exe| {
@@ -76,10 +93,11 @@ fn backend(id: &str) -> Value {
         })
         .unwrap_or(Value::Null);
     let (api, driver) = id.split_once('/').unwrap_or((id, ""));
-    match (&hello["ready"], &hello["unavailable"]) {
+    let mut v = match (&hello["ready"], &hello["unavailable"]) {
         (Value::Object(r), _) => json!({
             "id": id, "api": api, "driver": driver, "available": true, "reached": reach,
             "vendor": r.get("vendor"), "renderer": r.get("renderer"), "version": r.get("version"),
+            "device": r.get("device"),
             "egl": r.get("extensions").and_then(Value::as_array)
                 .and_then(|e| e.iter().filter_map(Value::as_str).find(|s| s.starts_with("EGL ")))
                 .map(|s| s.trim_start_matches("EGL ")),
@@ -91,7 +109,10 @@ fn backend(id: &str) -> Value {
             "id": id, "api": api, "driver": driver, "available": false, "reached": reach,
             "why": "its worker did not start or said nothing",
         }),
-    }
+    };
+    v["kind"] = json!(what);
+    v["aliases"] = json!(aliases.unwrap_or("none: run it by its id"));
+    v
 }
 
 /// How a backend id reaches its driver, in words.
@@ -102,8 +123,11 @@ fn reach(id: &str) -> String {
         .map(|(k, v)| format!("{k}={v}"))
         .collect();
     let how = match umbra_wgpu::Kind::parse(id) {
-        Some(umbra_wgpu::Kind::VulkanLavapipe) => "wgpu on Vulkan, the CPU adapter",
-        Some(umbra_wgpu::Kind::GlLlvmpipe) => "wgpu's GL backend on EGL",
+        Some(umbra_wgpu::Kind::Vulkan) => "wgpu on Vulkan, the adapter of this name",
+        Some(umbra_wgpu::Kind::Gl) => "wgpu's GL backend on EGL",
+        None if umbra_gl::parse_device_id(id).is_some() => {
+            "EGL device platform (EGL_EXT_platform_device), the device of this name"
+        }
         None => match std::env::var(umbra_gl::platform::ENV).ok().as_deref() {
             Some(p) if p.starts_with("device") => "EGL device (UMBRA_EGL_PLATFORM)",
             _ => "EGL surfaceless (or the first EGL device where surfaceless is not offered)",
@@ -118,6 +142,9 @@ fn reach(id: &str) -> String {
 
 /// Every EGL device with the contexts it makes.
 fn egl_devices() -> Value {
+    let names = umbra_gl::context::load_egl()
+        .and_then(|egl| umbra_gl::platform::named_devices(&egl))
+        .unwrap_or_default();
     match umbra_gl::platform::discover() {
         Err(e) => json!({ "unavailable": e.0 }),
         Ok(list) => Value::Array(
@@ -125,6 +152,8 @@ fn egl_devices() -> Value {
                 .map(|(d, contexts)| {
                     json!({
                         "index": d.index,
+                        "name": names.iter().find(|n| n.device.index == d.index).map(|n| n.name.clone()),
+                        "pci": d.pci_id(),
                         "reached": d.describe(),
                         "software": d.software(),
                         "render_node": d.render_node,
@@ -155,13 +184,18 @@ fn text(l: &Value) -> String {
                 String::new()
             };
             o.push_str(&format!(
-                "  {:<18} {} | {} | {}\n  {:<18} reached: {}{egl}\n",
+                "  {:<18} {} | {} | {}\n  {:<18} {}; aliases: {}\n  {:<18} reached: {}{egl}\n  {:<18} device: {}\n",
                 s(&b["id"]),
                 s(&b["vendor"]),
                 s(&b["renderer"]),
                 s(&b["version"]),
                 "",
+                s(&b["kind"]),
+                s(&b["aliases"]),
+                "",
                 s(&b["reached"]),
+                "",
+                s(&b["device"]),
             ));
         } else {
             o.push_str(&format!(
@@ -171,7 +205,7 @@ fn text(l: &Value) -> String {
             ));
         }
     }
-    o.push_str("\nEGL devices (UMBRA_EGL_PLATFORM=device:N reaches one):\n");
+    o.push_str("\nEGL devices (ids API/NAME; UMBRA_EGL_PLATFORM=device:N also reaches one for this build's GL ids):\n");
     match l["egl_devices"].as_array() {
         None => o.push_str(&format!(
             "  none: {}\n",
@@ -180,12 +214,13 @@ fn text(l: &Value) -> String {
         Some(devs) => {
             for d in devs {
                 o.push_str(&format!(
-                    "  {}{}\n",
+                    "  {}: name {} ({})\n",
                     s(&d["reached"]),
+                    s(&d["name"]),
                     if d["software"] == true {
-                        ""
+                        "Mesa's software device"
                     } else {
-                        " (a hardware device: no backend id for it yet)"
+                        "a hardware device"
                     }
                 ));
                 for c in d["contexts"].as_array().into_iter().flatten() {

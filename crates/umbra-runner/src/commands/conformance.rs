@@ -73,6 +73,8 @@ struct Settings {
     judge_cache: String,
     timeout: Duration,
     golden: Option<PathBuf>,
+    /// Backends with no goldens in `golden`: judged without a golden check.
+    no_goldens: std::collections::BTreeSet<String>,
     failures: PathBuf,
     /// Every judged run's gallery pictures (report.html's gallery reads them).
     gallery: PathBuf,
@@ -270,6 +272,7 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
     {
         let known = crate::harness::registry::known();
         let mut ids: Vec<&str> = known.iter().map(String::as_str).collect();
+        ids.extend(backends.iter().map(String::as_str));
         if crate::harness::fake::enabled() {
             ids.extend(crate::harness::fake::IDS);
         }
@@ -309,6 +312,22 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
     if bless && golden.is_none() {
         return usage("--bless with --golden none: there are no goldens to bless").into();
     }
+    // A backend without goldens (a device umbra has never seen) is judged by the specs and
+    // the reference; blessing starts its goldens.
+    let no_goldens: std::collections::BTreeSet<String> = match (&golden, bless) {
+        (Some(dir), false) => backends
+            .iter()
+            .filter(|b| !crate::judge::golden::has_goldens(dir, b))
+            .cloned()
+            .collect(),
+        _ => Default::default(),
+    };
+    for b in &no_goldens {
+        println!(
+            "{b}: {} (`cargo xtask bless --backend {b}` starts them)",
+            crate::judge::golden::NONE_FOR_BACKEND
+        );
+    }
     let inherited = crate::judge::golden::inherited_insta();
     if !inherited.is_empty() {
         eprintln!(
@@ -343,6 +362,7 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
         judge_cache,
         timeout,
         golden,
+        no_goldens,
         failures: run_dir.dir.join("failures"),
         gallery: run_dir.dir.join("pictures"),
         expectations,
@@ -835,8 +855,18 @@ fn run_group(
             None => format!("{backend}: said {hello}\n"),
         },
     };
+    let mut device = hello["ready"]["device"]
+        .as_str()
+        .filter(|d| !d.is_empty())
+        .map_or(String::new(), |d| format!("  device: {d}\n"));
+    if settings.no_goldens.contains(backend) {
+        device.push_str(&format!(
+            "  goldens: {} (`cargo xtask bless --backend {backend}` starts them)\n",
+            crate::judge::golden::NONE_FOR_BACKEND
+        ));
+    }
     let driver_line = format!(
-        "{}{}",
+        "{}{device}{}",
         driver_line,
         match (&build, files.is_empty()) {
             (Some(b), _) => format!("  build: {b}; expectations: {}\n", files.join(", ")),
@@ -849,6 +879,12 @@ fn run_group(
         "vendor": hello["ready"]["vendor"],
         "renderer": hello["ready"]["renderer"],
         "version": hello["ready"]["version"],
+        "device": hello["ready"]["device"],
+        "goldens": if settings.no_goldens.contains(backend) {
+            serde_json::json!(crate::judge::golden::NONE_FOR_BACKEND)
+        } else {
+            serde_json::Value::Null
+        },
         "mesa": facts.mesa,
         "build": build,
         "unavailable": hello.get("unavailable"),
@@ -888,7 +924,10 @@ fn run_group(
                     file: p.file.clone(),
                     index: p.index,
                     failures: Some(settings.failures.clone()),
-                    golden: settings.golden.clone(),
+                    golden: settings
+                        .golden
+                        .clone()
+                        .filter(|_| !settings.no_goldens.contains(backend)),
                     repeat: None,
                     no_twins: false,
                     gallery: Some(settings.gallery.clone()),

@@ -77,7 +77,7 @@ fn steps(args: &Args) -> Result<i32, i32> {
     let binary = t.out.join("repro");
     run_programs(&t, &facts, &binary, control.as_deref(), &mut m)?;
     (m.capture, m.replays) =
-        if umbra_wgpu::Kind::parse(&t.backend) == Some(umbra_wgpu::Kind::VulkanLavapipe) {
+        if umbra_wgpu::Kind::parse(&t.backend) == Some(umbra_wgpu::Kind::Vulkan) {
             gfxr_capture(&t.out, &t.backend, &reduced)
         } else {
             capture(&t.out, &binary, &t.backend, control.as_deref(), &m)
@@ -378,8 +378,8 @@ fn find_point(args: &Args, case_point: &str) -> Result<(PathBuf, String), String
 /// The same API on llvmpipe (none when the run is on llvmpipe already).
 fn default_control(backend: &str) -> Option<String> {
     let (api, driver) = backend.split_once('/')?;
-    (umbra_gl::parse_id(backend).is_some() && driver != "llvmpipe")
-        .then(|| format!("{api}/llvmpipe"))
+    let gl = umbra_gl::parse_id(backend).is_some() || umbra_gl::parse_device_id(backend).is_some();
+    (gl && driver != "llvmpipe").then(|| format!("{api}/llvmpipe"))
 }
 
 /// Runs this executable with `args`, returning its exit code and its stdout and stderr
@@ -512,7 +512,7 @@ fn capture(
     control: Option<&str>,
     m: &Measured,
 ) -> (Result<String, String>, Vec<Replay>) {
-    if umbra_gl::parse_id(backend).is_none() {
+    if umbra_gl::parse_id(backend).is_none() && umbra_gl::parse_device_id(backend).is_none() {
         return (
             Err(format!(
                 "{backend} runs through wgpu's GL backend, whose calls umbra does not record; `apitrace trace --api egl umbra render case.json --backend {backend}` captures them"

@@ -38,12 +38,19 @@ pub const SAMPLE: usize = 6;
 /// How many points must catch each fault × backend pair.
 pub const MIN_POINTS: usize = 3;
 
+/// The GL API of a GL backend id, a Mesa software driver's or an EGL device's.
+fn gl_api(id: &str) -> Option<umbra_gl::Api> {
+    umbra_gl::parse_id(id)
+        .map(|(api, _)| api)
+        .or_else(|| umbra_gl::parse_device_id(id).map(|(api, _)| api))
+}
+
 /// Whether `fault` means anything on backend `id`.
 pub fn applies(fault: Fault, id: &str) -> bool {
-    let gl = umbra_gl::parse_id(id);
-    let es2 = gl.is_some_and(|(api, _)| api == umbra_gl::Api::Gles2);
+    let gl = gl_api(id);
+    let es2 = gl == Some(umbra_gl::Api::Gles2);
     let wgpu = umbra_wgpu::Kind::parse(id);
-    let wgpu_gl = wgpu == Some(umbra_wgpu::Kind::GlLlvmpipe);
+    let wgpu_gl = wgpu == Some(umbra_wgpu::Kind::Gl);
     if gl.is_none() && wgpu.is_none() {
         return false;
     }
@@ -67,7 +74,7 @@ pub fn applies(fault: Fault, id: &str) -> bool {
 
 /// Whether case `c` exercises `fault` on backend `id` at all: only such points are run for it.
 pub fn exercises(fault: Fault, c: &umbra_case::Case, id: &str) -> bool {
-    let es2 = umbra_gl::parse_id(id).is_some_and(|(api, _)| api == umbra_gl::Api::Gles2);
+    let es2 = gl_api(id) == Some(umbra_gl::Api::Gles2);
     use umbra_case::format::{Compare, DepthFormat, Filter, Light, Outside, ShadingModel};
     let s = &c.shadow;
     match fault {

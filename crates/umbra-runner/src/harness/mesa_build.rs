@@ -232,9 +232,12 @@ impl MesaBuild {
                 )
             })
         };
-        match (umbra_wgpu::Kind::parse(id), umbra_gl::parse_id(id)) {
-            (Some(umbra_wgpu::Kind::VulkanLavapipe), _) => need_lvp(),
-            (Some(umbra_wgpu::Kind::GlLlvmpipe), _) => need_dri("swrast"),
+        match (
+            umbra_wgpu::Target::parse(id).filter(umbra_wgpu::Target::is_software),
+            umbra_gl::parse_id(id),
+        ) {
+            (Some(t), _) if t.kind == umbra_wgpu::Kind::Vulkan => need_lvp(),
+            (Some(_), _) => need_dri("swrast"),
             (None, Some((_, umbra_gl::Driver::Zink))) => need_dri("zink").or_else(need_lvp),
             (None, Some(_)) => need_dri("swrast"),
             _ => None,
@@ -252,10 +255,12 @@ impl MesaBuild {
     }
 }
 
-/// Whether backend `id` runs on Mesa (and so on the selected build).
+/// Whether backend `id` runs on Mesa's software drivers (and so on the selected build). A
+/// device id's driver is whatever the machine's loader finds (another vendor's, perhaps):
+/// the build's loader variables would hide it, so `--mesa` leaves device ids alone.
 pub fn is_mesa_backed(id: &str) -> bool {
     umbra_gl::parse_id(id).is_some()
-        || umbra_wgpu::Kind::parse(id).is_some()
+        || umbra_wgpu::Target::parse(id).is_some_and(|t| t.is_software())
         || id == crate::harness::fake::MESA
 }
 

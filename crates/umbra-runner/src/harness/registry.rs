@@ -1,54 +1,204 @@
-//! Backend ids and how to make them: `ref`, `API/DRIVER` for GL (`gl33/llvmpipe`,
-//! `gles2/zink`, ...), and `wgpu-vk/lavapipe`, `wgpu-gl/llvmpipe`.
+//! Backend ids and how to make them.
+//!
+//! - **This build's ids** ([`known`]): `ref`; `API/DRIVER` for Mesa's software drivers
+//!   (`gl33/llvmpipe`, `gles2/zink`, …), chosen by environment on EGL's surfaceless
+//!   platform; `wgpu-vk/lavapipe` and `wgpu-gl/llvmpipe`.
+//! - **This machine's devices** ([`discover`]): every EGL device as `API/NAME` and every
+//!   wgpu adapter as `wgpu-vk/NAME` or `wgpu-gl/NAME`, NAME from what the driver reports
+//!   (`gl33/radeonsi`, `gles3/iris.2`, `gl33/nvidia`, `wgpu-vk/radv`; Mesa's software EGL
+//!   device is `gl33/swrast`). Listed by `umbra backends`, taken by `--backend` like the
+//!   others, and by the aliases `hw` (every hardware device) and `all` (this build's ids and
+//!   every hardware device; the software EGL device is the same driver as `gl33/llvmpipe`
+//!   reached another way, so it is run only when named).
 //!
 //! A Mesa driver is chosen by environment before EGL loads, so a process hosts one driver.
 //! [`driver_env`] says which environment an id needs; the commands run ids whose driver this
-//! process did not load in a child process of their own ([`crate::harness::child`]).
+//! process did not load in a child process of their own ([`crate::harness::child`]). A
+//! device id sets no driver environment: the device's own driver answers.
 
 use umbra_case::Backend;
 
-/// Whether `id` names a backend of this build (fake ones only where enabled).
+/// Whether `id` names a backend of this build (fake ones only where enabled), or has the
+/// form of a device's id ([`is_device_id`]; whether the device exists is the worker's to
+/// find, and a missing one is a skip that lists what the machine has).
 pub fn is_known(id: &str) -> bool {
     known().iter().any(|k| k == id)
         || (crate::harness::fake::enabled() && crate::harness::fake::Fake::new(id).is_some())
+        || is_device_id(id)
+}
+
+/// Whether `id` has the form of a device's id: an EGL device's (`gl33/radeonsi`) or a wgpu
+/// adapter's (`wgpu-vk/radv`), not one of this build's Mesa software ids.
+pub fn is_device_id(id: &str) -> bool {
+    !known().iter().any(|k| k == id)
+        && (umbra_gl::parse_device_id(id).is_some() || umbra_wgpu::Target::parse(id).is_some())
+}
+
+/// A backend id found on this machine by [`discover`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Discovered {
+    /// The id.
+    pub id: String,
+    /// A hardware device (not Mesa's software device or CPU adapter).
+    pub hardware: bool,
+    /// How it is reached, in words.
+    pub reached: String,
+}
+
+/// The device ids of this machine, found in a child process (`umbra backends --ids`) so that
+/// no driver loads in this one: every EGL device with each GL API, every wgpu adapter that is
+/// not one of this build's ids. Empty where nothing can be listed.
+pub fn discover() -> Vec<Discovered> {
+    let out = std::env::current_exe().and_then(|exe| {
+        let mut cmd = std::process::Command::new(exe);
+        cmd.args(["backends", "--ids"])
+            .env("NODEVICE_SELECT", "1")
+            .stdin(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null());
+        crate::harness::pool::without_inherited_insta(&mut cmd);
+        cmd.output()
+    });
+    let Ok(out) = out else { return Vec::new() };
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter_map(|v| {
+            Some(Discovered {
+                id: v["id"].as_str()?.to_string(),
+                hardware: v["hardware"].as_bool()?,
+                reached: v["reached"].as_str().unwrap_or("").to_string(),
+            })
+        })
+        .collect()
+}
+
+/// [`discover`]'s list, computed in this process (what `umbra backends --ids` prints).
+pub fn discover_here() -> Vec<Discovered> {
+    let mut found = Vec::new();
+    if let Ok(egl) = umbra_gl::context::load_egl() {
+        for d in umbra_gl::platform::named_devices(&egl).unwrap_or_default() {
+            for api in umbra_gl::Api::ALL {
+                found.push(Discovered {
+                    id: format!("{}/{}", api.name(), d.name),
+                    hardware: !d.device.software(),
+                    reached: d.device.describe_with_pci(),
+                });
+            }
+        }
+    }
+    for kind in umbra_wgpu::Kind::ALL {
+        for (name, adapter) in umbra_wgpu::device::named_adapters(kind) {
+            let id = format!("{}/{name}", kind.prefix());
+            if known().contains(&id) {
+                continue;
+            }
+            let (hardware, reached) = umbra_wgpu::device::describe(&adapter);
+            found.push(Discovered {
+                id,
+                hardware,
+                reached,
+            });
+        }
+    }
+    found
 }
 
 /// The backends a command was asked for: the `--backend` values, `default` when there are
-/// none; `all` anywhere means every known backend. An unknown id is an error naming the
-/// known ones.
+/// none. The aliases: `all`, this build's ids and every hardware device of this machine;
+/// `hw`, every hardware device. An unknown id is an error naming the known ones; a device
+/// id this machine lacks is an error naming the devices it has.
 pub fn selected(named: &[&str], default: Vec<String>) -> Result<Vec<String>, String> {
-    let ids: Vec<String> = if named.is_empty() {
-        default
-    } else if named.contains(&"all") {
-        known()
-    } else {
-        named.iter().map(|s| s.to_string()).collect()
-    };
-    match ids.iter().find(|b| !is_known(b)) {
-        Some(bad) => Err(format!(
-            "unknown backend {bad:?}; this build has: {}",
-            known().join(", ")
-        )),
-        None => Ok(ids),
+    if named.is_empty() {
+        return Ok(default);
     }
+    let needs_devices = named
+        .iter()
+        .any(|n| *n == "all" || *n == "hw" || is_device_id(n));
+    let devices = if needs_devices {
+        discover()
+    } else {
+        Vec::new()
+    };
+    let hardware: Vec<String> = devices
+        .iter()
+        .filter(|d| d.hardware)
+        .map(|d| d.id.clone())
+        .collect();
+    let mut ids: Vec<String> = Vec::new();
+    let add = |id: String, ids: &mut Vec<String>| {
+        if !ids.contains(&id) {
+            ids.push(id);
+        }
+    };
+    for n in named {
+        match *n {
+            "all" => known()
+                .into_iter()
+                .chain(hardware.iter().cloned())
+                .for_each(|i| add(i, &mut ids)),
+            "hw" if hardware.is_empty() => {
+                return Err(format!(
+                    "--backend hw: this machine has no hardware device that EGL or wgpu lists{} (`umbra backends` shows what it has)",
+                    if devices.is_empty() {
+                        String::new()
+                    } else {
+                        format!(
+                            "; its devices are {}",
+                            devices
+                                .iter()
+                                .map(|d| d.id.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        )
+                    }
+                ));
+            }
+            "hw" => hardware.iter().cloned().for_each(|i| add(i, &mut ids)),
+            id if is_device_id(id) && !devices.iter().any(|d| d.id == id) => {
+                let have: Vec<&str> = devices.iter().map(|d| d.id.as_str()).collect();
+                return Err(format!(
+                    "--backend {id}: no such device on this machine; it has {} (`umbra backends` lists them)",
+                    if have.is_empty() {
+                        "none".to_string()
+                    } else {
+                        have.join(", ")
+                    }
+                ));
+            }
+            id if is_known(id) => add(id.to_string(), &mut ids),
+            bad => {
+                return Err(format!(
+                    "unknown backend {bad:?}; this build has: {}, the aliases hw and all, and this machine's devices (`umbra backends`)",
+                    known().join(", ")
+                ));
+            }
+        }
+    }
+    Ok(ids)
 }
 
 /// Every backend id this build knows, in report order.
 pub fn known() -> Vec<String> {
     let mut ids = vec!["ref".to_string()];
     ids.extend(umbra_gl::ids());
-    ids.extend(umbra_wgpu::Kind::ALL.iter().map(|k| k.id().to_string()));
+    ids.extend(umbra_wgpu::Target::software().iter().map(|t| t.id()));
     ids
 }
 
 /// The environment the id's driver needs, if any (wgpu's GL backend loads Mesa's EGL, so it
 /// needs llvmpipe's).
 pub fn driver_env(id: &str) -> Option<Vec<(&'static str, &'static str)>> {
-    match umbra_wgpu::Kind::parse(id) {
-        Some(umbra_wgpu::Kind::GlLlvmpipe) => Some(umbra_gl::Driver::Llvmpipe.env()),
+    match umbra_wgpu::Target::parse(id) {
+        // wgpu's GL backend takes EGL's default display, where Mesa's variables choose.
+        Some(t) if t.kind == umbra_wgpu::Kind::Gl && t.is_software() => {
+            Some(umbra_gl::Driver::Llvmpipe.env())
+        }
+        Some(t) if t.kind == umbra_wgpu::Kind::Gl => Some(Vec::new()),
         // The Vulkan device-select layer only complains about DISPLAY and XDG_RUNTIME_DIR.
-        Some(umbra_wgpu::Kind::VulkanLavapipe) => Some(vec![("NODEVICE_SELECT", "1")]),
-        None => umbra_gl::parse_id(id).map(|(_, d)| d.env()),
+        Some(_) => Some(vec![("NODEVICE_SELECT", "1")]),
+        None => umbra_gl::parse_id(id)
+            .map(|(_, d)| d.env())
+            .or_else(|| umbra_gl::parse_device_id(id).map(|_| Vec::new())),
     }
 }
 
@@ -105,13 +255,16 @@ pub fn hostable_here(id: &str) -> bool {
             return false;
         }
     }
-    match (umbra_wgpu::Kind::parse(id), umbra_gl::parse_id(id)) {
-        (Some(umbra_wgpu::Kind::GlLlvmpipe), _) => umbra_gl::Driver::Llvmpipe.is_selected(),
-        (Some(umbra_wgpu::Kind::VulkanLavapipe), _) => {
+    match (umbra_wgpu::Target::parse(id), umbra_gl::parse_id(id)) {
+        (Some(t), _) if t.kind == umbra_wgpu::Kind::Gl && t.is_software() => {
+            umbra_gl::Driver::Llvmpipe.is_selected()
+        }
+        (Some(t), _) if t.kind == umbra_wgpu::Kind::Vulkan => {
             std::env::var("NODEVICE_SELECT").is_ok_and(|v| v == "1")
         }
         (None, Some((_, d))) => d.is_selected(),
-        (None, None) => true,
+        // A device id needs no environment of its own.
+        _ => true,
     }
 }
 
@@ -126,8 +279,13 @@ pub fn create(id: &str) -> Result<Box<dyn Backend>, CreateError> {
             return Ok(Box::new(f));
         }
     }
-    if let Some(kind) = umbra_wgpu::Kind::parse(id) {
-        return umbra_wgpu::WgpuBackend::new(kind)
+    if let Some(target) = umbra_wgpu::Target::parse(id) {
+        return umbra_wgpu::WgpuBackend::new(target)
+            .map(|b| Box::new(b) as Box<dyn Backend>)
+            .map_err(|e| CreateError::Unavailable(e.0));
+    }
+    if let Some((api, name)) = umbra_gl::parse_device_id(id) {
+        return umbra_gl::GlBackend::on_device(api, name)
             .map(|b| Box::new(b) as Box<dyn Backend>)
             .map_err(|e| CreateError::Unavailable(e.0));
     }

@@ -135,7 +135,7 @@ pub fn main(args: &Args) -> i32 {
             }
             let hello = serde_json::json!({ "ready": {
                 "vendor": i.vendor, "renderer": i.renderer, "version": i.version,
-                "extensions": i.extensions, "create_ms": create_ms,
+                "extensions": i.extensions, "device": i.device, "create_ms": create_ms,
                 "build": build.as_ref().map(|b| b.describe()),
                 "mesa_libs": libs,
             } });

@@ -333,6 +333,37 @@ pub fn record_blessed(dir: &Path, entries: &[(String, String)]) -> std::io::Resu
     crate::atomic_file::write(&path, text.as_bytes())
 }
 
+/// What a backend without goldens is judged by, in the terminal, drivers.txt and the report.
+pub const NONE_FOR_BACKEND: &str =
+    "no goldens for this backend: judged by the specs and the reference";
+
+/// Whether backend `id` has goldens in `dir`: the manifest names it (blessing records every
+/// backend it wrote for), or a golden of one of its runs is there (the ids are told apart by
+/// the name each snapshot records, not by the file stem, whose punctuation is flattened).
+/// A backend without goldens (a device umbra has never seen) is judged by the specs and the
+/// reference alone; `cargo xtask bless --backend ID` starts its goldens.
+pub fn has_goldens(dir: &Path, id: &str) -> bool {
+    if manifest(dir)
+        .ok()
+        .flatten()
+        .is_some_and(|m| m.contains_key(id))
+    {
+        return true;
+    }
+    let prefix = format!("{}_", stem(id).rsplit_once('-').map_or("", |(p, _)| p));
+    let marker = format!("colour of {id}/");
+    std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .any(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            name.starts_with(&prefix)
+                && name.ends_with(".snap")
+                && std::fs::read_to_string(e.path()).is_ok_and(|t| t.contains(&marker))
+        })
+}
+
 /// Whether two Mesa versions are the same release for goldens (numeric parts only, so a
 /// distribution's packaging suffix does not matter).
 pub fn same_release(a: &str, b: &str) -> bool {
