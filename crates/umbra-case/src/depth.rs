@@ -74,7 +74,10 @@ impl DepthFormat {
     ///   of its own choosing" (GL 4.6 §8.5), so r is that choice's: 24-bit fixed point as
     ///   umbra models the storage, or 32-bit (llvmpipe and softpipe pick Z32_UNORM for an
     ///   UNSIGNED_INT upload, a Vulkan driver D32F: a soak found llvmpipe storing no visible
-    ///   units offset on an unsized map): from the float or 2⁻³² unit up to 2·2⁻²⁴.
+    ///   units offset on an unsized map): from the float or 2⁻³² unit up to 2·2⁻²⁴. The set
+    ///   {24, 32} is an observation, not a spec clause: the GL backend probes the driver's
+    ///   choice (GL_TEXTURE_DEPTH_SIZE, `umbra_gl::caps::Caps::unsized_depth_bits`) and a
+    ///   driver choosing another resolution skips the unsized points instead of failing.
     pub fn offset_unit_range(self, max_abs_z: f32) -> (f64, f64) {
         if self == DepthFormat::Unsized {
             let float = f64::from(DepthFormat::Depth32f.offset_unit(max_abs_z));

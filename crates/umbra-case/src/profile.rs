@@ -16,6 +16,11 @@
 //!   own shader, into RGBA8 and the lit pass unpacks and compares it in the shader: the stored
 //!   value has the packing's precision instead of the format's codes, the polygon offset is
 //!   the application's formula (no r or m freedom), and the camera's depth buffer is 24-bit.
+//!
+//! These are spec clauses and apply to every driver, one umbra has never seen included. The
+//! [`Deviation`]s are Mesa observations: no profile grants them, only an expectation naming a
+//! backend or renderer does. README.md ("Any driver a machine has") tables every freedom the
+//! judge grants with its source.
 
 /// The specification whose freedoms a backend's sampler has.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]

@@ -40,6 +40,10 @@ pub struct Caps {
     /// Depth clamping (ARB_depth_clamp, core in GL 3.2; EXT_depth_clamp on GLES): recorded,
     /// not used (umbra's cases keep geometry within the clip volume or test its clipping).
     pub depth_clamp: bool,
+    /// 24-bit depth renderbuffers: core in GL 3.3 and GLES 3.0, OES_depth24 on GLES 2, whose
+    /// path renders both passes into DEPTH_COMPONENT24 renderbuffers (the packed-depth
+    /// profile models a 24-bit camera depth buffer); without it GLES 2 is a skip.
+    pub depth24_renderbuffer: bool,
     /// GL_MAX_TEXTURE_SIZE, GL_MAX_CUBE_MAP_TEXTURE_SIZE and GL_MAX_RENDERBUFFER_SIZE: a
     /// case whose map or image is larger is a skip (umbra's own limits, 16384 and 8192, are
     /// llvmpipe's; other drivers may stop lower).
@@ -66,6 +70,7 @@ impl Caps {
         let version = gl.version();
         let can_ask_level = !version.is_embedded || (version.major, version.minor) >= (3, 1);
         Caps {
+            depth24_renderbuffer: api != Api::Gles2 || has("GL_OES_depth24"),
             max_texture: limit(glow::MAX_TEXTURE_SIZE),
             max_cube: limit(glow::MAX_CUBE_MAP_TEXTURE_SIZE),
             max_renderbuffer: limit(glow::MAX_RENDERBUFFER_SIZE),

@@ -5,14 +5,21 @@
 //! libEGL is loaded at run time (khronos-egl's `dynamic` feature), so a machine without Mesa
 //! builds and tests umbra and reports the GL backends as unsupported, naming the package to
 //! install, instead of failing to link. The config asks for `PBUFFER_BIT` (a surfaceless
-//! display has no window configs) and the context is made current with no surface; all
-//! rendering goes to framebuffer objects.
+//! display has no window configs) and the context is made current with no surface where the
+//! display has EGL_KHR_surfaceless_context, on a 1×1 pbuffer elsewhere; all rendering goes to
+//! framebuffer objects.
 
 use glow::HasContext as _;
 use khronos_egl as egl;
 
 use crate::api::Api;
 use crate::platform::Platform;
+
+/// Set to make the context current on a 1×1 pbuffer even where the display offers
+/// surfaceless contexts: the path a display without EGL_KHR_surfaceless_context takes, for a
+/// driver whose surfaceless contexts misbehave, and for the test that holds both paths to the
+/// same pictures.
+pub const PBUFFER_ENV: &str = "UMBRA_EGL_PBUFFER";
 
 /// Why a context could not be made: always a reason a person can act on.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -31,6 +38,8 @@ pub struct GlContext {
     egl: egl::DynamicInstance<egl::EGL1_5>,
     display: egl::Display,
     context: egl::Context,
+    /// The 1×1 pbuffer made current where the display has no surfaceless contexts.
+    surface: Option<egl::Surface>,
     /// EGL's vendor and version strings (and the device, on the device platform).
     pub egl_info: String,
     /// How EGL reached the driver.
@@ -62,7 +71,7 @@ impl GlContext {
                 "eglInitialize failed ({e}); install libgl1-mesa-dri (Mesa's drivers)"
             ))
         })?;
-        let egl_info = format!(
+        let mut egl_info = format!(
             "{} {}{}",
             egl.query_string(Some(display), egl::VENDOR)
                 .map(|s| s.to_string_lossy().into_owned())
@@ -124,8 +133,47 @@ impl GlContext {
                     api.name()
                 ))
             })?;
-        egl.make_current(display, None, None, Some(context))
-            .map_err(|e| Unavailable(format!("eglMakeCurrent without a surface failed ({e})")))?;
+        // No surface where the display has EGL_KHR_surfaceless_context (Mesa's, NVIDIA's);
+        // elsewhere a 1×1 pbuffer, which rendering never touches (it goes to framebuffer
+        // objects).
+        let surfaceless = egl
+            .query_string(Some(display), egl::EXTENSIONS)
+            .is_ok_and(|e| {
+                e.to_string_lossy()
+                    .split_whitespace()
+                    .any(|x| x == "EGL_KHR_surfaceless_context")
+            })
+            && std::env::var_os(PBUFFER_ENV).is_none();
+        let surface = if surfaceless {
+            None
+        } else {
+            Some(
+                egl.create_pbuffer_surface(
+                    display,
+                    config,
+                    &[egl::WIDTH, 1, egl::HEIGHT, 1, egl::NONE],
+                )
+                .map_err(|e| {
+                    Unavailable(format!(
+                        "this display lacks EGL_KHR_surfaceless_context and refused a 1×1 pbuffer ({e})"
+                    ))
+                })?,
+            )
+        };
+        if surface.is_some() {
+            egl_info.push_str(", current on a 1x1 pbuffer");
+        }
+        egl.make_current(display, surface, surface, Some(context))
+            .map_err(|e| {
+                Unavailable(format!(
+                    "eglMakeCurrent failed ({e}){}",
+                    if surfaceless {
+                        " without a surface"
+                    } else {
+                        " on a 1×1 pbuffer"
+                    }
+                ))
+            })?;
         // SAFETY: the context is current on this thread; the loader returns EGL's pointers.
         let gl = unsafe {
             glow::Context::from_loader_function(|name| {
@@ -155,6 +203,7 @@ impl GlContext {
             egl,
             display,
             context,
+            surface,
             egl_info,
             platform,
             device,
@@ -198,7 +247,7 @@ impl GlContext {
     /// process (wgpu's GL backend uses EGL too) may have made its own current meanwhile.
     pub fn make_current(&self) -> Result<(), Unavailable> {
         self.egl
-            .make_current(self.display, None, None, Some(self.context))
+            .make_current(self.display, self.surface, self.surface, Some(self.context))
             .map_err(|e| Unavailable(format!("eglMakeCurrent failed ({e})")))
     }
 }
@@ -207,6 +256,9 @@ impl Drop for GlContext {
     fn drop(&mut self) {
         let _ = self.egl.make_current(self.display, None, None, None);
         let _ = self.egl.destroy_context(self.display, self.context);
+        if let Some(s) = self.surface {
+            let _ = self.egl.destroy_surface(self.display, s);
+        }
         let _ = self.egl.terminate(self.display);
     }
 }

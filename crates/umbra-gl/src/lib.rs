@@ -1,5 +1,7 @@
-//! umbra's OpenGL backend: GL 3.3 core, GLES 3.0 and GLES 2.0 through EGL on Mesa's
-//! surfaceless platform, on the drivers llvmpipe, softpipe and zink.
+//! umbra's OpenGL backend: GL 3.3 core, GLES 3.0 and GLES 2.0 through EGL, on Mesa's
+//! software drivers (llvmpipe, softpipe and zink, chosen by environment on the surfaceless
+//! platform: [`parse_id`]) and on any EGL device a machine has, whoever made its driver
+//! (`gl33/radeonsi`, `gl33/nvidia`: [`parse_device_id`], [`platform::named_devices`]).
 //!
 //! - [`platform`]: how EGL reaches the driver, surfaceless or an EGL device.
 //! - [`context`]: EGL loaded at run time; a missing library or driver is

@@ -326,3 +326,51 @@ fn device_ids_and_the_hw_alias_name_what_this_machine_has() {
         assert!(t.contains(says) && t.contains("gl33/swrast"), "{t}");
     }
 }
+
+#[test]
+fn a_context_on_a_pbuffer_renders_what_a_surfaceless_context_renders() {
+    // The path a display without EGL_KHR_surfaceless_context takes (UMBRA_EGL_PBUFFER forces
+    // it here).
+    let root = scratch("egl-pbuffer");
+    let o = umbra_with(&["backends", "--json"], None, &[("UMBRA_EGL_PBUFFER", "1")]);
+    let listed = text(&o);
+    assert!(
+        listed.contains("\"egl\": \"Mesa Project 1.5, current on a 1x1 pbuffer\""),
+        "the pbuffer path is taken: {listed}"
+    );
+    for backend in ["gl33/llvmpipe", "gles2/llvmpipe", "gl33/swrast"] {
+        let dirs = [
+            backend.replace('/', "-"),
+            format!("{}-pbuffer", backend.replace('/', "-")),
+        ]
+        .map(|d| root.join(d));
+        for (dir, env) in dirs
+            .iter()
+            .zip([&[][..], &[("UMBRA_EGL_PBUFFER", "1")][..]])
+        {
+            let o = umbra_with(
+                &[
+                    "render",
+                    "cases/lights/point-cube.json",
+                    "--backend",
+                    backend,
+                    "-o",
+                    dir.to_str().unwrap_or_default(),
+                ],
+                None,
+                env,
+            );
+            assert!(o.status.success(), "{}", text(&o));
+        }
+        let (pa, pb) = (pictures(&dirs[0]), pictures(&dirs[1]));
+        assert!(!pa.is_empty() && pa == pb, "{backend}: {pa:?} {pb:?}");
+        for p in &pa {
+            assert_eq!(
+                std::fs::read(dirs[0].join(p)).ok(),
+                std::fs::read(dirs[1].join(p)).ok(),
+                "{backend}: {} differs",
+                p.display()
+            );
+        }
+    }
+}

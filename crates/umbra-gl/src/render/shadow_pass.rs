@@ -467,7 +467,8 @@ fn depth_format(f: DepthFormat) -> (i32, u32, u32) {
     }
 }
 
-/// GLES 2 depth renderbuffer: 16 bits, or 24 with OES_depth24 (Mesa has it).
+/// GLES 2 depth renderbuffer: 16 bits, or 24 with OES_depth24 (`Caps::depth24_renderbuffer`:
+/// a driver without it skips GLES 2).
 pub(super) fn es2_depth(f: DepthFormat) -> u32 {
     match f {
         DepthFormat::Depth16 => glow::DEPTH_COMPONENT16,
