@@ -1,4 +1,6 @@
-//! Goldens through insta, end to end, in a scratch golden directory:
+//! Goldens through insta, end to end, in a scratch golden directory that holds one other
+//! golden of the backend (so the backend has goldens; an empty directory is a backend judged
+//! without goldens, tested last):
 //! missing golden under CI → fail, nothing written; bless (`--bless`, what `cargo xtask
 //! bless` runs) → written;
 //! unchanged → pass without rewriting; a deliberately changed golden → fail under CI with
@@ -6,7 +8,7 @@
 
 mod common;
 
-use common::text;
+use common::{seed_goldens, text};
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -56,6 +58,8 @@ fn goldens_fail_on_change_and_are_only_written_by_blessing() {
     let _ = std::fs::remove_dir_all(&root);
     let (golden, out) = (root.join("golden"), root.join("out"));
     std::fs::create_dir_all(&golden).expect("dir");
+    let seeded = seed_goldens(&golden);
+    let before_ci = files(&golden);
 
     let o = umbra(&golden, &out, &[("CI", "true")]);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
@@ -64,11 +68,14 @@ fn goldens_fail_on_change_and_are_only_written_by_blessing() {
         "{}",
         text(&o)
     );
-    assert!(files(&golden).is_empty(), "CI wrote {:?}", files(&golden));
+    assert_eq!(files(&golden), before_ci, "CI wrote {:?}", files(&golden));
 
     let o = umbra_with(&golden, &out, &[], &["--bless"]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
-    let written = files(&golden);
+    let written: Vec<String> = files(&golden)
+        .into_iter()
+        .filter(|f| !f.starts_with(seeded))
+        .collect();
     // The golden (snapshot + picture); the reference has no driver version, so no manifest
     // of blessed drivers is written.
     assert_eq!(written.len(), 2, "{written:?}");
@@ -106,7 +113,7 @@ fn goldens_fail_on_change_and_are_only_written_by_blessing() {
     assert!(text(&o).contains("differs from its golden"), "{}", text(&o));
     assert_eq!(
         files(&golden).len(),
-        2,
+        4,
         "CI must not write a pending snapshot"
     );
 
@@ -127,6 +134,7 @@ fn a_golden_mismatch_is_one_line_even_with_backtraces_on() {
     let _ = std::fs::remove_dir_all(&root);
     let (golden, out) = (root.join("golden"), root.join("out"));
     std::fs::create_dir_all(&golden).expect("dir");
+    seed_goldens(&golden);
     let o = umbra(&golden, &out, &[("CI", "true"), ("RUST_BACKTRACE", "1")]);
     let t = text(&o);
     assert_eq!(o.status.code(), Some(1), "{t}");
@@ -145,5 +153,23 @@ fn a_golden_mismatch_is_one_line_even_with_backtraces_on() {
                 && l.contains("cargo xtask bless")),
         "{t}"
     );
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+#[test]
+fn a_backend_without_any_golden_is_judged_by_the_specs_and_the_reference_and_says_so() {
+    let root: PathBuf =
+        std::env::temp_dir().join(format!("umbra-golden-none-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let (golden, out) = (root.join("golden"), root.join("out"));
+    std::fs::create_dir_all(&golden).expect("dir");
+    let o = umbra(&golden, &out, &[("CI", "true")]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(
+        t.contains("ref: no goldens for this backend: judged by the specs and the reference (`cargo xtask bless --backend ref` starts them)"),
+        "{t}"
+    );
+    assert!(files(&golden).is_empty(), "CI wrote {:?}", files(&golden));
     let _ = std::fs::remove_dir_all(&root);
 }

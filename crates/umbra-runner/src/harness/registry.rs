@@ -55,7 +55,6 @@ pub fn discover() -> Vec<Discovered> {
             .env("NODEVICE_SELECT", "1")
             .stdin(std::process::Stdio::null())
             .stderr(std::process::Stdio::null());
-        crate::harness::pool::without_inherited_insta(&mut cmd);
         cmd.output()
     });
     let Ok(out) = out else { return Vec::new() };

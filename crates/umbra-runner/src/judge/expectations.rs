@@ -525,9 +525,10 @@ impl Expectations {
             // machines that have it.
             let mut parts = e.pattern.splitn(3, '/');
             let device = match (parts.next(), parts.next()) {
-                (Some(a), Some(b)) => {
-                    Some(format!("{a}/{b}")).filter(|id| crate::harness::registry::is_device_id(id))
-                }
+                (Some(a), Some(b)) => Some(format!("{a}/{b}")).filter(|id| {
+                    umbra_gl::parse_device_id(id).is_some()
+                        || umbra_wgpu::Target::parse(id).is_some()
+                }),
                 _ => None,
             };
             let mut backends: Vec<&str> = backends.to_vec();
