@@ -133,33 +133,7 @@ impl GlContext {
                     api.name()
                 ))
             })?;
-        // No surface where the display has EGL_KHR_surfaceless_context (Mesa's, NVIDIA's);
-        // elsewhere a 1×1 pbuffer, which rendering never touches (it goes to framebuffer
-        // objects).
-        let surfaceless = egl
-            .query_string(Some(display), egl::EXTENSIONS)
-            .is_ok_and(|e| {
-                e.to_string_lossy()
-                    .split_whitespace()
-                    .any(|x| x == "EGL_KHR_surfaceless_context")
-            })
-            && std::env::var_os(PBUFFER_ENV).is_none();
-        let surface = if surfaceless {
-            None
-        } else {
-            Some(
-                egl.create_pbuffer_surface(
-                    display,
-                    config,
-                    &[egl::WIDTH, 1, egl::HEIGHT, 1, egl::NONE],
-                )
-                .map_err(|e| {
-                    Unavailable(format!(
-                        "this display lacks EGL_KHR_surfaceless_context and refused a 1×1 pbuffer ({e})"
-                    ))
-                })?,
-            )
-        };
+        let surface = surface_for(&egl, display, config)?;
         if surface.is_some() {
             egl_info.push_str(", current on a 1x1 pbuffer");
         }
@@ -167,7 +141,7 @@ impl GlContext {
             .map_err(|e| {
                 Unavailable(format!(
                     "eglMakeCurrent failed ({e}){}",
-                    if surfaceless {
+                    if surface.is_none() {
                         " without a surface"
                     } else {
                         " on a 1×1 pbuffer"
@@ -210,6 +184,34 @@ impl GlContext {
             api,
         })
     }
+}
+
+/// The surface a context is made current on: none where the display has
+/// EGL_KHR_surfaceless_context (Mesa's, NVIDIA's) and [`PBUFFER_ENV`] is unset; elsewhere a
+/// 1×1 pbuffer, which rendering never touches (it goes to framebuffer objects).
+fn surface_for(
+    egl: &egl::DynamicInstance<egl::EGL1_5>,
+    display: egl::Display,
+    config: egl::Config,
+) -> Result<Option<egl::Surface>, Unavailable> {
+    let surfaceless = egl
+        .query_string(Some(display), egl::EXTENSIONS)
+        .is_ok_and(|e| {
+            e.to_string_lossy()
+                .split_whitespace()
+                .any(|x| x == "EGL_KHR_surfaceless_context")
+        })
+        && std::env::var_os(PBUFFER_ENV).is_none();
+    if surfaceless {
+        return Ok(None);
+    }
+    egl.create_pbuffer_surface(display, config, &[egl::WIDTH, 1, egl::HEIGHT, 1, egl::NONE])
+        .map(Some)
+        .map_err(|e| {
+            Unavailable(format!(
+                "this display lacks EGL_KHR_surfaceless_context (or {PBUFFER_ENV} is set) and refused a 1×1 pbuffer ({e})"
+            ))
+        })
 }
 
 /// Loads libEGL (1.5), or says which packages to install.
