@@ -13,6 +13,39 @@ use crate::profile::Profile;
 #[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct BackendId(pub String);
 
+impl BackendId {
+    /// What a driver reports (`radeonsi`, `NVIDIA`, `Intel open-source …`'s first word) as
+    /// the second part of an id: lower case, letters, digits, `-` and `_` only (anything
+    /// else becomes `-`); `unknown` for nothing. One rule for EGL devices and wgpu adapters.
+    pub fn name_part(raw: &str) -> String {
+        let part: String = raw
+            .trim()
+            .to_ascii_lowercase()
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                    c
+                } else {
+                    '-'
+                }
+            })
+            .collect();
+        if part.is_empty() {
+            "unknown".into()
+        } else {
+            part
+        }
+    }
+
+    /// Whether `s` can be an id's second part: [`BackendId::name_part`]'s characters, and
+    /// `.` before a second device's number (`radeonsi.2`).
+    pub fn is_name_part(s: &str) -> bool {
+        !s.is_empty()
+            && s.chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || "-_.".contains(c))
+    }
+}
+
 impl fmt::Display for BackendId {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(&self.0)

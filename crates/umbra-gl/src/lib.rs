@@ -44,11 +44,8 @@ pub fn parse_id(id: &str) -> Option<(Api, Driver)> {
 /// Whether such a device exists is only known by listing the devices.
 pub fn parse_device_id(id: &str) -> Option<(Api, &str)> {
     let (api, name) = id.split_once('/')?;
-    let plain = !name.is_empty()
-        && name
-            .chars()
-            .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || "-_.".contains(c));
-    (plain && Driver::parse(name).is_none()).then_some((Api::parse(api)?, name))
+    (umbra_case::BackendId::is_name_part(name) && Driver::parse(name).is_none())
+        .then_some((Api::parse(api)?, name))
 }
 
 /// Every GL backend id, in report order.

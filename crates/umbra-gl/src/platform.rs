@@ -313,22 +313,7 @@ pub fn driver_slug(driver: Option<&str>, vendor: &str) -> String {
             .unwrap_or("unknown")
             .to_string(),
     };
-    let slug: String = raw
-        .to_ascii_lowercase()
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '-'
-            }
-        })
-        .collect();
-    if slug.is_empty() {
-        "unknown".into()
-    } else {
-        slug
-    }
+    umbra_case::BackendId::name_part(&raw)
 }
 
 /// Names for devices whose driver slugs are `slugs` (in list order), with the keys that

@@ -89,11 +89,7 @@ impl Target {
     pub fn parse(id: &str) -> Option<Target> {
         let kind = Kind::parse(id)?;
         let (_, adapter) = id.split_once('/')?;
-        let plain = !adapter.is_empty()
-            && adapter
-                .chars()
-                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || "-_.".contains(c));
-        plain.then(|| Target {
+        umbra_case::BackendId::is_name_part(adapter).then(|| Target {
             kind,
             adapter: adapter.to_string(),
         })
@@ -131,21 +127,7 @@ pub fn adapter_slug(kind: Kind, driver: &str, name: &str, cpu: bool) -> String {
             .unwrap_or("")
             .to_string(),
     };
-    let slug: String = raw
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '-'
-            }
-        })
-        .collect();
-    if slug.is_empty() {
-        "unknown".into()
-    } else {
-        slug
-    }
+    umbra_case::BackendId::name_part(&raw)
 }
 
 /// Every adapter of `kind` with its name in ids: [`adapter_slug`], and `.2`, `.3` … for a
