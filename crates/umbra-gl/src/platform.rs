@@ -316,6 +316,18 @@ pub fn driver_slug(driver: Option<&str>, vendor: &str) -> String {
     umbra_case::BackendId::name_part(&raw)
 }
 
+/// A device's name where its driver's name is one of this build's Mesa software ids'
+/// (`llvmpipe`, `softpipe`, `zink`, chosen by environment): `zink-device` for zink on a GPU
+/// (NVK, or any hardware Vulkan driver Mesa loads zink over), so that `gl33/zink` stays
+/// software zink and the GPU keeps an id of its own.
+pub fn device_slug(slug: String) -> String {
+    if crate::Driver::parse(&slug).is_some() {
+        format!("{slug}-device")
+    } else {
+        slug
+    }
+}
+
 /// Names for devices whose driver slugs are `slugs` (in list order), with the keys that
 /// order two devices of one driver (their DRM node path, so the names stay with the nodes
 /// whatever order EGL lists them in): the first keeps the slug, the next get `.2`, `.3` ….
@@ -387,7 +399,7 @@ pub fn named_devices(
         .iter()
         .map(|(d, v, drv)| {
             (
-                driver_slug(drv.as_deref(), v),
+                device_slug(driver_slug(drv.as_deref(), v)),
                 d.render_node
                     .clone()
                     .or_else(|| d.drm_device.clone())
@@ -418,6 +430,12 @@ mod naming_tests {
         assert_eq!(driver_slug(None, "NVIDIA"), "nvidia");
         assert_eq!(driver_slug(Some(""), "Some Vendor Inc."), "some");
         assert_eq!(driver_slug(None, ""), "unknown");
+        // zink over a GPU's Vulkan driver is not this build's software zink.
+        assert_eq!(
+            device_slug(driver_slug(Some("zink"), "Mesa")),
+            "zink-device"
+        );
+        assert_eq!(device_slug("radeonsi".into()), "radeonsi");
         // Listed out of node order: the names follow the nodes, not the list.
         let keys = [
             ("radeonsi".to_string(), "/dev/dri/renderD129".to_string()),

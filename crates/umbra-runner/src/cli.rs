@@ -65,7 +65,7 @@ pub const FLAGS: &[Flag] = &[
     repeated(
         "backend",
         "ID",
-        "backend id: ref, gl33|gles3|gles2/llvmpipe|softpipe|zink, wgpu-vk/lavapipe, wgpu-gl/llvmpipe (repeatable; default: every backend, `ref` for render)",
+        "backend id: ref, gl33|gles3|gles2/llvmpipe|softpipe|zink, wgpu-vk/lavapipe, wgpu-gl/llvmpipe, a device of this machine (gl33/radeonsi, gl33/nvidia, wgpu-vk/radv …: `umbra backends` lists them), and, where a command takes several, the aliases hw (every hardware device) and all (this build's ids and every hardware device) (repeatable; default: this build's ids, `ref` for render)",
     ),
     valued(
         "cases",

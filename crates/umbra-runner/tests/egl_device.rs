@@ -319,6 +319,30 @@ fn device_ids_and_the_hw_alias_name_what_this_machine_has() {
         None,
     );
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    // A device id's processes inherit none of Mesa's driver selection: with softpipe asked
+    // for in the environment, the software device still answers with its default driver.
+    let o = umbra_with(
+        &[
+            "conformance",
+            "--backend",
+            "gl33/swrast",
+            "--filter",
+            "formats@shadow.depth_order=forward,shadow.format=depth16",
+            "--out",
+            out,
+        ],
+        None,
+        &[
+            ("GALLIUM_DRIVER", "softpipe"),
+            ("LIBGL_ALWAYS_SOFTWARE", "1"),
+        ],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let drivers = std::fs::read_to_string(dir.join("latest/drivers.txt")).unwrap_or_default();
+    assert!(
+        drivers.contains("gl33/swrast: Mesa/X.org | llvmpipe"),
+        "{drivers}"
+    );
     if ids.contains(r#""hardware":true"#) {
         println!("this machine has a hardware device; the no-GPU errors are not checked: {ids}");
         return;

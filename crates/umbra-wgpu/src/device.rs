@@ -131,8 +131,9 @@ pub fn adapter_slug(kind: Kind, driver: &str, name: &str, cpu: bool) -> String {
 }
 
 /// Every adapter of `kind` with its name in ids: [`adapter_slug`], and `.2`, `.3` … for a
-/// second and third adapter of one driver, in wgpu's enumeration order (the loader's
-/// physical-device order, stable for a machine's set of GPUs).
+/// second and third adapter of one driver, in wgpu's enumeration order (the Vulkan loader's
+/// physical-device order), which is not tied to a PCI slot: drivers.txt records each
+/// adapter's vendor and device ids.
 pub fn named_adapters(kind: Kind) -> Vec<(String, wgpu::Adapter)> {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = kind.backends();

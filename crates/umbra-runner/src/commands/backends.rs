@@ -76,8 +76,11 @@ fn backend(id: &str, what: &str, aliases: Option<&str>) -> Value {
     let env = registry::worker_env(id);
     let reach = reach(id);
     let out = std::env::current_exe().and_then(|exe| {
-        std::process::Command::new(exe)
-            .args(["worker", "--backend", id])
+        let mut cmd = std::process::Command::new(exe);
+        for v in registry::env_removed(id) {
+            cmd.env_remove(v);
+        }
+        cmd.args(["worker", "--backend", id])
             .envs(env)
             .stdin(std::process::Stdio::null())
             .stderr(std::process::Stdio::null())

@@ -312,12 +312,17 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
     if bless && golden.is_none() {
         return usage("--bless with --golden none: there are no goldens to bless").into();
     }
-    // A backend without goldens (a device umbra has never seen) is judged by the specs and
-    // the reference; blessing starts its goldens.
+    // A device umbra has never seen, without goldens, is judged by the specs and the
+    // reference; blessing starts its goldens. This build's own ids always have goldens: a
+    // missing one (an empty or missing golden directory included) is a change to review,
+    // never a check switched off.
     let no_goldens: std::collections::BTreeSet<String> = match (&golden, bless) {
         (Some(dir), false) => backends
             .iter()
-            .filter(|b| !crate::judge::golden::has_goldens(dir, b))
+            .filter(|b| {
+                crate::harness::registry::is_device_id(b)
+                    && !crate::judge::golden::has_goldens(dir, b)
+            })
             .cloned()
             .collect(),
         _ => Default::default(),

@@ -32,7 +32,7 @@ pub fn main(args: &Args) -> i32 {
         let env = crate::harness::registry::worker_env(backend_id);
         // The same command line, in a process with the backend's environment.
         let again: Vec<String> = std::env::args().skip(1).collect();
-        return crate::harness::child::rerun(&again, &env);
+        return crate::harness::child::rerun_for(backend_id, &again, &env);
     }
     let on_build = build.filter(|_| crate::harness::mesa_build::is_mesa_backed(backend_id));
     if let Some(why) = on_build.and_then(|b| b.lacks(backend_id)) {

@@ -211,7 +211,8 @@ fn emit_step(args: &Args, t: &Target, reduced: &Path) -> Result<serde_json::Valu
     if let Some(m) = args.value("mesa") {
         emit_args.extend(["--mesa".into(), m.to_string()]);
     }
-    let emitted = crate::harness::child::rerun(&emit_args, &registry::worker_env(&t.backend));
+    let emitted =
+        crate::harness::child::rerun_for(&t.backend, &emit_args, &registry::worker_env(&t.backend));
     if emitted != 0 {
         return Err(emitted);
     }
@@ -427,7 +428,9 @@ fn program_env(backend: &str) -> Vec<(String, String)> {
         .into_iter()
         .map(|(k, v)| (k.to_string(), v.to_string()))
         .collect();
-    if let Some(build) = crate::harness::mesa_build::selected() {
+    if let Some(build) = crate::harness::mesa_build::selected()
+        .filter(|_| crate::harness::mesa_build::is_mesa_backed(backend))
+    {
         env.extend(build.env());
     }
     env
@@ -460,7 +463,11 @@ fn env_text(env: &[(String, String)], out: &Path) -> String {
 /// Runs the compiled program on `backend`'s driver, killed after [`PROGRAM_TIMEOUT`].
 fn run_program(binary: &Path, backend: &str, out: &Path) -> ProgramRun {
     let env = program_env(backend);
-    let (code, output) = run_with_timeout(Command::new(binary).envs(env.clone()), PROGRAM_TIMEOUT);
+    let mut cmd = Command::new(binary);
+    for v in registry::env_removed(backend) {
+        cmd.env_remove(v);
+    }
+    let (code, output) = run_with_timeout(cmd.envs(env.clone()), PROGRAM_TIMEOUT);
     ProgramRun {
         backend: backend.to_string(),
         env: env_text(&env, out),

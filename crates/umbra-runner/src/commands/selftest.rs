@@ -237,17 +237,17 @@ pub fn main(args: &Args) -> i32 {
             return 125;
         }
     };
-    let mut backends: Vec<String> = args
-        .values("backend")
-        .iter()
-        .map(|s| s.to_string())
+    let default = crate::harness::registry::known()
+        .into_iter()
+        .filter(|b| b != "ref")
         .collect();
-    if backends.is_empty() {
-        backends = crate::harness::registry::known()
-            .into_iter()
-            .filter(|b| b != "ref")
-            .collect();
-    }
+    let backends = match crate::harness::registry::selected(&args.values("backend"), default) {
+        Ok(b) => b,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 125;
+        }
+    };
     let mut faults: Vec<Fault> = Vec::new();
     for name in args.values("fault") {
         match Fault::parse(name) {

@@ -8,6 +8,16 @@ use std::process::Command;
 /// Runs this executable with `args` and the environment `env`; returns its exit code (125 if
 /// it could not start or died from a signal).
 pub fn rerun(args: &[String], env: &[(String, String)]) -> i32 {
+    rerun_without(args, env, &[])
+}
+
+/// [`rerun`] for backend `id`: without the variables its processes must not inherit
+/// ([`crate::harness::registry::env_removed`]).
+pub fn rerun_for(id: &str, args: &[String], env: &[(String, String)]) -> i32 {
+    rerun_without(args, env, crate::harness::registry::env_removed(id))
+}
+
+fn rerun_without(args: &[String], env: &[(String, String)], removed: &[&str]) -> i32 {
     let exe = match std::env::current_exe() {
         Ok(e) => e,
         Err(e) => {
@@ -18,6 +28,9 @@ pub fn rerun(args: &[String], env: &[(String, String)]) -> i32 {
     let mut cmd = Command::new(exe);
     cmd.args(args);
     crate::harness::pool::without_inherited_insta(&mut cmd);
+    for v in removed {
+        cmd.env_remove(v);
+    }
     for (k, v) in env {
         cmd.env(k, v);
     }

@@ -51,6 +51,9 @@ impl Worker {
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit());
         without_inherited_insta(&mut cmd);
+        for v in crate::harness::registry::env_removed(id) {
+            cmd.env_remove(v);
+        }
         for (k, v) in env {
             cmd.env(k, v);
         }

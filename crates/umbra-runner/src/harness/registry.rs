@@ -16,6 +16,8 @@
 //! process did not load in a child process of their own ([`crate::harness::child`]). A
 //! device id sets no driver environment: the device's own driver answers.
 
+use std::io::Read as _;
+
 use umbra_case::Backend;
 
 /// Whether `id` names a backend of this build (fake ones only where enabled), or has the
@@ -34,6 +36,28 @@ pub fn is_device_id(id: &str) -> bool {
         && (umbra_gl::parse_device_id(id).is_some() || umbra_wgpu::Target::parse(id).is_some())
 }
 
+/// Variables that make Mesa pick a driver or a software path. A device id's processes run
+/// without them: an inherited `LIBGL_ALWAYS_SOFTWARE=1` (common in CI files) would turn a GPU
+/// into `kms_swrast`, another name and another driver.
+pub const MESA_SELECTION: [&str; 3] = [
+    "LIBGL_ALWAYS_SOFTWARE",
+    "GALLIUM_DRIVER",
+    "MESA_LOADER_DRIVER_OVERRIDE",
+];
+
+/// The variables a process for `id` must not inherit ([`MESA_SELECTION`] for a device id).
+pub fn env_removed(id: &str) -> &'static [&'static str] {
+    if is_device_id(id) {
+        &MESA_SELECTION
+    } else {
+        &[]
+    }
+}
+
+/// How long discovery may take: enumerating devices initialises each one's driver, and a
+/// hung driver must cost the listing, not the run.
+const DISCOVERY_LIMIT: std::time::Duration = std::time::Duration::from_secs(60);
+
 /// A backend id found on this machine by [`discover`].
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Discovered {
@@ -48,17 +72,58 @@ pub struct Discovered {
 /// The device ids of this machine, found in a child process (`umbra backends --ids`) so that
 /// no driver loads in this one: every EGL device with each GL API, every wgpu adapter that is
 /// not one of this build's ids. Empty where nothing can be listed.
-pub fn discover() -> Vec<Discovered> {
-    let out = std::env::current_exe().and_then(|exe| {
-        let mut cmd = std::process::Command::new(exe);
-        cmd.args(["backends", "--ids"])
-            .env("NODEVICE_SELECT", "1")
-            .stdin(std::process::Stdio::null())
-            .stderr(std::process::Stdio::null());
-        cmd.output()
-    });
-    let Ok(out) = out else { return Vec::new() };
-    String::from_utf8_lossy(&out.stdout)
+pub fn discover() -> Result<Vec<Discovered>, String> {
+    let exe = std::env::current_exe().map_err(|e| format!("cannot find this executable: {e}"))?;
+    let mut cmd = std::process::Command::new(exe);
+    cmd.args(["backends", "--ids"])
+        .env("NODEVICE_SELECT", "1")
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped());
+    for v in MESA_SELECTION {
+        cmd.env_remove(v);
+    }
+    let mut child = cmd
+        .spawn()
+        .map_err(|e| format!("cannot start device discovery: {e}"))?;
+    let read = |pipe: Option<Box<dyn std::io::Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut text = String::new();
+            if let Some(mut p) = pipe {
+                let _ = p.read_to_string(&mut text);
+            }
+            text
+        })
+    };
+    let stdout = read(child.stdout.take().map(|p| Box::new(p) as _));
+    let stderr = read(child.stderr.take().map(|p| Box::new(p) as _));
+    let started = std::time::Instant::now();
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(s)) => break s,
+            Ok(None) if started.elapsed() > DISCOVERY_LIMIT => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(format!(
+                    "device discovery (`umbra backends --ids`) hung for {} s: a driver did not answer eglInitialize or Vulkan enumeration",
+                    DISCOVERY_LIMIT.as_secs()
+                ));
+            }
+            Ok(None) => std::thread::sleep(std::time::Duration::from_millis(20)),
+            Err(e) => return Err(format!("device discovery: {e}")),
+        }
+    };
+    let (stdout, stderr) = (
+        stdout.join().unwrap_or_default(),
+        stderr.join().unwrap_or_default(),
+    );
+    if !status.success() {
+        return Err(format!(
+            "device discovery (`umbra backends --ids`) failed ({status}): {}",
+            stderr.trim()
+        ));
+    }
+    Ok(stdout
         .lines()
         .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
         .filter_map(|v| {
@@ -68,7 +133,7 @@ pub fn discover() -> Vec<Discovered> {
                 reached: v["reached"].as_str().unwrap_or("").to_string(),
             })
         })
-        .collect()
+        .collect())
 }
 
 /// [`discover`]'s list, computed in this process (what `umbra backends --ids` prints).
@@ -114,7 +179,7 @@ pub fn selected(named: &[&str], default: Vec<String>) -> Result<Vec<String>, Str
         .iter()
         .any(|n| *n == "all" || *n == "hw" || is_device_id(n));
     let devices = if needs_devices {
-        discover()
+        discover()?
     } else {
         Vec::new()
     };
@@ -262,8 +327,8 @@ pub fn hostable_here(id: &str) -> bool {
             std::env::var("NODEVICE_SELECT").is_ok_and(|v| v == "1")
         }
         (None, Some((_, d))) => d.is_selected(),
-        // A device id needs no environment of its own.
-        _ => true,
+        // A device id needs no environment of its own, only none of Mesa's selection.
+        _ => MESA_SELECTION.iter().all(|v| std::env::var_os(v).is_none()),
     }
 }
 

@@ -513,8 +513,10 @@ impl Expectations {
 
     /// Checks the lines against the runs they are for (`runs`: each planned run's name and
     /// case point, `backends`: every backend id): a name glob that no run name can match,
-    /// and two lines that both claim one run when neither is a `Deviation:` (the second
-    /// would never apply, silently) are errors naming the lines and the fix.
+    /// a backend part one or two edits from this build's ids (a misspelling; another
+    /// machine's device ids are kept), and two lines that both claim one run when neither is a
+    /// `Deviation:` (the second would never apply, silently) are errors naming the lines and
+    /// the fix.
     pub fn validate(
         &self,
         backends: &[&str],
@@ -531,6 +533,14 @@ impl Expectations {
                 }),
                 _ => None,
             };
+            if let Some(near) = device.as_deref().and_then(|d| near_miss(d, backends)) {
+                return Err(format!(
+                    "{}: the pattern {:?} names {:?}, which is no backend of this build and looks like a misspelling of {near:?}; fix the id (a device of another machine keeps its own name, `umbra backends` lists them)",
+                    e.source,
+                    e.pattern,
+                    device.as_deref().unwrap_or("")
+                ));
+            }
             let mut backends: Vec<&str> = backends.to_vec();
             backends.extend(device.as_deref());
             if let Some(why) = crate::glob::never_matches(&e.pattern, &backends) {
@@ -1002,5 +1012,47 @@ mod tests {
         assert_eq!(status, Status::UnexpectedPass);
         let err = Expected::parse("Deviation:nope").expect_err("unknown");
         assert!(err.contains("offset-unit-x4"), "{err}");
+    }
+}
+
+/// This build's id that `id` is one or two edits away from (a misspelling such as
+/// `gl33/llvmpip`), if any.
+fn near_miss<'a>(id: &str, known: &[&'a str]) -> Option<&'a str> {
+    known
+        .iter()
+        .copied()
+        .find(|k| *k != id && edits(k, id) <= 2)
+}
+
+/// The Levenshtein distance between `a` and `b`.
+fn edits(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut prev = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let here = row[j + 1];
+            row[j + 1] = (row[j] + 1)
+                .min(here + 1)
+                .min(prev + usize::from(ca != *cb));
+            prev = here;
+        }
+    }
+    row[b.len()]
+}
+
+#[cfg(test)]
+mod near_miss_tests {
+    use super::*;
+
+    #[test]
+    fn a_misspelt_id_is_caught_and_another_machine_s_device_is_not() {
+        let known = ["gl33/llvmpipe", "gles3/softpipe", "wgpu-vk/lavapipe"];
+        assert_eq!(near_miss("gl33/llvmpip", &known), Some("gl33/llvmpipe"));
+        assert_eq!(near_miss("gles3/sofpipe", &known), Some("gles3/softpipe"));
+        assert_eq!(near_miss("gl33/radeonsi", &known), None);
+        assert_eq!(near_miss("wgpu-vk/radv", &known), None);
+        assert_eq!(edits("kitten", "sitting"), 3);
     }
 }

@@ -340,8 +340,9 @@ pub const NONE_FOR_BACKEND: &str =
 /// Whether backend `id` has goldens in `dir`: the manifest names it (blessing records every
 /// backend it wrote for), or a golden of one of its runs is there (the ids are told apart by
 /// the name each snapshot records, not by the file stem, whose punctuation is flattened).
-/// A backend without goldens (a device umbra has never seen) is judged by the specs and the
-/// reference alone; `cargo xtask bless --backend ID` starts its goldens.
+/// A device's backend without goldens (a device umbra has never seen) is judged by the specs
+/// and the reference alone; `cargo xtask bless --backend ID` starts its goldens. This build's
+/// own ids are never asked: a golden of theirs that is missing is a change to review.
 pub fn has_goldens(dir: &Path, id: &str) -> bool {
     if manifest(dir)
         .ok()

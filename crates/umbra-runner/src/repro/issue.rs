@@ -194,9 +194,15 @@ pub fn issue_md(facts: &Value, m: &Measured) -> String {
             .clone()
             .unwrap_or_else(|| "the system's (see GL_VERSION)".into())
     );
+    let device = s(facts, "device");
+    let platform = if device.starts_with("EGL device") {
+        format!("{device} (`EGL_PLATFORM_DEVICE_EXT`)")
+    } else {
+        "EGL surfaceless (`EGL_PLATFORM_SURFACELESS_MESA`)".to_string()
+    };
     let _ = writeln!(
         o,
-        "- Platform: EGL surfaceless (`EGL_PLATFORM_SURFACELESS_MESA`), no window system; umbra backend `{backend}`\n"
+        "- Platform: {platform}, no window system; umbra backend `{backend}`\n"
     );
     let _ = writeln!(o, "### Regression\n");
     match &m.bisect {

@@ -144,6 +144,7 @@ pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> i32 {
         "renderer": info.renderer,
         "version": info.version,
         "extensions": info.extensions,
+        "device": info.device,
         "failed": judged.failed.iter().map(|f| json!({"check": f.check, "count": f.count})).collect::<Vec<_>>(),
         "problems": judged.problems,
         "pixels": probes.pixels.len(),
