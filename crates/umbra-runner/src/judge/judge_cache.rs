@@ -3,12 +3,15 @@
 //! point and *effective* profile, [`umbra_case::Profile::effective_for`], so that backends
 //! whose profiles differ only in freedoms the case cannot exercise share one).
 //!
-//! Both depend on the case point and on umbra's own code only, never on the backend's output,
-//! so they are content-addressed by both: an entry's file name is a hash of the resolved case
-//! point (and the profile), and it lives in a directory named for this build of umbra
-//! ([`build_id`], the linker's hash of the executable's contents, or our own hash of its
-//! bytes: any change to umbra's code, committed or not, is a new directory, so nothing
-//! computed by another build is ever read). The cache
+//! Both depend on the case point and on the code that computes them, never on the backend's
+//! output, so they are content-addressed by both: an entry's file name is a hash of the
+//! resolved case point (and the profile), and it lives in a directory named for that code
+//! ([`build_id`]: the [`crate::judge::basis_key`] of the sources of umbra-case, umbra-ref and
+//! umbra-compare, this file's format, their locked dependencies and the toolchain, computed
+//! by the build script). A change to those, committed or not, is a new directory, so nothing
+//! computed by other code is ever read; a change anywhere else (the runner, a backend, the
+//! report) keeps the directory, so the next commit's CI job reads what the last one computed.
+//! The cache
 //! outlives the run: a second conformance run, the self-test, a sweep and every step of a
 //! Mesa bisection (which keeps umbra fixed and changes only the driver) read what the first
 //! computed, so re-running a point costs the backend's frame and the comparison. [`prepare`]
@@ -74,13 +77,21 @@ pub struct Basis {
 /// The default cache root of the commands, beside their default output (`target/umbra`).
 pub const DEFAULT_ROOT: &str = "target/umbra/cache/judge";
 
-/// This build of umbra, as the cache keys it: the linker's GNU build id (a SHA-1 over the
-/// linked executable's contents, which Debian's toolchain always writes, read from the note
-/// near the file's start), or where there is none, 64-bit FNV-1a over the executable's bytes
+/// The code that computes the judging basis, as the cache keys it: the sources' key
+/// ([`crate::judge::basis_key`], `KEY-src`). Where the build script could not compute one (a
+/// crate built outside its workspace), this build of umbra: the linker's GNU build id (a
+/// SHA-1 over the linked executable's contents, which Debian's toolchain always writes, read
+/// from the note near the file's start), or where there is none, 64-bit FNV-1a over the
+/// executable's bytes
 /// (about 40 ms for the 77 MB debug binary). Computed once per process that asks.
 pub fn build_id() -> &'static str {
     static ID: std::sync::OnceLock<String> = std::sync::OnceLock::new();
     ID.get_or_init(|| {
+        // The sources' key where the build script computed one (16 hex digits, `-src` keeps
+        // the `HASH16-…` shape `prepare` recognises).
+        if let Some(key) = option_env!("UMBRA_BASIS_KEY").filter(|k| !k.is_empty()) {
+            return format!("{key}-src");
+        }
         let exe = std::env::current_exe().unwrap_or_default();
         let head = std::fs::File::open(&exe)
             .and_then(|f| {
@@ -794,8 +805,8 @@ mod tests {
         std::fs::write(&unversioned, b"x").expect("old entry");
         let mine = prepare(&root);
         assert!(mine.ends_with(build_id()) && mine.is_dir());
-        // A debug build on Debian carries the linker's build id: the cheap path is the one taken.
-        assert!(build_id().contains("-gnu"), "{}", build_id());
+        // Built in its workspace, the key is the sources' (basis_key), not the executable's.
+        assert!(build_id().ends_with("-src"), "{}", build_id());
         assert!(!other.exists(), "another build's entries are removed");
         assert!(unrelated.exists(), "nothing else is touched");
         assert!(

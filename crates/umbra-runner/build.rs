@@ -1,0 +1,37 @@
+//! Computes the key of the judging basis from the sources that compute it
+//! (`src/judge/basis_key.rs`, compiled here too) and hands it to the crate as
+//! `UMBRA_BASIS_KEY`, with the toolchain it folded in as `UMBRA_BASIS_TOOLCHAIN`. Outside a
+//! workspace (a packaged crate, no sibling sources) the key is empty and the cache falls back
+//! to keying by the executable.
+
+#[path = "src/judge/basis_key.rs"]
+#[allow(dead_code)]
+mod basis_key;
+
+use std::path::PathBuf;
+
+fn main() {
+    let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap_or_default());
+    let root = manifest.join("../..");
+    for p in basis_key::watched(&root) {
+        println!("cargo:rerun-if-changed={}", p.display());
+    }
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let version = std::process::Command::new(rustc)
+        .arg("-V")
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_default();
+    let toolchain = format!("{version} {}", std::env::var("TARGET").unwrap_or_default());
+    let key = match basis_key::sources_key(&root, &toolchain) {
+        Ok(k) => k,
+        Err(e) => {
+            println!(
+                "cargo:warning=the judging cache is keyed by the executable instead of the sources: {e}"
+            );
+            String::new()
+        }
+    };
+    println!("cargo:rustc-env=UMBRA_BASIS_KEY={key}");
+    println!("cargo:rustc-env=UMBRA_BASIS_TOOLCHAIN={toolchain}");
+}
