@@ -10,6 +10,9 @@ use std::path::{Path, PathBuf};
 
 use umbra_runner::judge::basis_key::{BASIS_CRATES, FORMAT_FILE, locked_dependencies, sources_key};
 
+/// One edit of the copied tree.
+type Change<'a> = Box<dyn Fn() + 'a>;
+
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
@@ -108,7 +111,7 @@ fn a_change_outside_the_judge_keeps_the_key_and_a_change_inside_drops_it() {
         .find(|d| d.starts_with("glam "))
         .expect("the reference depends on glam");
     let glam_version = glam.trim_start_matches("glam ");
-    let changes: Vec<(&str, Box<dyn Fn()>)> = vec![
+    let changes: Vec<(&str, Change)> = vec![
         (
             "umbra-ref's source",
             Box::new(|| append(&tree.join("crates/umbra-ref/src/lib.rs"), "\n// x\n")),
