@@ -661,6 +661,8 @@ impl Faulted {
                     umbra_report::Status::Fail,
                     &r.failed,
                     r.under_deviation.as_deref(),
+                    // The self-test runs without goldens.
+                    &["golden"],
                 );
                 let checks = crate::judge::expectations::signature(&r.failed);
                 if self.verbose {

@@ -635,7 +635,10 @@ impl Expectations {
     /// The final status of a raw outcome for run `name` of case point `case` that failed the
     /// checks `failed` (and, judged again under the deviation its expectation names, the
     /// checks `under_deviation`), and why: the expectation's reason and, for a failure that
-    /// does not match it, how it differs.
+    /// does not match it, how it differs. `unchecked` names the checks this run did not make
+    /// (`golden` under `--golden none`, as `drivers` runs the candidate): an expected failure
+    /// that names only those is not applicable to the run, which keeps its own status (a
+    /// pass stays a pass, not an UnexpectedPass), and the reason says so.
     pub fn apply(
         &self,
         name: &str,
@@ -643,6 +646,7 @@ impl Expectations {
         raw: Status,
         failed: &[umbra_report::FailedCheck],
         under_deviation: Option<&[umbra_report::FailedCheck]>,
+        unchecked: &[&str],
     ) -> (Status, Option<String>) {
         let Some(e) = self.find(name, case) else {
             return (raw, None);
@@ -656,6 +660,22 @@ impl Expectations {
             )
         };
         match (&raw, &e.expected) {
+            (_, Expected::Fail(bounds))
+                if !bounds.is_empty()
+                    && bounds.iter().all(|b| unchecked.contains(&b.check.as_str())) =>
+            {
+                (
+                    raw,
+                    Some(format!(
+                        "not applicable: it names only {}, which this run did not check; {why}",
+                        bounds
+                            .iter()
+                            .map(|b| b.check.as_str())
+                            .collect::<Vec<_>>()
+                            .join(" and ")
+                    )),
+                )
+            }
             // A cause does not show on every scene: a pass under it is a pass.
             (Status::Pass | Status::Flake, _) if !e.when.is_empty() => (raw, None),
             (Status::Pass | Status::Flake, _) => (Status::UnexpectedPass, Some(why)),
@@ -753,7 +773,65 @@ mod tests {
         raw: Status,
         failed: &[umbra_report::FailedCheck],
     ) -> (Status, Option<String>) {
-        e.apply(name, &serde_json::Value::Null, raw, failed, None)
+        e.apply(name, &serde_json::Value::Null, raw, failed, None, &[])
+    }
+
+    #[test]
+    fn an_expectation_naming_only_a_check_the_run_did_not_make_is_not_applicable() {
+        let dir = std::env::temp_dir().join(format!("umbra-exp-na-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        std::fs::write(
+            dir.join("na.txt"),
+            "gles2/zink/filters@*,Fail:golden<=1,zink's PCF-5 golden\n\
+             gl33/zink/near-far,Fail:golden<=1+value<=35,a golden and a value\n",
+        )
+        .expect("write");
+        let e = Expectations::load(&dir).expect("load");
+        let _ = std::fs::remove_dir_all(&dir);
+        // --golden none: a pass stays a pass, and says why the expectation did not apply.
+        let (status, why) = e.apply(
+            "gles2/zink/filters@x",
+            &serde_json::Value::Null,
+            Status::Pass,
+            &[],
+            None,
+            &["golden"],
+        );
+        assert_eq!(status, Status::Pass);
+        assert!(
+            why.unwrap_or_default()
+                .starts_with("not applicable: it names only golden, which this run did not check"),
+        );
+        // With goldens checked it is the UnexpectedPass it always was.
+        let (status, _) = e.apply(
+            "gles2/zink/filters@x",
+            &serde_json::Value::Null,
+            Status::Pass,
+            &[],
+            None,
+            &[],
+        );
+        assert_eq!(status, Status::UnexpectedPass);
+        // A failure of another check under it is still a failure.
+        let (status, _) = e.apply(
+            "gles2/zink/filters@x",
+            &serde_json::Value::Null,
+            Status::Fail,
+            &failed(&[("value", 3)]),
+            None,
+            &["golden"],
+        );
+        assert_eq!(status, Status::Fail);
+        // An expectation that names a check the run did make still applies.
+        let (status, _) = e.apply(
+            "gl33/zink/near-far",
+            &serde_json::Value::Null,
+            Status::Pass,
+            &[],
+            None,
+            &["golden"],
+        );
+        assert_eq!(status, Status::UnexpectedPass);
     }
 
     fn failed(checks: &[(&str, u64)]) -> Vec<umbra_report::FailedCheck> {
@@ -989,6 +1067,7 @@ mod tests {
             Status::Fail,
             &map,
             Some(&[]),
+            &[],
         );
         assert_eq!(status, Status::ExpectedFail);
         let left = failed(&[("value", 3)]);
@@ -998,17 +1077,39 @@ mod tests {
             Status::Fail,
             &map,
             Some(&left),
+            &[],
         );
         assert_eq!(status, Status::Fail);
         assert!(why.unwrap_or_default().contains("still fails value=3"));
         // Not judged again (a crash, say, or no judged check): not explained.
-        let (status, _) = e.apply("gl33/zink/new-case", &with_units, Status::Fail, &map, None);
+        let (status, _) = e.apply(
+            "gl33/zink/new-case",
+            &with_units,
+            Status::Fail,
+            &map,
+            None,
+            &[],
+        );
         assert_eq!(status, Status::Fail);
         // A cause does not show on every scene.
-        let (status, why) = e.apply("gl33/zink/new-case", &with_units, Status::Pass, &[], None);
+        let (status, why) = e.apply(
+            "gl33/zink/new-case",
+            &with_units,
+            Status::Pass,
+            &[],
+            None,
+            &[],
+        );
         assert_eq!((status, why), (Status::Pass, None));
         // By name, a pass is still news.
-        let (status, _) = e.apply("gl33/zink/pinned", &with_units, Status::Pass, &[], None);
+        let (status, _) = e.apply(
+            "gl33/zink/pinned",
+            &with_units,
+            Status::Pass,
+            &[],
+            None,
+            &[],
+        );
         assert_eq!(status, Status::UnexpectedPass);
         let err = Expected::parse("Deviation:nope").expect_err("unknown");
         assert!(err.contains("offset-unit-x4"), "{err}");
