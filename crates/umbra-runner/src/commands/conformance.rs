@@ -117,105 +117,226 @@ pub fn run(args: &Args) -> Finished {
 }
 
 /// [`run`] into `run_dir` when the caller made it (`umbra soak` writes its cases there
-/// first), with `extra` reports.
+/// first), with `extra` reports. The steps, in order: read the options, plan the runs, settle
+/// the goldens, execute the plan on the workers, gather what they found, write the reports,
+/// print the summary, record blessings, and choose the exit code.
 pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Finished {
     crate::harness::interrupt::install();
-    let build = match crate::harness::mesa_build::select(args.value("mesa")) {
-        Ok(b) => b,
+    let opts = match Options::read(args) {
+        Ok(o) => o,
+        Err(code) => return code.into(),
+    };
+    let planned = match plan_runs(&opts) {
+        Ok(Step::Go(p)) => p,
+        Ok(Step::Done(f)) => return f,
+        Err(code) => return code.into(),
+    };
+    let no_goldens = match settle_goldens(&opts) {
+        Ok(n) => n,
+        Err(code) => return code.into(),
+    };
+    let run_dir = match run_dir.map_or_else(|| RunDir::create(&opts.out), Ok) {
+        Ok(r) => r,
         Err(e) => {
-            eprintln!("error: {e}");
+            eprintln!(
+                "error: cannot create a run directory under {}: {e}; give --out a writable directory",
+                opts.out.join("runs").display()
+            );
             return 125.into();
         }
     };
-    let cases_dir = PathBuf::from(args.value("cases").unwrap_or("cases"));
-    let out = PathBuf::from(args.value("out").unwrap_or("target/umbra"));
-    let filter = args.value("filter").unwrap_or("*").to_string();
-    let backends = match crate::harness::registry::selected(
-        &args.values("backend"),
-        crate::harness::registry::known(),
-    ) {
-        Ok(b) => b,
-        Err(e) => {
+    let started = Instant::now();
+    let settings = settings(args, &opts, no_goldens, &run_dir);
+    let Plan {
+        results,
+        monotone,
+        plan,
+        ..
+    } = planned;
+    let collected = match execute(plan, results, &settings, opts.jobs) {
+        Ok(c) => c,
+        Err(code) => return code.into(),
+    };
+    let gathered = match gather(collected, &opts, &monotone, &run_dir) {
+        Ok(g) => g,
+        Err(f) => return f,
+    };
+    let budget = TimeBudget::of(
+        &gathered.results,
+        started.elapsed(),
+        Duration::from_micros(WORKER_START_US.load(Ordering::Relaxed)),
+        Duration::from_micros(CONTEXT_US.load(Ordering::Relaxed)),
+    );
+    if let Err(code) = write_reports(&gathered, &settings, &budget, &run_dir, extra) {
+        return Finished {
+            code,
+            results: gathered.results,
+        };
+    }
+    let regressions = print_summary(&gathered.results, &opts, &budget, &run_dir, started);
+    if settings.bless {
+        record_blessings(&gathered, &settings);
+    }
+    let passed = gathered
+        .results
+        .iter()
+        .filter(|r| {
+            matches!(
+                r.status,
+                Status::Pass | Status::ExpectedFail | Status::Flake
+            )
+        })
+        .count();
+    let skipped = gathered
+        .results
+        .iter()
+        .filter(|r| r.status.name() == "Skip")
+        .count();
+    // The closing line, alone, in the form CI tools read.
+    println!("conformance: {passed} passed, {regressions} failed, {skipped} skipped");
+    let code = exit_code(&gathered, regressions);
+    Finished {
+        code,
+        results: gathered.results,
+    }
+}
+
+/// What the command line asks for, checked: every bad value is a usage error (exit 125)
+/// that names the flag and the fix.
+struct Options {
+    build: Option<&'static crate::harness::mesa_build::MesaBuild>,
+    out: PathBuf,
+    filter: String,
+    backends: Vec<String>,
+    shard: (usize, usize),
+    jobs: usize,
+    timeout: Duration,
+    golden: Option<PathBuf>,
+    expectations: Expectations,
+    files: Vec<PathBuf>,
+    bless: bool,
+}
+
+impl Options {
+    fn read(args: &Args) -> Result<Options, i32> {
+        let fail = |e: String| {
             eprintln!("error: {e}");
-            return 125.into();
+            125
+        };
+        let build = crate::harness::mesa_build::select(args.value("mesa")).map_err(fail)?;
+        let backends = crate::harness::registry::selected(
+            &args.values("backend"),
+            crate::harness::registry::known(),
+        )
+        .map_err(fail)?;
+        let shard = args
+            .value("shard")
+            .map(parse_shard)
+            .transpose()
+            .map_err(|e| usage(&e))?
+            .unwrap_or((0, 1));
+        let (jobs, timeout) = limits(args)?;
+        let golden = match args.value("golden") {
+            Some("none") => None,
+            Some(dir) if !Path::new(dir).is_dir() => {
+                return Err(usage(&format!(
+                    "--golden {dir}: no such directory; give the golden directory (golden/), or --golden none to run without golden checks"
+                )));
+            }
+            Some(dir) => Some(PathBuf::from(dir)),
+            None => Some(PathBuf::from("golden")),
+        };
+        if let Some(warning) = golden
+            .as_deref()
+            .and_then(crate::judge::golden::check_manifest)
+        {
+            eprintln!("{}", term(&warning));
         }
-    };
-    let shard = match args.value("shard").map(parse_shard).transpose() {
-        Ok(s) => s.unwrap_or((0, 1)),
-        Err(e) => return usage(&e).into(),
-    };
+        let expectations = Expectations::load(Path::new(
+            args.value("expectations").unwrap_or("expectations"),
+        ))
+        .map_err(fail)?;
+        let cases_dir = PathBuf::from(args.value("cases").unwrap_or("cases"));
+        let files = match umbra_case::case_files(&cases_dir) {
+            Ok(f) if !f.is_empty() => f,
+            Ok(_) => {
+                return Err(fail(format!(
+                    "no *.json case under {}",
+                    cases_dir.display()
+                )));
+            }
+            Err(e) => return Err(fail(format!("cannot read {}: {e}", cases_dir.display()))),
+        };
+        Ok(Options {
+            build,
+            out: PathBuf::from(args.value("out").unwrap_or("target/umbra")),
+            filter: args.value("filter").unwrap_or("*").to_string(),
+            backends,
+            shard,
+            jobs,
+            timeout,
+            golden,
+            expectations,
+            files,
+            bless: args.has("bless"),
+        })
+    }
+}
+
+/// `--jobs`, `--timeout` and the memory budget per worker, checked together (the budget
+/// depends on the job count).
+fn limits(args: &Args) -> Result<(usize, Duration), i32> {
     let jobs = match args.value("jobs").map(str::parse::<usize>).transpose() {
         Ok(Some(0)) => {
-            return usage("--jobs 0: at least one worker must run; give --jobs 1 or more (default: the core count)").into();
+            return Err(usage(
+                "--jobs 0: at least one worker must run; give --jobs 1 or more (default: the core count)",
+            ));
         }
         Ok(j) => j.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
-        Err(_) => return usage("--jobs takes a positive number").into(),
+        Err(_) => return Err(usage("--jobs takes a positive number")),
     };
     let timeout = match args.value("timeout").map(str::parse::<u64>).transpose() {
         Ok(Some(0)) => {
-            return usage("--timeout 0: no run can finish in no time; give whole seconds, 1 or more (default 300)").into();
+            return Err(usage(
+                "--timeout 0: no run can finish in no time; give whole seconds, 1 or more (default 300)",
+            ));
         }
         Ok(t) => Duration::from_secs(t.unwrap_or(300)),
-        Err(_) => return usage("--timeout takes whole seconds").into(),
+        Err(_) => return Err(usage("--timeout takes whole seconds")),
     };
-    if let Err(e) = crate::harness::memory_limit::check_jobs(jobs) {
-        return usage(&e).into();
-    }
+    crate::harness::memory_limit::check_jobs(jobs).map_err(|e| usage(&e))?;
     match crate::harness::memory_limit::select(args.value("max-memory"), jobs) {
-        Ok(b) if b < umbra_case::memory::BASE_BYTES => {
-            return usage(&format!(
-                "the memory budget per worker, {}, is below one run's base ({}: a worker with its driver, before any case; umbra_case::memory::BASE_BYTES); give --max-memory 1GiB or more, or fewer --jobs",
-                umbra_case::memory::gib(b),
-                umbra_case::memory::gib(umbra_case::memory::BASE_BYTES)
-            ))
-            .into();
-        }
-        Ok(_) => {}
-        Err(e) => return Finished::from(usage(&e)),
+        Ok(b) if b < umbra_case::memory::BASE_BYTES => Err(usage(&format!(
+            "the memory budget per worker, {}, is below one run's base ({}: a worker with its driver, before any case; umbra_case::memory::BASE_BYTES); give --max-memory 1GiB or more, or fewer --jobs",
+            umbra_case::memory::gib(b),
+            umbra_case::memory::gib(umbra_case::memory::BASE_BYTES)
+        ))),
+        Ok(_) => Ok((jobs, timeout)),
+        Err(e) => Err(usage(&e)),
     }
-    let golden = match args.value("golden") {
-        Some("none") => None,
-        Some(dir) if !Path::new(dir).is_dir() => {
-            return usage(&format!(
-                "--golden {dir}: no such directory; give the golden directory (golden/), or --golden none to run without golden checks"
-            ))
-            .into();
-        }
-        Some(dir) => Some(PathBuf::from(dir)),
-        None => Some(PathBuf::from("golden")),
-    };
-    if let Some(warning) = golden
-        .as_deref()
-        .and_then(crate::judge::golden::check_manifest)
-    {
-        eprintln!("{}", term(&warning));
-    }
-    let expectations = match Expectations::load(Path::new(
-        args.value("expectations").unwrap_or("expectations"),
-    )) {
-        Ok(e) => e,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 125.into();
-        }
-    };
-    let files = match umbra_case::case_files(&cases_dir) {
-        Ok(f) if !f.is_empty() => f,
-        Ok(_) => {
-            eprintln!("error: no *.json case under {}", cases_dir.display());
-            return 125.into();
-        }
-        Err(e) => {
-            eprintln!("error: cannot read {}: {e}", cases_dir.display());
-            return 125.into();
-        }
-    };
+}
 
-    // Plan.
+/// A step's outcome: go on with the value, or the command is done (an empty shard).
+enum Step<T> {
+    Go(T),
+    Done(Finished),
+}
+
+/// The runs to make: the case files that did not load (each a failed result already), the
+/// monotone expectations, and this shard's runs.
+struct Plan {
+    results: Vec<RunResult>,
+    monotone: Vec<Monotone>,
+    plan: Vec<Planned>,
+}
+
+/// Loads every case file, plans every backend × point the filter selects, checks the
+/// expectations against the plan, and keeps this shard's share.
+fn plan_runs(opts: &Options) -> Result<Step<Plan>, i32> {
     let mut results: Vec<RunResult> = Vec::new();
     let mut points: Vec<(PathBuf, Vec<PointPlan>)> = Vec::new();
     let mut monotone: Vec<Monotone> = Vec::new();
-    for f in &files {
+    for f in &opts.files {
         match umbra_case::load_file(f) {
             Ok(p) => {
                 monotone.extend(Monotone::of(&p));
@@ -229,30 +350,14 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
                         .collect(),
                 ));
             }
-            Err(e) => results.push(RunResult {
-                name: format!("cases/{}", f.display()),
-                backend: String::new(),
-                case: f.display().to_string(),
-                file: f.display().to_string(),
-                values: Vec::new(),
-                status: Status::Fail,
-                reason: e.to_string(),
-                metrics: None,
-                failed: Vec::new(),
-                golden: None,
-                time_s: 0.0,
-                reproduce: format!("cargo run --bin umbra -- render {}", f.display()),
-                diagnosis: None,
-                fingerprint: None,
-                details: String::new(),
-            }),
+            Err(e) => results.push(unloadable(f, &e.to_string())),
         }
     }
     if let Some(e) = duplicate_names(&points) {
-        return usage(&e).into();
+        return Err(usage(&e));
     }
     let mut plan = Vec::new();
-    for b in &backends {
+    for b in &opts.backends {
         for (file, ids) in &points {
             for (index, (id, values, case)) in ids.iter().enumerate() {
                 let p = Planned {
@@ -263,61 +368,98 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
                     values: values.clone(),
                     case: case.clone(),
                 };
-                if crate::glob::matches(&filter, id) || crate::glob::matches(&filter, &p.name()) {
+                if crate::glob::matches(&opts.filter, id)
+                    || crate::glob::matches(&opts.filter, &p.name())
+                {
                     plan.push(p);
                 }
             }
         }
     }
-    {
-        let known = crate::harness::registry::known();
-        let mut ids: Vec<&str> = known.iter().map(String::as_str).collect();
-        ids.extend(backends.iter().map(String::as_str));
-        if crate::harness::fake::enabled() {
-            ids.extend(crate::harness::fake::IDS);
-        }
-        let runs: Vec<(String, &serde_json::Value)> =
-            plan.iter().map(|p| (p.name(), &*p.case)).collect();
-        if let Err(e) = expectations.validate(&ids, &runs) {
-            eprintln!("error: {e}");
-            return 125.into();
-        }
-    }
+    validate_expectations(opts, &plan)?;
     let selected = plan.len();
+    let (index, count) = opts.shard;
     let plan: Vec<Planned> = plan
         .into_iter()
         .enumerate()
-        .filter(|(i, _)| i % shard.1 == shard.0)
+        .filter(|(i, _)| i % count == index)
         .map(|(_, p)| p)
         .collect();
     if selected == 0 && results.is_empty() {
-        eprintln!("error: --filter {filter:?} selects no run");
-        return 125.into();
+        eprintln!("error: --filter {:?} selects no run", opts.filter);
+        return Err(125);
     }
     if plan.is_empty() && results.is_empty() {
         // More shards than runs (a CI matrix sized for a larger plan): an empty shard is a
         // successful one.
         println!(
-            "note: shard {}/{} holds none of the {selected} selected runs (there are more shards than runs); nothing to do",
-            shard.0, shard.1
+            "note: shard {index}/{count} holds none of the {selected} selected runs (there are more shards than runs); nothing to do"
         );
         println!("conformance: 0 passed, 0 failed, 0 skipped");
-        return 0.into();
+        return Ok(Step::Done(0.into()));
     }
+    Ok(Step::Go(Plan {
+        results,
+        monotone,
+        plan,
+    }))
+}
 
-    let bless = args.has("bless");
-    if bless && crate::judge::golden::under_ci() {
-        return usage("--bless: CI=true: goldens change only through review (`cargo xtask bless` or `cargo insta review` on a desk), never in CI").into();
+/// A case file that did not load, as a failed result naming the error.
+fn unloadable(f: &Path, why: &str) -> RunResult {
+    RunResult {
+        name: format!("cases/{}", f.display()),
+        backend: String::new(),
+        case: f.display().to_string(),
+        file: f.display().to_string(),
+        values: Vec::new(),
+        status: Status::Fail,
+        reason: why.to_string(),
+        metrics: None,
+        failed: Vec::new(),
+        golden: None,
+        time_s: 0.0,
+        reproduce: format!("cargo run --bin umbra -- render {}", f.display()),
+        diagnosis: None,
+        fingerprint: None,
+        details: String::new(),
     }
-    if bless && golden.is_none() {
-        return usage("--bless with --golden none: there are no goldens to bless").into();
+}
+
+/// The expectations checked against the planned runs ([`Expectations::validate`]).
+fn validate_expectations(opts: &Options, plan: &[Planned]) -> Result<(), i32> {
+    let known = crate::harness::registry::known();
+    let mut ids: Vec<&str> = known.iter().map(String::as_str).collect();
+    ids.extend(opts.backends.iter().map(String::as_str));
+    if crate::harness::fake::enabled() {
+        ids.extend(crate::harness::fake::IDS);
     }
-    // A device umbra has never seen, without goldens, is judged by the specs and the
-    // reference; blessing starts its goldens. This build's own ids always have goldens: a
-    // missing one (an empty or missing golden directory included) is a change to review,
-    // never a check switched off.
-    let no_goldens: std::collections::BTreeSet<String> = match (&golden, bless) {
-        (Some(dir), false) => backends
+    let runs: Vec<(String, &serde_json::Value)> =
+        plan.iter().map(|p| (p.name(), &*p.case)).collect();
+    opts.expectations.validate(&ids, &runs).map_err(|e| {
+        eprintln!("error: {e}");
+        125
+    })
+}
+
+/// Blessing's preconditions, and the backends judged without goldens: a device umbra has
+/// never seen, without goldens, is judged by the specs and the reference; blessing starts
+/// its goldens. This build's own ids always have goldens: a missing one (an empty or missing
+/// golden directory included) is a change to review, never a check switched off.
+fn settle_goldens(opts: &Options) -> Result<std::collections::BTreeSet<String>, i32> {
+    if opts.bless && crate::judge::golden::under_ci() {
+        return Err(usage(
+            "--bless: CI=true: goldens change only through review (`cargo xtask bless` or `cargo insta review` on a desk), never in CI",
+        ));
+    }
+    if opts.bless && opts.golden.is_none() {
+        return Err(usage(
+            "--bless with --golden none: there are no goldens to bless",
+        ));
+    }
+    let no_goldens: std::collections::BTreeSet<String> = match (&opts.golden, opts.bless) {
+        (Some(dir), false) => opts
+            .backends
             .iter()
             .filter(|b| {
                 crate::harness::registry::is_device_id(b)
@@ -340,48 +482,55 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
             term(&inherited.join(" "))
         );
     }
-    let run_dir = match run_dir.map_or_else(|| RunDir::create(&out), Ok) {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!(
-                "error: cannot create a run directory under {}: {e}; give --out a writable directory",
-                out.join("runs").display()
-            );
-            return 125.into();
-        }
-    };
+    Ok(no_goldens)
+}
 
-    // Execute.
-    let started = Instant::now();
-    // Absolute, because workers may run with another working directory one day.
-    let golden = golden.map(|g| std::fs::canonicalize(&g).unwrap_or(g));
-    // The judging basis (truth and reference) of each point, shared by every backend's worker
-    // and kept for the next run of this build (content-addressed, see judge_cache).
+/// What every worker thread shares: the judging cache (prepared here: the judging basis of
+/// each point, shared by every backend's worker and kept for the next run, see
+/// judge_cache), the goldens (absolute, since workers may run with another working directory
+/// one day), where pictures go, the expectations.
+fn settings(
+    args: &Args,
+    opts: &Options,
+    no_goldens: std::collections::BTreeSet<String>,
+    run_dir: &RunDir,
+) -> Settings {
     let judge_cache = crate::judge::judge_cache::prepare(
         &args
             .value("judge-cache")
-            .map_or_else(|| out.join("cache").join("judge"), PathBuf::from),
+            .map_or_else(|| opts.out.join("cache").join("judge"), PathBuf::from),
     );
-    let judge_cache = judge_cache.to_string_lossy().into_owned();
-    let settings = Settings {
-        judge_cache,
-        timeout,
-        golden,
+    Settings {
+        judge_cache: judge_cache.to_string_lossy().into_owned(),
+        timeout: opts.timeout,
+        golden: opts
+            .golden
+            .clone()
+            .map(|g| std::fs::canonicalize(&g).unwrap_or(g)),
         no_goldens,
         failures: run_dir.dir.join("failures"),
         gallery: run_dir.dir.join("pictures"),
-        expectations,
+        expectations: opts.expectations.clone(),
         verbose: args.has("verbose"),
-        bless,
-    };
+        bless: opts.bless,
+    }
+}
+
+/// Runs the plan: its runs grouped by backend, each backend's rotated by its share (so
+/// concurrent workers rarely reach a point whose judging basis is not cached yet at the same
+/// moment; the second would wait for the first, see judge_cache), `jobs` threads each working
+/// on one backend at a time ([`Queues`], [`run_group`]).
+fn execute(
+    plan: Vec<Planned>,
+    results: Vec<RunResult>,
+    settings: &Settings,
+    jobs: usize,
+) -> Result<Collected, i32> {
     let mut groups: BTreeMap<String, VecDeque<Planned>> = BTreeMap::new();
     for p in plan {
         groups.entry(p.backend.clone()).or_default().push_back(p);
     }
     let total = groups.values().map(VecDeque::len).sum::<usize>();
-    // Each backend starts at another point of the plan (its runs rotated by its share), so
-    // concurrent workers rarely reach a point whose judging basis is not cached yet at the
-    // same moment (the second would wait for the first, see judge_cache).
     let n = groups.len().max(1);
     for (k, runs) in groups.values_mut().enumerate() {
         let offset = k * runs.len() / n;
@@ -394,6 +543,7 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
     let done = Mutex::new(Collected {
         results,
         progress: crate::harness::progress::Progress::new(total),
+        total,
         ..Default::default()
     });
     std::thread::scope(|s| {
@@ -403,7 +553,7 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
                 // runs start (a `while let` on the lock would hold it throughout).
                 let next = || queues.lock().ok().and_then(|mut q| q.pick());
                 while let Some((backend, first)) = next() {
-                    run_group(&backend, &queues, first, &settings, &done, total);
+                    run_group(&backend, &queues, first, settings, &done, total);
                     if let Ok(mut q) = queues.lock() {
                         q.release(&backend);
                     }
@@ -411,6 +561,32 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
             });
         }
     });
+    done.into_inner().map_err(|_| {
+        eprintln!("error: a worker thread panicked");
+        125
+    })
+}
+
+/// What the run found, put together: every result sorted by name and diagnosed (the
+/// monotone expectations, the consensus), drivers.txt and report.json's driver rows.
+struct Gathered {
+    results: Vec<RunResult>,
+    drivers: String,
+    driver_rows: Vec<serde_json::Value>,
+    refused: Vec<String>,
+    unavailable_runs: usize,
+    build: Option<&'static crate::harness::mesa_build::MesaBuild>,
+}
+
+/// Puts the workers' findings together. An interrupted run (130) or one whose pictures could
+/// not be written (125, a full disk) is abandoned here: its report would be incomplete, so
+/// `latest` keeps pointing at the last whole one.
+fn gather(
+    collected: Collected,
+    opts: &Options,
+    monotone: &[Monotone],
+    run_dir: &RunDir,
+) -> Result<Gathered, Finished> {
     let Collected {
         mut results,
         drivers,
@@ -419,14 +595,9 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
         unavailable_runs,
         progress,
         storage,
+        total,
         ..
-    } = match done.into_inner() {
-        Ok(d) => d,
-        Err(_) => {
-            eprintln!("error: a worker thread panicked");
-            return 125.into();
-        }
-    };
+    } = collected;
     progress.close();
     if let Some(sig) = crate::harness::interrupt::requested() {
         run_dir.abandon(&format!(
@@ -434,53 +605,77 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
             crate::harness::interrupt::name(sig),
             results.len()
         ));
-        return Finished { code: 130, results };
+        return Err(Finished { code: 130, results });
     }
     if let Some(first) = storage.first() {
         run_dir.abandon(&format!(
             "{} run(s) could not write their pictures ({first})",
             storage.len()
         ));
-        return Finished { code: 125, results };
+        return Err(Finished { code: 125, results });
     }
     driver_rows.sort_by(|a, b| a["backend"].as_str().cmp(&b["backend"].as_str()));
     let drivers = format!(
         "Mesa: {}\n{drivers}",
-        build.map_or("the system's".to_string(), |b| b.describe())
+        opts.build
+            .as_ref()
+            .map_or("the system's".to_string(), |b| b.describe())
     );
     results.sort_by(|a, b| a.name.cmp(&b.name));
-    for m in &monotone {
+    for m in monotone {
         m.judge(&mut results);
     }
     crate::judge::consensus::diagnose(&mut results);
+    Ok(Gathered {
+        results,
+        drivers,
+        driver_rows,
+        refused,
+        unavailable_runs,
+        build: opts.build,
+    })
+}
 
-    // Report.
-    let budget = TimeBudget::of(
-        &results,
-        started.elapsed(),
-        Duration::from_micros(WORKER_START_US.load(Ordering::Relaxed)),
-        Duration::from_micros(CONTEXT_US.load(Ordering::Relaxed)),
-    );
+/// Writes the reports into the run directory and publishes it (`latest`); 125 when they
+/// cannot be written, with the run directory abandoned.
+fn write_reports(
+    g: &Gathered,
+    settings: &Settings,
+    budget: &TimeBudget,
+    run_dir: &RunDir,
+    extra: Option<Extra>,
+) -> Result<(), i32> {
     let header = serde_json::json!({
-        "mesa_build": build,
-        "drivers": driver_rows,
+        "mesa_build": g.build,
+        "drivers": g.driver_rows,
     });
     let written = umbra_report::write_conformance(
         &run_dir.dir,
         &settings.failures,
         &settings.gallery,
-        &results,
-        &drivers,
+        &g.results,
+        &g.drivers,
         &header,
-        &budget,
+        budget,
     )
-    .and_then(|()| extra.map_or(Ok(()), |f| f(&run_dir.dir, &results)))
+    .and_then(|()| extra.map_or(Ok(()), |f| f(&run_dir.dir, &g.results)))
     .and_then(|()| run_dir.publish());
-    if let Err(e) = written {
+    written.map_err(|e| {
         run_dir.abandon(&format!("cannot write the reports: {e}"));
-        return Finished { code: 125, results };
-    }
-    let count = |name: &str| results.iter().filter(|r| r.status.name() == name).count();
+        125
+    })
+}
+
+/// The terminal's summary: where the reports are, every regression with its diagnosis, the
+/// consensus, the time budget, the check strength, the statuses and goldens blessed on
+/// another driver. Returns the number of regressions.
+fn print_summary(
+    results: &[RunResult],
+    opts: &Options,
+    budget: &TimeBudget,
+    run_dir: &RunDir,
+    started: Instant,
+) -> usize {
     let regressions: Vec<&RunResult> = results
         .iter()
         .filter(|r| r.status.is_regression())
@@ -489,7 +684,7 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
         "\n{} runs in {:.1} s; reports in {} (-> runs/{})",
         results.len(),
         started.elapsed().as_secs_f64(),
-        out.join("latest").display(),
+        opts.out.join("latest").display(),
         run_dir.id
     );
     for r in &regressions {
@@ -512,9 +707,8 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
             "consensus: {suspects} failing run(s) fail the same way on every driver judged against the same intervals: suspect umbra's model there before the drivers"
         );
     }
-    let passed = count("Pass") + count("ExpectedFail") + count("Flake");
     println!("{}", budget.line());
-    if let Some((median, max, above, runs)) = umbra_report::html::blind_stats(&results) {
+    if let Some((median, max, above, runs)) = umbra_report::html::blind_stats(results) {
         println!(
             "check strength: blind area median {:.3}%, max {:.2}%, {above} of {runs} judged runs above {:.0}% (report.html, Check strength)",
             100.0 * median,
@@ -522,7 +716,7 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
             100.0 * umbra_report::html::BLIND_FLAG
         );
     }
-    println!("statuses: {}", umbra_report::model::breakdown(&results));
+    println!("statuses: {}", umbra_report::model::breakdown(results));
     let foreign = results
         .iter()
         .filter(|r| r.golden.as_deref() == Some("changed-other-driver"))
@@ -533,68 +727,69 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
             crate::judge::golden::MANIFEST
         );
     }
-    // Blessing (`cargo xtask bless`): record the driver each backend's goldens now match.
-    if settings.bless {
-        if let Some(dir) = &settings.golden {
-            let version_of = |b: &str| {
-                driver_rows
-                    .iter()
-                    .find(|r| r["backend"].as_str() == Some(b))
-                    .and_then(|r| r["mesa"].as_str())
-                    .map(str::to_string)
-            };
-            // Each backend (kept if already recorded), then each golden written now.
-            let mut entries: Vec<(String, String)> = Vec::new();
-            for r in &results {
-                let Some(v) = version_of(&r.backend) else {
-                    continue;
-                };
-                if r.golden.is_some() && !entries.iter().any(|(k, _)| *k == r.backend) {
-                    entries.push((r.backend.clone(), v.clone()));
-                }
-                // A golden gets its own entry only where its version differs from what the
-                // manifest already says for it (its backend's, usually).
-                if r.golden.as_deref() == Some("written")
-                    && crate::judge::golden::blessed_on(dir, &r.backend, &r.name).as_deref()
-                        != Some(v.as_str())
-                {
-                    entries.push((crate::judge::golden::stem(&r.name), v));
-                }
-            }
-            if entries.is_empty() {
-                // Nothing Mesa-backed was blessed: the manifest stays as it is.
-            } else if let Err(e) = crate::judge::golden::record_blessed(dir, &entries) {
-                eprintln!(
-                    "error: cannot record the blessed drivers in {}: {e}",
-                    dir.display()
-                );
-            }
+    regressions.len()
+}
+
+/// Blessing (`cargo xtask bless`): records the driver each backend's goldens now match, the
+/// backend's entry (kept if already recorded), then each golden written now whose version
+/// differs from what the manifest already says for it (its backend's, usually).
+fn record_blessings(g: &Gathered, settings: &Settings) {
+    let Some(dir) = &settings.golden else {
+        return;
+    };
+    let version_of = |b: &str| {
+        g.driver_rows
+            .iter()
+            .find(|r| r["backend"].as_str() == Some(b))
+            .and_then(|r| r["mesa"].as_str())
+            .map(str::to_string)
+    };
+    let mut entries: Vec<(String, String)> = Vec::new();
+    for r in &g.results {
+        let Some(v) = version_of(&r.backend) else {
+            continue;
+        };
+        if r.golden.is_some() && !entries.iter().any(|(k, _)| *k == r.backend) {
+            entries.push((r.backend.clone(), v.clone()));
+        }
+        if r.golden.as_deref() == Some("written")
+            && crate::judge::golden::blessed_on(dir, &r.backend, &r.name).as_deref()
+                != Some(v.as_str())
+        {
+            entries.push((crate::judge::golden::stem(&r.name), v));
         }
     }
-    // The closing line, alone, in the form CI tools read.
-    println!(
-        "conformance: {passed} passed, {} failed, {} skipped",
-        regressions.len(),
-        count("Skip")
-    );
-    let code = if !refused.is_empty() {
-        for r in &refused {
+    // Nothing Mesa-backed was blessed: the manifest stays as it is.
+    if !entries.is_empty() {
+        if let Err(e) = crate::judge::golden::record_blessed(dir, &entries) {
+            eprintln!(
+                "error: cannot record the blessed drivers in {}: {e}",
+                dir.display()
+            );
+        }
+    }
+}
+
+/// 125 when a backend refused the Mesa build asked for (its runs were not judged) or nothing
+/// could run here; 1 on a regression; 0 otherwise.
+fn exit_code(g: &Gathered, regressions: usize) -> i32 {
+    if !g.refused.is_empty() {
+        for r in &g.refused {
             eprintln!("error: {r}");
         }
         eprintln!(
             "error: {} backend(s) did not run on the Mesa build asked for; their runs were not judged",
-            refused.len()
+            g.refused.len()
         );
         125
-    } else if !regressions.is_empty() {
+    } else if regressions > 0 {
         1
-    } else if unavailable_runs == results.len() && !results.is_empty() {
+    } else if g.unavailable_runs == g.results.len() && !g.results.is_empty() {
         eprintln!("error: no selected backend is available here, nothing ran");
         125
     } else {
         0
-    };
-    Finished { code, results }
+    }
 }
 
 /// A case's `expect.error_falls_along`: runs of one backend that differ only in that axis,
@@ -722,6 +917,8 @@ struct Collected {
     storage: Vec<String>,
     /// What the terminal shows while the run goes on.
     progress: crate::harness::progress::Progress,
+    /// How many runs the plan holds.
+    total: usize,
 }
 
 type Done = Mutex<Collected>;
@@ -794,17 +991,7 @@ fn run_group(
     done: &Done,
     total: usize,
 ) {
-    let mut env = crate::harness::registry::worker_env(backend);
-    if crate::harness::fake::enabled() {
-        env.push(("UMBRA_FAKE_BACKENDS".into(), "1".into()));
-    }
-    env.push((
-        crate::judge::judge_cache::ENV.into(),
-        settings.judge_cache.clone(),
-    ));
-    if settings.bless {
-        env.extend(crate::judge::golden::insta_env(true));
-    }
+    let env = group_env(backend, settings);
     let start_worker = || {
         let t = Instant::now();
         let w = Worker::start(backend, &env, settings.timeout);
@@ -826,18 +1013,101 @@ fn run_group(
         Ok(w) => (w.hello.clone(), None),
         Err(e) => (serde_json::json!({ "unavailable": e }), Some(e.clone())),
     };
-    let refused = hello
-        .get("refused")
-        .and_then(|u| u.as_str())
-        .map(str::to_string);
-    // Expectations for this backend's driver (`@applies`), and which files they come from.
-    let facts = crate::judge::expectations::DriverFacts::from_hello(&hello["ready"]);
-    let expectations = settings.expectations.for_driver(&facts);
-    let files: Vec<String> = expectations
+    let group = Group {
+        backend,
+        refused: hello
+            .get("refused")
+            .and_then(|u| u.as_str())
+            .map(str::to_string),
+        unavailable: hello
+            .get("unavailable")
+            .and_then(|u| u.as_str())
+            .map(str::to_string),
+        start_error,
+        // Expectations for this backend's driver (`@applies`).
+        expectations: settings.expectations.for_driver(
+            &crate::judge::expectations::DriverFacts::from_hello(&hello["ready"]),
+        ),
+        settings,
+    };
+    if let Some(mut d) = done.lock().ok().filter(|_| first) {
+        let (line, row) = describe_driver(&group, &hello);
+        d.drivers.push_str(&line);
+        d.driver_rows.push(row);
+        if let Some(why) = &group.refused {
+            d.refused.push(format!("{backend}: {why}"));
+        }
+    }
+    let next = || queues.lock().ok().and_then(|mut q| q.next_run(backend));
+    while let Some(p) = next() {
+        let t0 = Instant::now();
+        let outcome = group.attempt_point(&p, &mut worker, &start_worker);
+        let (result, storage) = group.result_of(&p, outcome, t0);
+        if let Ok(mut d) = done.lock() {
+            d.finished += 1;
+            let r = &result;
+            let mut line = format!(
+                "[{}/{total}] {} {} ({:.0} ms)",
+                d.finished,
+                r.status,
+                r.name,
+                r.time_s * 1e3
+            );
+            if !matches!(r.status, Status::Pass) && !r.reason.is_empty() {
+                let _ = write!(line, ": {}", first_line(&r.reason));
+            }
+            d.progress.finished(r.status.name(), &line);
+            if settings.verbose && !r.details.is_empty() {
+                println!("{}", r.details);
+            }
+            if group.unavailable.is_some() && group.start_error.is_none() {
+                d.unavailable_runs += 1;
+            }
+            d.storage.extend(storage);
+            d.results.push(result);
+        }
+    }
+}
+
+/// A backend's workers' environment: the driver's ([`crate::harness::registry::worker_env`]),
+/// the fakes' switch where enabled, the judging cache, and insta's when blessing.
+fn group_env(backend: &str, settings: &Settings) -> Vec<(String, String)> {
+    let mut env = crate::harness::registry::worker_env(backend);
+    if crate::harness::fake::enabled() {
+        env.push(("UMBRA_FAKE_BACKENDS".into(), "1".into()));
+    }
+    env.push((
+        crate::judge::judge_cache::ENV.into(),
+        settings.judge_cache.clone(),
+    ));
+    if settings.bless {
+        env.extend(crate::judge::golden::insta_env(true));
+    }
+    env
+}
+
+/// One backend's group of runs, as its first worker left it: why it cannot run (refused the
+/// Mesa build, unavailable, its worker would not start) and the expectations for its driver.
+struct Group<'a> {
+    backend: &'a str,
+    refused: Option<String>,
+    unavailable: Option<String>,
+    start_error: Option<String>,
+    expectations: Expectations,
+    settings: &'a Settings,
+}
+
+/// The backend's lines for drivers.txt (driver strings, device, goldens, build and the
+/// expectation files that apply) and its row in report.json's `drivers`.
+fn describe_driver(g: &Group, hello: &serde_json::Value) -> (String, serde_json::Value) {
+    let (backend, settings) = (g.backend, g.settings);
+    let files: Vec<String> = g
+        .expectations
         .files()
         .iter()
         .map(|(f, n)| format!("{f} ({n})"))
         .collect();
+    let facts = crate::judge::expectations::DriverFacts::from_hello(&hello["ready"]);
     let build = hello["ready"]["build"].as_str().map(str::to_string);
     let driver_line = match (hello.get("ready"), hello.get("unavailable")) {
         (Some(r), _) => format!(
@@ -855,7 +1125,7 @@ fn run_group(
                 .unwrap_or_default()
         ),
         (_, Some(u)) => format!("{backend}: unavailable: {}\n", u.as_str().unwrap_or("")),
-        _ => match &refused {
+        _ => match &g.refused {
             Some(why) => format!("{backend}: refused: {why}\n"),
             None => format!("{backend}: said {hello}\n"),
         },
@@ -864,13 +1134,14 @@ fn run_group(
         .as_str()
         .filter(|d| !d.is_empty())
         .map_or(String::new(), |d| format!("  device: {d}\n"));
-    if settings.no_goldens.contains(backend) {
+    let no_goldens = settings.no_goldens.contains(backend);
+    if no_goldens {
         device.push_str(&format!(
             "  goldens: {} (`cargo xtask bless --backend {backend}` starts them)\n",
             crate::judge::golden::NONE_FOR_BACKEND
         ));
     }
-    let driver_line = format!(
+    let line = format!(
         "{}{device}{}",
         driver_line,
         match (&build, files.is_empty()) {
@@ -885,7 +1156,7 @@ fn run_group(
         "renderer": hello["ready"]["renderer"],
         "version": hello["ready"]["version"],
         "device": hello["ready"]["device"],
-        "goldens": if settings.no_goldens.contains(backend) {
+        "goldens": if no_goldens {
             serde_json::json!(crate::judge::golden::NONE_FOR_BACKEND)
         } else {
             serde_json::Value::Null
@@ -893,30 +1164,29 @@ fn run_group(
         "mesa": facts.mesa,
         "build": build,
         "unavailable": hello.get("unavailable"),
-        "refused": refused,
+        "refused": g.refused,
         "expectations": files,
     });
-    let unavailable = hello
-        .get("unavailable")
-        .and_then(|u| u.as_str())
-        .map(str::to_string);
-    if let Some(mut d) = done.lock().ok().filter(|_| first) {
-        d.drivers.push_str(&driver_line);
-        d.driver_rows.push(row);
-        if let Some(why) = &refused {
-            d.refused.push(format!("{backend}: {why}"));
-        }
-    }
-    let next = || queues.lock().ok().and_then(|mut q| q.next_run(backend));
-    while let Some(p) = next() {
-        let name = p.name();
-        let t0 = Instant::now();
-        let outcome = match (&start_error, &unavailable) {
-            _ if refused.is_some() => Attempt::bare(
+    (line, row)
+}
+
+impl Group<'_> {
+    /// Runs point `p` on the group's worker (started again if it died), once more if it
+    /// failed (a different answer is a flake); a group that cannot run crashes or skips each
+    /// point with the reason.
+    fn attempt_point(
+        &self,
+        p: &Planned,
+        worker: &mut Result<Worker, String>,
+        start_worker: &dyn Fn() -> Result<Worker, String>,
+    ) -> Attempt {
+        let settings = self.settings;
+        match (&self.start_error, &self.unavailable) {
+            _ if self.refused.is_some() => Attempt::bare(
                 Status::Crash,
                 format!(
                     "not run: the worker refused the Mesa build: {}",
-                    refused.as_deref().unwrap_or("")
+                    self.refused.as_deref().unwrap_or("")
                 ),
             ),
             (Some(e), _) => Attempt::bare(
@@ -932,35 +1202,39 @@ fn run_group(
                     golden: settings
                         .golden
                         .clone()
-                        .filter(|_| !settings.no_goldens.contains(backend)),
+                        .filter(|_| !settings.no_goldens.contains(self.backend)),
                     repeat: None,
                     no_twins: false,
                     gallery: Some(settings.gallery.clone()),
-                    deviation: Some(expectations.deviations(&name, &p.case).names())
+                    deviation: Some(self.expectations.deviations(&p.name(), &p.case).names())
                         .filter(|n| !n.is_empty()),
                 };
-                let first = attempt(&mut worker, &start_worker, &req, settings.timeout);
-                if first.status.is_failure() {
-                    // Rerun once: a different answer is a flake.
-                    let second = attempt(&mut worker, &start_worker, &req, settings.timeout);
-                    if second.status == Status::Pass {
-                        let why = format!(
-                            "failed first ({}: {}), passed on rerun",
-                            first.status, first.reason
-                        );
-                        Attempt {
-                            status: Status::Flake,
-                            reason: why,
-                            ..second
-                        }
-                    } else {
-                        first
-                    }
-                } else {
-                    first
+                let first = attempt(worker, start_worker, &req, settings.timeout);
+                if !first.status.is_failure() {
+                    return first;
+                }
+                let second = attempt(worker, start_worker, &req, settings.timeout);
+                if second.status != Status::Pass {
+                    return first;
+                }
+                Attempt {
+                    status: Status::Flake,
+                    reason: format!(
+                        "failed first ({}: {}), passed on rerun",
+                        first.status, first.reason
+                    ),
+                    ..second
                 }
             }
-        };
+        }
+    }
+
+    /// The run's result: its raw outcome under the driver's expectations (an expectation
+    /// naming only checks this run did not make does not apply), with the command that
+    /// reproduces it; and the storage problem its pictures met, if any.
+    fn result_of(&self, p: &Planned, outcome: Attempt, t0: Instant) -> (RunResult, Option<String>) {
+        let settings = self.settings;
+        let name = p.name();
         let Attempt {
             status: raw,
             reason,
@@ -972,14 +1246,13 @@ fn run_group(
             under_deviation,
             storage,
         } = outcome;
-        // The checks this run did not make: an expectation naming only those does not apply.
         let unchecked: &[&str] =
             if settings.golden.is_none() || settings.no_goldens.contains(&p.backend) {
                 &["golden"]
             } else {
                 &[]
             };
-        let (status, expected) = expectations.apply(
+        let (status, expected) = self.expectations.apply(
             &name,
             &p.case,
             raw,
@@ -1001,7 +1274,7 @@ fn run_group(
             (_, None) => reason,
         };
         let result = RunResult {
-            name: name.clone(),
+            name,
             backend: p.backend.clone(),
             case: p.id.clone(),
             file: p.file.display().to_string(),
@@ -1012,48 +1285,29 @@ fn run_group(
             failed,
             golden,
             time_s: t0.elapsed().as_secs_f64(),
-            reproduce: format!(
-                "cargo run --bin umbra -- render {} --backend {} --point {}{}",
-                shell_word(&p.file.display().to_string()),
-                p.backend,
-                shell_word(&p.id),
-                // The run's Mesa build, so that the command reproduces it on that build.
-                crate::harness::mesa_build::selected()
-                    .filter(|_| crate::harness::mesa_build::is_mesa_backed(&p.backend))
-                    .map_or(String::new(), |b| format!(
-                        " --mesa {}",
-                        shell_word(&b.root.display().to_string())
-                    ))
-            ),
+            reproduce: reproduce_command(p),
             diagnosis: None,
             fingerprint,
             details,
         };
-        if let Ok(mut d) = done.lock() {
-            d.finished += 1;
-            let r = &result;
-            let mut line = format!(
-                "[{}/{total}] {} {} ({:.0} ms)",
-                d.finished,
-                r.status,
-                r.name,
-                r.time_s * 1e3
-            );
-            if !matches!(r.status, Status::Pass) && !r.reason.is_empty() {
-                let _ = write!(line, ": {}", first_line(&r.reason));
-            }
-            let status = r.status.name();
-            d.progress.finished(status, &line);
-            if settings.verbose && !r.details.is_empty() {
-                println!("{}", r.details);
-            }
-            if unavailable.is_some() && start_error.is_none() {
-                d.unavailable_runs += 1;
-            }
-            d.storage.extend(storage);
-            d.results.push(result);
-        }
+        (result, storage)
     }
+}
+
+/// The command that renders run `p` again, on the run's Mesa build when it used one.
+fn reproduce_command(p: &Planned) -> String {
+    format!(
+        "cargo run --bin umbra -- render {} --backend {} --point {}{}",
+        shell_word(&p.file.display().to_string()),
+        p.backend,
+        shell_word(&p.id),
+        crate::harness::mesa_build::selected()
+            .filter(|_| crate::harness::mesa_build::is_mesa_backed(&p.backend))
+            .map_or(String::new(), |b| format!(
+                " --mesa {}",
+                shell_word(&b.root.display().to_string())
+            ))
+    )
 }
 
 /// What one attempt at a run gave.
