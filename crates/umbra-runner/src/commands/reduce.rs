@@ -208,199 +208,240 @@ impl Judge {
 /// Runs the command; returns the exit code (0: reduced, 1: the point does not fail as
 /// required, 125: bad input).
 pub fn main(args: &Args) -> i32 {
+    let (point, backend) = match target(args) {
+        Ok(t) => t,
+        Err(code) => return code,
+    };
+    let mut r = match Reducer::start(args, &point, &backend) {
+        Ok(r) => r,
+        Err(code) => return code,
+    };
+    r.objects();
+    r.tessellation();
+    r.sizes();
+    r.defaults();
+    r.finish(args, &point)
+}
+
+/// The point to reduce and its backend, checked: a usage error (125) names what is missing.
+fn target(args: &Args) -> Result<(umbra_case::CasePoint, String), i32> {
     let [file] = args.positional.as_slice() else {
-        return usage("give exactly one case file");
+        return Err(usage("give exactly one case file"));
     };
     let (Some(point_id), Some(backend)) = (args.value("point"), args.value("backend")) else {
-        return usage("give --point ID and --backend ID");
+        return Err(usage("give --point ID and --backend ID"));
     };
-    if let Err(e) = crate::harness::mesa_build::select(args.value("mesa")) {
+    let fail = |e: String| {
         eprintln!("error: {e}");
-        return 125;
-    }
+        125
+    };
+    crate::harness::mesa_build::select(args.value("mesa")).map_err(fail)?;
     if !crate::harness::registry::is_known(backend) || backend == "ref" {
-        eprintln!(
-            "error: --backend {backend:?}: give a backend other than ref; this build has: {}",
+        return Err(fail(format!(
+            "--backend {backend:?}: give a backend other than ref; this build has: {}",
             crate::harness::registry::known().join(", ")
-        );
-        return 125;
+        )));
     }
-    let points = match umbra_case::load_file(Path::new(file)) {
-        Ok(p) => p,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 125;
-        }
-    };
-    let Some(point) = points.iter().find(|p| p.id() == point_id) else {
-        eprintln!(
-            "error: {file} has no point {point_id:?}; its points: {}",
+    let points = umbra_case::load_file(Path::new(file)).map_err(|e| fail(e.to_string()))?;
+    match points.iter().find(|p| p.id() == point_id) {
+        Some(p) => Ok((p.clone(), backend.to_string())),
+        None => Err(fail(format!(
+            "{file} has no point {point_id:?}; its points: {}",
             points.iter().map(|p| p.id()).collect::<Vec<_>>().join(", ")
+        ))),
+    }
+}
+
+/// A reduction under way: the case as reduced so far, how it must keep failing (`want`), the
+/// judge of candidates and the changes kept.
+struct Reducer {
+    case: Value,
+    judge: Judge,
+    want: Verdict,
+    removed: Vec<String>,
+    verbose: bool,
+    before: Size,
+    /// Where candidates are written; removed when the reduction ends.
+    dir: PathBuf,
+    file: String,
+    point_id: String,
+}
+
+impl Reducer {
+    /// Step 1: the point without its sweep and twins, which must still fail the asked checks
+    /// (or crash) on the backend and pass on the reference.
+    fn start(args: &Args, point: &umbra_case::CasePoint, backend: &str) -> Result<Reducer, i32> {
+        let file = args.positional.first().cloned().unwrap_or_default();
+        let point_id = point.id();
+        let timeout = Duration::from_secs(
+            args.value("timeout")
+                .and_then(|t| t.parse().ok())
+                .unwrap_or(120),
         );
-        return 125;
-    };
-    let timeout = Duration::from_secs(
-        args.value("timeout")
-            .and_then(|t| t.parse().ok())
-            .unwrap_or(120),
-    );
-    let dir = std::env::temp_dir().join(format!("umbra-reduce-{}", std::process::id()));
-    let _ = std::fs::create_dir_all(&dir);
-    let mut judge = Judge {
-        backend: backend.to_string(),
-        worker: None,
-        reference: None,
-        timeout,
-        dir: dir.clone(),
-        tried: 0,
-        last: String::new(),
-        required: args.values("check").into_iter().map(String::from).collect(),
-    };
-    let Ok(mut case) = serde_json::to_value(&point.case) else {
-        eprintln!("error: cannot write the point as JSON");
-        return 125;
-    };
-    // 1. No sweep (the point's values are in `case` already) and no twins.
-    if let Some(o) = case.as_object_mut() {
-        o.remove("sweep");
-    }
-    if let Some(e) = case.get_mut("expect").and_then(Value::as_object_mut) {
-        e.remove("twins");
-        e.remove("error_falls_along");
-    }
-    let want = judge.run_on(false, &case);
-    match &want {
-        Verdict::Fail(c) if !c.is_empty() && judge.required.is_subset(c) => {}
-        Verdict::Fail(c) if !c.is_empty() => {
-            eprintln!(
-                "error: --check {}: {point_id} on {backend} fails {} only; name checks it fails",
-                judge
-                    .required
-                    .iter()
-                    .cloned()
-                    .collect::<Vec<_>>()
-                    .join(" --check "),
-                c.iter().cloned().collect::<Vec<_>>().join("+")
-            );
-            let _ = std::fs::remove_dir_all(&dir);
-            return 125;
+        let dir = std::env::temp_dir().join(format!("umbra-reduce-{}", std::process::id()));
+        let _ = std::fs::create_dir_all(&dir);
+        let mut judge = Judge {
+            backend: backend.to_string(),
+            worker: None,
+            reference: None,
+            timeout,
+            dir: dir.clone(),
+            tried: 0,
+            last: String::new(),
+            required: args.values("check").into_iter().map(String::from).collect(),
+        };
+        let Ok(mut case) = serde_json::to_value(&point.case) else {
+            eprintln!("error: cannot write the point as JSON");
+            return Err(125);
+        };
+        if let Some(o) = case.as_object_mut() {
+            o.remove("sweep");
         }
-        Verdict::Crash(_) => {}
-        other => {
-            eprintln!(
-                "error: {point_id} on {backend} {other} once its twins and golden are set aside; reduce needs a point whose own frame fails (or that crashes)"
-            );
-            let _ = std::fs::remove_dir_all(&dir);
-            return 1;
+        if let Some(e) = case.get_mut("expect").and_then(Value::as_object_mut) {
+            e.remove("twins");
+            e.remove("error_falls_along");
         }
-    }
-    let reference = judge.run_on(true, &case);
-    if reference != Verdict::Pass {
-        eprintln!(
-            "error: {point_id} does not pass on the reference ({reference}): nothing to reduce against"
+        let gone = |code: i32| {
+            let _ = std::fs::remove_dir_all(&dir);
+            code
+        };
+        let want = judge.run_on(false, &case);
+        match &want {
+            Verdict::Fail(c) if !c.is_empty() && judge.required.is_subset(c) => {}
+            Verdict::Fail(c) if !c.is_empty() => {
+                eprintln!(
+                    "error: --check {}: {point_id} on {backend} fails {} only; name checks it fails",
+                    judge
+                        .required
+                        .iter()
+                        .cloned()
+                        .collect::<Vec<_>>()
+                        .join(" --check "),
+                    c.iter().cloned().collect::<Vec<_>>().join("+")
+                );
+                return Err(gone(125));
+            }
+            Verdict::Crash(_) => {}
+            other => {
+                eprintln!(
+                    "error: {point_id} on {backend} {other} once its twins and golden are set aside; reduce needs a point whose own frame fails (or that crashes)"
+                );
+                return Err(gone(1));
+            }
+        }
+        let reference = judge.run_on(true, &case);
+        if reference != Verdict::Pass {
+            eprintln!(
+                "error: {point_id} does not pass on the reference ({reference}): nothing to reduce against"
+            );
+            return Err(gone(1));
+        }
+        let before = Size::of(&case).unwrap_or_default();
+        println!(
+            "reduce: {point_id} on {backend} {want}; passes on ref; {}",
+            size_line(&before)
         );
-        let _ = std::fs::remove_dir_all(&dir);
-        return 1;
+        Ok(Reducer {
+            case,
+            judge,
+            want,
+            removed: Vec::new(),
+            verbose: args.has("verbose"),
+            before,
+            dir,
+            file,
+            point_id,
+        })
     }
-    let before = Size::of(&case).unwrap_or_default();
-    println!(
-        "reduce: {point_id} on {backend} {want}; passes on ref; {}",
-        size_line(&before)
-    );
-    let verbose = args.has("verbose");
-    let mut removed: Vec<String> = Vec::new();
-    let mut keep = |case: &mut Value, cand: Value, what: String, judge: &mut Judge| -> bool {
-        if judge.keeps(&cand, &want) {
+
+    /// Keeps `cand` if it still fails as wanted; says so.
+    fn keep(&mut self, cand: Value, what: String) -> bool {
+        if self.judge.keeps(&cand, &self.want) {
             let s = Size::of(&cand).unwrap_or_default();
             println!("  kept: {what} ({})", size_line(&s));
-            removed.push(what);
-            *case = cand;
+            self.removed.push(what);
+            self.case = cand;
             true
         } else {
-            if verbose {
-                println!("  not kept: {what} ({})", judge.last);
+            if self.verbose {
+                println!("  not kept: {what} ({})", self.judge.last);
             }
             false
         }
-    };
+    }
 
-    // 2. Objects: halves, then one at a time, until nothing more goes.
-    loop {
-        let n = case["scene"]["objects"].as_array().map_or(0, Vec::len);
-        let mut progress = false;
-        let mut chunk = n / 2;
-        while chunk >= 1 && !progress {
-            let mut start = 0;
-            while start < case["scene"]["objects"].as_array().map_or(0, Vec::len) {
-                let objs = case["scene"]["objects"]
-                    .as_array()
-                    .cloned()
-                    .unwrap_or_default();
-                if objs.len() <= 1 {
-                    break;
+    /// Step 2: objects, halves first, then one at a time, until nothing more goes.
+    fn objects(&mut self) {
+        let count = |case: &Value| case["scene"]["objects"].as_array().map_or(0, Vec::len);
+        loop {
+            let mut progress = false;
+            let mut chunk = count(&self.case) / 2;
+            while chunk >= 1 && !progress {
+                let mut start = 0;
+                while start < count(&self.case) {
+                    let objs = self.case["scene"]["objects"]
+                        .as_array()
+                        .cloned()
+                        .unwrap_or_default();
+                    if objs.len() <= 1 {
+                        break;
+                    }
+                    let end = (start + chunk).min(objs.len());
+                    let mut cand = self.case.clone();
+                    let rest: Vec<Value> = objs
+                        .iter()
+                        .enumerate()
+                        .filter(|(i, _)| *i < start || *i >= end)
+                        .map(|(_, o)| o.clone())
+                        .collect();
+                    cand["scene"]["objects"] = Value::Array(rest);
+                    let what = format!(
+                        "removed object{} {}",
+                        if end - start > 1 { "s" } else { "" },
+                        describe_objects(&objs[start..end])
+                    );
+                    if self.keep(cand, what) {
+                        progress = true;
+                    } else {
+                        start = end;
+                    }
                 }
-                let end = (start + chunk).min(objs.len());
-                let mut cand = case.clone();
-                let rest: Vec<Value> = objs
-                    .iter()
-                    .enumerate()
-                    .filter(|(i, _)| *i < start || *i >= end)
-                    .map(|(_, o)| o.clone())
-                    .collect();
-                cand["scene"]["objects"] = Value::Array(rest);
-                let what = format!(
-                    "removed object{} {}",
-                    if end - start > 1 { "s" } else { "" },
-                    describe_objects(&objs[start..end])
-                );
-                if keep(&mut case, cand, what, &mut judge) {
-                    progress = true;
-                } else {
-                    start = end;
-                }
+                chunk /= 2;
             }
-            chunk /= 2;
-        }
-        if !progress {
-            break;
+            if !progress {
+                break;
+            }
         }
     }
-    // Tessellation and meshes.
-    let n = case["scene"]["objects"].as_array().map_or(0, Vec::len);
-    for i in 0..n {
-        loop {
-            let o = case["scene"]["objects"][i].clone();
-            let Some(seg) = o["sphere"]["segments"].as_u64().filter(|s| *s > 4) else {
-                break;
-            };
-            let mut cand = case.clone();
-            cand["scene"]["objects"][i]["sphere"]["segments"] = Value::from((seg / 2).max(4));
-            if !keep(
-                &mut case,
-                cand,
-                format!("sphere {i}: segments {seg} → {}", (seg / 2).max(4)),
-                &mut judge,
-            ) {
-                break;
+
+    /// Step 2, continued: spheres' segments halved, meshes' triangles one at a time.
+    fn tessellation(&mut self) {
+        let n = self.case["scene"]["objects"].as_array().map_or(0, Vec::len);
+        for i in 0..n {
+            while let Some(seg) = self.case["scene"]["objects"][i]["sphere"]["segments"]
+                .as_u64()
+                .filter(|s| *s > 4)
+            {
+                let mut cand = self.case.clone();
+                cand["scene"]["objects"][i]["sphere"]["segments"] = Value::from((seg / 2).max(4));
+                let what = format!("sphere {i}: segments {seg} → {}", (seg / 2).max(4));
+                if !self.keep(cand, what) {
+                    break;
+                }
             }
-        }
-        let tris = case["scene"]["objects"][i]["mesh"]["triangles"]
-            .as_array()
-            .cloned();
-        if let Some(tris) = tris {
+            let Some(mut current) = self.case["scene"]["objects"][i]["mesh"]["triangles"]
+                .as_array()
+                .cloned()
+            else {
+                continue;
+            };
             let mut t = 0;
-            let mut current = tris;
             while t < current.len() && current.len() > 1 {
-                let mut cand = case.clone();
+                let mut cand = self.case.clone();
                 let mut fewer = current.clone();
                 fewer.remove(t);
                 cand["scene"]["objects"][i]["mesh"]["triangles"] = Value::Array(fewer.clone());
-                if keep(
-                    &mut case,
-                    cand,
-                    format!("mesh {i}: triangle {t}"),
-                    &mut judge,
-                ) {
+                if self.keep(cand, format!("mesh {i}: triangle {t}")) {
                     current = fewer;
                 } else {
                     t += 1;
@@ -408,123 +449,125 @@ pub fn main(args: &Args) -> i32 {
             }
         }
     }
-    // 3. Image and map sizes.
-    for (path, what) in [
-        (["camera", "size"], "camera image"),
-        (["shadow", "size"], "shadow map"),
-    ] {
-        loop {
-            let s = &case[path[0]][path[1]];
-            let (Some(w), Some(h)) = (s[0].as_u64(), s[1].as_u64()) else {
-                break;
-            };
-            if w < 32 || h < 32 {
-                break;
-            }
-            let mut cand = case.clone();
-            cand[path[0]][path[1]] = serde_json::json!([w / 2, h / 2]);
-            if !keep(
-                &mut case,
-                cand,
-                format!("{what} {w}x{h} → {}x{}", w / 2, h / 2),
-                &mut judge,
-            ) {
-                break;
-            }
-        }
-    }
-    // 4. Fields back to their defaults, one at a time.
-    for section in ["shadow", "shading", "expect"] {
-        let keys: Vec<String> = case[section]
-            .as_object()
-            .map(|o| o.keys().cloned().collect())
-            .unwrap_or_default();
-        for k in keys {
-            if section == "shadow" && k == "size" {
-                continue;
-            }
-            if let Some(sub) = case[section][&k].as_object().cloned() {
-                for sk in sub.keys() {
-                    let mut cand = case.clone();
-                    if let Some(o) = cand[section][&k].as_object_mut() {
-                        o.remove(sk);
-                    }
-                    if differs(&case, &cand) {
-                        keep(
-                            &mut case,
-                            cand,
-                            format!("{section}.{k}.{sk} → default"),
-                            &mut judge,
-                        );
-                    }
+
+    /// Step 3: the camera image and the shadow map halved while they stay 16 or more.
+    fn sizes(&mut self) {
+        for (path, what) in [
+            (["camera", "size"], "camera image"),
+            (["shadow", "size"], "shadow map"),
+        ] {
+            loop {
+                let s = &self.case[path[0]][path[1]];
+                let (Some(w), Some(h)) = (s[0].as_u64(), s[1].as_u64()) else {
+                    break;
+                };
+                if w < 32 || h < 32 {
+                    break;
+                }
+                let mut cand = self.case.clone();
+                cand[path[0]][path[1]] = serde_json::json!([w / 2, h / 2]);
+                if !self.keep(cand, format!("{what} {w}x{h} → {}x{}", w / 2, h / 2)) {
+                    break;
                 }
             }
-            let mut cand = case.clone();
-            if let Some(o) = cand[section].as_object_mut() {
-                o.remove(&k);
-            }
-            if differs(&case, &cand) {
-                keep(
-                    &mut case,
-                    cand,
-                    format!("{section}.{k} → default"),
-                    &mut judge,
-                );
+        }
+    }
+
+    /// Step 4: fields of `shadow`, `shading` and `expect` back to their defaults, one at a
+    /// time (sub-fields first).
+    fn defaults(&mut self) {
+        for section in ["shadow", "shading", "expect"] {
+            let keys: Vec<String> = self.case[section]
+                .as_object()
+                .map(|o| o.keys().cloned().collect())
+                .unwrap_or_default();
+            for k in keys {
+                if section == "shadow" && k == "size" {
+                    continue;
+                }
+                if let Some(sub) = self.case[section][&k].as_object().cloned() {
+                    for sk in sub.keys() {
+                        let mut cand = self.case.clone();
+                        if let Some(o) = cand[section][&k].as_object_mut() {
+                            o.remove(sk);
+                        }
+                        if differs(&self.case, &cand) {
+                            self.keep(cand, format!("{section}.{k}.{sk} → default"));
+                        }
+                    }
+                }
+                let mut cand = self.case.clone();
+                if let Some(o) = cand[section].as_object_mut() {
+                    o.remove(&k);
+                }
+                if differs(&self.case, &cand) {
+                    self.keep(cand, format!("{section}.{k} → default"));
+                }
             }
         }
     }
-    // 5. Drop what equals its default from the text.
-    case = strip_defaults(case);
-    let after = Size::of(&case).unwrap_or_default();
-    // How the reduced case fails, as written (a subset of the point's failed checks).
-    let now = judge.run_on(false, &case);
-    let name = format!("{}-reduced", point.case.name);
-    case["name"] = Value::from(name.clone());
-    case["about"] = Value::from(format!(
-        "reduced by umbra reduce from {file} point {point_id} on {backend}, where it {want}; reduced, it {now} there and passes on the reference; {} changes kept ({} candidates tried): {}",
-        removed.len(),
-        judge.tried,
-        if removed.is_empty() {
-            "none".into()
-        } else {
-            removed.join("; ")
+
+    /// Step 5: what equals its default dropped from the text, the case named and described
+    /// (how it fails now, what was kept), checked to load, and written.
+    fn finish(mut self, args: &Args, point: &umbra_case::CasePoint) -> i32 {
+        let (file, point_id, backend) = (
+            self.file.clone(),
+            self.point_id.clone(),
+            self.judge.backend.clone(),
+        );
+        let mut case = strip_defaults(std::mem::take(&mut self.case));
+        let after = Size::of(&case).unwrap_or_default();
+        // How the reduced case fails, as written (a subset of the point's failed checks).
+        let now = self.judge.run_on(false, &case);
+        let name = format!("{}-reduced", point.case.name);
+        case["name"] = Value::from(name.clone());
+        case["about"] = Value::from(format!(
+            "reduced by umbra reduce from {file} point {point_id} on {backend}, where it {}; reduced, it {now} there and passes on the reference; {} changes kept ({} candidates tried): {}",
+            self.want,
+            self.removed.len(),
+            self.judge.tried,
+            if self.removed.is_empty() {
+                "none".into()
+            } else {
+                self.removed.join("; ")
+            }
+        ));
+        if let Some(o) = case.as_object_mut() {
+            o.retain(|_, v| !v.is_null());
         }
-    ));
-    if let Some(o) = case.as_object_mut() {
-        o.retain(|_, v| !v.is_null());
+        let out = args
+            .value("o")
+            .or(args.value("out"))
+            .map(PathBuf::from)
+            .unwrap_or_else(|| PathBuf::from("target/umbra/reduce").join(format!("{name}.json")));
+        if let Some(parent) = out.parent() {
+            let _ = std::fs::create_dir_all(parent);
+        }
+        let _ = std::fs::remove_dir_all(&self.dir);
+        // The reduced case must load as written.
+        let text = case_text(&tidy(case), 0) + "\n";
+        if let Err(e) = umbra_case::load_str(&text, &out) {
+            eprintln!("error: the reduced case does not load ({e}); this is a bug in the reducer");
+            return 125;
+        }
+        if let Err(e) = std::fs::write(&out, text) {
+            eprintln!("error: cannot write {}: {e}", out.display());
+            return 125;
+        }
+        println!(
+            "reduce: {} → {}; it {now}; {} changes kept of {} candidates tried",
+            size_line(&self.before),
+            size_line(&after),
+            self.removed.len(),
+            self.judge.tried
+        );
+        println!(
+            "reduce: wrote {} (cargo run --bin umbra -- render {} --backend {backend})",
+            out.display(),
+            out.display()
+        );
+        0
     }
-    let out = args
-        .value("o")
-        .or(args.value("out"))
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("target/umbra/reduce").join(format!("{name}.json")));
-    if let Some(parent) = out.parent() {
-        let _ = std::fs::create_dir_all(parent);
-    }
-    let _ = std::fs::remove_dir_all(&dir);
-    // The reduced case must load as written.
-    let text = case_text(&tidy(case), 0) + "\n";
-    if let Err(e) = umbra_case::load_str(&text, &out) {
-        eprintln!("error: the reduced case does not load ({e}); this is a bug in the reducer");
-        return 125;
-    }
-    if let Err(e) = std::fs::write(&out, text) {
-        eprintln!("error: cannot write {}: {e}", out.display());
-        return 125;
-    }
-    println!(
-        "reduce: {} → {}; it {now}; {} changes kept of {} candidates tried",
-        size_line(&before),
-        size_line(&after),
-        removed.len(),
-        judge.tried
-    );
-    println!(
-        "reduce: wrote {} (cargo run --bin umbra -- render {} --backend {backend})",
-        out.display(),
-        out.display()
-    );
-    0
 }
 
 /// The case as a person would write it: f32 values at their shortest (0.4, not
