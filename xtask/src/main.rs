@@ -19,12 +19,16 @@
 //!   `git diff` before committing. Refused under `CI=true`: CI never writes a golden.
 //! - `cargo xtask fetch-mesa [--dir DIR]`: a second Mesa (bookworm-backports, 25.0.7) unpacked
 //!   into a directory without changing the system (`fetch_mesa`), for `--mesa DIR`.
+//! - `cargo xtask mesa-ci --driver DRIVER --out DIR [--fraction N] [--run]`: what a Mesa
+//!   driver's `ci/` directory would hold to run umbra under deqp-runner (`mesa_ci`), and with
+//!   `--run` the suite run by deqp-runner 0.24.
 //! - `cargo xtask drivers --baseline A --candidate B`, `cargo xtask bisect --mesa-src DIR
 //!   --good REV --bad REV`, `cargo xtask reduce CASE --point ID --backend ID`: the same set-up,
 //!   then `umbra drivers`, `umbra bisect`, `umbra reduce`.
 
 mod fetch_mesa;
 mod mesa;
+mod mesa_ci;
 
 use std::path::PathBuf;
 use std::process::{Command, ExitCode};
@@ -99,6 +103,14 @@ fn command() -> clap::Command {
             .arg(rest().help("arguments for `umbra conformance` (e.g. --filter, --backend)")),
     )
     .subcommand(
+        clap::Command::new("mesa-ci")
+            .about("Write what a Mesa driver's ci/ directory would hold to run umbra under deqp-runner (suite TOML, caselist, fails/flakes/skips from umbra's expectations); with --run, run it with deqp-runner 0.24")
+            .arg(Arg::new("driver").long("driver").value_name("DRIVER").required(true).help("the driver: llvmpipe, softpipe, zink, lavapipe, or a device's name (radeonsi …)"))
+            .arg(Arg::new("out").long("out").value_name("DIR").required(true).help("where to write the files (and results/ with --run)"))
+            .arg(Arg::new("fraction").long("fraction").value_name("N").value_parser(clap::value_parser!(u32).range(1..)).help("with --run: run 1 test of every N (deqp-runner --fraction)"))
+            .arg(Arg::new("run").long("run").action(clap::ArgAction::SetTrue).help("run the suite with deqp-runner (installed with cargo when missing)")),
+    )
+    .subcommand(
         clap::Command::new("fetch-mesa")
             .about("Download a second Mesa (Debian packages) and unpack it without touching the system, for --mesa DIR")
             .arg(Arg::new("dir").long("dir").value_name("DIR").help("where to unpack [default: target/mesa/SUITE]"))
@@ -138,6 +150,21 @@ fn main() -> ExitCode {
             sub.get_one::<String>("dir").map(PathBuf::from),
             &workspace_root(),
         ),
+        "mesa-ci" => {
+            mesa::ensure();
+            mesa_ci::main(
+                &mesa_ci::Options {
+                    driver: sub.get_one::<String>("driver").cloned().unwrap_or_default(),
+                    out: sub
+                        .get_one::<String>("out")
+                        .map(PathBuf::from)
+                        .unwrap_or_default(),
+                    fraction: sub.get_one::<u32>("fraction").copied(),
+                    run: sub.get_flag("run"),
+                },
+                &workspace_root(),
+            )
+        }
         cmd => {
             mesa::ensure();
             umbra(&[cmd], &args)
@@ -213,6 +240,13 @@ fn umbra_command(command: &[&str], args: &[String]) -> Command {
         "--",
     ]);
     cmd.args(command).args(args);
+    cmd
+}
+
+/// `cargo ARGS` in the workspace.
+fn cargo_args(args: &[&str]) -> Command {
+    let mut cmd = cargo();
+    cmd.args(args);
     cmd
 }
 

@@ -5,13 +5,17 @@
 use std::process::ExitCode;
 
 use umbra_runner::commands::{
-    backends, bisect, conformance, drivers, reduce, render, repro, selftest, soak, sweep,
+    backends, bisect, conformance, deqp, drivers, reduce, render, repro, selftest, soak, sweep,
 };
 use umbra_runner::{cli, harness};
 
 fn main() -> ExitCode {
     quiet_on_closed_pipe();
     let argv: Vec<String> = std::env::args().collect();
+    // dEQP's protocol (deqp-runner): its `--deqp-*=V` flags are not umbra's to parse.
+    if argv.get(1).is_some_and(|a| a == "deqp") {
+        return ExitCode::from(deqp::main(&argv[2..]).clamp(0, 255) as u8);
+    }
     let code = match cli::parse(&argv) {
         Err(e) => {
             let usage_error = e.use_stderr();

@@ -1311,15 +1311,15 @@ fn reproduce_command(p: &Planned) -> String {
 }
 
 /// What one attempt at a run gave.
-struct Attempt {
-    status: Status,
-    reason: String,
+pub(crate) struct Attempt {
+    pub(crate) status: Status,
+    pub(crate) reason: String,
     metrics: Option<Metrics>,
     details: String,
-    failed: Vec<umbra_report::FailedCheck>,
+    pub(crate) failed: Vec<umbra_report::FailedCheck>,
     golden: Option<String>,
     fingerprint: Option<umbra_compare::consensus::Fingerprint>,
-    under_deviation: Option<Vec<umbra_report::FailedCheck>>,
+    pub(crate) under_deviation: Option<Vec<umbra_report::FailedCheck>>,
     storage: Option<String>,
 }
 
@@ -1340,7 +1340,7 @@ impl Attempt {
 }
 
 /// One attempt at a run, restarting the worker first if the last one died.
-fn attempt(
+pub(crate) fn attempt(
     worker: &mut Result<Worker, String>,
     start: &dyn Fn() -> Result<Worker, String>,
     req: &Request,

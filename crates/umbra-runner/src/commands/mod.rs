@@ -4,6 +4,7 @@
 pub mod backends;
 pub mod bisect;
 pub mod conformance;
+pub mod deqp;
 pub mod drivers;
 pub mod orientations;
 pub mod reduce;

@@ -1,0 +1,408 @@
+//! `umbra deqp`: umbra as a dEQP test binary, so that Mesa's deqp-runner drives it from a
+//! suite TOML (`[[deqp]]`) beside its dEQP entries, with its caselists, `--fraction`,
+//! baselines (`DRIVER-fails.txt`), skips and flakes.
+//!
+//! Why dEQP's protocol rather than gtest's: deqp-runner hands a dEQP binary a caselist file
+//! of any size (`--deqp-caselist-file=F`, the tests of one group) and reads one status per
+//! test from its stdout (`Test case 'NAME'..` then `  Pass (detail)`, `  Fail (…)`,
+//! `  NotSupported (…)`, `  Crash (…)`, `  Timeout (…)`); a binary that dies leaves its
+//! remaining tests Missing and deqp-runner reruns them. umbra keeps its own isolation under
+//! that: every test runs in a worker process of its backend ([`crate::harness::pool`]), a
+//! driver crash or hang costs that test (reported `Crash` or `Timeout`) and a fresh worker
+//! takes the next, so one bad test never hides a group. The judge is umbra's, the spec's
+//! intervals and the exact truth, with no golden check (a deqp-runner run is a partial run:
+//! baselines are deqp-runner's). Failing tests leave umbra's pictures (expected, actual,
+//! error) under `--umbra-pictures=DIR`, one directory per test.
+//!
+//! Test names are `umbra.API.DRIVER.CASE.K`: the backend id with `/` as `.`, the case's name
+//! and the point's index in its case file (K counts the file's sweep points from 0). Run
+//! names (`gl33/llvmpipe/beyond-far@shadow.compare=hardware,…`) hold commas, `=`, `{` and
+//! `"`, which deqp-runner's CSV files and regex skip lists cannot carry; `--list` prints both
+//! names side by side.
+//!
+//! - `umbra deqp --deqp-caselist-file=F [--cases=DIR] [--umbra-pictures=DIR]
+//!   [--umbra-judge-cache=DIR] [--deqp-…]`: runs the listed tests (deqp-runner starts the
+//!   binary in its own directory, so the suite gives absolute paths) (other `--deqp-*` flags are accepted and ignored, as deqp-runner
+//!   adds its log, shader-cache and flush flags).
+//! - `umbra deqp --list [--backend=ID]… [--cases=DIR] [--expectations=DIR]`: one line per
+//!   test, `NAME<TAB>RUN NAME<TAB>EXPECTED`, EXPECTED being what umbra's expectations say for
+//!   the backend's driver (`Pass`, `Fail`, `Crash`, `Timeout`, `Skip`, or `Cause` for an
+//!   expectation by cause, which fails only where its cause shows and which umbra itself
+//!   reports as `QualityWarning` when the cause explains the failure), which
+//!   `cargo xtask mesa-ci` turns into the driver's fails and skips files.
+//!
+//! What deqp-runner's files cannot say, umbra's own check keeps: an expected failure's
+//! signature (which checks, on how many pixels) and an expectation by cause. In deqp-runner a
+//! baselined test that fails differently still reads `Fail`; `umbra conformance` on the same
+//! driver tells "fails differently" (a regression) from the expected failure.
+
+use std::collections::BTreeMap;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use umbra_report::Status;
+
+use crate::harness::pool::Worker;
+use crate::harness::worker::Request;
+use crate::judge::expectations::{Expectations, Expected};
+
+/// A test's name for deqp-runner.
+pub fn test_name(backend: &str, case: &str, index: usize) -> String {
+    format!("umbra.{}.{case}.{index}", backend.replace('/', "."))
+}
+
+/// The backend, case name and point index a test name stands for.
+pub fn parse_test_name(name: &str) -> Option<(String, String, usize)> {
+    let rest = name.strip_prefix("umbra.")?;
+    let (rest, index) = rest.rsplit_once('.')?;
+    let (backend, case) = rest.rsplit_once('.')?;
+    let (api, driver) = backend.split_once('.')?;
+    Some((
+        format!("{api}/{driver}"),
+        case.to_string(),
+        index.parse().ok()?,
+    ))
+}
+
+/// The value of `--NAME=V` among `argv`, every one of them.
+fn values<'a>(argv: &'a [String], name: &str) -> Vec<&'a str> {
+    let prefix = format!("--{name}=");
+    argv.iter()
+        .filter_map(|a| a.strip_prefix(prefix.as_str()))
+        .collect()
+}
+
+/// Runs `umbra deqp ARGS` (`argv`: the arguments after `deqp`).
+pub fn main(argv: &[String]) -> i32 {
+    let cases = PathBuf::from(values(argv, "cases").first().copied().unwrap_or("cases"));
+    let index = match CaseIndex::load(&cases) {
+        Ok(i) => i,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 125;
+        }
+    };
+    if argv.iter().any(|a| a == "--list") {
+        return list(argv, &index);
+    }
+    // The tests: a caselist file, or `--deqp-case=A,B` (deqp-runner's probe of
+    // `umbra.info.renderer,…` before a run: umbra has no info tests, so they are NotSupported
+    // and the log holds no TestCaseResult, which deqp-runner takes as "no check").
+    let names: Vec<String> = match (
+        values(argv, "deqp-caselist-file").first().copied(),
+        values(argv, "deqp-case").first().copied(),
+    ) {
+        (Some(caselist), _) => match std::fs::read_to_string(caselist) {
+            Ok(t) => t
+                .lines()
+                .map(str::trim)
+                .filter(|l| !l.is_empty())
+                .map(str::to_string)
+                .collect(),
+            Err(e) => {
+                eprintln!("error: cannot read {caselist}: {e}");
+                return 125;
+            }
+        },
+        (None, Some(cases)) => cases.split(',').map(str::to_string).collect(),
+        (None, None) => {
+            eprintln!(
+                "error: umbra deqp: give --deqp-caselist-file=FILE (the tests to run, one name a line), --deqp-case=NAME[,NAME] or --list"
+            );
+            return 125;
+        }
+    };
+    let expectations = match Expectations::load(Path::new(
+        values(argv, "umbra-expectations")
+            .first()
+            .copied()
+            .unwrap_or("expectations"),
+    )) {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 125;
+        }
+    };
+    let opts = RunOptions {
+        pictures: values(argv, "umbra-pictures").first().map(PathBuf::from),
+        log: values(argv, "deqp-log-filename").first().map(PathBuf::from),
+        cache: PathBuf::from(
+            values(argv, "umbra-judge-cache")
+                .first()
+                .copied()
+                .unwrap_or(crate::judge::judge_cache::DEFAULT_ROOT),
+        ),
+        expectations,
+    };
+    run(&names, &index, &opts)
+}
+
+/// Every case file's points by case name: the file, and each point's id and case as JSON
+/// (what expectations' `@when` conditions read).
+struct CaseIndex(BTreeMap<String, (PathBuf, Vec<(String, serde_json::Value)>)>);
+
+impl CaseIndex {
+    fn load(dir: &Path) -> Result<CaseIndex, String> {
+        let files = umbra_case::case_files(dir)
+            .map_err(|e| format!("cannot read {}: {e}", dir.display()))?;
+        let mut map = BTreeMap::new();
+        for f in files {
+            let points = umbra_case::load_file(&f).map_err(|e| e.to_string())?;
+            if let Some(first) = points.first() {
+                let abs = std::fs::canonicalize(&f).unwrap_or(f.clone());
+                map.insert(
+                    first.case.name.clone(),
+                    (
+                        abs,
+                        points
+                            .iter()
+                            .map(|p| (p.id(), serde_json::to_value(&p.case).unwrap_or_default()))
+                            .collect(),
+                    ),
+                );
+            }
+        }
+        Ok(CaseIndex(map))
+    }
+}
+
+/// Runs each test in a worker of its backend and prints its status as dEQP does.
+fn run(names: &[String], index: &CaseIndex, opts: &RunOptions) -> i32 {
+    let mut session = Session {
+        cache: crate::judge::judge_cache::prepare(&opts.cache),
+        timeout: Duration::from_secs(300),
+        workers: BTreeMap::new(),
+        facts: BTreeMap::new(),
+    };
+    let mut logged = String::new();
+    let stdout = std::io::stdout();
+    for name in names {
+        let mut out = stdout.lock();
+        let _ = writeln!(out, "Test case '{name}'..");
+        let _ = out.flush();
+        drop(out);
+        let (status, detail) = match parse_test_name(name).and_then(|(backend, case, k)| {
+            let (file, points) = index.0.get(&case)?;
+            let (id, json) = points.get(k)?;
+            Some((backend, file.clone(), k, id.clone(), json))
+        }) {
+            None if name.starts_with("umbra.info.") => (
+                "NotSupported",
+                "umbra has no info tests; `umbra backends` lists the drivers".to_string(),
+            ),
+            None => (
+                "InternalError",
+                format!(
+                    "{name} names no umbra test (umbra.API.DRIVER.CASE.K, `umbra deqp --list`)"
+                ),
+            ),
+            Some((backend, file, k, id, json)) => {
+                session.test(name, &backend, file, k, &id, json, opts)
+            }
+        };
+        let detail = detail.lines().next().unwrap_or("").replace(['(', ')'], "");
+        let detail = if detail.is_empty() {
+            "umbra".to_string()
+        } else {
+            detail
+        };
+        let mut out = stdout.lock();
+        let _ = writeln!(out, "  {status} ({detail})\n");
+        let _ = out.flush();
+        logged.push_str(&format!("{name}\t{status}\t{detail}\n"));
+    }
+    println!("DONE!");
+    if let Some(log) = &opts.log {
+        let _ = std::fs::write(log, logged);
+    }
+    0
+}
+
+/// What a run of tests is told: where failing tests' pictures go, the log deqp-runner names,
+/// the judging cache, umbra's expectations.
+struct RunOptions {
+    pictures: Option<PathBuf>,
+    log: Option<PathBuf>,
+    cache: PathBuf,
+    expectations: Expectations,
+}
+
+/// The workers of a run (one per backend, started again after a crash) and each backend's
+/// driver facts (which select the expectations that apply).
+struct Session {
+    cache: PathBuf,
+    timeout: Duration,
+    workers: BTreeMap<String, Result<Worker, String>>,
+    facts: BTreeMap<String, crate::judge::expectations::DriverFacts>,
+}
+
+impl Session {
+    /// Runs one test in its backend's worker and says its dEQP status and detail. A failure
+    /// that an expectation by cause explains (`@when`, a modelled deviation, judged again
+    /// under it) is `QualityWarning`, which deqp-runner counts as a success (Warn) and keeps
+    /// visible; any other failure is `Fail`, for the baseline to expect or not.
+    #[allow(clippy::too_many_arguments)]
+    fn test(
+        &mut self,
+        name: &str,
+        backend: &str,
+        file: PathBuf,
+        k: usize,
+        id: &str,
+        json: &serde_json::Value,
+        opts: &RunOptions,
+    ) -> (&'static str, String) {
+        let mut env = crate::harness::registry::worker_env(backend);
+        env.push((
+            crate::judge::judge_cache::ENV.into(),
+            self.cache.to_string_lossy().into_owned(),
+        ));
+        let timeout = self.timeout;
+        let start = || Worker::start(backend, &env, timeout);
+        let worker = self
+            .workers
+            .entry(backend.to_string())
+            .or_insert_with(&start);
+        if let Ok(w) = worker.as_ref() {
+            self.facts.entry(backend.to_string()).or_insert_with(|| {
+                crate::judge::expectations::DriverFacts::from_hello(&w.hello["ready"])
+            });
+        }
+        let expectations = self
+            .facts
+            .get(backend)
+            .map(|f| opts.expectations.for_driver(f))
+            .unwrap_or_default();
+        let run = format!("{backend}/{id}");
+        let req = Request {
+            file,
+            index: k,
+            failures: opts.pictures.as_ref().map(|p| p.join(name)),
+            golden: None,
+            repeat: None,
+            no_twins: false,
+            gallery: None,
+            deviation: Some(expectations.deviations(&run, json).names()).filter(|n| !n.is_empty()),
+        };
+        let a = crate::commands::conformance::attempt(worker, &start, &req, timeout);
+        let raw = deqp_status(&a.status);
+        let (status, why) = expectations.apply(
+            &run,
+            json,
+            a.status.clone(),
+            &a.failed,
+            a.under_deviation.as_deref(),
+            &["golden"],
+        );
+        let by_cause = expectations
+            .find(&run, json)
+            .is_some_and(|e| !e.when.is_empty() || matches!(e.expected, Expected::Deviation(_)));
+        match (status, why) {
+            (Status::ExpectedFail, Some(why)) if by_cause => (
+                "QualityWarning",
+                format!("expected by cause: {why}; {}", a.reason),
+            ),
+            (_, Some(why)) if raw != "Pass" => (raw, format!("{} (umbra: {why})", a.reason)),
+            _ => (raw, a.reason),
+        }
+    }
+}
+
+/// dEQP's name for a status (`qpTestLog.c`'s result names, as deqp-runner parses them).
+fn deqp_status(s: &Status) -> &'static str {
+    match s {
+        Status::Pass | Status::Flake => "Pass",
+        Status::Skip(_) => "NotSupported",
+        Status::Crash => "Crash",
+        Status::Timeout => "Timeout",
+        _ => "Fail",
+    }
+}
+
+/// `--list`: every test of the backends asked for, its run name and what umbra's
+/// expectations say for it on this machine's driver.
+fn list(argv: &[String], index: &CaseIndex) -> i32 {
+    let named: Vec<&str> = values(argv, "backend");
+    let backends =
+        match crate::harness::registry::selected(&named, crate::harness::registry::known()) {
+            Ok(b) => b,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return 125;
+            }
+        };
+    let expectations = match Expectations::load(Path::new(
+        values(argv, "expectations")
+            .first()
+            .copied()
+            .unwrap_or("expectations"),
+    )) {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 125;
+        }
+    };
+    for backend in backends.iter().filter(|b| *b != "ref") {
+        // The driver's facts (its Mesa version) select the expectations that apply.
+        let facts = match Worker::start(
+            backend,
+            &crate::harness::registry::worker_env(backend),
+            Duration::from_secs(60),
+        ) {
+            Ok(w) => crate::judge::expectations::DriverFacts::from_hello(&w.hello["ready"]),
+            Err(e) => {
+                eprintln!("error: {backend}: no worker ({e})");
+                return 125;
+            }
+        };
+        let expectations = expectations.for_driver(&facts);
+        for (case, (_, points)) in &index.0 {
+            for (k, (id, json)) in points.iter().enumerate() {
+                let run = format!("{backend}/{id}");
+                let expected = match expectations.find(&run, json) {
+                    None => "Pass",
+                    // By cause (`@when`, or a modelled deviation): it fails where the cause
+                    // shows and passes elsewhere, which only a run tells; `umbra deqp`
+                    // reports an explained failure as QualityWarning (deqp-runner's Warn).
+                    Some(e)
+                        if !e.when.is_empty() || matches!(e.expected, Expected::Deviation(_)) =>
+                    {
+                        "Cause"
+                    }
+                    Some(e) => match e.expected {
+                        Expected::Fail(_) | Expected::Deviation(_) => "Fail",
+                        Expected::Crash => "Crash",
+                        Expected::Timeout => "Timeout",
+                        Expected::Skip => "Skip",
+                    },
+                };
+                println!("{}\t{run}\t{expected}", test_name(backend, case, k));
+            }
+        }
+    }
+    0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn test_names_carry_no_csv_or_regex_trouble_and_read_back() {
+        let n = test_name("gl33/radeonsi.2", "beyond-far", 7);
+        assert_eq!(n, "umbra.gl33.radeonsi.2.beyond-far.7");
+        assert!(!n.contains([',', ' ', '"', '{', '=', '/']));
+        assert_eq!(
+            parse_test_name(&n),
+            Some(("gl33/radeonsi.2".into(), "beyond-far".into(), 7))
+        );
+        assert_eq!(
+            parse_test_name(&test_name("wgpu-vk/lavapipe", "l-occluder", 0)),
+            Some(("wgpu-vk/lavapipe".into(), "l-occluder".into(), 0))
+        );
+        assert_eq!(parse_test_name("dEQP-GLES2.info.version"), None);
+    }
+}
