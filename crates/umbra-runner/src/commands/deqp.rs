@@ -73,8 +73,26 @@ fn values<'a>(argv: &'a [String], name: &str) -> Vec<&'a str> {
         .collect()
 }
 
+/// `umbra deqp --help`.
+const HELP: &str = "umbra deqp: umbra as a dEQP test binary, for Mesa's deqp-runner (cargo xtask mesa-ci writes the suite)
+
+Usage:
+  umbra deqp --deqp-caselist-file=FILE [--deqp-case=NAME[,NAME]] [--cases=DIR]
+             [--umbra-expectations=DIR] [--umbra-pictures=DIR] [--umbra-judge-cache=DIR] [--deqp-...]
+  umbra deqp --list [--backend=ID]... [--cases=DIR] [--expectations=DIR]
+
+Tests are named umbra.API.DRIVER.CASE.K; each runs in a worker of its backend and prints
+`Test case 'NAME'..` and `  STATUS (detail)` (Pass, Fail, QualityWarning for a failure an
+expectation by cause explains, NotSupported, Crash, Timeout, InternalError). Other --deqp-*
+flags are accepted and ignored. --list prints NAME, run name and expected status, tab-separated.
+";
+
 /// Runs `umbra deqp ARGS` (`argv`: the arguments after `deqp`).
 pub fn main(argv: &[String]) -> i32 {
+    if argv.iter().any(|a| a == "--help" || a == "-h") {
+        print!("{HELP}");
+        return 0;
+    }
     let cases = PathBuf::from(values(argv, "cases").first().copied().unwrap_or("cases"));
     let index = match CaseIndex::load(&cases) {
         Ok(i) => i,
