@@ -131,17 +131,9 @@ pub fn main(argv: &[String]) -> i32 {
             return 125;
         }
     };
-    let expectations = match Expectations::load(Path::new(
-        values(argv, "umbra-expectations")
-            .first()
-            .copied()
-            .unwrap_or("expectations"),
-    )) {
+    let expectations = match load_expectations(argv) {
         Ok(e) => e,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 125;
-        }
+        Err(code) => return code,
     };
     let opts = RunOptions {
         pictures: values(argv, "umbra-pictures").first().map(PathBuf::from),
@@ -155,6 +147,20 @@ pub fn main(argv: &[String]) -> i32 {
         expectations,
     };
     run(&names, &index, &opts)
+}
+
+/// umbra's expectations from `--umbra-expectations=DIR` (the suite's spelling) or
+/// `--expectations=DIR`, `expectations` by default; an error is printed and is 125.
+fn load_expectations(argv: &[String]) -> Result<Expectations, i32> {
+    let dir = values(argv, "umbra-expectations")
+        .into_iter()
+        .chain(values(argv, "expectations"))
+        .next()
+        .unwrap_or("expectations");
+    Expectations::load(Path::new(dir)).map_err(|e| {
+        eprintln!("error: {e}");
+        125
+    })
 }
 
 /// Every case file's points by case name: the file, and each point's id and case as JSON
@@ -351,17 +357,9 @@ fn list(argv: &[String], index: &CaseIndex) -> i32 {
                 return 125;
             }
         };
-    let expectations = match Expectations::load(Path::new(
-        values(argv, "expectations")
-            .first()
-            .copied()
-            .unwrap_or("expectations"),
-    )) {
+    let expectations = match load_expectations(argv) {
         Ok(e) => e,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 125;
-        }
+        Err(code) => return code,
     };
     for backend in backends.iter().filter(|b| *b != "ref") {
         // The driver's facts (its Mesa version) select the expectations that apply.
