@@ -142,21 +142,7 @@ fn run(gpu: &Gpu) -> Result<Vec<f32>, String> {
     });
     let mut encoder = d.create_command_encoder(&Default::default());
     {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("probe ramp"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass = crate::render::depth_only_pass(&mut encoder, "probe ramp", &depth_view);
         pass.set_pipeline(&ramp);
         pass.draw(0..3, 0..1);
     }
