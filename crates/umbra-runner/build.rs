@@ -2,7 +2,8 @@
 //! (`src/judge/basis_key.rs`, compiled here too) and hands it to the crate as
 //! `UMBRA_BASIS_KEY`, with the toolchain it folded in as `UMBRA_BASIS_TOOLCHAIN`. Outside a
 //! workspace (a packaged crate, no sibling sources) the key is empty and the cache falls back
-//! to keying by the executable.
+//! to keying by the executable. It also hands over `UMBRA_BUILD_KEY`, the key of every
+//! crate's sources, which names this build for `umbra merge`.
 
 #[path = "src/judge/basis_key.rs"]
 #[allow(dead_code)]
@@ -33,5 +34,14 @@ fn main() {
         }
     };
     println!("cargo:rustc-env=UMBRA_BASIS_KEY={key}");
+    // The build's own key (every crate's sources): what `umbra merge` compares across shards.
+    for p in basis_key::workspace_watched(&root) {
+        println!("cargo:rerun-if-changed={}", p.display());
+    }
+    let build = basis_key::workspace_key(&root, &toolchain).unwrap_or_else(|e| {
+        println!("cargo:warning=umbra's build key could not be computed: {e}");
+        String::new()
+    });
+    println!("cargo:rustc-env=UMBRA_BUILD_KEY={build}");
     println!("cargo:rustc-env=UMBRA_BASIS_TOOLCHAIN={toolchain}");
 }

@@ -129,3 +129,83 @@ pub fn csv_field(s: &str) -> String {
         s.to_string()
     }
 }
+
+/// The fields of one CSV line (RFC 4180 quoting; a line holds one record).
+pub fn split_line(line: &str) -> Result<Vec<String>, String> {
+    let mut fields = Vec::new();
+    let mut field = String::new();
+    let mut chars = line.chars().peekable();
+    let mut quoted = false;
+    let mut at_start = true;
+    while let Some(c) = chars.next() {
+        match (quoted, c) {
+            (false, '"') if at_start => quoted = true,
+            (true, '"') if chars.peek() == Some(&'"') => {
+                field.push('"');
+                chars.next();
+            }
+            (true, '"') => {
+                quoted = false;
+                if chars.peek().is_some_and(|c| *c != ',') {
+                    return Err("a quoted field goes on after its closing quote".into());
+                }
+            }
+            (false, ',') => {
+                fields.push(std::mem::take(&mut field));
+                at_start = true;
+                continue;
+            }
+            (_, c) => field.push(c),
+        }
+        at_start = false;
+    }
+    if quoted {
+        return Err("a quoted field is not closed".into());
+    }
+    fields.push(field);
+    Ok(fields)
+}
+
+/// The rows of a results.csv (`test,status,duration`, no header): name, status, seconds.
+/// An error names the line.
+pub fn parse_results(text: &str) -> Result<Vec<(String, String, f64)>, String> {
+    let mut rows = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let bad = |why: &str| format!("line {}: {why}: {line:?}", i + 1);
+        let fields = split_line(line).map_err(|e| bad(&e))?;
+        let [name, status, time] = fields.as_slice() else {
+            return Err(bad("not three fields (test,status,duration)"));
+        };
+        let time: f64 = time
+            .trim()
+            .parse()
+            .map_err(|_| bad("the duration is not a number of seconds"))?;
+        rows.push((name.clone(), status.clone(), time));
+    }
+    Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn results_read_back_what_tables_write() {
+        let name = r#"gl33/llvmpipe/acne@shadow.bias={"constant":0.0005}"#;
+        let line = format!("{},Pass,0.019", csv_field(name));
+        assert_eq!(
+            parse_results(&line),
+            Ok(vec![(name.to_string(), "Pass".to_string(), 0.019)])
+        );
+        assert!(
+            parse_results("a,Pass")
+                .expect_err("two fields")
+                .contains("line 1")
+        );
+        assert!(parse_results("\"a,Pass,1").is_err());
+        assert!(parse_results("a,Pass,fast").is_err());
+    }
+}

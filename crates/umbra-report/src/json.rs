@@ -1,6 +1,7 @@
 //! `report.json` (schema 1): the run's header (command, wall time, time budget, the Mesa
 //! build and every driver) and one object per run, the README's promised fields at top level,
-//! then everything else.
+//! then everything else; a merged run adds `shards`, one row per shard it was put together
+//! from.
 
 use crate::model::{Metrics, RunResult, TimeBudget};
 
@@ -44,7 +45,7 @@ pub fn report(
             })
         })
         .collect();
-    serde_json::json!({
+    let mut doc = serde_json::json!({
         "schema": 1,
         "wall_s": budget.wall_s,
         "time_budget": budget,
@@ -53,5 +54,10 @@ pub fn report(
         "mesa_build": header["mesa_build"],
         "drivers": header["drivers"],
         "runs": runs,
-    })
+    });
+    // A merged run (`umbra merge`): the shards it was put together from.
+    if !header["shards"].is_null() {
+        doc["shards"] = header["shards"].clone();
+    }
+    doc
 }

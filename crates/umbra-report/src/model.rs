@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use umbra_compare::reference::RefAgreement;
 
 /// The status of one run.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(tag = "status", content = "reason")]
 pub enum Status {
     /// Rendered and judged as expected.
@@ -186,8 +186,8 @@ pub struct Metrics {
     pub visibility_hash: String,
 }
 
-/// One finished run, as reported.
-#[derive(Clone, Debug, Serialize)]
+/// One finished run, as reported (and as a shard's record keeps it for `umbra merge`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RunResult {
     /// `backend/case@sweep`.
     pub name: String,
@@ -216,7 +216,7 @@ pub struct RunResult {
     pub reproduce: String,
     /// For a failing run: how the other drivers of its profile answered where it failed
     /// (the consensus diagnosis), when any other ran the point.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub diagnosis: Option<Diagnosis>,
     /// Where the run broke the model (what the diagnosis compares; not reported itself).
     #[serde(skip)]
@@ -252,7 +252,7 @@ impl Diagnosis {
 }
 
 /// Where a conformance run's time went, summed over its runs (worker time, not wall).
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct TimeBudget {
     /// Wall time of the whole run, s.
     pub wall_s: f64,
@@ -299,6 +299,24 @@ impl TimeBudget {
             }
         }
         b.other_s = (b.runs_s - b.render_s - b.twins_s - b.judge_s - b.golden_s).max(0.0);
+        b
+    }
+
+    /// The budget of shards run side by side: every sum added up, the wall time the slowest
+    /// shard's.
+    pub fn merged(parts: &[TimeBudget]) -> TimeBudget {
+        let mut b = TimeBudget::default();
+        for p in parts {
+            b.wall_s = b.wall_s.max(p.wall_s);
+            b.runs_s += p.runs_s;
+            b.render_s += p.render_s;
+            b.twins_s += p.twins_s;
+            b.judge_s += p.judge_s;
+            b.golden_s += p.golden_s;
+            b.worker_start_s += p.worker_start_s;
+            b.context_s += p.context_s;
+            b.other_s += p.other_s;
+        }
         b
     }
 

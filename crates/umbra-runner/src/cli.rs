@@ -97,7 +97,12 @@ pub const FLAGS: &[Flag] = &[
     valued(
         "shard",
         "I/N",
-        "run every N-th planned run starting at I (0 ≤ I < N), for CI sharding",
+        "run shard I of N (0 ≤ I < N), for CI jobs or machines: every N-th planned run from I, or split by --durations; `umbra merge` puts the shards back together",
+    ),
+    valued(
+        "durations",
+        "results.csv",
+        "with --shard: split the plan by a previous run's durations (its results.csv), longest runs first to the least loaded shard; prints the predicted imbalance",
     ),
     valued(
         "jobs",
@@ -290,6 +295,7 @@ pub const COMMANDS: &[Spec] = &[
             "filter",
             "backend",
             "shard",
+            "durations",
             "jobs",
             "timeout",
             "expectations",
@@ -302,6 +308,17 @@ pub const COMMANDS: &[Spec] = &[
             "bless",
         ],
         required: &[],
+        hidden: false,
+    },
+    Spec {
+        name: "merge",
+        about: "Merge the results of conformance shards (--shard I/N, on N jobs or machines) into one run: results.csv, failures.csv, junit.xml, report.json and report.html, judged across runs again as one unsharded run; refuses shards of different builds, inputs or overlapping runs, and names a missing shard (exit 0 as expected, 1 regressions, 125 could not merge)",
+        positional: Some((
+            "DIR...",
+            "each shard's --out directory (or its runs/ID directory)",
+        )),
+        flags: &["out"],
+        required: &["out"],
         hidden: false,
     },
     Spec {
@@ -490,12 +507,16 @@ pub fn command() -> Command {
     for spec in COMMANDS {
         let mut c = Command::new(spec.name).about(spec.about).hide(spec.hidden);
         if let Some((value, help)) = spec.positional {
-            c = c.arg(
-                Arg::new("positional")
-                    .value_name(value)
-                    .help(help)
-                    .required(true),
-            );
+            // `NAME...`: one or more.
+            let many = value.strip_suffix("...");
+            let mut a = Arg::new("positional")
+                .value_name(many.unwrap_or(value))
+                .help(help)
+                .required(true);
+            if many.is_some() {
+                a = a.num_args(1..).action(ArgAction::Append);
+            }
+            c = c.arg(a);
         }
         for name in spec.flags {
             let f = flag(name);

@@ -14,3 +14,4 @@ pub mod harness;
 pub mod judge;
 pub mod repro;
 pub mod run_dir;
+pub mod shards;

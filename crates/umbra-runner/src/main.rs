@@ -5,7 +5,8 @@
 use std::process::ExitCode;
 
 use umbra_runner::commands::{
-    backends, bisect, conformance, deqp, drivers, reduce, render, repro, selftest, soak, sweep,
+    backends, bisect, conformance, deqp, drivers, merge, reduce, render, repro, selftest, soak,
+    sweep,
 };
 use umbra_runner::{cli, harness};
 
@@ -25,6 +26,7 @@ fn main() -> ExitCode {
         Ok((name, args)) => match name.as_str() {
             "render" => render::main(&args),
             "conformance" => conformance::main(&args),
+            "merge" => merge::main(&args),
             "selftest" => selftest::main(&args),
             "soak" => soak::main(&args),
             "sweep" => sweep::main(&args),

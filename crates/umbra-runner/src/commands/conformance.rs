@@ -34,6 +34,7 @@ use crate::args::Args;
 use crate::harness::pool::{Reply, Worker};
 use crate::harness::worker::{Request, RunReport};
 use crate::judge::expectations::Expectations;
+use crate::judge::falls_along::FallsAlong;
 use crate::run_dir::RunDir;
 use umbra_report::escape::{shell_word, term};
 use umbra_report::{Metrics, RunResult, Status, TimeBudget};
@@ -127,8 +128,7 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
         Err(code) => return code.into(),
     };
     let planned = match plan_runs(&opts) {
-        Ok(Step::Go(p)) => p,
-        Ok(Step::Done(f)) => return f,
+        Ok(p) => p,
         Err(code) => return code.into(),
     };
     let no_goldens = match settle_goldens(&opts) {
@@ -149,15 +149,15 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
     let settings = settings(args, &opts, no_goldens, &run_dir);
     let Plan {
         results,
-        monotone,
+        falls_along,
         plan,
-        ..
+        names,
     } = planned;
     let collected = match execute(plan, results, &settings, opts.jobs) {
         Ok(c) => c,
         Err(code) => return code.into(),
     };
-    let gathered = match gather(collected, &opts, &monotone, &run_dir) {
+    let gathered = match gather(collected, &opts, &falls_along, &run_dir) {
         Ok(g) => g,
         Err(f) => return f,
     };
@@ -167,34 +167,30 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
         Duration::from_micros(WORKER_START_US.load(Ordering::Relaxed)),
         Duration::from_micros(CONTEXT_US.load(Ordering::Relaxed)),
     );
-    if let Err(code) = write_reports(&gathered, &settings, &budget, &run_dir, extra) {
+    let record = record(&opts, names, falls_along, &gathered, &budget);
+    if let Err(code) = write_reports(&gathered, &settings, &budget, &run_dir, &record, extra) {
         return Finished {
             code,
             results: gathered.results,
         };
     }
-    let regressions = print_summary(&gathered.results, &opts, &budget, &run_dir, started);
+    let regressions = print_summary(
+        &gathered.results,
+        &budget,
+        &opts.out,
+        &run_dir,
+        started.elapsed(),
+    );
     if settings.bless {
         record_blessings(&gathered, &settings);
     }
-    let passed = gathered
-        .results
-        .iter()
-        .filter(|r| {
-            matches!(
-                r.status,
-                Status::Pass | Status::ExpectedFail | Status::Flake
-            )
-        })
-        .count();
-    let skipped = gathered
-        .results
-        .iter()
-        .filter(|r| r.status.name() == "Skip")
-        .count();
-    // The closing line, alone, in the form CI tools read.
-    println!("conformance: {passed} passed, {regressions} failed, {skipped} skipped");
-    let code = exit_code(&gathered, regressions);
+    println!("{}", closing_line("conformance", &gathered.results));
+    let code = exit_code(
+        &gathered.refused,
+        gathered.unavailable_runs,
+        gathered.results.len(),
+        regressions,
+    );
     Finished {
         code,
         results: gathered.results,
@@ -209,6 +205,10 @@ struct Options {
     filter: String,
     backends: Vec<String>,
     shard: (usize, usize),
+    /// How the plan is split over the shards (`--durations`).
+    by: crate::shards::balance::By,
+    /// Digests of the cases, expectations and goldens, for the run's record.
+    inputs: crate::shards::record::Inputs,
     jobs: usize,
     timeout: Duration,
     golden: Option<PathBuf>,
@@ -252,10 +252,19 @@ impl Options {
         {
             eprintln!("{}", term(&warning));
         }
-        let expectations = Expectations::load(Path::new(
-            args.value("expectations").unwrap_or("expectations"),
-        ))
-        .map_err(fail)?;
+        let expectations_dir = Path::new(args.value("expectations").unwrap_or("expectations"));
+        let expectations = Expectations::load(expectations_dir).map_err(fail)?;
+        let by = match args.value("durations") {
+            None => crate::shards::balance::By::Stride,
+            Some(_) if shard.1 == 1 => {
+                return Err(usage(
+                    "--durations balances shards: give it with --shard I/N (N > 1)",
+                ));
+            }
+            Some(f) => crate::shards::balance::By::Durations(
+                crate::shards::balance::Durations::read(Path::new(f)).map_err(|e| usage(&e))?,
+            ),
+        };
         let cases_dir = PathBuf::from(args.value("cases").unwrap_or("cases"));
         let files = match umbra_case::case_files(&cases_dir) {
             Ok(f) if !f.is_empty() => f,
@@ -267,12 +276,31 @@ impl Options {
             }
             Err(e) => return Err(fail(format!("cannot read {}: {e}", cases_dir.display()))),
         };
+        let digest = |d: &Path| {
+            crate::shards::record::Digest::of(d)
+                .map_err(|e| fail(format!("cannot read what the run's record names: {e}")))
+        };
+        let inputs = crate::shards::record::Inputs {
+            cases: digest(&cases_dir)?,
+            expectations: if expectations_dir.is_dir() {
+                digest(expectations_dir)?
+            } else {
+                crate::shards::record::Digest {
+                    dir: expectations_dir.display().to_string(),
+                    files: 0,
+                    digest: String::new(),
+                }
+            },
+            golden: golden.as_deref().map(digest).transpose()?,
+        };
         Ok(Options {
             build,
             out: PathBuf::from(args.value("out").unwrap_or("target/umbra")),
             filter: args.value("filter").unwrap_or("*").to_string(),
             backends,
             shard,
+            by,
+            inputs,
             jobs,
             timeout,
             golden,
@@ -316,30 +344,26 @@ fn limits(args: &Args) -> Result<(usize, Duration), i32> {
     }
 }
 
-/// A step's outcome: go on with the value, or the command is done (an empty shard).
-enum Step<T> {
-    Go(T),
-    Done(Finished),
-}
-
 /// The runs to make: the case files that did not load (each a failed result already), the
-/// monotone expectations, and this shard's runs.
+/// `expect.error_falls_along` series, and this shard's runs.
 struct Plan {
     results: Vec<RunResult>,
-    monotone: Vec<Monotone>,
+    falls_along: Vec<FallsAlong>,
     plan: Vec<Planned>,
+    /// Every selected run's name before sharding, in plan order (the run's record).
+    names: Vec<String>,
 }
 
 /// Loads every case file, plans every backend × point the filter selects, checks the
 /// expectations against the plan, and keeps this shard's share.
-fn plan_runs(opts: &Options) -> Result<Step<Plan>, i32> {
+fn plan_runs(opts: &Options) -> Result<Plan, i32> {
     let mut results: Vec<RunResult> = Vec::new();
     let mut points: Vec<(PathBuf, Vec<PointPlan>)> = Vec::new();
-    let mut monotone: Vec<Monotone> = Vec::new();
+    let mut falls_along: Vec<FallsAlong> = Vec::new();
     for f in &opts.files {
         match umbra_case::load_file(f) {
             Ok(p) => {
-                monotone.extend(Monotone::of(&p));
+                falls_along.extend(FallsAlong::of(&p));
                 points.push((
                     f.clone(),
                     p.iter()
@@ -378,31 +402,41 @@ fn plan_runs(opts: &Options) -> Result<Step<Plan>, i32> {
     }
     validate_expectations(opts, &plan)?;
     let selected = plan.len();
-    let (index, count) = opts.shard;
-    let plan: Vec<Planned> = plan
-        .into_iter()
-        .enumerate()
-        .filter(|(i, _)| i % count == index)
-        .map(|(_, p)| p)
-        .collect();
     if selected == 0 && results.is_empty() {
         eprintln!("error: --filter {:?} selects no run", opts.filter);
         return Err(125);
     }
+    let names: Vec<String> = plan.iter().map(Planned::name).collect();
+    let (index, count) = opts.shard;
+    let shard_of = crate::shards::balance::assign(&names, count, &opts.by);
+    let plan: Vec<Planned> = plan
+        .into_iter()
+        .zip(&shard_of)
+        .filter(|(_, s)| **s == index)
+        .map(|(p, _)| p)
+        .collect();
+    if count > 1 {
+        println!(
+            "shard {index}/{count}: {} of the {selected} selected runs",
+            plan.len()
+        );
+        if let crate::shards::balance::By::Durations(d) = &opts.by {
+            println!("{}", crate::shards::balance::report(&names, count, d));
+        }
+    }
     if plan.is_empty() && results.is_empty() {
         // More shards than runs (a CI matrix sized for a larger plan): an empty shard is a
-        // successful one.
+        // successful one, and leaves its (empty) reports and record for the merge.
         println!(
             "note: shard {index}/{count} holds none of the {selected} selected runs (there are more shards than runs); nothing to do"
         );
-        println!("conformance: 0 passed, 0 failed, 0 skipped");
-        return Ok(Step::Done(0.into()));
     }
-    Ok(Step::Go(Plan {
+    Ok(Plan {
         results,
-        monotone,
+        falls_along,
         plan,
-    }))
+        names,
+    })
 }
 
 /// A case file that did not load, as a failed result naming the error.
@@ -568,10 +602,14 @@ fn execute(
 }
 
 /// What the run found, put together: every result sorted by name and diagnosed (the
-/// monotone expectations, the consensus), drivers.txt and report.json's driver rows.
+/// `expect.error_falls_along` series, the consensus), drivers.txt and report.json's driver rows.
 struct Gathered {
     results: Vec<RunResult>,
+    /// The results before the checks across runs (the run's record keeps them).
+    before_cross: Vec<RunResult>,
     drivers: String,
+    /// drivers.txt's lines of each backend, by backend.
+    driver_lines: Vec<(String, String)>,
     driver_rows: Vec<serde_json::Value>,
     refused: Vec<String>,
     unavailable_runs: usize,
@@ -584,7 +622,7 @@ struct Gathered {
 fn gather(
     collected: Collected,
     opts: &Options,
-    monotone: &[Monotone],
+    falls_along: &[FallsAlong],
     run_dir: &RunDir,
 ) -> Result<Gathered, Finished> {
     let Collected {
@@ -615,20 +653,20 @@ fn gather(
         return Err(Finished { code: 125, results });
     }
     driver_rows.sort_by(|a, b| a["backend"].as_str().cmp(&b["backend"].as_str()));
-    let drivers = format!(
-        "Mesa: {}\n{drivers}",
-        opts.build
-            .as_ref()
-            .map_or("the system's".to_string(), |b| b.describe())
-    );
+    let mut driver_lines = drivers;
+    driver_lines.sort();
+    let drivers = drivers_text(&mesa_line(opts.build), &driver_lines);
     results.sort_by(|a, b| a.name.cmp(&b.name));
-    for m in monotone {
+    let before_cross = results.clone();
+    for m in falls_along {
         m.judge(&mut results);
     }
     crate::judge::consensus::diagnose(&mut results);
     Ok(Gathered {
         results,
+        before_cross,
         drivers,
+        driver_lines,
         driver_rows,
         refused,
         unavailable_runs,
@@ -636,13 +674,93 @@ fn gather(
     })
 }
 
-/// Writes the reports into the run directory and publishes it (`latest`); 125 when they
-/// cannot be written, with the run directory abandoned.
+/// drivers.txt: the Mesa build, then each backend's lines in backend order.
+pub(crate) fn drivers_text(head: &str, lines: &[(String, String)]) -> String {
+    let mut text = format!("{head}\n");
+    for (_, l) in lines {
+        text.push_str(l);
+    }
+    text
+}
+
+/// drivers.txt's first line: the Mesa build the run used.
+fn mesa_line(build: Option<&crate::harness::mesa_build::MesaBuild>) -> String {
+    format!(
+        "Mesa: {}",
+        build.map_or("the system's".to_string(), |b| b.describe())
+    )
+}
+
+/// The run's record for `umbra merge` ([`crate::shards::record`]).
+fn record(
+    opts: &Options,
+    names: Vec<String>,
+    falls_along: Vec<FallsAlong>,
+    g: &Gathered,
+    budget: &TimeBudget,
+) -> crate::shards::record::Record {
+    use crate::shards::record as rec;
+    let drivers = g
+        .driver_lines
+        .iter()
+        .map(|(backend, text)| rec::DriverRecord {
+            backend: backend.clone(),
+            text: text.clone(),
+            row: g
+                .driver_rows
+                .iter()
+                .find(|r| r["backend"].as_str() == Some(backend))
+                .cloned()
+                .unwrap_or_default(),
+        })
+        .collect();
+    let fingerprints = g
+        .before_cross
+        .iter()
+        .filter_map(|r| Some((r.name.clone(), r.fingerprint.clone()?)))
+        .collect();
+    let mine: std::collections::BTreeSet<&str> =
+        g.before_cross.iter().map(|r| r.name.as_str()).collect();
+    rec::Record {
+        schema: rec::SCHEMA,
+        umbra: rec::Build::this(),
+        inputs: opts.inputs.clone(),
+        mesa_build: serde_json::to_value(g.build).unwrap_or_default(),
+        mesa_line: mesa_line(g.build),
+        shard: rec::ShardRecord {
+            index: opts.shard.0,
+            count: opts.shard.1,
+            by: opts.by.describe(),
+            runs: names
+                .iter()
+                .filter(|n| mine.contains(n.as_str()))
+                .cloned()
+                .collect(),
+        },
+        plan: rec::PlanRecord {
+            filter: opts.filter.clone(),
+            backends: opts.backends.clone(),
+            runs: names,
+        },
+        wall_s: budget.wall_s,
+        budget: budget.clone(),
+        drivers,
+        refused: g.refused.clone(),
+        unavailable_runs: g.unavailable_runs,
+        falls_along,
+        runs: g.before_cross.clone(),
+        fingerprints,
+    }
+}
+
+/// Writes the reports and the run's record into the run directory and publishes it
+/// (`latest`); 125 when they cannot be written, with the run directory abandoned.
 fn write_reports(
     g: &Gathered,
     settings: &Settings,
     budget: &TimeBudget,
     run_dir: &RunDir,
+    record: &crate::shards::record::Record,
     extra: Option<Extra>,
 ) -> Result<(), i32> {
     let header = serde_json::json!({
@@ -658,6 +776,7 @@ fn write_reports(
         &header,
         budget,
     )
+    .and_then(|()| record.write(&run_dir.dir))
     .and_then(|()| extra.map_or(Ok(()), |f| f(&run_dir.dir, &g.results)))
     .and_then(|()| run_dir.publish());
     written.map_err(|e| {
@@ -669,12 +788,12 @@ fn write_reports(
 /// The terminal's summary: where the reports are, every regression with its diagnosis, the
 /// consensus, the time budget, the check strength, the statuses and goldens blessed on
 /// another driver. Returns the number of regressions.
-fn print_summary(
+pub(crate) fn print_summary(
     results: &[RunResult],
-    opts: &Options,
     budget: &TimeBudget,
+    out: &Path,
     run_dir: &RunDir,
-    started: Instant,
+    elapsed: Duration,
 ) -> usize {
     let regressions: Vec<&RunResult> = results
         .iter()
@@ -683,8 +802,8 @@ fn print_summary(
     println!(
         "\n{} runs in {:.1} s; reports in {} (-> runs/{})",
         results.len(),
-        started.elapsed().as_secs_f64(),
-        opts.out.join("latest").display(),
+        elapsed.as_secs_f64(),
+        out.join("latest").display(),
         run_dir.id
     );
     for r in &regressions {
@@ -730,6 +849,18 @@ fn print_summary(
     regressions.len()
 }
 
+/// The closing line, alone, in the form CI tools read: `COMMAND: P passed, F failed, S
+/// skipped` (passed counts expected failures and flakes; failed, the regressions).
+pub(crate) fn closing_line(command: &str, results: &[RunResult]) -> String {
+    let count = |f: fn(&Status) -> bool| results.iter().filter(|r| f(&r.status)).count();
+    format!(
+        "{command}: {} passed, {} failed, {} skipped",
+        count(|s| matches!(s, Status::Pass | Status::ExpectedFail | Status::Flake)),
+        count(Status::is_regression),
+        count(|s| matches!(s, Status::Skip(_)))
+    )
+}
+
 /// Blessing (`cargo xtask bless`): records the driver each backend's goldens now match, the
 /// backend's entry (kept if already recorded), then each golden written now whose version
 /// differs from what the manifest already says for it (its backend's, usually).
@@ -772,89 +903,28 @@ fn record_blessings(g: &Gathered, settings: &Settings) {
 
 /// 125 when a backend refused the Mesa build asked for (its runs were not judged) or nothing
 /// could run here; 1 on a regression; 0 otherwise.
-fn exit_code(g: &Gathered, regressions: usize) -> i32 {
-    if !g.refused.is_empty() {
-        for r in &g.refused {
+pub(crate) fn exit_code(
+    refused: &[String],
+    unavailable_runs: usize,
+    runs: usize,
+    regressions: usize,
+) -> i32 {
+    if !refused.is_empty() {
+        for r in refused {
             eprintln!("error: {r}");
         }
         eprintln!(
             "error: {} backend(s) did not run on the Mesa build asked for; their runs were not judged",
-            g.refused.len()
+            refused.len()
         );
         125
     } else if regressions > 0 {
         1
-    } else if g.unavailable_runs == g.results.len() && !g.results.is_empty() {
+    } else if unavailable_runs == runs && runs > 0 {
         eprintln!("error: no selected backend is available here, nothing ran");
         125
     } else {
         0
-    }
-}
-
-/// A case's `expect.error_falls_along`: runs of one backend that differ only in that axis,
-/// in sweep order, whose error against the truth must not rise.
-struct Monotone {
-    path: String,
-    /// Per series (the other axes' values): the point ids in the axis's order.
-    series: Vec<Vec<String>>,
-}
-
-impl Monotone {
-    fn of(points: &[umbra_case::CasePoint]) -> Option<Monotone> {
-        let path = points.first()?.case.expect.error_falls_along.clone()?;
-        let mut series: BTreeMap<String, Vec<String>> = BTreeMap::new();
-        for p in points {
-            let others: Vec<String> = p
-                .values
-                .iter()
-                .filter(|(k, _)| *k != path)
-                .map(|(k, v)| format!("{k}={v}"))
-                .collect();
-            series.entry(others.join(",")).or_default().push(p.id());
-        }
-        Some(Monotone {
-            path,
-            series: series.into_values().collect(),
-        })
-    }
-
-    /// Fails every judged run whose error exceeds its predecessor's on the same backend.
-    fn judge(&self, results: &mut [RunResult]) {
-        let error = |m: &Metrics| m.false_shadow + m.false_light;
-        let mut backends: Vec<String> = results.iter().map(|r| r.backend.clone()).collect();
-        backends.sort();
-        backends.dedup();
-        for backend in &backends {
-            for ids in &self.series {
-                let mut previous: Option<(String, u64)> = None;
-                for id in ids {
-                    let Some(r) = results
-                        .iter_mut()
-                        .find(|r| &r.backend == backend && &r.case == id)
-                    else {
-                        continue;
-                    };
-                    let Some(e) = r.metrics.as_ref().map(error) else {
-                        continue;
-                    };
-                    if let Some((prev_id, prev)) = &previous {
-                        if e > *prev && !r.status.is_regression() {
-                            r.status = Status::Fail;
-                            r.failed.push(umbra_report::FailedCheck {
-                                check: "falls-along".into(),
-                                count: 1,
-                            });
-                            r.reason = format!(
-                                "expect.error_falls_along {}: the error against the truth rose to {e} px from {prev} px at {prev_id}",
-                                self.path
-                            );
-                        }
-                    }
-                    previous = Some((id.clone(), e));
-                }
-            }
-        }
     }
 }
 
@@ -903,8 +973,8 @@ fn first_line(s: &str) -> &str {
 #[derive(Default)]
 struct Collected {
     results: Vec<RunResult>,
-    /// drivers.txt: one line per backend.
-    drivers: String,
+    /// drivers.txt's lines of each backend.
+    drivers: Vec<(String, String)>,
     /// report.json's `drivers`: per backend, the driver, the build and the expectation files
     /// that applied.
     driver_rows: Vec<serde_json::Value>,
@@ -1032,7 +1102,7 @@ fn run_group(
     };
     if let Some(mut d) = done.lock().ok().filter(|_| first) {
         let (line, row) = describe_driver(&group, &hello);
-        d.drivers.push_str(&line);
+        d.drivers.push((backend.to_string(), line));
         d.driver_rows.push(row);
         if let Some(why) = &group.refused {
             d.refused.push(format!("{backend}: {why}"));

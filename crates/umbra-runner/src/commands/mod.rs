@@ -6,6 +6,7 @@ pub mod bisect;
 pub mod conformance;
 pub mod deqp;
 pub mod drivers;
+pub mod merge;
 pub mod orientations;
 pub mod reduce;
 pub mod render;

@@ -10,6 +10,11 @@
 //! those files or versions, committed or not, makes a new key. The compiler and target are
 //! part of it too (`rustc -V`, the target triple), since the truth's arithmetic is theirs.
 //!
+//! A second key, [`workspace_key`], covers every crate's sources and the whole Cargo.lock: it
+//! names the build of umbra a run came from, so `umbra merge` can refuse shards of
+//! different builds (two CI jobs that compiled the same commit with the same toolchain get the
+//! same key, whatever their paths or machines).
+//!
 //! This file is compiled twice: into the runner (tests call [`sources_key`] on a copy of the
 //! tree) and into its build script, which computes the key of the tree being built and
 //! hands it to the crate as `UMBRA_BASIS_KEY`. It uses the standard library only.
@@ -22,16 +27,19 @@ pub const BASIS_CRATES: [&str; 3] = ["umbra-case", "umbra-ref", "umbra-compare"]
 /// The runner's own file that fixes the cache's format.
 pub const FORMAT_FILE: &str = "crates/umbra-runner/src/judge/judge_cache.rs";
 
+/// FNV-1a's offset basis: where a fresh hash starts.
+pub const FNV_START: u64 = 0xcbf2_9ce4_8422_2325;
+
 /// 64-bit FNV-1a, continued from `h`.
-fn fnv(mut h: u64, bytes: &[u8]) -> u64 {
+pub fn fnv(mut h: u64, bytes: &[u8]) -> u64 {
     for b in bytes {
         h = (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3);
     }
     h
 }
 
-/// Every file under `dir`, sorted, relative paths with `/`.
-fn files_under(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+/// Every file under `dir`, sorted.
+pub fn files_under(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
@@ -63,6 +71,42 @@ pub fn watched(root: &Path) -> Vec<PathBuf> {
     v.push(root.join(FORMAT_FILE));
     v.push(root.join("Cargo.lock"));
     v
+}
+
+/// The files [`workspace_key`] reads: every crate's manifest, build script and sources, the
+/// workspace manifest and Cargo.lock.
+pub fn workspace_watched(root: &Path) -> Vec<PathBuf> {
+    let mut v = vec![root.join("Cargo.toml"), root.join("Cargo.lock")];
+    if let Ok(entries) = std::fs::read_dir(root.join("crates")) {
+        let mut crates: Vec<PathBuf> = entries.flatten().map(|e| e.path()).collect();
+        crates.sort();
+        for c in crates {
+            v.extend([c.join("Cargo.toml"), c.join("build.rs"), c.join("src")]);
+        }
+    }
+    v
+}
+
+/// The key of every crate's sources under `root` (see [`workspace_watched`]) with
+/// `toolchain`: 16 hexadecimal digits naming this build of umbra.
+pub fn workspace_key(root: &Path, toolchain: &str) -> Result<String, String> {
+    let mut h = fnv(0xcbf2_9ce4_8422_2325, toolchain.as_bytes());
+    let mut files = Vec::new();
+    for p in workspace_watched(root) {
+        if p.is_dir() {
+            files.extend(files_under(&p).map_err(|e| format!("{}: {e}", p.display()))?);
+        } else if p.exists() {
+            files.push(p);
+        }
+    }
+    for f in files {
+        let bytes = std::fs::read(&f).map_err(|e| format!("{}: {e}", f.display()))?;
+        let rel = f.strip_prefix(root).unwrap_or(&f).to_string_lossy();
+        h = fnv(h, rel.replace('\\', "/").as_bytes());
+        h = fnv(h, &(bytes.len() as u64).to_le_bytes());
+        h = fnv(h, &bytes);
+    }
+    Ok(format!("{h:016x}"))
 }
 
 /// The packages of Cargo.lock: name → (version, dependency names).

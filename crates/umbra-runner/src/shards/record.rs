@@ -1,0 +1,200 @@
+//! A conformance run's record for `umbra merge` (`shard.json` in the run's directory): what
+//! the run was (the build of umbra, digests of the cases, expectations and goldens it read,
+//! the Mesa build, the whole plan before sharding and this shard's place in it) and every
+//! run's result in full, as it stood before the checks that read several runs at once
+//! (`expect.error_falls_along`, the consensus diagnosis), which the merge makes again over
+//! every shard's runs, as one unsharded run would. Written with the other reports, before the
+//! run is published, so a shard that did not complete leaves none.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use umbra_report::{RunResult, TimeBudget};
+
+use crate::judge::falls_along::FallsAlong;
+
+/// The record's file name in a run's directory.
+pub const FILE: &str = "shard.json";
+
+/// The record's format; a merge refuses any other.
+pub const SCHEMA: u32 = 1;
+
+/// A run's record.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Record {
+    /// [`SCHEMA`].
+    pub schema: u32,
+    /// The build of umbra.
+    pub umbra: Build,
+    /// What the run read besides the code.
+    pub inputs: Inputs,
+    /// The Mesa build (`--mesa`), as report.json has it.
+    pub mesa_build: serde_json::Value,
+    /// drivers.txt's first line, which names it.
+    pub mesa_line: String,
+    /// The plan before sharding.
+    pub plan: PlanRecord,
+    /// This run's share of it.
+    pub shard: ShardRecord,
+    /// Wall time, s.
+    pub wall_s: f64,
+    /// Where the worker time went.
+    pub budget: TimeBudget,
+    /// Per backend: drivers.txt's lines and report.json's row.
+    pub drivers: Vec<DriverRecord>,
+    /// Backends that refused the Mesa build asked for.
+    pub refused: Vec<String>,
+    /// Runs whose backend was unavailable.
+    pub unavailable_runs: usize,
+    /// The cases' `expect.error_falls_along` series.
+    pub falls_along: Vec<FallsAlong>,
+    /// Every run's result, sorted by name, before the checks across runs.
+    pub runs: Vec<RunResult>,
+    /// The fingerprint of each failing run, by name (what the consensus compares).
+    pub fingerprints: BTreeMap<String, umbra_compare::consensus::Fingerprint>,
+}
+
+/// The build of umbra a run came from.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Build {
+    /// The package version.
+    pub version: String,
+    /// The key of every crate's sources, Cargo.lock and the toolchain
+    /// ([`crate::judge::basis_key::workspace_key`]).
+    pub key: String,
+    /// The compiler and target it was built with.
+    pub toolchain: String,
+}
+
+impl Build {
+    /// This build.
+    pub fn this() -> Build {
+        Build {
+            version: env!("CARGO_PKG_VERSION").into(),
+            key: option_env!("UMBRA_BUILD_KEY").unwrap_or("").into(),
+            toolchain: option_env!("UMBRA_BASIS_TOOLCHAIN").unwrap_or("").into(),
+        }
+    }
+}
+
+/// A directory the run read, by its contents.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Digest {
+    /// The directory as given.
+    pub dir: String,
+    /// How many files it holds.
+    pub files: usize,
+    /// 64-bit FNV-1a over each file's path (relative), length and bytes, in path order.
+    pub digest: String,
+}
+
+impl Digest {
+    /// The digest of every file under `dir`.
+    pub fn of(dir: &Path) -> Result<Digest, String> {
+        use crate::judge::basis_key::{FNV_START, files_under, fnv};
+        let files = files_under(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let mut h = FNV_START;
+        for f in &files {
+            let bytes = std::fs::read(f).map_err(|e| format!("{}: {e}", f.display()))?;
+            let rel = f.strip_prefix(dir).unwrap_or(f).to_string_lossy();
+            h = fnv(h, rel.as_bytes());
+            h = fnv(h, &(bytes.len() as u64).to_le_bytes());
+            h = fnv(h, &bytes);
+        }
+        Ok(Digest {
+            dir: dir.display().to_string(),
+            files: files.len(),
+            digest: format!("{h:016x}"),
+        })
+    }
+
+    /// Whether two digests are of the same contents (wherever the directories were).
+    pub fn same(&self, other: &Digest) -> bool {
+        self.files == other.files && self.digest == other.digest
+    }
+}
+
+/// What a run read besides the code.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Inputs {
+    /// `--cases`.
+    pub cases: Digest,
+    /// `--expectations`.
+    pub expectations: Digest,
+    /// `--golden`, or `None` for `--golden none`.
+    pub golden: Option<Digest>,
+}
+
+/// The plan before sharding.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PlanRecord {
+    /// `--filter`.
+    pub filter: String,
+    /// The backends selected.
+    pub backends: Vec<String>,
+    /// Every selected run's name, in plan order.
+    pub runs: Vec<String>,
+}
+
+/// A run's share of its plan.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ShardRecord {
+    /// I of `--shard I/N`.
+    pub index: usize,
+    /// N (1: unsharded).
+    pub count: usize,
+    /// How the plan was split ([`crate::shards::balance::By::describe`]).
+    pub by: String,
+    /// The names of the runs this shard took, in plan order.
+    pub runs: Vec<String>,
+}
+
+/// One backend's driver, as drivers.txt and report.json describe it.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct DriverRecord {
+    /// The backend id.
+    pub backend: String,
+    /// Its lines in drivers.txt.
+    pub text: String,
+    /// Its row in report.json's `drivers`.
+    pub row: serde_json::Value,
+}
+
+impl Record {
+    /// Writes the record into the run's directory `dir`, synced (a full disk is an error
+    /// here, not a short file later).
+    pub fn write(&self, dir: &Path) -> std::io::Result<()> {
+        let json = serde_json::to_vec(self).map_err(std::io::Error::other)?;
+        let mut f = std::fs::File::create(dir.join(FILE))?;
+        std::io::Write::write_all(&mut f, &json)?;
+        f.sync_all()
+    }
+
+    /// Reads a record; an error names the file and says what is wrong with it.
+    pub fn read(path: &Path) -> Result<Record, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+            format!(
+                "{}: not JSON ({e}): a damaged or truncated record; run the shard again",
+                path.display()
+            )
+        })?;
+        match v["schema"].as_u64() {
+            Some(s) if s == u64::from(SCHEMA) => {}
+            other => {
+                return Err(format!(
+                    "{}: record schema {} where this umbra reads {SCHEMA}: merge with the umbra that ran the shards",
+                    path.display(),
+                    other.map_or("missing".to_string(), |s| s.to_string())
+                ));
+            }
+        }
+        serde_json::from_value(v).map_err(|e| {
+            format!(
+                "{}: not a shard record ({e}); run the shard again",
+                path.display()
+            )
+        })
+    }
+}
