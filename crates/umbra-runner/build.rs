@@ -38,7 +38,14 @@ fn main() {
     for p in basis_key::workspace_watched(&root) {
         println!("cargo:rerun-if-changed={}", p.display());
     }
-    let build = basis_key::workspace_key(&root, &toolchain).unwrap_or_else(|e| {
+    // The build's own key also folds in the profile and RUSTFLAGS: they change the code,
+    // not the judge's arithmetic (the basis key leaves them out).
+    let flavour = format!(
+        "{toolchain} profile={} rustflags={}",
+        std::env::var("PROFILE").unwrap_or_default(),
+        std::env::var("CARGO_ENCODED_RUSTFLAGS").unwrap_or_default()
+    );
+    let build = basis_key::workspace_key(&root, &flavour).unwrap_or_else(|e| {
         println!("cargo:warning=umbra's build key could not be computed: {e}");
         String::new()
     });

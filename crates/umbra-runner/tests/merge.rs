@@ -270,24 +270,57 @@ fn a_merge_refuses_what_would_make_its_report_wrong_and_names_it() {
         &[&shards[0], &shards[1], &shards[2], &other],
         "is in two shards",
     );
-    // Another build of umbra, and another case set: the record says so.
-    for (field, value, what) in [
-        ("key", "0123456789abcdef", "different builds of umbra"),
-        ("digest", "fedcba9876543210", "different case sets"),
-    ] {
-        let copy = root.join(format!("edited-{field}"));
+    // Shard 2/3's record as another job would have left it, edited by `change`.
+    let edited = |label: &str, change: &dyn Fn(&mut serde_json::Value)| {
+        let copy = root.join(format!("edited-{label}"));
         std::fs::create_dir_all(&copy).expect("copy dir");
         let record_path = shards[2].join("latest/shard.json");
         let mut v: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&record_path).expect("record"))
                 .expect("record JSON");
-        match field {
-            "key" => v["umbra"]["key"] = value.into(),
-            _ => v["inputs"]["cases"]["digest"] = value.into(),
-        }
+        change(&mut v);
         std::fs::write(copy.join("shard.json"), v.to_string()).expect("write record");
+        copy
+    };
+    let llvmpipe_row = |v: &mut serde_json::Value, key: &str, value: &str| {
+        for d in v["drivers"].as_array_mut().expect("drivers") {
+            if d["backend"] == "gl33/llvmpipe" {
+                d["row"][key] = value.into();
+            }
+        }
+    };
+    // Another build of umbra, case set, timeout or driver: the record says so.
+    for (label, what, change) in [
+        (
+            "key",
+            "different builds of umbra",
+            &(|v: &mut serde_json::Value| v["umbra"]["key"] = "0123456789abcdef".into())
+                as &dyn Fn(&mut serde_json::Value),
+        ),
+        ("cases", "different case sets", &|v| {
+            v["inputs"]["cases"]["digest"] = "fedcba9876543210".into()
+        }),
+        ("timeout", "different settings", &|v| {
+            v["settings"]["timeout_s"] = 5.into()
+        }),
+        ("vendor", "gl33/llvmpipe ran on different drivers", &|v| {
+            llvmpipe_row(v, "vendor", "Another Vendor")
+        }),
+    ] {
+        let copy = edited(label, change);
         refused(&[&shards[0], &shards[1], &copy], what);
     }
+    // The same driver reporting another renderer on another host is kept, and said.
+    let other_host = edited("renderer", &|v| {
+        llvmpipe_row(v, "renderer", "llvmpipe (LLVM 15.0.6, 512 bits)")
+    });
+    let o = merge(&[&shards[0], &shards[1], &other_host], &root.join("hosts"));
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    let drivers = std::fs::read_to_string(root.join("hosts/latest/drivers.txt")).expect("drivers");
+    assert!(
+        drivers.contains("also renderer") && drivers.contains("512 bits"),
+        "{drivers}"
+    );
     // A damaged record.
     let damaged = root.join("damaged");
     std::fs::create_dir_all(&damaged).expect("dir");

@@ -291,7 +291,13 @@ impl Options {
                     digest: String::new(),
                 }
             },
-            golden: golden.as_deref().map(digest).transpose()?,
+            golden: golden
+                .as_deref()
+                .map(|g| {
+                    crate::shards::record::Digest::of_goldens(g)
+                        .map_err(|e| fail(format!("cannot read what the run's record names: {e}")))
+                })
+                .transpose()?,
         };
         Ok(Options {
             build,
@@ -736,6 +742,10 @@ fn record(
                 .filter(|n| mine.contains(n.as_str()))
                 .cloned()
                 .collect(),
+        },
+        settings: rec::Settings {
+            timeout_s: opts.timeout.as_secs(),
+            bless: opts.bless,
         },
         plan: rec::PlanRecord {
             filter: opts.filter.clone(),

@@ -141,7 +141,10 @@ fn locate(dir: &Path) -> Result<PathBuf, String> {
     }
     let latest = dir.join("latest");
     if latest.join(FILE).is_file() {
-        return std::fs::canonicalize(&latest).map_err(|e| format!("{}: {e}", latest.display()));
+        let shown =
+            std::fs::canonicalize(&latest).map_err(|e| format!("{}: {e}", latest.display()))?;
+        warn_if_newer_incomplete(dir, &shown);
+        return Ok(shown);
     }
     if latest.exists() {
         return Err(format!(
@@ -189,9 +192,38 @@ fn locate(dir: &Path) -> Result<PathBuf, String> {
     }
 }
 
-/// The same build of umbra, cases, expectations, goldens and Mesa build in every shard.
+/// A run under `dir/runs` newer than the one `latest` shows that did not complete (a shard
+/// run again and interrupted): the merge takes the older, complete one, and says so.
+fn warn_if_newer_incomplete(dir: &Path, shown: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir.join("runs")) else {
+        return;
+    };
+    let shown_name = shown.file_name().unwrap_or_default().to_os_string();
+    for e in entries.flatten() {
+        let p = e.path();
+        if p.file_name().unwrap_or_default() > shown_name.as_os_str() {
+            if let Ok(why) = std::fs::read_to_string(p.join(crate::run_dir::INCOMPLETE)) {
+                eprintln!(
+                    "warning: {}: a newer run did not complete ({}); merging the complete one latest shows, {}",
+                    dir.display(),
+                    why.trim(),
+                    shown.display()
+                );
+            }
+        }
+    }
+}
+
+/// The same build of umbra, cases, expectations, goldens, settings and Mesa build in every
+/// shard.
 fn same_inputs(shards: &[Shard]) -> Result<(), String> {
     let first = &shards[0];
+    if let Some(s) = shards.iter().find(|s| s.record.umbra.key.is_empty()) {
+        return Err(format!(
+            "{} was run by an umbra whose build has no key (built outside its workspace, so its build script could not hash the sources); run the shards with umbra built from its workspace",
+            s.label()
+        ));
+    }
     let differ = |what: &str, a: String, b: String, s: &Shard| {
         format!(
             "the shards are of different {what}: {} has {a}, {} has {b}; merge only the shards of one run (one commit, one toolchain, the same inputs)",
@@ -250,12 +282,44 @@ fn same_inputs(shards: &[Shard]) -> Result<(), String> {
                 s,
             ));
         }
-        if a.mesa_build != b.mesa_build {
+        if a.settings != b.settings {
             return Err(differ(
-                "Mesa builds",
-                a.mesa_line.clone(),
-                b.mesa_line.clone(),
+                "settings",
+                format!(
+                    "--timeout {} bless {}",
+                    a.settings.timeout_s, a.settings.bless
+                ),
+                format!(
+                    "--timeout {} bless {}",
+                    b.settings.timeout_s, b.settings.bless
+                ),
                 s,
+            ));
+        }
+    }
+    // The Mesa build (`--mesa`), by what it is, not where it lies (each job's checkout has
+    // its own path), and only between shards that ran one of its drivers: a machine that ran
+    // only hardware device ids did not use it.
+    let mesa_backed = |s: &&Shard| {
+        s.record
+            .plan
+            .backends
+            .iter()
+            .any(|b| crate::harness::mesa_build::is_mesa_backed(b))
+    };
+    let identity = |s: &Shard| {
+        let m = &s.record.mesa_build;
+        serde_json::json!([m["layout"], m["version"], m["dri_drivers"]])
+    };
+    let mut on_mesa = shards.iter().filter(mesa_backed);
+    if let Some(a) = on_mesa.next() {
+        if let Some(b) = on_mesa.find(|b| identity(a) != identity(b)) {
+            return Err(format!(
+                "the shards ran Mesa's drivers from different Mesa builds: {} has {}, {} has {}; merge only the shards of one run",
+                a.label(),
+                a.record.mesa_line,
+                b.label(),
+                b.record.mesa_line
             ));
         }
     }
@@ -359,33 +423,55 @@ fn disjoint(shards: &[Shard]) -> Result<(), String> {
     Ok(())
 }
 
-/// Each backend's driver, once: shards that ran one backend on different drivers (two
-/// machines with different GPUs or Mesa versions under one id) are refused.
+/// Each backend's driver, once. Shards that ran one backend id on different drivers (another
+/// vendor, driver version or Mesa version: two kinds of machine under one id) are refused.
+/// The same driver on different hosts may report another renderer or device (llvmpipe's
+/// vector width on AVX2 and AVX-512 runners, another GPU of one kind): kept, with each
+/// variant and its shards added to the backend's drivers.txt lines and printed.
 fn drivers(shards: &[Shard]) -> Result<Vec<DriverRecord>, String> {
-    const SAME: [&str; 6] = ["vendor", "renderer", "version", "device", "build", "mesa"];
+    const SAME: [&str; 3] = ["vendor", "version", "mesa"];
+    const NOTED: [&str; 2] = ["renderer", "device"];
     let mut by_backend: BTreeMap<String, (DriverRecord, &Shard)> = BTreeMap::new();
+    let mut notes: BTreeMap<String, Vec<String>> = BTreeMap::new();
     for s in shards {
         for d in &s.record.drivers {
-            match by_backend.get(&d.backend) {
-                None => {
-                    by_backend.insert(d.backend.clone(), (d.clone(), s));
-                }
-                Some((first, owner)) => {
-                    if let Some(k) = SAME.iter().find(|k| first.row[**k] != d.row[**k]) {
-                        return Err(format!(
-                            "{} ran on different drivers: {} has {k} {}, {} has {}; give each machine its own backend ids, or merge shards of one machine kind",
-                            d.backend,
-                            owner.label(),
-                            first.row[*k],
-                            s.label(),
-                            d.row[*k]
-                        ));
-                    }
+            let Some((first, owner)) = by_backend.get(&d.backend) else {
+                by_backend.insert(d.backend.clone(), (d.clone(), s));
+                continue;
+            };
+            if let Some(k) = SAME.iter().find(|k| first.row[**k] != d.row[**k]) {
+                return Err(format!(
+                    "{} ran on different drivers: {} has {k} {}, {} has {}; give each kind of machine its own backend ids, or merge shards of one kind",
+                    d.backend,
+                    owner.label(),
+                    first.row[*k],
+                    s.label(),
+                    d.row[*k]
+                ));
+            }
+            for k in NOTED {
+                if first.row[k] != d.row[k] {
+                    notes.entry(d.backend.clone()).or_default().push(format!(
+                        "  also {k} {} (shard {}), beside {} (shard {})\n",
+                        d.row[k],
+                        s.label(),
+                        first.row[k],
+                        owner.label()
+                    ));
                 }
             }
         }
     }
-    Ok(by_backend.into_values().map(|(d, _)| d).collect())
+    Ok(by_backend
+        .into_values()
+        .map(|(mut d, _)| {
+            for n in notes.remove(&d.backend).unwrap_or_default() {
+                print!("note: {}{n}", d.backend);
+                d.text.push_str(&n);
+            }
+            d
+        })
+        .collect())
 }
 
 /// Slowest over fastest shard, by wall and by worker time; each shard's figures.

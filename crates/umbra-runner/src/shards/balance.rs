@@ -19,11 +19,12 @@ pub enum By {
 
 impl By {
     /// How the split is recorded in each shard's record (`umbra merge` refuses shards split
-    /// differently): `stride`, or `durations FILE DIGEST`.
+    /// differently): `stride`, or `durations DIGEST` (the file's contents, wherever each job
+    /// keeps it).
     pub fn describe(&self) -> String {
         match self {
             By::Stride => "stride".into(),
-            By::Durations(d) => format!("durations {} {}", d.source, d.digest),
+            By::Durations(d) => format!("durations {}", d.digest),
         }
     }
 }

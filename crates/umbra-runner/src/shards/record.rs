@@ -37,6 +37,8 @@ pub struct Record {
     pub plan: PlanRecord,
     /// This run's share of it.
     pub shard: ShardRecord,
+    /// The settings that can change a run's status besides the inputs.
+    pub settings: Settings,
     /// Wall time, s.
     pub wall_s: f64,
     /// Where the worker time went.
@@ -60,8 +62,9 @@ pub struct Record {
 pub struct Build {
     /// The package version.
     pub version: String,
-    /// The key of every crate's sources, Cargo.lock and the toolchain
-    /// ([`crate::judge::basis_key::workspace_key`]).
+    /// The key of every crate's sources, Cargo.lock, the toolchain, the build profile and
+    /// RUSTFLAGS ([`crate::judge::basis_key::workspace_key`]); empty where the build script
+    /// could not compute it (a crate built outside its workspace).
     pub key: String,
     /// The compiler and target it was built with.
     pub toolchain: String,
@@ -92,8 +95,28 @@ pub struct Digest {
 impl Digest {
     /// The digest of every file under `dir`.
     pub fn of(dir: &Path) -> Result<Digest, String> {
+        Digest::of_files(dir, |_| true)
+    }
+
+    /// The digest of the goldens under `dir`: the reviewed snapshots (`*.snap`,
+    /// `*.snap.png`) and the blessed-on record. Pending ones (`*.snap.new*`, which a run at a
+    /// desk writes where a picture differs) are not goldens, and would make one shard's
+    /// digest differ from the next.
+    pub fn of_goldens(dir: &Path) -> Result<Digest, String> {
+        Digest::of_files(dir, |name| {
+            name.ends_with(".snap")
+                || name.ends_with(".snap.png")
+                || name == crate::judge::golden::MANIFEST
+        })
+    }
+
+    fn of_files(dir: &Path, keep: fn(&str) -> bool) -> Result<Digest, String> {
         use crate::judge::basis_key::{FNV_START, files_under, fnv};
-        let files = files_under(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let files: Vec<_> = files_under(dir)
+            .map_err(|e| format!("{}: {e}", dir.display()))?
+            .into_iter()
+            .filter(|f| keep(&f.file_name().unwrap_or_default().to_string_lossy()))
+            .collect();
         let mut h = FNV_START;
         for f in &files {
             let bytes = std::fs::read(f).map_err(|e| format!("{}: {e}", f.display()))?;
@@ -150,6 +173,15 @@ pub struct ShardRecord {
     pub runs: Vec<String>,
 }
 
+/// The settings that can change a run's status: shards merged must agree on them.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Settings {
+    /// `--timeout`, s.
+    pub timeout_s: u64,
+    /// `--bless` (goldens written, not checked).
+    pub bless: bool,
+}
+
 /// One backend's driver, as drivers.txt and report.json describe it.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct DriverRecord {
@@ -196,5 +228,28 @@ impl Record {
                 path.display()
             )
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pending_snapshot_leaves_the_goldens_digest_as_it_was() {
+        let dir = std::env::temp_dir().join(format!("umbra-digest-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("dir");
+        std::fs::write(dir.join("ref_a.snap"), "x").expect("write");
+        std::fs::write(dir.join("ref_a.snap.png"), "png").expect("write");
+        let before = Digest::of_goldens(&dir).expect("digest");
+        std::fs::write(dir.join("ref_a.snap.new"), "y").expect("write");
+        std::fs::write(dir.join("ref_a.snap.new.png"), "png2").expect("write");
+        assert_eq!(Digest::of_goldens(&dir).expect("digest"), before);
+        // A golden that changes does change it; every file counts in `of`.
+        std::fs::write(dir.join("ref_a.snap.png"), "png3").expect("write");
+        assert!(!Digest::of_goldens(&dir).expect("digest").same(&before));
+        assert_eq!(Digest::of(&dir).expect("digest").files, 4);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }
