@@ -38,6 +38,19 @@ pub fn fnv(mut h: u64, bytes: &[u8]) -> u64 {
     h
 }
 
+/// `h` continued over each of `files` in order: its path relative to `root` (with `/`), its
+/// length and its bytes. An error names the file that could not be read.
+pub fn hash_files(mut h: u64, root: &Path, files: &[PathBuf]) -> Result<u64, String> {
+    for f in files {
+        let bytes = std::fs::read(f).map_err(|e| format!("{}: {e}", f.display()))?;
+        let rel = f.strip_prefix(root).unwrap_or(f).to_string_lossy();
+        h = fnv(h, rel.replace('\\', "/").as_bytes());
+        h = fnv(h, &(bytes.len() as u64).to_le_bytes());
+        h = fnv(h, &bytes);
+    }
+    Ok(h)
+}
+
 /// Every file under `dir`, sorted.
 pub fn files_under(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let mut out = Vec::new();
@@ -99,13 +112,7 @@ pub fn workspace_key(root: &Path, toolchain: &str) -> Result<String, String> {
             files.push(p);
         }
     }
-    for f in files {
-        let bytes = std::fs::read(&f).map_err(|e| format!("{}: {e}", f.display()))?;
-        let rel = f.strip_prefix(root).unwrap_or(&f).to_string_lossy();
-        h = fnv(h, rel.replace('\\', "/").as_bytes());
-        h = fnv(h, &(bytes.len() as u64).to_le_bytes());
-        h = fnv(h, &bytes);
-    }
+    h = hash_files(h, root, &files)?;
     Ok(format!("{h:016x}"))
 }
 
@@ -179,13 +186,7 @@ pub fn sources_key(root: &Path, toolchain: &str) -> Result<String, String> {
         );
     }
     files.push(root.join(FORMAT_FILE));
-    for f in files {
-        let bytes = std::fs::read(&f).map_err(|e| format!("{}: {e}", f.display()))?;
-        let rel = f.strip_prefix(root).unwrap_or(&f).to_string_lossy();
-        h = fnv(h, rel.replace('\\', "/").as_bytes());
-        h = fnv(h, &(bytes.len() as u64).to_le_bytes());
-        h = fnv(h, &bytes);
-    }
+    h = hash_files(h, root, &files)?;
     let lock_path = root.join("Cargo.lock");
     let lock =
         std::fs::read_to_string(&lock_path).map_err(|e| format!("{}: {e}", lock_path.display()))?;

@@ -111,20 +111,13 @@ impl Digest {
     }
 
     fn of_files(dir: &Path, keep: fn(&str) -> bool) -> Result<Digest, String> {
-        use crate::judge::basis_key::{FNV_START, files_under, fnv};
+        use crate::judge::basis_key::{FNV_START, files_under, hash_files};
         let files: Vec<_> = files_under(dir)
             .map_err(|e| format!("{}: {e}", dir.display()))?
             .into_iter()
             .filter(|f| keep(&f.file_name().unwrap_or_default().to_string_lossy()))
             .collect();
-        let mut h = FNV_START;
-        for f in &files {
-            let bytes = std::fs::read(f).map_err(|e| format!("{}: {e}", f.display()))?;
-            let rel = f.strip_prefix(dir).unwrap_or(f).to_string_lossy();
-            h = fnv(h, rel.as_bytes());
-            h = fnv(h, &(bytes.len() as u64).to_le_bytes());
-            h = fnv(h, &bytes);
-        }
+        let h = hash_files(FNV_START, dir, &files)?;
         Ok(Digest {
             dir: dir.display().to_string(),
             files: files.len(),
