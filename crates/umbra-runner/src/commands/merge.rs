@@ -297,9 +297,13 @@ fn same_inputs(shards: &[Shard]) -> Result<(), String> {
             ));
         }
     }
-    // The Mesa build (`--mesa`), by what it is, not where it lies (each job's checkout has
-    // its own path), and only between shards that ran one of its drivers: a machine that ran
-    // only hardware device ids did not use it.
+    same_mesa_build(shards)
+}
+
+/// The Mesa build (`--mesa`), by what it is, not where it lies (each job's checkout has its
+/// own path), and only between shards that ran one of its drivers: a machine that ran only
+/// hardware device ids did not use it.
+fn same_mesa_build(shards: &[Shard]) -> Result<(), String> {
     let mesa_backed = |s: &&Shard| {
         s.record
             .plan
