@@ -59,10 +59,15 @@ pub fn write_conformance(
         ("junit.xml", &junit),
         ("report.html", &html),
     ] {
-        // Flushed and synced: a full disk shows here, as an error, not later as a short file.
-        let mut f = std::fs::File::create(dir.join(name))?;
-        std::io::Write::write_all(&mut f, text.as_bytes())?;
-        f.sync_all()?;
+        write_synced(&dir.join(name), text.as_bytes())?;
     }
     Ok(())
+}
+
+/// Writes `bytes` to `path`, flushed and synced: a full disk shows here, as an error, not
+/// later as a short file.
+pub fn write_synced(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut f = std::fs::File::create(path)?;
+    std::io::Write::write_all(&mut f, bytes)?;
+    f.sync_all()
 }

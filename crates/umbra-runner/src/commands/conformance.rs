@@ -613,7 +613,6 @@ struct Gathered {
     results: Vec<RunResult>,
     /// The results before the checks across runs (the run's record keeps them).
     before_cross: Vec<RunResult>,
-    drivers: String,
     /// drivers.txt's lines of each backend, by backend.
     driver_lines: Vec<(String, String)>,
     driver_rows: Vec<serde_json::Value>,
@@ -661,7 +660,6 @@ fn gather(
     driver_rows.sort_by(|a, b| a["backend"].as_str().cmp(&b["backend"].as_str()));
     let mut driver_lines = drivers;
     driver_lines.sort();
-    let drivers = drivers_text(&mesa_line(opts.build), &driver_lines);
     results.sort_by(|a, b| a.name.cmp(&b.name));
     let before_cross = results.clone();
     for m in falls_along {
@@ -671,7 +669,6 @@ fn gather(
     Ok(Gathered {
         results,
         before_cross,
-        drivers,
         driver_lines,
         driver_rows,
         refused,
@@ -725,8 +722,6 @@ fn record(
         .iter()
         .filter_map(|r| Some((r.name.clone(), r.fingerprint.clone()?)))
         .collect();
-    let mine: std::collections::BTreeSet<&str> =
-        g.before_cross.iter().map(|r| r.name.as_str()).collect();
     rec::Record {
         schema: rec::SCHEMA,
         umbra: rec::Build::this(),
@@ -737,11 +732,6 @@ fn record(
             index: opts.shard.0,
             count: opts.shard.1,
             by: opts.by.describe(),
-            runs: names
-                .iter()
-                .filter(|n| mine.contains(n.as_str()))
-                .cloned()
-                .collect(),
         },
         settings: rec::Settings {
             timeout_s: opts.timeout.as_secs(),
@@ -752,7 +742,6 @@ fn record(
             backends: opts.backends.clone(),
             runs: names,
         },
-        wall_s: budget.wall_s,
         budget: budget.clone(),
         drivers,
         refused: g.refused.clone(),
@@ -782,7 +771,7 @@ fn write_reports(
         &settings.failures,
         &settings.gallery,
         &g.results,
-        &g.drivers,
+        &drivers_text(&mesa_line(g.build), &g.driver_lines),
         &header,
         budget,
     )

@@ -34,6 +34,8 @@ struct Shard {
     /// Its run directory (where the record and pictures are).
     run: PathBuf,
     record: Record,
+    /// The planned runs it holds ([`Record::own_runs`]).
+    runs: Vec<String>,
 }
 
 impl Shard {
@@ -127,7 +129,13 @@ fn read_all(dirs: &[String]) -> Result<Vec<Shard>, String> {
         let given = PathBuf::from(d);
         let run = locate(&given)?;
         let record = Record::read(&run.join(FILE))?;
-        shards.push(Shard { given, run, record });
+        let runs = record.own_runs();
+        shards.push(Shard {
+            given,
+            run,
+            record,
+            runs,
+        });
     }
     Ok(shards)
 }
@@ -370,7 +378,7 @@ fn complete_plans(shards: &[Shard]) -> Result<(), String> {
         if !missing.is_empty() {
             let present: BTreeSet<&str> = group
                 .iter()
-                .flat_map(|s| s.record.shard.runs.iter().map(String::as_str))
+                .flat_map(|s| s.runs.iter().map(String::as_str))
                 .collect();
             let absent: Vec<&str> = first
                 .record
@@ -399,7 +407,7 @@ fn complete_plans(shards: &[Shard]) -> Result<(), String> {
                 first.record.plan.filter
             ));
         }
-        let present: BTreeSet<&String> = group.iter().flat_map(|s| &s.record.shard.runs).collect();
+        let present: BTreeSet<&String> = group.iter().flat_map(|s| &s.runs).collect();
         if let Some(lost) = first.record.plan.runs.iter().find(|n| !present.contains(n)) {
             return Err(format!(
                 "run {lost} of the plan is in none of its {count} shards: the shards did not split one plan alike; run them again with one umbra"
@@ -414,7 +422,7 @@ fn complete_plans(shards: &[Shard]) -> Result<(), String> {
 fn disjoint(shards: &[Shard]) -> Result<(), String> {
     let mut owner: BTreeMap<&str, &Shard> = BTreeMap::new();
     for s in shards {
-        for n in &s.record.shard.runs {
+        for n in &s.runs {
             if let Some(other) = owner.insert(n, s) {
                 return Err(format!(
                     "run {n} is in two shards, {} and {}: overlapping runs would count twice; merge shards of one plan, or plans that share no run",
@@ -486,7 +494,7 @@ fn print_balance(shards: &[Shard]) {
         println!(
             "  {:<8} {:>5} runs  {:>7.1} s wall  {:>7.1} s worker time  split by {}  {}",
             format!("{}/{}", s.record.shard.index, s.record.shard.count),
-            s.record.shard.runs.len(),
+            s.runs.len(),
             b.wall_s,
             b.runs_s + b.worker_start_s,
             s.record.shard.by.split(' ').next().unwrap_or(""),
@@ -561,7 +569,7 @@ fn write(
             "index": s.record.shard.index,
             "count": s.record.shard.count,
             "by": s.record.shard.by,
-            "runs": s.record.shard.runs.len(),
+            "runs": s.runs.len(),
             "wall_s": s.record.budget.wall_s,
             "worker_s": s.record.budget.runs_s + s.record.budget.worker_start_s,
             "dir": s.given.display().to_string(),

@@ -39,9 +39,7 @@ pub struct Record {
     pub shard: ShardRecord,
     /// The settings that can change a run's status besides the inputs.
     pub settings: Settings,
-    /// Wall time, s.
-    pub wall_s: f64,
-    /// Where the worker time went.
+    /// Where the worker time went, and the wall time.
     pub budget: TimeBudget,
     /// Per backend: drivers.txt's lines and report.json's row.
     pub drivers: Vec<DriverRecord>,
@@ -162,8 +160,6 @@ pub struct ShardRecord {
     pub count: usize,
     /// How the plan was split ([`crate::shards::balance::By::describe`]).
     pub by: String,
-    /// The names of the runs this shard took, in plan order.
-    pub runs: Vec<String>,
 }
 
 /// The settings that can change a run's status: shards merged must agree on them.
@@ -187,13 +183,24 @@ pub struct DriverRecord {
 }
 
 impl Record {
+    /// The planned runs this shard holds, in plan order (a case file that did not load is
+    /// reported by every shard, under no plan).
+    pub fn own_runs(&self) -> Vec<String> {
+        let held: std::collections::BTreeSet<&str> =
+            self.runs.iter().map(|r| r.name.as_str()).collect();
+        self.plan
+            .runs
+            .iter()
+            .filter(|n| held.contains(n.as_str()))
+            .cloned()
+            .collect()
+    }
+
     /// Writes the record into the run's directory `dir`, synced (a full disk is an error
     /// here, not a short file later).
     pub fn write(&self, dir: &Path) -> std::io::Result<()> {
         let json = serde_json::to_vec(self).map_err(std::io::Error::other)?;
-        let mut f = std::fs::File::create(dir.join(FILE))?;
-        std::io::Write::write_all(&mut f, &json)?;
-        f.sync_all()
+        umbra_report::write_synced(&dir.join(FILE), &json)
     }
 
     /// Reads a record; an error names the file and says what is wrong with it.
