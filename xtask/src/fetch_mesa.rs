@@ -1,14 +1,31 @@
-//! `cargo xtask fetch-mesa [--dir DIR] [--suite SUITE]`: a second, real Mesa without touching
-//! the system's (../shared/PLATFORM.md, last section).
+//! `cargo xtask fetch-mesa [--suite SUITE] [--dir DIR]`: any Debian suite's Mesa, beside the
+//! system's and without changing it, for `--mesa DIR` (../shared/PLATFORM.md, last section;
+//! ../shared/ECOSYSTEM.md, "Current Mesa on this machine kind").
 //!
-//! apt is pointed at one extra suite through a private sources list, lists directory and
-//! cache (`-o Dir::Etc::sourcelist=…`), so the system's apt configuration and state are not
-//! changed; the Mesa packages of that suite are downloaded and unpacked with `dpkg -x` into
-//! DIR (default `target/mesa/SUITE`), which `--mesa DIR` then loads. The mirror is the
-//! system's own (from /etc/apt), so a snapshot mirror stays a snapshot.
+//! apt is pointed at the one suite through a private sources list, lists directory, cache and
+//! an empty dpkg status (`-o Dir::Etc::sourcelist=…`), so the system's apt configuration and
+//! state are not changed and the suite's own versions are the candidates. The mirror is the
+//! system's (from /etc/apt), so a snapshot mirror stays a snapshot; its Release files may have
+//! expired, so `Acquire::Check-Valid-Until` is off (the signatures are still checked).
+//!
+//! **Which packages.** A suite whose C library is no newer than the machine's (bookworm-
+//! backports on Debian 12) needs only Mesa's own packages ([`PACKAGES`]): the machine's
+//! libraries serve the rest. A newer one (trixie: glibc 2.41, sid: 2.43, with LLVM 19 or
+//! 22) links against libraries the machine does not have in those versions, so the whole
+//! dependency closure of Mesa and the GL/Vulkan loaders ([`LOADERS`]) is unpacked, the
+//! suite's glibc and dynamic loader included; umbra then starts the build's driver processes
+//! through that loader (`umbra_runner::harness::own_libc`). No chroot, so no root: apt's
+//! download and `dpkg-deb -x` run as any user.
+//!
+//! **What it leaves.** DIR (default `target/mesa/SUITE`) holds the unpacked packages and
+//! `umbra-mesa.json` (suite, Mesa and glibc versions, every package with its version), which
+//! `--mesa DIR` reports in drivers.txt. The new tree is unpacked beside the old one and
+//! renamed into place, so an interrupted fetch never leaves a half build under DIR; a fetch
+//! that finds the same package versions already there does nothing.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::time::Instant;
 
 /// The packages that make a complete Mesa for umbra's drivers (PLATFORM.md): EGL (glvnd
 /// vendor), gallium (llvmpipe, softpipe, zink), the DRI loaders, lavapipe, and the libdrm
@@ -23,6 +40,13 @@ pub const PACKAGES: &[&str] = &[
     "libdrm-amdgpu1",
     "libdrm-intel1",
 ];
+
+/// The loaders a process on a suite's own C library needs from that suite too: glvnd's EGL
+/// and GLES dispatch, and the Vulkan loader.
+pub const LOADERS: &[&str] = &["libegl1", "libglvnd0", "libgles2", "libvulkan1"];
+
+/// The file the fetch writes at DIR's root (`umbra_runner::harness::mesa_build::FETCHED`).
+const FETCHED: &str = "umbra-mesa.json";
 
 /// The mirror the system's apt uses for Debian (deb822 or one-line format).
 fn mirror() -> String {
@@ -50,96 +74,354 @@ fn mirror() -> String {
     "http://deb.debian.org/debian".into()
 }
 
+/// apt with a private configuration for one suite.
+struct Apt {
+    /// The private state: sources list, lists, cache, empty status, downloaded packages.
+    dir: PathBuf,
+    /// The suite whose versions are preferred.
+    suite: String,
+}
+
+impl Apt {
+    fn new(dir: PathBuf, suite: &str) -> Result<Apt, String> {
+        for d in [
+            dir.join("lists").join("partial"),
+            dir.join("cache").join("archives").join("partial"),
+            dir.join("debs"),
+            dir.join("sources.list.d"),
+        ] {
+            std::fs::create_dir_all(&d)
+                .map_err(|e| format!("cannot create {}: {e}", d.display()))?;
+        }
+        // A backports suite holds only the backported packages: what they link against comes
+        // from its base suite (trixie for trixie-backports), with the backports preferred
+        // (APT::Default-Release).
+        let mirror = mirror();
+        let mut line = String::new();
+        for s in std::iter::once(suite).chain(suite.strip_suffix("-backports")) {
+            line.push_str(&format!(
+                "deb [signed-by=/usr/share/keyrings/debian-archive-keyring.gpg] {mirror} {s} main\n"
+            ));
+        }
+        std::fs::write(dir.join("sources.list"), &line)
+            .and_then(|()| std::fs::write(dir.join("status"), ""))
+            .map_err(|e| format!("cannot write under {}: {e}", dir.display()))?;
+        for l in line.lines() {
+            println!("fetch-mesa: {l}");
+        }
+        Ok(Apt {
+            dir,
+            suite: suite.to_string(),
+        })
+    }
+
+    /// `program` (apt-get or apt-cache) with the private configuration.
+    fn command(&self, program: &str) -> Command {
+        let mut cmd = Command::new(program);
+        let opt = |cmd: &mut Command, o: String| {
+            cmd.arg("-o").arg(o);
+        };
+        opt(
+            &mut cmd,
+            format!(
+                "Dir::Etc::sourcelist={}",
+                self.dir.join("sources.list").display()
+            ),
+        );
+        opt(
+            &mut cmd,
+            format!(
+                "Dir::Etc::sourceparts={}",
+                self.dir.join("sources.list.d").display()
+            ),
+        );
+        opt(
+            &mut cmd,
+            format!("Dir::State::Lists={}", self.dir.join("lists").display()),
+        );
+        opt(
+            &mut cmd,
+            format!("Dir::State::status={}", self.dir.join("status").display()),
+        );
+        opt(
+            &mut cmd,
+            format!("Dir::Cache={}", self.dir.join("cache").display()),
+        );
+        opt(&mut cmd, "Debug::NoLocking=1".into());
+        // A snapshot mirror's Release files carry a Valid-Until long past.
+        opt(&mut cmd, "Acquire::Check-Valid-Until=false".into());
+        // As root apt would hand downloads to the _apt user, who cannot write here.
+        opt(&mut cmd, "APT::Sandbox::User=root".into());
+        opt(&mut cmd, format!("APT::Default-Release={}", self.suite));
+        cmd
+    }
+
+    fn output(&self, program: &str, args: &[&str]) -> Result<String, String> {
+        let o = self
+            .command(program)
+            .args(args)
+            .output()
+            .map_err(|e| format!("cannot run {program}: {e}"))?;
+        if !o.status.success() {
+            return Err(format!(
+                "{program} {} failed: {}",
+                args.join(" "),
+                String::from_utf8_lossy(&o.stderr).trim()
+            ));
+        }
+        Ok(String::from_utf8_lossy(&o.stdout).into_owned())
+    }
+
+    /// The suite's version of each package (`apt-cache show`).
+    fn versions(&self, packages: &[String]) -> Result<Vec<(String, String)>, String> {
+        let mut args = vec!["show", "--no-all-versions"];
+        args.extend(packages.iter().map(String::as_str));
+        Ok(parse_versions(&self.output("apt-cache", &args)?))
+    }
+
+    /// The packages `roots` need, recursively (Depends only; virtual packages are left to
+    /// the real packages that provide them, which apt lists too).
+    fn closure(&self, roots: &[&str]) -> Result<Vec<String>, String> {
+        let mut args = vec![
+            "depends",
+            "--recurse",
+            "--no-recommends",
+            "--no-suggests",
+            "--no-conflicts",
+            "--no-breaks",
+            "--no-replaces",
+            "--no-enhances",
+        ];
+        args.extend(roots);
+        Ok(parse_closure(&self.output("apt-cache", &args)?))
+    }
+}
+
+/// `(package, version)` of each stanza of `apt-cache show`, sorted.
+fn parse_versions(text: &str) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    let mut name = None;
+    for line in text.lines() {
+        if let Some(n) = line.strip_prefix("Package: ") {
+            name = Some(n.trim().to_string());
+        } else if let Some(v) = line.strip_prefix("Version: ") {
+            if let Some(n) = name.take() {
+                out.push((n, v.trim().to_string()));
+            }
+        }
+    }
+    out.sort();
+    out.dedup();
+    out
+}
+
+/// The real packages `apt-cache depends --recurse` lists (its unindented lines; `<virtual>`
+/// ones are left to the packages that provide them, which it lists too), sorted.
+fn parse_closure(text: &str) -> Vec<String> {
+    let mut names: Vec<String> = text
+        .lines()
+        .filter(|l| !l.starts_with(' ') && !l.starts_with('<') && !l.trim().is_empty())
+        .map(|l| l.trim().to_string())
+        .collect();
+    names.sort();
+    names.dedup();
+    names
+}
+
+/// Whether Debian version `a` is newer than `b` (`dpkg --compare-versions`).
+fn newer(a: &str, b: &str) -> bool {
+    Command::new("dpkg")
+        .args(["--compare-versions", a, "gt", b])
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// The machine's C library version (dpkg's libc6), if dpkg knows it.
+fn machine_libc() -> Option<String> {
+    let o = Command::new("dpkg-query")
+        .args(["-W", "-f=${Version}", "libc6"])
+        .output()
+        .ok()?;
+    let v = String::from_utf8_lossy(&o.stdout).trim().to_string();
+    (o.status.success() && !v.is_empty()).then_some(v)
+}
+
 /// Runs the command; returns the exit code.
 pub fn main(suite: &str, dir: Option<PathBuf>, root: &Path) -> i32 {
-    let dir = dir.unwrap_or_else(|| root.join("target").join("mesa").join(suite));
-    let apt = dir.join(".apt");
-    let debs = apt.join("debs");
-    for d in [
-        apt.join("lists").join("partial"),
-        apt.join("cache").join("archives").join("partial"),
-        debs.clone(),
-    ] {
-        if let Err(e) = std::fs::create_dir_all(&d) {
-            eprintln!("error: cannot create {}: {e}", d.display());
-            return 125;
+    match fetch(suite, dir, root) {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: fetch-mesa --suite {suite}: {e}");
+            125
         }
     }
-    let list = apt.join("sources.list");
-    let line = format!(
-        "deb [signed-by=/usr/share/keyrings/debian-archive-keyring.gpg] {} {suite} main\n",
-        mirror()
-    );
-    if let Err(e) = std::fs::write(&list, &line) {
-        eprintln!("error: cannot write {}: {e}", list.display());
-        return 125;
+}
+
+fn fetch(suite: &str, dir: Option<PathBuf>, root: &Path) -> Result<(), String> {
+    let started = Instant::now();
+    let mesa_dir = root.join("target").join("mesa");
+    let dir = dir.unwrap_or_else(|| mesa_dir.join(suite));
+    let apt = Apt::new(mesa_dir.join(".apt").join(suite), suite)?;
+    let update = apt
+        .command("apt-get")
+        .args(["-qq", "update"])
+        .status()
+        .map_err(|e| format!("cannot run apt-get: {e}; fix: run on a Debian machine with apt"))?;
+    if !update.success() {
+        return Err(format!(
+            "apt-get update of the private list failed; fix: check that the mirror serves suite {suite:?} ({}/sources.list)",
+            apt.dir.display()
+        ));
     }
-    let opts = |cmd: &mut Command| {
-        cmd.arg("-o")
-            .arg(format!("Dir::Etc::sourcelist={}", list.display()))
-            .args(["-o", "Dir::Etc::sourceparts=-"])
-            .arg("-o")
-            .arg(format!("Dir::State::Lists={}", apt.join("lists").display()))
-            .arg("-o")
-            .arg(format!("Dir::Cache={}", apt.join("cache").display()))
-            .args(["-o", "Debug::NoLocking=1"]);
+    let libc = apt
+        .versions(&["libc6".to_string()])?
+        .into_iter()
+        .next()
+        .map(|(_, v)| v);
+    let machine = machine_libc();
+    let own_libc = match (&libc, &machine) {
+        (Some(s), Some(m)) => newer(s, m).then(|| s.clone()),
+        // No dpkg to ask: carry the suite's C library to be safe.
+        (Some(s), None) => Some(s.clone()),
+        (None, _) => None,
     };
-    println!("fetch-mesa: {}", line.trim());
-    let mut update = Command::new("apt-get");
-    opts(&mut update);
-    update.arg("update");
-    if !update.status().is_ok_and(|s| s.success()) {
-        eprintln!(
-            "error: apt-get update of the private list failed (network, or no apt here); fix: check the mirror in {}",
-            list.display()
-        );
-        return 125;
-    }
-    let mut download = Command::new("apt-get");
-    opts(&mut download);
-    download.arg("download").current_dir(&debs);
-    for p in PACKAGES {
-        download.arg(format!("{p}/{suite}"));
-    }
-    if !download.status().is_ok_and(|s| s.success()) {
-        eprintln!(
-            "error: apt-get download failed; {suite} may not carry every package of {}",
-            PACKAGES.join(" ")
-        );
-        return 125;
-    }
-    let Ok(entries) = std::fs::read_dir(&debs) else {
-        return 125;
+    let names: Vec<String> = match &own_libc {
+        Some(v) => {
+            println!(
+                "fetch-mesa: {suite}'s C library (libc6 {v}) is newer than this machine's ({}): unpacking Mesa with everything it links against, the suite's glibc and loader included",
+                machine.as_deref().unwrap_or("unknown")
+            );
+            let roots: Vec<&str> = PACKAGES.iter().chain(LOADERS).copied().collect();
+            apt.closure(&roots)?
+        }
+        None => PACKAGES.iter().map(|p| p.to_string()).collect(),
     };
-    let mut version = String::new();
-    for e in entries.filter_map(Result::ok) {
-        let p = e.path();
-        if p.extension().is_none_or(|x| x != "deb") {
-            continue;
-        }
-        let name = p
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        if name.starts_with("mesa-libgallium_") {
-            version = name.split('_').nth(1).unwrap_or("").to_string();
-        }
-        if !Command::new("dpkg-deb")
+    let versions = apt.versions(&names)?;
+    let missing: Vec<&String> = names
+        .iter()
+        .filter(|n| !versions.iter().any(|(p, _)| p == *n))
+        .collect();
+    if !missing.is_empty() {
+        return Err(format!(
+            "suite {suite} does not carry {}; fix: choose a suite that has Mesa's packages (bookworm-backports, trixie, sid)",
+            missing
+                .iter()
+                .map(|s| s.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    let mesa = versions
+        .iter()
+        .find(|(p, _)| p == "mesa-libgallium" || p == "libegl-mesa0")
+        .map(|(_, v)| v.clone())
+        .unwrap_or_default();
+    let packages: Vec<String> = versions.iter().map(|(p, v)| format!("{p}={v}")).collect();
+    let record = serde_json::json!({
+        "suite": suite,
+        "mesa": mesa,
+        "own_libc": own_libc,
+        "packages": packages,
+    });
+    if std::fs::read_to_string(dir.join(FETCHED))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .is_some_and(|old| old == record)
+    {
+        println!(
+            "fetch-mesa: Mesa {mesa} from {suite} is already in {} (the same {} packages); use it with --mesa {}",
+            dir.display(),
+            packages.len(),
+            dir.display()
+        );
+        return Ok(());
+    }
+    let debs = apt.dir.join("debs");
+    let _ = std::fs::remove_dir_all(&debs);
+    std::fs::create_dir_all(&debs).map_err(|e| format!("cannot create {}: {e}", debs.display()))?;
+    let download = apt
+        .command("apt-get")
+        .args(["-qq", "download"])
+        .args(&packages)
+        .current_dir(&debs)
+        .status()
+        .map_err(|e| format!("cannot run apt-get: {e}"))?;
+    if !download.success() {
+        return Err(format!(
+            "apt-get download failed for {} packages of {suite}",
+            packages.len()
+        ));
+    }
+    let partial = dir.with_extension("partial");
+    let _ = std::fs::remove_dir_all(&partial);
+    std::fs::create_dir_all(&partial)
+        .map_err(|e| format!("cannot create {}: {e}", partial.display()))?;
+    let mut downloaded = 0u64;
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&debs)
+        .map_err(|e| format!("cannot read {}: {e}", debs.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "deb"))
+        .collect();
+    files.sort();
+    for p in &files {
+        downloaded += std::fs::metadata(p).map_or(0, |m| m.len());
+        let ok = Command::new("dpkg-deb")
             .arg("-x")
-            .arg(&p)
-            .arg(&dir)
+            .arg(p)
+            .arg(&partial)
             .status()
-            .is_ok_and(|s| s.success())
-        {
-            eprintln!("error: dpkg-deb -x {} failed", p.display());
-            return 125;
+            .is_ok_and(|s| s.success());
+        if !ok {
+            return Err(format!("dpkg-deb -x {} failed", p.display()));
         }
     }
+    let text = serde_json::to_string_pretty(&record).unwrap_or_default() + "\n";
+    std::fs::write(partial.join(FETCHED), text)
+        .map_err(|e| format!("cannot write {}: {e}", partial.join(FETCHED).display()))?;
+    let old = dir.with_extension("old");
+    let _ = std::fs::remove_dir_all(&old);
+    if dir.exists() {
+        std::fs::rename(&dir, &old).map_err(|e| format!("cannot move {}: {e}", dir.display()))?;
+    }
+    std::fs::rename(&partial, &dir)
+        .map_err(|e| format!("cannot move {} into place: {e}", partial.display()))?;
+    let _ = std::fs::remove_dir_all(&old);
     println!(
-        "fetch-mesa: Mesa {version} unpacked in {}\nfetch-mesa: use it with --mesa {} (e.g. cargo xtask drivers --baseline system --candidate {})",
+        "fetch-mesa: Mesa {mesa} from {suite}: {} packages ({:.0} MB downloaded){} unpacked in {} in {:.0} s\nfetch-mesa: use it with --mesa {} (e.g. cargo xtask conformance --mesa {}, cargo xtask drivers --baseline system --candidate {})",
+        files.len(),
+        downloaded as f64 / 1e6,
+        own_libc
+            .as_deref()
+            .map(|v| format!(", its own glibc {v},"))
+            .unwrap_or_default(),
+        dir.display(),
+        started.elapsed().as_secs_f64(),
         dir.display(),
         dir.display(),
         dir.display()
     );
-    0
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn apt_cache_output_is_read_stanza_by_stanza() {
+        // A field between Package and Version (Source) once lost every version.
+        let show = "Package: libc6\nSource: glibc\nVersion: 2.43-7\n\nPackage: mesa-libgallium\nSource: mesa\nVersion: 26.2.6-1\n";
+        assert_eq!(
+            parse_versions(show),
+            vec![
+                ("libc6".to_string(), "2.43-7".to_string()),
+                ("mesa-libgallium".to_string(), "26.2.6-1".to_string()),
+            ]
+        );
+        let depends = "libegl-mesa0\n  Depends: libc6\n  |Depends: libx\nlibc6\n  Depends: libgcc-s1\n<libgl-provider>\nlibgcc-s1\n";
+        assert_eq!(
+            parse_closure(depends),
+            vec!["libc6", "libegl-mesa0", "libgcc-s1"]
+        );
+    }
 }

@@ -6,7 +6,8 @@
 //!   then runs `umbra conformance ARGS` and passes its exit code through (0 as expected,
 //!   1 regressions, 125 could not run), so `git bisect run cargo xtask conformance` works.
 //! - `cargo xtask test`: the same set-up, then the whole test suite, a conformance run, the
-//!   self-test and a fixed-seed soak of generated cases.
+//!   self-test, a fixed-seed soak of generated cases, and the catalogue again on the newest
+//!   Mesa Debian ships (sid, fetched with `fetch-mesa`).
 //! - `cargo xtask soak --seed S --count N`: generated cases on every backend, judged alone,
 //!   failures by class (`umbra soak`).
 //! - `cargo xtask selftest`: every injected fault on every backend it applies to; a fault the
@@ -17,8 +18,13 @@
 //! - `cargo xtask bless [ARGS]`: a conformance run that accepts every changed or new golden
 //!   (`umbra conformance --bless`, which alone gives its workers `INSTA_UPDATE=always`), then lists what changed under `golden/` for review in
 //!   `git diff` before committing. Refused under `CI=true`: CI never writes a golden.
-//! - `cargo xtask fetch-mesa [--dir DIR]`: a second Mesa (bookworm-backports, 25.0.7) unpacked
-//!   into a directory without changing the system (`fetch_mesa`), for `--mesa DIR`.
+//! - `cargo xtask fetch-mesa [--suite SUITE] [--dir DIR]`: any Debian suite's Mesa (default
+//!   bookworm-backports, 25.0.7; sid is 26.2.6), with its own C library where the suite's is
+//!   newer than the machine's, unpacked without changing the system (`fetch_mesa`), for
+//!   `--mesa DIR`.
+//! - `cargo xtask gpu-bundle [--out DIR]`: a self-contained folder (stripped release umbra,
+//!   cases, expectations, run.sh) that runs the catalogue on every hardware backend of a GPU
+//!   machine, judged by the specs (`gpu_bundle`).
 //! - `cargo xtask mesa-ci --driver DRIVER --out DIR [--fraction N] [--run]`: what a Mesa
 //!   driver's `ci/` directory would hold to run umbra under deqp-runner (`mesa_ci`), and with
 //!   `--run` the suite run by deqp-runner 0.24.
@@ -27,6 +33,7 @@
 //!   then `umbra drivers`, `umbra bisect`, `umbra reduce`.
 
 mod fetch_mesa;
+mod gpu_bundle;
 mod mesa;
 mod mesa_ci;
 
@@ -93,7 +100,7 @@ fn command() -> clap::Command {
     }
     c.subcommand(
         clap::Command::new("test")
-            .about("The set-up, the whole test suite (cargo test --workspace ARGS), then conformance, selftest and a 60-case soak as CI runs them")
+            .about("The set-up, the whole test suite (cargo test --workspace ARGS), then conformance, selftest, a 60-case soak and conformance on Debian sid's Mesa, as CI runs them")
             .arg(rest().help("extra arguments for cargo test")),
     )
     .subcommand(
@@ -111,8 +118,21 @@ fn command() -> clap::Command {
             .arg(Arg::new("run").long("run").action(clap::ArgAction::SetTrue).help("run the suite with deqp-runner (installed with cargo when missing)")),
     )
     .subcommand(
+        clap::Command::new("gpu-bundle")
+            .about("Write a self-contained folder (a stripped release umbra, the cases, the expectations, run.sh) that runs the catalogue judged by the specs on every hardware backend of a GPU machine, at most 48 MiB")
+            .arg(Arg::new("out").long("out").value_name("DIR").help("where to write the bundle [default: target/umbra/gpu-bundle]"))
+            .arg(
+                Arg::new("profile")
+                    .long("profile")
+                    .value_name("PROFILE")
+                    .default_value("bundle")
+                    .value_parser(["bundle", "dev"])
+                    .help("bundle: the stripped release build; dev: the debug build (tests; over the size limit)"),
+            ),
+    )
+    .subcommand(
         clap::Command::new("fetch-mesa")
-            .about("Download a second Mesa (Debian packages) and unpack it without touching the system, for --mesa DIR")
+            .about("Download any Debian suite's Mesa (sid, trixie, trixie-backports, bookworm-backports …) with what it links against, and unpack it without touching the system, for --mesa DIR")
             .arg(Arg::new("dir").long("dir").value_name("DIR").help("where to unpack [default: target/mesa/SUITE]"))
             .arg(
                 Arg::new("suite")
@@ -144,6 +164,12 @@ fn main() -> ExitCode {
     let code = match name {
         "test" => test(&args),
         "bless" => bless(&args),
+        "gpu-bundle" => gpu_bundle::main(
+            sub.get_one::<String>("out").map(PathBuf::from),
+            sub.get_one::<String>("profile")
+                .map_or("bundle", String::as_str),
+            &workspace_root(),
+        ),
         "fetch-mesa" => fetch_mesa::main(
             sub.get_one::<String>("suite")
                 .map_or("bookworm-backports", String::as_str),
@@ -185,14 +211,44 @@ fn test(extra: &[String]) -> i32 {
     }
     // The main job on every case, as CI will run it, then the harness's own sensitivity, then
     // the judge on scenes it was not developed against (a fixed seed: the same 60 generated
-    // cases in every CI run, about a minute on 2 cores).
+    // cases in every CI run, about a minute on 2 cores), then the catalogue again on the
+    // newest Mesa Debian ships, so umbra stays green on what its users run today.
     let conformance = umbra(&["conformance"], &[]);
     let selftest = umbra(&["selftest"], &[]);
     let soak = umbra(&["soak"], &CI_SOAK.map(String::from));
-    [conformance, selftest, soak]
+    let current = current_mesa();
+    [conformance, selftest, soak, current]
         .into_iter()
         .find(|c| *c != 0)
         .unwrap_or(0)
+}
+
+/// The Debian suite with the newest Mesa (`cargo xtask test` runs the catalogue on it too).
+const NEWEST_SUITE: &str = "sid";
+
+/// The catalogue on the newest suite's Mesa (fetched into `target/mesa/sid`, its own C library
+/// included): 0 when every run is as expected there. `UMBRA_SKIP_CURRENT_MESA=1` leaves it out
+/// and says so (a machine without the network); it is never skipped silently.
+fn current_mesa() -> i32 {
+    if std::env::var_os("UMBRA_SKIP_CURRENT_MESA").is_some() {
+        eprintln!(
+            "note: UMBRA_SKIP_CURRENT_MESA is set: the catalogue on {NEWEST_SUITE}'s Mesa was NOT run"
+        );
+        return 0;
+    }
+    let root = workspace_root();
+    let code = fetch_mesa::main(NEWEST_SUITE, None, &root);
+    if code != 0 {
+        eprintln!(
+            "error: cannot fetch {NEWEST_SUITE}'s Mesa for the current-release conformance run; on a machine without the network set UMBRA_SKIP_CURRENT_MESA=1 to leave it out"
+        );
+        return code;
+    }
+    let dir = root.join("target").join("mesa").join(NEWEST_SUITE);
+    umbra(
+        &["conformance"],
+        &["--mesa".into(), dir.display().to_string()],
+    )
 }
 
 /// The soak `cargo xtask test` runs (README, "Generated scenes").

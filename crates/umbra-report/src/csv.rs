@@ -1,7 +1,9 @@
 //! The CSV files of a conformance run, in deqp-runner's spirit: `results.csv` (`test,status,
 //! time`), `failures.csv` (the regressions only), `errors.csv` (every judged figure of a run)
-//! and `twins.csv` (one row per metamorphic twin). One row per run, one header line naming
-//! every column; fields quoted per RFC 4180 where they need it.
+//! `twins.csv` (one row per metamorphic twin) and `goldens.csv` (every picture that differs
+//! from its golden: how much, between which driver versions, and whether every changed
+//! pixel is legal). One row per run, one header line naming every column; fields quoted per
+//! RFC 4180 where they need it.
 
 use std::fmt::Write as _;
 
@@ -17,6 +19,8 @@ pub struct Tables {
     pub errors: String,
     /// `twins.csv`.
     pub twins: String,
+    /// `goldens.csv`.
+    pub goldens: String,
 }
 
 /// Writes the tables of `results`.
@@ -60,6 +64,26 @@ pub fn tables(results: &[RunResult]) -> Tables {
                 t.shared_shadow_pass
             );
         }
+    }
+    let mut goldens =
+        String::from("test,status,golden,blessed_on,driver,pixels,max_step,new,legal_change\n");
+    for r in results {
+        let Some(c) = r.metrics.as_ref().and_then(|m| m.golden_change.as_ref()) else {
+            continue;
+        };
+        let _ = writeln!(
+            goldens,
+            "{},{},{},{},{},{},{},{},{}",
+            csv_field(&r.name),
+            r.status,
+            r.golden.as_deref().unwrap_or(""),
+            csv_field(c.blessed_on.as_deref().unwrap_or("")),
+            csv_field(c.driver.as_deref().unwrap_or("")),
+            c.pixels,
+            c.max_step,
+            c.new,
+            c.legal
+        );
     }
     for r in results {
         let _ = writeln!(csv, "{},{},{:.3}", csv_field(&r.name), r.status, r.time_s);
@@ -113,6 +137,7 @@ pub fn tables(results: &[RunResult]) -> Tables {
         failures,
         errors,
         twins,
+        goldens,
     }
 }
 

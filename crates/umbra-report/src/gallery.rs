@@ -1,7 +1,8 @@
 //! The gallery of report.html: every case point × backend as a thumbnail with its status
 //! colour, filterable by case, backend and status; a click opens reference | backend | truth |
 //! heat map | golden (and the pending golden when insta left one) side by side at full size,
-//! with the reason and the command that reproduces the run (`report.html#run=NAME` links to one;
+//! with the reason and the command that reproduces the run; a picture that changed from a golden of
+//! another driver release, legally, has a dashed outline and says how it changed (`report.html#run=NAME` links to one;
 //! `#status=Fail&backend=gles2/zink` presets the filters).
 //!
 //! The page stays one self-contained file, sized for the full catalogue:
@@ -94,6 +95,8 @@ pub fn section(results: &[RunResult], pictures: &Path) -> String {
                 crate::names::repro_command(&r.name, crate::names::mesa_of(&r.reproduce).as_deref())
             }),
             "g": r.golden,
+            // How the picture differs from its golden, and between which driver versions.
+            "gc": r.metrics.as_ref().and_then(|m| m.golden_change.as_ref()).map(|c| c.describe()),
         }));
     }
     let data = json!({
@@ -138,7 +141,7 @@ pub const STYLE: &str = "#g-grid{display:flex;flex-wrap:wrap;gap:4px;margin:8px 
 .cell{width:104px;height:112px;border:3px solid #999;box-sizing:border-box;cursor:pointer;display:flex;flex-direction:column;align-items:center;justify-content:center;font-size:10px;overflow:hidden;background:#fafafa}\
 .cell img{max-width:94px;max-height:78px;image-rendering:pixelated}.cell span{white-space:nowrap;overflow:hidden;max-width:94px}\
 .cell.Pass{border-color:#2e7d32}.cell.ExpectedFail{border-color:#8bc34a}.cell.Fail,.cell.Crash,.cell.Timeout,.cell.UnexpectedPass{border-color:#c62828}\
-.cell[hidden]{display:none}.cell.Skip{border-color:#bbb;color:#777}.cell.Flake{border-color:#ef6c00}\
+.cell.changed{border-style:dashed;outline:2px dashed #1565c0;outline-offset:-6px}.cell[hidden]{display:none}.cell.Skip{border-color:#bbb;color:#777}.cell.Flake{border-color:#ef6c00}\
 #g-detail{position:fixed;inset:0;background:rgba(0,0,0,.55);overflow:auto;z-index:10}\
 .g-box{background:#fff;margin:24px;padding:12px;border-radius:4px}.g-box figure img{max-width:none}\
 .g-filters label{margin-right:12px}";
@@ -159,6 +162,7 @@ const SCRIPT: &str = r#"(function () {
     c.className = 'cell ' + r.s;
     c.dataset.k = k; c.dataset.case = r.c; c.dataset.backend = r.b; c.dataset.status = r.s;
     c.title = r.n + ': ' + r.s;
+    if (r.g === 'changed-legal') { c.className += ' changed'; c.title += ' (changed picture, legal on this driver)'; }
     if (r.t !== null) {
       var img = document.createElement('img');
       img.alt = r.n; img.dataset.pic = r.t;
@@ -198,7 +202,8 @@ const SCRIPT: &str = r#"(function () {
   function open(k) {
     var r = data.runs[k];
     document.getElementById('g-title').textContent = r.s + ' ' + r.n;
-    document.getElementById('g-reason').textContent = (r.r || '') + (r.d ? ' | consensus: ' + r.d : '');
+    document.getElementById('g-reason').textContent = (r.r || '') + (r.d ? ' | consensus: ' + r.d : '') +
+      (r.gc ? ' | golden: ' + r.gc : '');
     document.getElementById('g-reproduce').textContent = r.x;
     document.getElementById('g-repro').textContent = r.y || '';
     document.getElementById('g-repro-line').hidden = !r.y;
@@ -221,7 +226,14 @@ const SCRIPT: &str = r#"(function () {
   document.getElementById('g-close').addEventListener('click', close);
   detail.addEventListener('click', function (e) { if (e.target === detail) { close(); } });
   document.addEventListener('keydown', function (e) { if (e.key === 'Escape') { close(); } });
-  // Links: report.html#run=NAME opens one run; #status=Fail&backend=gles2/zink sets filters.
+  // Links: report.html#run=NAME opens one run (also from the page's own tables);
+  // #status=Fail&backend=gles2/zink sets filters.
+  window.addEventListener('hashchange', function () {
+    var h = location.hash.replace(/^#/, '');
+    if (h.indexOf('run=') !== 0) { return; }
+    var wanted = decodeURIComponent(h.slice(4));
+    data.runs.forEach(function (r, k) { if (r.n === wanted) { open(k); } });
+  });
   var hash = location.hash.replace(/^#/, '');
   if (hash.indexOf('run=') === 0) {
     var wanted = decodeURIComponent(hash.slice(4));

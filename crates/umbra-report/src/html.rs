@@ -115,6 +115,7 @@ pub fn report(
             ),
         );
     }
+    s.push_str(&changed_pictures_section(results));
     s.push_str(&strength_section(results));
     s.push_str(&twins_section(results));
     s.push_str(&crate::error_curves::section(results));
@@ -172,6 +173,48 @@ pub fn report(
         s.push_str("</tr>");
     }
     s.push_str("</table></body></html>\n");
+    s
+}
+
+/// Pictures that differ from their golden on another driver release where the judge holds
+/// every changed pixel legal: not failures, but changes a person should see (each row opens
+/// the run's golden beside its frame in the gallery).
+fn changed_pictures_section(results: &[RunResult]) -> String {
+    let changed: Vec<(&RunResult, &crate::model::GoldenChange)> = results
+        .iter()
+        .filter(|r| r.golden.as_deref() == Some("changed-legal"))
+        .filter_map(|r| Some((r, r.metrics.as_ref()?.golden_change.as_ref()?)))
+        .collect();
+    if changed.is_empty() {
+        return String::new();
+    }
+    let mut s = format!(
+        "<h2 id=\"changed-pictures\">Changed pictures</h2><p>{} picture(s) differ from goldens blessed on another \
+         driver release, and the judge holds every changed pixel legal on this driver: the driver's choice inside the \
+         specs, reported and not failed. Click one for its golden beside this run's frame. After review, \
+         <code>cargo xtask bless --mesa DIR</code> records this release's pictures beside the old goldens.</p>\
+         <table><tr><th>run</th><th>status</th><th>golden blessed on</th><th>this driver</th><th>pixels changed</th>\
+         <th>largest step</th></tr>",
+        changed.len()
+    );
+    for (r, c) in changed {
+        let _ = write!(
+            s,
+            "<tr><td><a href=\"#run={}\">{}</a></td><td class=\"{}\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}/255</td></tr>",
+            esc(&crate::names::url_component(&r.name)),
+            esc(&r.name),
+            r.status.name(),
+            r.status,
+            esc(c
+                .blessed_on
+                .as_deref()
+                .unwrap_or(if c.new { "none (new)" } else { "unknown" })),
+            esc(c.driver.as_deref().unwrap_or("unknown")),
+            c.pixels,
+            c.max_step
+        );
+    }
+    s.push_str("</table>");
     s
 }
 

@@ -26,10 +26,12 @@ pub mod model;
 pub mod names;
 pub mod pareto;
 
-pub use model::{Diagnosis, FailedCheck, Metrics, RunResult, Status, TimeBudget, TwinMetric};
+pub use model::{
+    Diagnosis, FailedCheck, GoldenChange, Metrics, RunResult, Status, TimeBudget, TwinMetric,
+};
 
 /// Writes a conformance run's reports into its directory `dir`: results.csv, failures.csv,
-/// errors.csv, twins.csv, drivers.txt, report.json, junit.xml, report.html (the runner
+/// errors.csv, twins.csv, goldens.csv, drivers.txt, report.json, junit.xml, report.html (the runner
 /// publishes the directory as `latest` once this succeeds).
 /// `failures` is where the workers wrote each failing run's pictures, `pictures` every judged
 /// run's gallery pictures (one directory per run in each).
@@ -54,6 +56,7 @@ pub fn write_conformance(
         ("failures.csv", &tables.failures),
         ("errors.csv", &tables.errors),
         ("twins.csv", &tables.twins),
+        ("goldens.csv", &tables.goldens),
         ("drivers.txt", drivers),
         ("report.json", &json),
         ("junit.xml", &junit),

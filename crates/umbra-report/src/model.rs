@@ -156,6 +156,9 @@ pub struct Metrics {
     pub ssim: Option<f64>,
     /// SSIM of the colour against its golden, where one exists.
     pub ssim_golden: Option<f64>,
+    /// How the colour differs from its golden, where it does (or where there is none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub golden_change: Option<GoldenChange>,
     /// Shadow pass, ms.
     pub shadow_ms: f64,
     /// Lit pass, ms.
@@ -186,6 +189,79 @@ pub struct Metrics {
     pub visibility_hash: String,
 }
 
+/// How a run's picture differs from its golden (outside the golden tolerance of one 8-bit
+/// step per channel), and between which driver versions.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GoldenChange {
+    /// The Mesa version the golden was blessed on, where known.
+    pub blessed_on: Option<String>,
+    /// The Mesa version of this run's driver, where it is a Mesa driver.
+    pub driver: Option<String>,
+    /// Pixels with a channel more than one step from the golden's (every pixel when there
+    /// is no golden or its size differs).
+    pub pixels: u64,
+    /// The largest channel difference, in 8-bit steps.
+    pub max_step: u8,
+    /// No golden on any release yet.
+    pub new: bool,
+    /// Of the changed pixels, those the judge found illegal on this driver (the run fails
+    /// the judge's own checks there: value, coverage, colour).
+    #[serde(default)]
+    pub illegal: u64,
+    /// Of the changed pixels, those the judge did not compare (the background): no check but
+    /// the golden's speaks for them.
+    #[serde(default)]
+    pub unjudged: u64,
+    /// The golden holds strictly on this driver: blessed (or confirmed) on its release, or
+    /// not a Mesa driver. Any change is then a failure to review.
+    #[serde(default)]
+    pub strict: bool,
+    /// The golden was blessed on another release and every pixel that differs is one the
+    /// judge holds legal on this driver: reported as a changed picture, not a failure.
+    pub legal: bool,
+}
+
+impl GoldenChange {
+    /// `1234 px differ by up to 9/255`.
+    pub fn pixels_phrase(&self) -> String {
+        format!("{} px differ by up to {}/255", self.pixels, self.max_step)
+    }
+
+    /// One sentence for the terminal and the reports.
+    pub fn describe(&self) -> String {
+        let v = |x: &Option<String>| x.as_deref().unwrap_or("unknown").to_string();
+        let (blessed, driver) = (v(&self.blessed_on), v(&self.driver));
+        if self.strict {
+            return match self.new {
+                true => "no golden yet".to_string(),
+                false => format!("differs from its golden: {}", self.pixels_phrase()),
+            };
+        }
+        match (self.new, self.legal) {
+            (true, true) => format!(
+                "new picture, legal on this driver: no golden on any release yet (the backend's goldens are of Mesa {blessed}, this driver is Mesa {driver}) and every pixel is inside what the specs allow"
+            ),
+            (true, false) => format!(
+                "new picture (no golden on any release yet; this driver is Mesa {driver}) that the judge's own checks fail"
+            ),
+            (false, true) => format!(
+                "picture changed within the spec: {} from the golden blessed on Mesa {blessed}, every one legal on this driver (Mesa {driver})",
+                self.pixels_phrase()
+            ),
+            (false, false) if self.unjudged == 0 => format!(
+                "picture changed: {} from the golden blessed on Mesa {blessed}, {} of them where the judge finds this driver's (Mesa {driver}) answer illegal: failed by the judge's own checks there, not by the golden",
+                self.pixels_phrase(),
+                self.illegal
+            ),
+            (false, false) => format!(
+                "picture changed: {} from the golden blessed on Mesa {blessed} (this driver Mesa {driver}), {} of them where the judge does not look (background)",
+                self.pixels_phrase(),
+                self.unjudged
+            ),
+        }
+    }
+}
+
 /// One finished run, as reported (and as a shard's record keeps it for `umbra merge`).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RunResult {
@@ -207,8 +283,12 @@ pub struct RunResult {
     pub metrics: Option<Metrics>,
     /// The checks a failing run failed (its signature).
     pub failed: Vec<FailedCheck>,
-    /// What became of its golden: `unchanged`, `written`, `changed`, or
-    /// `changed-other-driver` (differs, and was blessed on another Mesa version: failed, with both versions named).
+    /// What became of its golden: `unchanged`, `written`, `written-for-release` (blessed as
+    /// this Mesa release's golden beside another release's), `changed`,
+    /// `changed-other-driver` (differs where the judge does not hold every pixel legal, and
+    /// was blessed on another Mesa version: failed, with both versions named), or
+    /// `changed-legal` (differs from another release's golden only where every pixel is legal:
+    /// not a failure; `metrics.golden_change` says how).
     pub golden: Option<String>,
     /// Wall time of the run including retries, seconds.
     pub time_s: f64,

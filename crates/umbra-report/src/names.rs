@@ -53,6 +53,21 @@ pub fn mesa_of(reproduce: &str) -> Option<String> {
     (!word.is_empty()).then_some(word)
 }
 
+/// `text` percent-encoded for a URL's fragment (`report.html#run=NAME`): everything but
+/// ASCII letters, digits and `-_.~/` as `%XX` of its UTF-8 bytes, as the page's
+/// `decodeURIComponent` reads it back.
+pub fn url_component(text: &str) -> String {
+    text.bytes()
+        .map(|b| {
+            if b.is_ascii_alphanumeric() || b"-_.~/".contains(&b) {
+                (b as char).to_string()
+            } else {
+                format!("%{b:02X}")
+            }
+        })
+        .collect()
+}
+
 /// 32-bit FNV-1a of a name: a stable short tag for file names.
 pub fn fnv1a(name: &str) -> u32 {
     name.bytes().fold(0x811c_9dc5u32, |h, b| {

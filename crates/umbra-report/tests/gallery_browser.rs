@@ -129,6 +129,27 @@ fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
             results.push(r);
         }
     }
+    // A picture that changed on another Mesa release where the judge holds every changed
+    // pixel legal: a pass, shown as a changed picture beside its golden.
+    let mut changed = run("gl33/zink", "filters@shadow.filter=pcf5", Status::Pass);
+    changed.golden = Some("changed-legal".into());
+    changed.metrics = Some(umbra_report::Metrics {
+        golden_change: Some(umbra_report::GoldenChange {
+            blessed_on: Some("22.3.6".into()),
+            driver: Some("26.2.6-1".into()),
+            pixels: 23,
+            max_step: 24,
+            legal: true,
+            ..Default::default()
+        }),
+        ..Default::default()
+    });
+    let d = pictures.join(umbra_report::names::file_name(&changed.name));
+    std::fs::create_dir_all(&d).expect("run dir");
+    png(&d.join("thumb.png"), 48, 36, 90);
+    png(&d.join("color.png"), 160, 120, 90);
+    png(&d.join("golden.png"), 160, 120, 95);
+    results.push(changed.clone());
     let html = umbra_report::html::report(
         &results,
         "ref: umbra | CPU reference",
@@ -153,6 +174,32 @@ fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
         dom.contains("<div id=\"g-detail\" hidden=\"\">"),
         "the detail view starts closed"
     );
+
+    // The changed picture: listed in its own table, outlined in the gallery, and its detail
+    // view says how it changed beside the golden and the frame.
+    assert!(
+        dom.contains("id=\"changed-pictures\"")
+            && dom.contains(&format!(
+                "href=\"#run={}\"",
+                umbra_report::names::url_component(&changed.name)
+            )),
+        "the changed pictures table links the run"
+    );
+    assert_eq!(dom.matches("class=\"cell Pass changed\"").count(), 1);
+    let (dom, _) = dump(
+        &page,
+        &format!("#run={}", umbra_report::names::url_component(&changed.name)),
+    );
+    let reason = &dom[dom.find("id=\"g-reason\"").expect("reason")..];
+    assert!(
+        reason.contains("picture changed within the spec: 23 px differ by up to 24/255")
+            && reason.contains("Mesa 22.3.6")
+            && reason.contains("Mesa 26.2.6-1"),
+        "{}",
+        &reason[..reason.len().min(400)]
+    );
+    let detail = &dom[dom.find("id=\"g-pictures\"").expect("pictures box")..];
+    assert_eq!(detail.matches("<figure>").count(), 2, "backend and golden");
 
     // A filter link shows just the runs of that status.
     let (dom, _) = dump(&page, "#status=Pass");

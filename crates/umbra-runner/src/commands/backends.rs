@@ -75,7 +75,7 @@ pub fn main(args: &Args) -> i32 {
 fn backend(id: &str, what: &str, aliases: Option<&str>) -> Value {
     let env = registry::worker_env(id);
     let reach = reach(id);
-    let out = std::env::current_exe().and_then(|exe| {
+    let out = crate::harness::own_libc::self_exe().and_then(|exe| {
         let mut cmd = std::process::Command::new(exe);
         for v in registry::env_removed(id) {
             cmd.env_remove(v);

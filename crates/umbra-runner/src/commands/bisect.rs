@@ -174,7 +174,7 @@ pub fn main(args: &Args) -> i32 {
             }
         }
     }
-    let exe = match std::env::current_exe() {
+    let exe = match crate::harness::own_libc::self_exe() {
         Ok(e) => e,
         Err(e) => {
             eprintln!("error: cannot find this executable: {e}");
@@ -357,7 +357,7 @@ fn repro_first_bad(
         return 125;
     };
     println!("bisect: the repro bundle of {run} on {sha}: {dir}");
-    let Ok(exe) = std::env::current_exe() else {
+    let Ok(exe) = crate::harness::own_libc::self_exe() else {
         return 125;
     };
     let mut cmd = Command::new(exe);
@@ -500,7 +500,7 @@ pub fn step(args: &Args) -> i32 {
         return 125;
     }
     let t = Instant::now();
-    let Ok(exe) = std::env::current_exe() else {
+    let Ok(exe) = crate::harness::own_libc::self_exe() else {
         return 125;
     };
     let report = work.join("reports").join(&sha);

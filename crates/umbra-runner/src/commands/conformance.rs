@@ -83,6 +83,9 @@ struct Settings {
     verbose: bool,
     /// `--bless`: workers may write goldens.
     bless: bool,
+    /// Every point of every backend run (no `--filter`, no `--shard`): a bless then confirms
+    /// each backend's goldens on its driver's release.
+    whole: bool,
 }
 
 /// Runs the command; returns the process exit code.
@@ -553,6 +556,7 @@ fn settings(
         expectations: opts.expectations.clone(),
         verbose: args.has("verbose"),
         bless: opts.bless,
+        whole: opts.filter == "*" && opts.shard.1 == 1,
     }
 }
 
@@ -835,17 +839,99 @@ pub(crate) fn print_summary(
         );
     }
     println!("statuses: {}", umbra_report::model::breakdown(results));
+    print_golden_changes(results);
+    regressions.len()
+}
+
+/// The goldens' part of the summary: pictures that changed on another driver release,
+/// legally (reported, not failed; `goldens.csv` and report.html list them) or not (failed,
+/// each run's reason names both versions).
+fn print_golden_changes(results: &[RunResult]) {
+    let legal: Vec<&RunResult> = results
+        .iter()
+        .filter(|r| r.golden.as_deref() == Some("changed-legal"))
+        .collect();
+    if !legal.is_empty() {
+        let mut by: std::collections::BTreeMap<(String, String), Vec<&str>> = Default::default();
+        for r in &legal {
+            let c = r.metrics.as_ref().and_then(|m| m.golden_change.as_ref());
+            let v = |x: Option<&Option<String>>| {
+                x.and_then(|x| x.clone())
+                    .unwrap_or_else(|| "unknown".into())
+            };
+            by.entry((v(c.map(|c| &c.blessed_on)), v(c.map(|c| &c.driver))))
+                .or_default()
+                .push(&r.backend);
+        }
+        let new = legal
+            .iter()
+            .filter(|r| {
+                r.metrics
+                    .as_ref()
+                    .and_then(|m| m.golden_change.as_ref())
+                    .is_some_and(|c| c.new)
+            })
+            .count();
+        println!(
+            "goldens: {} picture(s) changed on this driver inside what the specs allow ({new} of them new, with no golden on any release): reported, not failed; goldens.csv and report.html (gallery, status \"changed picture\") show each beside its golden",
+            legal.len()
+        );
+        for ((blessed, driver), backends) in &by {
+            let mut counts: std::collections::BTreeMap<&str, usize> = Default::default();
+            for b in backends {
+                *counts.entry(b).or_default() += 1;
+            }
+            println!(
+                "  golden blessed on Mesa {blessed}, this driver Mesa {driver}: {}",
+                counts
+                    .iter()
+                    .map(|(b, n)| format!("{b} {n}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        for r in legal.iter().take(5) {
+            if let Some(c) = r.metrics.as_ref().and_then(|m| m.golden_change.as_ref()) {
+                println!("    {}: {}", term(&r.name), c.pixels_phrase());
+            }
+        }
+        if legal.len() > 5 {
+            println!("    … {} more in goldens.csv", legal.len() - 5);
+        }
+        println!(
+            "  after review, `cargo xtask bless --mesa DIR` (the same build) records this release's pictures beside the old goldens (golden/mesa-RELEASE/), which then hold strictly on it"
+        );
+    }
+    let judged: Vec<&RunResult> = results
+        .iter()
+        .filter(|r| r.golden.as_deref() == Some("changed-judged"))
+        .collect();
+    if !judged.is_empty() {
+        let statuses: std::collections::BTreeMap<String, usize> =
+            judged.iter().fold(Default::default(), |mut m, r| {
+                *m.entry(r.status.name().to_string()).or_default() += 1;
+                m
+            });
+        println!(
+            "goldens: {} picture(s) changed on another driver release where the judge finds pixels illegal: those runs stand on the judge's own checks ({}), not on the golden; goldens.csv lists them",
+            judged.len(),
+            statuses
+                .iter()
+                .map(|(s, n)| format!("{n} {s}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     let foreign = results
         .iter()
         .filter(|r| r.golden.as_deref() == Some("changed-other-driver"))
         .count();
     if foreign > 0 {
         println!(
-            "goldens: {foreign} differ and were blessed on another driver version (golden/{}); each run's reason names both versions",
+            "goldens: {foreign} differ where the judge does not look (the background, the frame's size), and were blessed on another driver version (golden/{}); each run's reason names both versions",
             crate::judge::golden::MANIFEST
         );
     }
-    regressions.len()
 }
 
 /// The closing line, alone, in the form CI tools read: `COMMAND: P passed, F failed, S
@@ -887,6 +973,28 @@ fn record_blessings(g: &Gathered, settings: &Settings) {
                 != Some(v.as_str())
         {
             entries.push((crate::judge::golden::stem(&r.name), v));
+        }
+    }
+    // A whole bless (every point of each backend: no --filter, no --shard) on a release its
+    // goldens were not blessed on confirms them there: the goldens of that release's own
+    // (written now where a picture differs) and the rest, as they are now, hold strictly on
+    // it from here on.
+    if settings.whole {
+        let mut seen: Vec<&str> = Vec::new();
+        for r in g.results.iter().filter(|r| r.golden.is_some()) {
+            if seen.contains(&r.backend.as_str()) {
+                continue;
+            }
+            seen.push(&r.backend);
+            let Some(v) = version_of(&r.backend) else {
+                continue;
+            };
+            // The release the backend's goldens were first blessed on (the manifest keeps it;
+            // a backend blessed for the first time now has none yet).
+            let base = crate::judge::golden::blessed_on(dir, &r.backend, &r.backend);
+            if base.is_some_and(|b| !crate::judge::golden::same_release(&b, &v)) {
+                entries.push(crate::judge::golden::confirmation(dir, &r.backend, &v));
+            }
         }
     }
     // Nothing Mesa-backed was blessed: the manifest stays as it is.

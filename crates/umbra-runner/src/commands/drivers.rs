@@ -272,7 +272,7 @@ pub fn main(args: &Args) -> i32 {
     };
     let out = PathBuf::from(args.value("out").unwrap_or("target/umbra/drivers"));
     let _ = std::fs::remove_dir_all(&out);
-    let Ok(exe) = std::env::current_exe() else {
+    let Ok(exe) = crate::harness::own_libc::self_exe() else {
         eprintln!("error: cannot find this executable");
         return 125;
     };

@@ -39,6 +39,10 @@ pub fn main(args: &Args) -> i32 {
         println!("skip {backend_id}: {why}");
         return 0;
     }
+    if let Some(Err(e)) = on_build.map(crate::harness::own_libc::enter) {
+        eprintln!("error: {backend_id}: {e}");
+        return 125;
+    }
     let mut backend = match crate::harness::registry::create(backend_id) {
         Ok(b) => b,
         Err(crate::harness::registry::CreateError::Unknown(e)) => return usage_error(&e),

@@ -386,7 +386,7 @@ fn default_control(backend: &str) -> Option<String> {
 /// Runs this executable with `args`, returning its exit code and its stdout and stderr
 /// together.
 fn run_self(args: &[String]) -> std::io::Result<(Option<i32>, String)> {
-    let exe = std::env::current_exe()?;
+    let exe = crate::harness::own_libc::self_exe()?;
     let mut cmd = Command::new(exe);
     cmd.args(args);
     crate::harness::pool::without_inherited_insta(&mut cmd);
@@ -463,14 +463,31 @@ fn env_text(env: &[(String, String)], out: &Path) -> String {
 /// Runs the compiled program on `backend`'s driver, killed after [`PROGRAM_TIMEOUT`].
 fn run_program(binary: &Path, backend: &str, out: &Path) -> ProgramRun {
     let env = program_env(backend);
-    let mut cmd = Command::new(binary);
+    // A build with its own C library runs the program through its loader.
+    let build = crate::harness::mesa_build::selected()
+        .filter(|_| crate::harness::mesa_build::is_mesa_backed(backend));
+    let mut cmd = crate::harness::own_libc::command(build, binary);
     for v in registry::env_removed(backend) {
         cmd.env_remove(v);
     }
     let (code, output) = run_with_timeout(cmd.envs(env.clone()), PROGRAM_TIMEOUT);
+    // What a reader types: the environment, then the build's loader where it has one.
+    let through = build
+        .and_then(|b| b.loader.as_ref().map(|l| (b, l)))
+        .map_or(String::new(), |(b, l)| {
+            format!(
+                " {} --library-path {}",
+                l.display(),
+                b.lib_dirs
+                    .iter()
+                    .map(|d| d.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(":")
+            )
+        });
     ProgramRun {
         backend: backend.to_string(),
-        env: env_text(&env, out),
+        env: env_text(&env, out) + &through,
         code,
         output,
     }
@@ -529,6 +546,17 @@ fn capture(
     }
     if m.runs.is_empty() {
         return (Err("no program was built to capture".into()), Vec::new());
+    }
+    if let Some(b) = crate::harness::mesa_build::selected()
+        .filter(|b| b.loader.is_some() && crate::harness::mesa_build::is_mesa_backed(backend))
+    {
+        return (
+            Err(format!(
+                "the Mesa build in {} carries its own C library and runs through its own loader, which apitrace's capture (LD_PRELOAD of the machine's libraries) cannot follow; run repro.c there as the bundle's commands say",
+                b.root.display()
+            )),
+            Vec::new(),
+        );
     }
     let trace = out.join("capture.trace");
     let env = program_env(backend);
@@ -684,7 +712,7 @@ fn gfxr_capture(
     reduced: &Path,
 ) -> (Result<String, String>, Vec<Replay>) {
     let file = out.join("capture.gfxr");
-    let Ok(exe) = std::env::current_exe() else {
+    let Ok(exe) = crate::harness::own_libc::self_exe() else {
         return (Err("cannot find this executable".into()), Vec::new());
     };
     let layer = [

@@ -18,7 +18,7 @@ pub fn rerun_for(id: &str, args: &[String], env: &[(String, String)]) -> i32 {
 }
 
 fn rerun_without(args: &[String], env: &[(String, String)], removed: &[&str]) -> i32 {
-    let exe = match std::env::current_exe() {
+    let exe = match crate::harness::own_libc::self_exe() {
         Ok(e) => e,
         Err(e) => {
             eprintln!("error: cannot find this executable to start a driver process: {e}");

@@ -34,7 +34,7 @@ pub const IDS: [&str; 6] = [
 pub const MESA: &str = "fake/mesa";
 
 /// A marker file that makes a directory a fake Mesa build, for the runner's own tests (only
-/// with fake backends enabled): `{"version": "...", "fault": "invert" | null}`.
+/// with fake backends enabled): `{"version": "...", "fault": "invert" | "background" | null}`.
 pub const MARKER: &str = "umbra-fake-mesa.json";
 
 /// The marker of the fake build in `root`, if it is one: (version, fault), or why the marker
@@ -123,6 +123,14 @@ impl Backend for Fake {
                 std::thread::sleep(std::time::Duration::from_secs(3600));
             },
             "fake/flaky" if self.calls > 1 => {}
+            // A change only where the judge does not look: the background's colour.
+            MESA if fake_build().and_then(|b| b.1).as_deref() == Some("background") => {
+                for i in 0..frame.visibility.len() {
+                    if !frame.covered(i) {
+                        frame.color[i * 4..i * 4 + 3].copy_from_slice(&[200, 40, 40]);
+                    }
+                }
+            }
             MESA if fake_build().and_then(|b| b.1).as_deref() != Some("invert") => {}
             _ => {
                 for v in &mut frame.visibility {
@@ -130,10 +138,13 @@ impl Backend for Fake {
                         *v = 1.0 - *v;
                     }
                 }
-                // The picture changes with the shadows (goldens see it too).
-                for px in frame.color.chunks_exact_mut(4) {
-                    for c in &mut px[..3] {
-                        *c = 255 - *c;
+                // The picture changes with the shadows (goldens see it too); the background,
+                // which has none, stays.
+                for i in 0..frame.visibility.len() {
+                    if frame.covered(i) {
+                        for c in &mut frame.color[i * 4..i * 4 + 3] {
+                            *c = 255 - *c;
+                        }
                     }
                 }
             }

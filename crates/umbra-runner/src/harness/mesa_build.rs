@@ -47,6 +47,31 @@ pub struct MesaBuild {
     pub lib_dirs: Vec<PathBuf>,
     /// Where umbra's loader JSON files for this build live.
     pub generated: PathBuf,
+    /// The build's own dynamic loader (`ld-linux-*.so.*` beside a `libc.so.6`), when it carries
+    /// its C library: a Debian suite newer than the machine (`cargo xtask fetch-mesa --suite
+    /// sid`). Its processes are started through it ([`crate::harness::own_libc`]).
+    pub loader: Option<PathBuf>,
+    /// What `cargo xtask fetch-mesa` recorded of it ([`FETCHED`]), when it made it.
+    pub fetched: Option<Fetched>,
+}
+
+/// The file `cargo xtask fetch-mesa` writes at the root of what it unpacks.
+pub const FETCHED: &str = "umbra-mesa.json";
+
+/// What `cargo xtask fetch-mesa` recorded of a build it unpacked.
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
+pub struct Fetched {
+    /// The Debian suite (`sid`, `trixie`, `bookworm-backports`).
+    pub suite: String,
+    /// The version of its Mesa packages (`26.2.6-1`).
+    pub mesa: String,
+    /// The version of its C library (`2.43-7`) where the build carries it, else none: the
+    /// machine's is used.
+    #[serde(default)]
+    pub own_libc: Option<String>,
+    /// Every package unpacked, `name=version`.
+    #[serde(default)]
+    pub packages: Vec<String>,
 }
 
 static SELECTED: OnceLock<Option<MesaBuild>> = OnceLock::new();
@@ -67,7 +92,14 @@ pub fn select(flag: Option<&str>) -> Result<Option<&'static MesaBuild>, String> 
     };
     let build = match value.as_deref() {
         None | Some("system") => None,
-        Some(v) => Some(MesaBuild::open(Path::new(v)).map_err(|e| format!("{from} {v}: {e}"))?),
+        Some(v) => {
+            let build = MesaBuild::open(Path::new(v)).map_err(|e| format!("{from} {v}: {e}"))?;
+            if build.layout != "fake (tests)" {
+                crate::harness::own_libc::check_loadable(&build)
+                    .map_err(|e| format!("{from} {v}: {e}"))?;
+            }
+            Some(build)
+        }
     };
     let _ = SELECTED.set(build);
     Ok(selected())
@@ -98,6 +130,8 @@ impl MesaBuild {
                 lavapipe: None,
                 lib_dirs: Vec::new(),
                 generated,
+                loader: None,
+                fetched: None,
             });
         }
         let mut found = Found::default();
@@ -120,6 +154,23 @@ impl MesaBuild {
         } else {
             "install prefix"
         };
+        // A C library and its loader side by side: the build carries its own, and every
+        // directory of shared libraries in it is searched first.
+        let loader = found
+            .loaders
+            .iter()
+            .find(|l| found.libcs.iter().any(|c| c.parent() == l.parent()))
+            .cloned();
+        if loader.is_some() {
+            for d in &found.so_dirs {
+                if !lib_dirs.contains(d) {
+                    lib_dirs.push(d.clone());
+                }
+            }
+        }
+        let fetched = std::fs::read_to_string(root.join(FETCHED))
+            .ok()
+            .and_then(|t| serde_json::from_str(&t).ok());
         let build = MesaBuild {
             version: version_of(&root, &found),
             root,
@@ -130,6 +181,8 @@ impl MesaBuild {
             lavapipe: found.lavapipe,
             lib_dirs,
             generated,
+            loader,
+            fetched,
         };
         build.write_loader_files(found.icd_api.as_deref())?;
         Ok(build)
@@ -166,7 +219,9 @@ impl MesaBuild {
     /// worker checks what it loaded).
     pub fn env(&self) -> Vec<(String, String)> {
         let mut env = vec![(ENV.to_string(), self.root.to_string_lossy().into_owned())];
-        if !self.lib_dirs.is_empty() {
+        // A build with its own C library is found through its loader's `--library-path`, which
+        // no child inherits: in LD_LIBRARY_PATH its libc would meet the machine's loader.
+        if !self.lib_dirs.is_empty() && self.loader.is_none() {
             let mut dirs: Vec<String> = self
                 .lib_dirs
                 .iter()
@@ -246,10 +301,21 @@ impl MesaBuild {
 
     /// One line for reports: where the build is and what it says it is.
     pub fn describe(&self) -> String {
+        let layout = match &self.fetched {
+            Some(f) => format!("Debian {} packages", f.suite),
+            None => self.layout.to_string(),
+        };
+        let libc = match (
+            &self.loader,
+            self.fetched.as_ref().and_then(|f| f.own_libc.as_ref()),
+        ) {
+            (Some(_), Some(v)) => format!(", its own C library glibc {v}"),
+            (Some(_), None) => ", its own C library".to_string(),
+            (None, _) => String::new(),
+        };
         format!(
-            "{} ({}, {})",
+            "{} ({layout}, {}{libc})",
             self.root.display(),
-            self.layout,
             self.version.as_deref().unwrap_or("version unknown")
         )
     }
@@ -276,6 +342,11 @@ struct Found {
     shared: Vec<PathBuf>,
     pkg_version: Option<String>,
     project_version: Option<String>,
+    /// Dynamic loaders (`ld-linux-*.so.*`) and C libraries (`libc.so.6`) in the tree.
+    loaders: Vec<PathBuf>,
+    libcs: Vec<PathBuf>,
+    /// Every directory holding a shared library (`*.so*`), in walk order.
+    so_dirs: Vec<PathBuf>,
 }
 
 /// Walks `dir` (not into `.git`, meson's private directories or symlinked directories) for
@@ -305,6 +376,17 @@ fn walk(dir: &Path, depth: usize, found: &mut Found) {
             }
             walk(&path, depth + 1, found);
             continue;
+        }
+        if name.contains(".so")
+            && !found.so_dirs.iter().any(|d| d == dir)
+            && dir.file_name().is_some_and(|d| d != "dri")
+        {
+            found.so_dirs.push(dir.to_path_buf());
+        }
+        if name.starts_with("ld-linux") && name.contains(".so") {
+            found.loaders.push(path.clone());
+        } else if name == "libc.so.6" {
+            found.libcs.push(path.clone());
         }
         if name == "libEGL_mesa.so.0" && found.egl.is_none() {
             found.egl = Some(path);

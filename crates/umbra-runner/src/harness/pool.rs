@@ -32,8 +32,8 @@ pub struct Worker {
 impl Worker {
     /// Starts `umbra worker --backend id` with `env`; waits up to `limit` for its hello.
     pub fn start(id: &str, env: &[(String, String)], limit: Duration) -> Result<Worker, String> {
-        let exe =
-            std::env::current_exe().map_err(|e| format!("cannot find this executable: {e}"))?;
+        let exe = crate::harness::own_libc::self_exe()
+            .map_err(|e| format!("cannot find this executable: {e}"))?;
         Worker::start_exe(&exe, id, env, limit)
     }
 

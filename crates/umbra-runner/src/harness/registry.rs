@@ -73,7 +73,8 @@ pub struct Discovered {
 /// no driver loads in this one: every EGL device with each GL API, every wgpu adapter that is
 /// not one of this build's ids. Empty where nothing can be listed.
 pub fn discover() -> Result<Vec<Discovered>, String> {
-    let exe = std::env::current_exe().map_err(|e| format!("cannot find this executable: {e}"))?;
+    let exe = crate::harness::own_libc::self_exe()
+        .map_err(|e| format!("cannot find this executable: {e}"))?;
     let mut cmd = std::process::Command::new(exe);
     cmd.args(["backends", "--ids"])
         .env("NODEVICE_SELECT", "1")

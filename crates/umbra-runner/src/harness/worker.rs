@@ -113,6 +113,14 @@ pub fn main(args: &Args) -> i32 {
                 say(&mut out, serde_json::json!({ "unavailable": why }));
                 return 0;
             }
+            // A build with its own C library: this process continues on it (re-executed).
+            if let Err(e) = crate::harness::own_libc::enter(&b) {
+                say(
+                    &mut out,
+                    serde_json::json!({ "refused": format!("{id}: {e}") }),
+                );
+                return 0;
+            }
             Some(b)
         }
         None => None,
@@ -124,7 +132,9 @@ pub fn main(args: &Args) -> i32 {
             let libs = crate::harness::mesa_build::loaded_libs();
             if let Some(build) = &build {
                 if build.layout != "fake (tests)" {
-                    if let Err(e) = crate::harness::mesa_build::check_loaded(&build.root, &libs) {
+                    if let Err(e) = crate::harness::mesa_build::check_loaded(&build.root, &libs)
+                        .and_then(|()| crate::harness::own_libc::check_on_build_libc(build))
+                    {
                         say(
                             &mut out,
                             serde_json::json!({ "refused": format!("{id}: {e}") }),
@@ -283,6 +293,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 visibility_storage: j.frame.visibility_storage.name().into(),
                 ssim: j.ssim,
                 ssim_golden: None,
+                golden_change: None,
                 shadow_ms: t.shadow_pass.as_secs_f64() * 1e3,
                 lit_ms: t.lit_pass.as_secs_f64() * 1e3,
                 total_ms: t.total.as_secs_f64() * 1e3,
@@ -308,55 +319,49 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             let mut metrics = metrics;
             let golden_start = std::time::Instant::now();
             let mut identical_to_golden = false;
+            let mut held = None;
             let golden = req.golden.as_ref().map(|dir| {
-                let crate::judge::golden::Checked {
-                    golden: g,
-                    message: msg,
-                    ssim,
-                    identical,
-                } = crate::judge::golden::check(dir, &name, &j.frame, &j.legal);
-                metrics.ssim_golden = ssim;
-                identical_to_golden = identical;
-                // A golden blessed on another driver version still fails; the reason says so.
                 let info = backend.info();
-                let here = crate::judge::expectations::reported_version(
+                let driver = crate::judge::expectations::reported_version(
                     [info.version.as_str(), info.renderer.as_str()]
                         .into_iter()
                         .chain(info.extensions.iter().map(String::as_str)),
                 );
-                let blessed = crate::judge::golden::blessed_on(dir, &backend.id().0, &name);
-                let foreign = match (&here, &blessed) {
-                    (Some(h), Some(b)) => (!crate::judge::golden::same_release(h, b)).then_some((h, b)),
-                    _ => None,
-                };
-                match (g, foreign) {
-                    (crate::judge::golden::Golden::Changed, foreign) => {
-                        problems.push(match foreign {
-                            Some((h, b)) => format!(
-                                "{msg}; this golden was blessed on Mesa {b} and this driver is Mesa {h}: the difference may be the driver's change between them (compare the two with `cargo xtask drivers`, and bless on this version only after review)"
-                            ),
-                            None => msg,
-                        });
-                        failed.push(umbra_report::FailedCheck {
-                            check: "golden".into(),
-                            count: 1,
-                        });
-                        if foreign.is_some() {
-                            "changed-other-driver".to_string()
-                        } else {
-                            "changed".to_string()
-                        }
-                    }
-                    (g, _) => format!("{g:?}").to_lowercase(),
+                let checked = crate::judge::golden::check(
+                    dir,
+                    &crate::judge::golden::Subject {
+                        backend: &backend.id().0,
+                        name: &name,
+                        driver: driver.as_deref(),
+                    },
+                    &j.frame,
+                    &j.legal,
+                    &j.pixels,
+                    problems.is_empty(),
+                );
+                metrics.ssim_golden = checked.ssim;
+                metrics.golden_change = checked.change.clone();
+                identical_to_golden = checked.identical;
+                let foreign = !checked.held.strict;
+                held = Some(checked.held);
+                if checked.golden == crate::judge::golden::Golden::Changed {
+                    problems.push(checked.message);
+                    failed.push(umbra_report::FailedCheck {
+                        check: "golden".into(),
+                        count: 1,
+                    });
                 }
+                checked.golden.word(foreign).to_string()
             });
             let mut storage = None;
             if let Some(dir) = &req.gallery {
-                let golden = req.golden.as_ref().map(|g| {
+                let golden = held.as_ref().map(|h| {
                     let stem = crate::judge::golden::stem(&name);
                     (
-                        g.join(format!("{stem}.snap.png")),
-                        g.join(format!("{stem}.snap.new.png")),
+                        h.file
+                            .clone()
+                            .unwrap_or_else(|| h.write_dir.join(format!("{stem}.snap.png"))),
+                        h.write_dir.join(format!("{stem}.snap.new.png")),
                     )
                 });
                 let at = dir.join(umbra_report::names::file_name(&name));

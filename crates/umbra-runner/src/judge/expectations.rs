@@ -346,10 +346,14 @@ pub enum Term {
     Renderer(String),
 }
 
-/// The numeric components of a version string, up to the first non-numeric part
-/// (`25.0.7-2~bpo12+1` → [25, 0, 7]).
+/// The numeric components of a version string's upstream part: up to the first
+/// non-numeric component, and never past a packaging suffix (`25.0.7-2~bpo12+1` → [25, 0,
+/// 7]; `26.3.0-devel (git-abc)` → [26, 3, 0]).
 pub fn version_parts(v: &str) -> Vec<u32> {
-    v.split(['.', '-', '~', '+', ' '])
+    v.split(['-', '~', '+', ' '])
+        .next()
+        .unwrap_or("")
+        .split('.')
         .map_while(|p| p.parse().ok())
         .collect()
 }

@@ -16,14 +16,27 @@
 //! --bless` (refused under `CI=true`), which alone sets `INSTA_UPDATE=always`, and lists what
 //! it wrote.
 //!
-//! Goldens stay per backend id; `golden/blessed-on.json` records the Mesa version goldens were
-//! blessed on (`cargo xtask bless` writes it): per backend, the version its goldens were first
-//! blessed on, and per golden written since, that golden's (so one golden blessed on a newer
-//! Mesa, for a feature the older one skips, does not relabel the rest). A run on another
-//! version (`--mesa`, or a distribution upgrade) compares as always and a difference still
-//! fails, but its reason says plainly that the golden was blessed on another version ("blessed
-//! on Mesa 22.3.6, this driver is Mesa 25.0.7"), because the likeliest cause is then the
-//! driver's change, not umbra's; `cargo xtask drivers` shows the two builds side by side.
+//! **Goldens across driver releases.** A golden is strict on the Mesa release it was blessed
+//! on and lets the judge speak on any other, the way Mesa's trace CI keeps one checksum per
+//! device:
+//! - `golden/blessed-on.json` records the release each backend's goldens were first blessed
+//!   on, and per golden written since on another, that golden's.
+//! - `golden/mesa-RELEASE/` holds a release's own pictures, only those that differ from the
+//!   golden of the release they were blessed on ([`held`]): a new release records what
+//!   differs, not a second copy of everything. Blessing on a release never overwrites another
+//!   release's golden.
+//! - A whole bless on a release (`cargo xtask bless --mesa DIR`, every point of a backend)
+//!   confirms that backend's goldens there (`BACKEND@RELEASE` in the manifest, with a digest
+//!   of its goldens), so the rest hold strictly on it too, for as long as they are the goldens
+//!   it confirmed ([`confirmed`]).
+//! - On a release where its golden is not strict, a picture that differs is judged pixel by
+//!   pixel ([`check`]): where every changed pixel is one the judge holds legal on this driver,
+//!   it is a changed picture (`changed-legal`), reported with both versions (terminal,
+//!   goldens.csv, report.html) and not failed; where some changed pixels are illegal, the
+//!   judge's own checks fail the run there (`changed-judged`: the golden adds nothing); only a
+//!   change where the judge does not look (the background, the frame's size) fails the golden
+//!   check, with both versions named. So a Mesa developer's CI on main is green when the
+//!   driver is right, and every spec-legal change is still visible.
 //!
 //! Tolerance (the same backend on another day): each 8-bit colour channel may differ by one
 //! step (the output's rounding), except on pixels where the judge already allows the shadow
@@ -39,10 +52,40 @@ use umbra_case::Frame;
 pub enum Golden {
     /// Within tolerance of the golden.
     Unchanged,
-    /// Different (or new) and written by insta (`INSTA_UPDATE=always`, i.e. blessing).
+    /// Different (or new) and written by insta (`INSTA_UPDATE=always`, i.e. blessing) into the
+    /// golden directory itself.
     Written,
+    /// Different from a golden blessed on another Mesa release and written (blessing) as
+    /// this release's golden, `mesa-RELEASE/` beside the old one, which stays.
+    WrittenForRelease,
     /// Different (or new) and left for review (or refused under CI): a failure.
     Changed,
+    /// Different from a golden blessed on another Mesa release (or no golden on any release
+    /// yet), and every pixel that differs is one the judge holds legal on this driver: not a
+    /// failure, reported as a changed picture with both versions
+    /// ([`umbra_report::GoldenChange`]).
+    ChangedLegal,
+    /// Different from a golden blessed on another Mesa release, and every pixel that differs
+    /// is one the judge compared, some of them illegal: the judge's own checks fail the run
+    /// there (value, coverage, colour; an expectation may name that failure, as on the
+    /// golden's release), so the golden adds no failure of its own; reported with both
+    /// versions.
+    ChangedJudged,
+}
+
+impl Golden {
+    /// The word reports use (`RunResult::golden`).
+    pub fn word(self, foreign: bool) -> &'static str {
+        match self {
+            Golden::Unchanged => "unchanged",
+            Golden::Written => "written",
+            Golden::WrittenForRelease => "written-for-release",
+            Golden::Changed if foreign => "changed-other-driver",
+            Golden::Changed => "changed",
+            Golden::ChangedLegal => "changed-legal",
+            Golden::ChangedJudged => "changed-judged",
+        }
+    }
 }
 
 /// Encodes a frame's colour as PNG.
@@ -76,9 +119,96 @@ pub fn stem(name: &str) -> String {
     format!("{plain}-{:08x}", umbra_report::names::fnv1a(name))
 }
 
-/// Checks `frame` against golden `name` in `dir`; `legal[i]` marks pixels where a shadow
-/// difference is legal (empty: none). Returns what happened, a message for a change, and the
-/// SSIM of the colour against the golden where one exists.
+/// The release a driver version belongs to for goldens: its numeric parts (`26.2.6-1` →
+/// `26.2.6`), so a distribution's packaging suffix does not matter.
+pub fn release(version: &str) -> String {
+    crate::judge::expectations::version_parts(version)
+        .iter()
+        .map(u32::to_string)
+        .collect::<Vec<_>>()
+        .join(".")
+}
+
+/// The directory of release `version`'s goldens inside the golden directory: the pictures
+/// that differ on that release from the golden blessed on another (`golden/mesa-26.2.6/`).
+pub fn release_dir(dir: &Path, version: &str) -> std::path::PathBuf {
+    dir.join(format!("mesa-{}", release(version)))
+}
+
+/// The run being checked: which golden and which driver.
+pub struct Subject<'a> {
+    /// The backend id.
+    pub backend: &'a str,
+    /// The run name.
+    pub name: &'a str,
+    /// The Mesa version the driver reports (none: not a Mesa driver, or the reference).
+    pub driver: Option<&'a str>,
+}
+
+/// Where a run's golden is read and written, and how strictly it holds on this driver.
+#[derive(Clone, Debug)]
+pub struct Held {
+    /// The golden file (`STEM.snap.png`), where one exists on any release.
+    pub file: Option<std::path::PathBuf>,
+    /// Where a new golden for this driver is written (and insta's pending snapshot): the
+    /// golden directory, or the release directory when the golden was blessed on another
+    /// release (which never overwrites the other release's golden).
+    pub write_dir: std::path::PathBuf,
+    /// The Mesa version the golden was blessed on, where known.
+    pub blessed_on: Option<String>,
+    /// Whether this driver's release is one the golden was blessed or confirmed on
+    /// ([`confirmed`]), or either version is unknown: then any difference outside the
+    /// tolerance is a change to review. Otherwise a difference whose every pixel the judge
+    /// holds legal is reported, not failed.
+    pub strict: bool,
+}
+
+/// Which golden holds for `run` in `dir`: this release's own (`mesa-RELEASE/STEM`), else the
+/// golden directory's; strict on the release it was blessed on or confirmed on.
+pub fn held(dir: &Path, run: &Subject) -> Held {
+    let stem = stem(run.name);
+    let file_in = |d: &Path| {
+        let f = d.join(format!("{stem}.snap.png"));
+        f.is_file().then_some(f)
+    };
+    let Some(driver) = run.driver else {
+        return Held {
+            file: file_in(dir),
+            write_dir: dir.to_path_buf(),
+            blessed_on: None,
+            strict: true,
+        };
+    };
+    let own = release_dir(dir, driver);
+    if let Some(f) = file_in(&own) {
+        return Held {
+            file: Some(f),
+            write_dir: own,
+            blessed_on: Some(release(driver)),
+            strict: true,
+        };
+    }
+    let base = file_in(dir);
+    let blessed_on = blessed_on(dir, run.backend, run.name);
+    let same = blessed_on
+        .as_deref()
+        .is_none_or(|b| same_release(b, driver));
+    // A golden of another release is never overwritten from this one: this release's
+    // differing picture goes beside it. A run with no golden anywhere starts one here.
+    let write_dir = if base.is_some() && !same {
+        own
+    } else {
+        dir.to_path_buf()
+    };
+    let strict = same || (base.is_some() && confirmed(dir, run.backend, driver));
+    Held {
+        file: base,
+        write_dir,
+        blessed_on,
+        strict,
+    }
+}
+
 /// A golden check's outcome.
 pub struct Checked {
     /// What happened to the golden.
@@ -90,20 +220,75 @@ pub struct Checked {
     /// Whether the frame's colour is the golden's, pixel for pixel (its PNG is the golden's
     /// file).
     pub identical: bool,
+    /// The golden that held, and where a pending one would be (the gallery shows both).
+    pub held: Held,
+    /// For a picture that differs from its golden: how, and between which versions.
+    pub change: Option<umbra_report::GoldenChange>,
 }
 
-/// Checks `frame`'s colour against run `name`'s golden in `dir` (`legal`: the pixels where the
-/// judge allows the shadow itself to differ).
-pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> Checked {
-    let stem = stem(name);
-    let existing = std::fs::read(dir.join(format!("{stem}.snap.png"))).ok();
+/// How `frame` differs from golden `img` (same size): pixels with a channel more than one
+/// step apart, the largest step, how many of those the judge found illegal, and how many it
+/// did not compare (the background, where only the golden speaks).
+fn difference(
+    img: &image::RgbaImage,
+    frame: &Frame,
+    judged: &[umbra_compare::reference::PixelJudgement],
+) -> (u64, u8, u64, u64) {
+    use umbra_compare::reference::PixelJudgement;
+    let (mut pixels, mut step, mut illegal, mut unjudged) = (0u64, 0u8, 0u64, 0u64);
+    for (i, (g, f)) in img
+        .as_raw()
+        .chunks_exact(4)
+        .zip(frame.color.chunks_exact(4))
+        .enumerate()
+    {
+        let d = g
+            .iter()
+            .zip(f)
+            .map(|(a, b)| a.abs_diff(*b))
+            .max()
+            .unwrap_or(0);
+        if d <= 1 {
+            continue;
+        }
+        pixels += 1;
+        step = step.max(d);
+        match judged.get(i) {
+            Some(PixelJudgement::Illegal) => illegal += 1,
+            None | Some(PixelJudgement::NotCompared) => unjudged += 1,
+            Some(_) => {}
+        }
+    }
+    (pixels, step, illegal, unjudged)
+}
+
+/// Checks `frame`'s colour against the golden that holds for `run` in `dir` ([`held`]).
+/// `legal`: the pixels where the judge allows the shadow itself to differ (the tolerance on
+/// the golden's own release); `judged`: each pixel's judgement (which pixels a change on
+/// another release may touch); `judge_passed`: whether the run broke nothing the specs
+/// allow (a missing golden on another release is then a new picture, not a failure).
+pub fn check(
+    dir: &Path,
+    run: &Subject,
+    frame: &Frame,
+    legal: &[bool],
+    judged: &[umbra_compare::reference::PixelJudgement],
+    judge_passed: bool,
+) -> Checked {
+    let stem = stem(run.name);
+    let held = held(dir, run);
+    let existing = held.file.as_ref().and_then(|f| std::fs::read(f).ok());
     let decoded = existing
         .as_deref()
         .and_then(|bytes| image::load_from_memory(bytes).ok())
         .map(|i| i.to_rgba8());
-    let identical = decoded.as_ref().is_some_and(|img| {
-        img.dimensions() == (frame.width, frame.height) && *img.as_raw() == frame.color
-    });
+    let same_size = decoded
+        .as_ref()
+        .is_some_and(|img| img.dimensions() == (frame.width, frame.height));
+    let identical = same_size
+        && decoded
+            .as_ref()
+            .is_some_and(|img| *img.as_raw() == frame.color);
     let ssim = decoded.as_ref().and_then(|img| {
         // A frame identical to its golden (the usual regression run) is at SSIM 1 by
         // definition; the windowed computation is most of a golden check's time.
@@ -118,10 +303,9 @@ pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> Checked {
         };
         umbra_compare::ssim(&golden, frame)
     });
-    let within = decoded.is_some_and(|img| {
-        img.dimensions() == (frame.width, frame.height)
-            && img
-                .as_raw()
+    let within = same_size
+        && decoded.as_ref().is_some_and(|img| {
+            img.as_raw()
                 .chunks_exact(4)
                 .zip(frame.color.chunks_exact(4))
                 .enumerate()
@@ -129,16 +313,22 @@ pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> Checked {
                     legal.get(i).copied().unwrap_or(false)
                         || g.iter().zip(f).all(|(a, b)| a.abs_diff(*b) <= 1)
                 })
-    });
+        });
     let ci = under_ci();
-    if within && dir.join(format!("{stem}.snap")).is_file() {
+    let snap_of = |d: &Path| d.join(format!("{stem}.snap"));
+    let read_dir = held
+        .file
+        .as_ref()
+        .and_then(|f| f.parent())
+        .map_or_else(|| held.write_dir.clone(), Path::to_path_buf);
+    if within && snap_of(&read_dir).is_file() {
         // insta would be handed the golden's own bytes and find them equal: a pass that
         // writes nothing, at the price of reading the snapshot again and listing the whole
         // golden directory (its clean-up of this snapshot's pending files, done here by name;
         // never under CI, which changes nothing under golden/).
         if !ci {
             for pending in [format!("{stem}.snap.new"), format!("{stem}.snap.new.png")] {
-                let _ = std::fs::remove_file(dir.join(pending));
+                let _ = std::fs::remove_file(held.write_dir.join(pending));
             }
         }
         return Checked {
@@ -146,21 +336,75 @@ pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> Checked {
             message: String::new(),
             ssim,
             identical,
+            held,
+            change: None,
         };
     }
+    // Outside the tolerance, or no golden. On a release the golden was not blessed on, a
+    // picture whose every differing pixel the judge holds legal is the driver's choice inside
+    // the spec: reported with both versions, never failed.
+    let area = u64::from(frame.width) * u64::from(frame.height);
+    let (pixels, max_step, illegal, unjudged) = match (&decoded, same_size) {
+        (Some(img), true) => difference(img, frame, judged),
+        // A new picture: the judge speaks for every pixel it compared.
+        (None, _) => (area, 255, u64::from(!judge_passed), 0),
+        (Some(_), false) => (area, 255, 0, area),
+    };
+    // Off the golden's release, the judge decides every pixel it compared: a change there is
+    // legal (reported) or illegal (failed by its own checks); only a change where it did not
+    // look (the background, a resized frame) is the golden's to fail.
+    let judged_change = !held.strict && unjudged == 0;
+    let legal_change = judged_change && illegal == 0;
+    let change = umbra_report::GoldenChange {
+        blessed_on: held.blessed_on.clone(),
+        driver: run.driver.map(str::to_string),
+        pixels,
+        max_step,
+        new: decoded.is_none(),
+        illegal,
+        unjudged,
+        strict: held.strict,
+        legal: legal_change,
+    };
+    let reported = if legal_change {
+        Golden::ChangedLegal
+    } else {
+        Golden::ChangedJudged
+    };
+    let versions = match (&held.blessed_on, run.driver) {
+        (Some(b), Some(h)) if !held.strict => format!(
+            "; this golden was blessed on Mesa {b} and this driver is Mesa {h}: the difference may be the driver's change between them (compare the two with `cargo xtask drivers`, and bless on this version only after review)"
+        ),
+        _ => String::new(),
+    };
+    let what = if existing.is_some() {
+        "differs from its golden"
+    } else {
+        "has no golden yet"
+    };
     if ci {
-        let what = if existing.is_some() {
-            "differs from its golden"
+        let (golden, message) = if judged_change {
+            (reported, change.describe())
         } else {
-            "has no golden yet"
+            (
+                Golden::Changed,
+                format!(
+                    "the colour image {what}{}; CI=true: nothing written; run `cargo xtask bless` or `cargo insta review` locally and commit the result{versions}",
+                    if change.new {
+                        String::new()
+                    } else {
+                        format!(" ({})", change.pixels_phrase())
+                    }
+                ),
+            )
         };
         return Checked {
-            golden: Golden::Changed,
-            message: format!(
-                "the colour image {what}; CI=true: nothing written; run `cargo xtask bless` or `cargo insta review` locally and commit the result"
-            ),
+            golden,
+            message,
             ssim,
             identical,
+            held,
+            change: Some(change),
         };
     }
     let bytes = match (&existing, within) {
@@ -168,10 +412,10 @@ pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> Checked {
         _ => png(frame),
     };
     let mut settings = insta::Settings::clone_current();
-    settings.set_snapshot_path(dir);
+    settings.set_snapshot_path(&held.write_dir);
     settings.set_prepend_module_to_snapshot(false);
     settings.set_omit_expression(true);
-    settings.set_description(format!("umbra golden: colour of {name}"));
+    settings.set_description(format!("umbra golden: colour of {}", run.name));
     let name_ext = format!("{stem}.png");
     // insta reports a mismatch by panicking: keep that panic (and, with RUST_BACKTRACE set,
     // its backtrace) off the output; the run's reason says what happened and how to review
@@ -182,20 +426,38 @@ pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> Checked {
         settings.bind(|| insta::assert_binary_snapshot!(name_ext.as_str(), bytes.clone()));
     }));
     std::panic::set_hook(hook);
+    let for_release = held.write_dir != dir;
     let (golden, message) = match (outcome, within) {
         (Ok(()), true) => (Golden::Unchanged, String::new()),
+        (Ok(()), false) if for_release => (
+            Golden::WrittenForRelease,
+            format!(
+                "golden {stem} written for Mesa {} in {}",
+                held.write_dir.file_name().map_or_else(String::new, |n| n
+                    .to_string_lossy()
+                    .trim_start_matches("mesa-")
+                    .to_string()),
+                held.write_dir.display()
+            ),
+        ),
         (Ok(()), false) => (Golden::Written, format!("golden {stem} written")),
+        (Err(_), _) if judged_change => (
+            reported,
+            format!(
+                "{}; pending as this release's golden: {}/{stem}.snap.new (`cargo insta review` or `cargo xtask bless`)",
+                change.describe(),
+                held.write_dir.display()
+            ),
+        ),
         (Err(_), _) => {
-            let what = if existing.is_some() {
-                "differs from its golden"
-            } else {
-                "has no golden yet"
-            };
             let how = format!(
                 "review it with `cargo insta review` (pending {}/{stem}.snap.new) or accept all with `cargo xtask bless`",
-                dir.display()
+                held.write_dir.display()
             );
-            (Golden::Changed, format!("the colour image {what}; {how}"))
+            (
+                Golden::Changed,
+                format!("the colour image {what}; {how}{versions}"),
+            )
         }
     };
     Checked {
@@ -203,6 +465,8 @@ pub fn check(dir: &Path, name: &str, frame: &Frame, legal: &[bool]) -> Checked {
         message,
         ssim,
         identical,
+        held,
+        change: Some(change),
     }
 }
 
@@ -318,7 +582,7 @@ pub fn record_blessed(dir: &Path, entries: &[(String, String)]) -> std::io::Resu
     let path = dir.join(MANIFEST);
     let mut map = manifest(dir).ok().flatten().unwrap_or_default();
     for (key, v) in entries {
-        if key.contains('/') {
+        if key.contains('/') && !key.contains('@') {
             map.entry(key.clone()).or_insert_with(|| v.clone());
         } else {
             map.insert(key.clone(), v.clone());
@@ -331,6 +595,70 @@ pub fn record_blessed(dir: &Path, entries: &[(String, String)]) -> std::io::Resu
         return Ok(());
     }
     crate::atomic_file::write(&path, text.as_bytes())
+}
+
+/// The manifest key that confirms backend `id`'s goldens on `version`'s release.
+fn confirmation_key(id: &str, version: &str) -> String {
+    format!("{id}@{}", release(version))
+}
+
+/// A digest of backend `id`'s goldens in `dir` itself (not a release's): every
+/// `STEM.snap.png` of its runs, by name and bytes. A confirmation holds only while this is
+/// what it was.
+pub fn backend_digest(dir: &Path, id: &str) -> String {
+    let prefix = format!("{}_", stem(id).rsplit_once('-').map_or("", |(p, _)| p));
+    let mut files: Vec<std::path::PathBuf> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            p.file_name().is_some_and(|n| {
+                let n = n.to_string_lossy();
+                n.starts_with(&prefix) && n.ends_with(".snap.png")
+            })
+        })
+        .collect();
+    files.sort();
+    let h = crate::judge::basis_key::hash_files(crate::judge::basis_key::FNV_START, dir, &files)
+        .unwrap_or(0);
+    format!("{h:016x}")
+}
+
+/// Whether backend `id`'s goldens in `dir` were confirmed on `version`'s release by a whole
+/// bless there (`cargo xtask bless --mesa DIR` over every point of the backend) and are still
+/// the goldens it confirmed: then a golden with no picture of that release's own holds on
+/// it strictly, as on the release it was blessed on. The goldens' digest is computed once per
+/// process and backend (a worker checks hundreds of runs; nothing writes goldens while it
+/// runs but a bless, which records its confirmations after its workers are gone).
+pub fn confirmed(dir: &Path, id: &str, version: &str) -> bool {
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+    static DIGESTS: OnceLock<Mutex<HashMap<String, String>>> = OnceLock::new();
+    let Some(want) = manifest(dir)
+        .ok()
+        .flatten()
+        .and_then(|m| m.get(&confirmation_key(id, version)).cloned())
+    else {
+        return false;
+    };
+    let key = format!("{}|{id}", dir.display());
+    let digests = DIGESTS.get_or_init(Mutex::default);
+    let cached = digests.lock().ok().and_then(|c| c.get(&key).cloned());
+    let have = cached.unwrap_or_else(|| {
+        let d = backend_digest(dir, id);
+        if let Ok(mut c) = digests.lock() {
+            c.insert(key, d.clone());
+        }
+        d
+    });
+    have == want
+}
+
+/// The manifest entry that confirms backend `id`'s goldens (as they are now in `dir`) on
+/// `version`'s release: for [`record_blessed`] after a whole bless there.
+pub fn confirmation(dir: &Path, id: &str, version: &str) -> (String, String) {
+    (confirmation_key(id, version), backend_digest(dir, id))
 }
 
 /// What a backend without goldens is judged by, in the terminal, drivers.txt and the report.
@@ -368,7 +696,7 @@ pub fn has_goldens(dir: &Path, id: &str) -> bool {
 /// Whether two Mesa versions are the same release for goldens (numeric parts only, so a
 /// distribution's packaging suffix does not matter).
 pub fn same_release(a: &str, b: &str) -> bool {
-    crate::judge::expectations::version_parts(a) == crate::judge::expectations::version_parts(b)
+    release(a) == release(b)
 }
 
 #[cfg(test)]
@@ -394,5 +722,145 @@ mod manifest_tests {
         assert!(check_manifest(&dir).is_some_and(|w| w.contains("fails its checksum")));
         assert_eq!(blessed_on(&dir, "ref", "ref/x"), None);
         let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
+#[cfg(test)]
+mod release_tests {
+    use super::*;
+    use umbra_compare::reference::PixelJudgement;
+
+    fn frame(color: [u8; 4]) -> Frame {
+        Frame {
+            width: 4,
+            height: 2,
+            color: color.repeat(8),
+            visibility: vec![1.0; 8],
+            surface: None,
+            shadow_map: None,
+            visibility_storage: Default::default(),
+            timings: Default::default(),
+        }
+    }
+
+    /// A golden directory holding one golden of `gl33/llvmpipe/x`, blessed on Mesa 22.3.6.
+    fn golden_dir(tag: &str) -> std::path::PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("umbra-golden-release-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("dir");
+        let stem = stem("gl33/llvmpipe/x");
+        std::fs::write(
+            dir.join(format!("{stem}.snap")),
+            "---\nsource: umbra\n---\n",
+        )
+        .expect("snap");
+        std::fs::write(
+            dir.join(format!("{stem}.snap.png")),
+            png(&frame([10, 10, 10, 255])),
+        )
+        .expect("png");
+        record_blessed(&dir, &[("gl33/llvmpipe".into(), "22.3.6".into())]).expect("manifest");
+        dir
+    }
+
+    fn run(driver: &str) -> Subject<'_> {
+        Subject {
+            backend: "gl33/llvmpipe",
+            name: "gl33/llvmpipe/x",
+            driver: Some(driver),
+        }
+    }
+
+    /// The judge's verdict on each pixel: pixel 0 as `first`, the rest legal.
+    fn judged(first: PixelJudgement) -> Vec<PixelJudgement> {
+        let mut j = vec![PixelJudgement::Agrees; 8];
+        j[0] = first;
+        j
+    }
+
+    #[test]
+    fn a_change_on_another_release_is_reported_when_the_judge_holds_it_legal() {
+        let dir = golden_dir("legal");
+        let changed = frame([30, 10, 10, 255]);
+        let legal = judged(PixelJudgement::LegalDifference);
+        // On the release it was blessed on, the golden is strict.
+        let same = check(&dir, &run("22.3.6-1"), &changed, &[], &legal, true);
+        assert_eq!(same.golden, Golden::Changed);
+        // On another, a change the judge holds legal everywhere is reported, not failed.
+        let other = check(&dir, &run("26.2.6-1"), &changed, &[], &legal, true);
+        assert_eq!(other.golden, Golden::ChangedLegal, "{}", other.message);
+        let c = other.change.expect("the change is described");
+        assert_eq!((c.pixels, c.max_step, c.legal), (8, 20, true));
+        assert_eq!(c.blessed_on.as_deref(), Some("22.3.6"));
+        assert!(c.describe().contains("22.3.6") && c.describe().contains("26.2.6-1"));
+        // Where the judge found the changed pixel illegal, its own checks fail the run.
+        let illegal = check(
+            &dir,
+            &run("26.2.6-1"),
+            &changed,
+            &[],
+            &judged(PixelJudgement::Illegal),
+            false,
+        );
+        assert_eq!(illegal.golden, Golden::ChangedJudged);
+        // A change where the judge does not look (the background) is the golden's to fail.
+        let background = check(
+            &dir,
+            &run("26.2.6-1"),
+            &changed,
+            &[],
+            &judged(PixelJudgement::NotCompared),
+            true,
+        );
+        assert_eq!(background.golden, Golden::Changed);
+        assert!(background.message.contains("blessed on Mesa 22.3.6"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_release_golden_and_a_confirmation_hold_strictly_on_their_release() {
+        let dir = golden_dir("strict");
+        let stem = stem("gl33/llvmpipe/x");
+        let new = frame([30, 10, 10, 255]);
+        let legal = judged(PixelJudgement::LegalDifference);
+        // This release's own golden: read from mesa-26.2.6/, strict, and the base untouched.
+        let own = release_dir(&dir, "26.2.6-1");
+        std::fs::create_dir_all(&own).expect("release dir");
+        std::fs::write(own.join(format!("{stem}.snap")), "---\n---\n").expect("snap");
+        std::fs::write(own.join(format!("{stem}.snap.png")), png(&new)).expect("png");
+        let held_there = held(&dir, &run("26.2.6-2"));
+        assert!(held_there.strict && held_there.write_dir == own);
+        assert_eq!(
+            check(&dir, &run("26.2.6-2"), &new, &[], &legal, true).golden,
+            Golden::Unchanged
+        );
+        let other = frame([60, 10, 10, 255]);
+        assert_eq!(
+            check(&dir, &run("26.2.6-2"), &other, &[], &legal, true).golden,
+            Golden::Changed
+        );
+        // Another release without a golden of its own: lenient, and never writes the base.
+        let lenient = held(&dir, &run("26.1.6"));
+        assert!(!lenient.strict);
+        assert_eq!(lenient.write_dir, release_dir(&dir, "26.1.6"));
+        // A confirmation of the backend's goldens as they are makes that release strict, until
+        // a golden of the backend changes.
+        record_blessed(&dir, &[confirmation(&dir, "gl33/llvmpipe", "26.1.6")]).expect("confirm");
+        assert!(confirmed(&dir, "gl33/llvmpipe", "26.1.6-1"));
+        std::fs::write(dir.join(format!("{stem}.snap.png")), png(&other)).expect("png");
+        assert_ne!(
+            backend_digest(&dir, "gl33/llvmpipe"),
+            manifest(&dir).ok().flatten().expect("manifest")["gl33/llvmpipe@26.1.6"],
+            "a changed golden no longer matches its confirmation"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn releases_ignore_packaging() {
+        assert_eq!(release("26.2.6-1"), "26.2.6");
+        assert_eq!(release("25.0.7-2~bpo12+1"), "25.0.7");
+        assert!(release_dir(Path::new("golden"), "26.2.6-1").ends_with("mesa-26.2.6"));
     }
 }
