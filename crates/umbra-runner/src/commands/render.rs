@@ -39,7 +39,7 @@ pub fn main(args: &Args) -> i32 {
         println!("skip {backend_id}: {why}");
         return 0;
     }
-    if let Some(Err(e)) = on_build.map(crate::harness::own_libc::enter) {
+    if let Some(Err(e)) = on_build.map(crate::harness::mesa_build::MesaBuild::enter) {
         eprintln!("error: {backend_id}: {e}");
         return 125;
     }

@@ -466,25 +466,20 @@ fn run_program(binary: &Path, backend: &str, out: &Path) -> ProgramRun {
     // A build with its own C library runs the program through its loader.
     let build = crate::harness::mesa_build::selected()
         .filter(|_| crate::harness::mesa_build::is_mesa_backed(backend));
-    let mut cmd = crate::harness::own_libc::command(build, binary);
+    let own = build.and_then(crate::harness::mesa_build::MesaBuild::own_libc);
+    let mut cmd = crate::harness::own_libc::command(own.as_ref(), binary);
     for v in registry::env_removed(backend) {
         cmd.env_remove(v);
     }
     let (code, output) = run_with_timeout(cmd.envs(env.clone()), PROGRAM_TIMEOUT);
     // What a reader types: the environment, then the build's loader where it has one.
-    let through = build
-        .and_then(|b| b.loader.as_ref().map(|l| (b, l)))
-        .map_or(String::new(), |(b, l)| {
-            format!(
-                " {} --library-path {}",
-                l.display(),
-                b.lib_dirs
-                    .iter()
-                    .map(|d| d.display().to_string())
-                    .collect::<Vec<_>>()
-                    .join(":")
-            )
-        });
+    let through = own.as_ref().map_or(String::new(), |o| {
+        format!(
+            " {} --library-path {}",
+            o.loader.display(),
+            crate::harness::own_libc::search_path(o.dirs)
+        )
+    });
     ProgramRun {
         backend: backend.to_string(),
         env: env_text(&env, out) + &through,

@@ -49,7 +49,7 @@ pub struct MesaBuild {
     pub generated: PathBuf,
     /// The build's own dynamic loader (`ld-linux-*.so.*` beside a `libc.so.6`), when it carries
     /// its C library: a Debian suite newer than the machine (`cargo xtask fetch-mesa --suite
-    /// sid`). Its processes are started through it ([`crate::harness::own_libc`]).
+    /// sid`). Its processes are started through it ([`MesaBuild::enter`]).
     pub loader: Option<PathBuf>,
     /// What `cargo xtask fetch-mesa` recorded of it ([`FETCHED`]), when it made it.
     pub fetched: Option<Fetched>,
@@ -95,8 +95,13 @@ pub fn select(flag: Option<&str>) -> Result<Option<&'static MesaBuild>, String> 
         Some(v) => {
             let build = MesaBuild::open(Path::new(v)).map_err(|e| format!("{from} {v}: {e}"))?;
             if build.layout != "fake (tests)" {
-                crate::harness::own_libc::check_loadable(&build)
-                    .map_err(|e| format!("{from} {v}: {e}"))?;
+                crate::harness::own_libc::check_loadable(
+                    &build.root,
+                    build.loader.as_deref(),
+                    &build.lib_dirs,
+                    &build.key_libraries(),
+                )
+                .map_err(|e| format!("{from} {v}: {e}"))?;
             }
             Some(build)
         }
@@ -297,6 +302,54 @@ impl MesaBuild {
             (None, Some(_)) => need_dri("swrast"),
             _ => None,
         }
+    }
+
+    /// The build's own C library, when it carries one ([`crate::harness::own_libc`]).
+    pub fn own_libc(&self) -> Option<crate::harness::own_libc::Own<'_>> {
+        self.loader
+            .as_deref()
+            .map(|loader| crate::harness::own_libc::Own {
+                root: &self.root,
+                loader,
+                dirs: &self.lib_dirs,
+            })
+    }
+
+    /// Moves this process onto the build's own C library where it carries one (re-executed
+    /// through its loader; on success this does not return), and checks that it runs there.
+    pub fn enter(&self) -> Result<(), String> {
+        match self.own_libc() {
+            Some(own) => crate::harness::own_libc::enter(&own)
+                .and_then(|()| crate::harness::own_libc::check_on_build_libc(&own)),
+            None => Ok(()),
+        }
+    }
+
+    /// The libraries a backend's driver loads from the build: glvnd's EGL vendor, lavapipe,
+    /// gallium and its siblings, one DRI driver (what [`select`] has the loader list).
+    fn key_libraries(&self) -> Vec<PathBuf> {
+        let mut libs: Vec<PathBuf> = self.egl.iter().chain(&self.lavapipe).cloned().collect();
+        for d in &self.lib_dirs {
+            let Ok(rd) = std::fs::read_dir(d) else {
+                continue;
+            };
+            let mut gallium: Vec<PathBuf> = rd
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| {
+                    p.file_name().is_some_and(|n| {
+                        let n = n.to_string_lossy();
+                        n.starts_with("libgallium") && n.contains(".so")
+                    })
+                })
+                .collect();
+            gallium.sort();
+            libs.extend(gallium);
+        }
+        if let (Some(dri), Some(first)) = (&self.dri, self.dri_drivers.first()) {
+            libs.push(dri.join(format!("{first}_dri.so")));
+        }
+        libs.dedup();
+        libs
     }
 
     /// One line for reports: where the build is and what it says it is.

@@ -20,7 +20,16 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::harness::mesa_build::MesaBuild;
+/// A build that carries its own C library: where it is, its loader, and the directories its
+/// libraries are searched in, in order.
+pub struct Own<'a> {
+    /// The build's directory.
+    pub root: &'a Path,
+    /// Its dynamic loader (`ld-linux-*.so.*`).
+    pub loader: &'a Path,
+    /// Every directory of its shared libraries.
+    pub dirs: &'a [PathBuf],
+}
 
 /// Set in a process re-executed through a build's loader: the umbra executable.
 pub const EXE_ENV: &str = "UMBRA_EXE";
@@ -43,16 +52,16 @@ fn is_loader(p: &Path) -> bool {
 }
 
 /// Whether this process already runs on `build`'s C library.
-fn on_build_libc(build: &MesaBuild) -> bool {
+fn on_build_libc(build: &Own) -> bool {
     mapped()
         .iter()
-        .any(|p| p.file_name().is_some_and(|n| n == "libc.so.6") && p.starts_with(&build.root))
+        .any(|p| p.file_name().is_some_and(|n| n == "libc.so.6") && p.starts_with(build.root))
 }
 
 /// For a build with its own C library: checks that this process runs on it (the re-execution
 /// through its loader took), naming the C library it has otherwise.
-pub fn check_on_build_libc(build: &MesaBuild) -> Result<(), String> {
-    if build.loader.is_none() || on_build_libc(build) {
+pub fn check_on_build_libc(build: &Own) -> Result<(), String> {
+    if on_build_libc(build) {
         return Ok(());
     }
     let libc = mapped()
@@ -76,13 +85,11 @@ fn mapped() -> Vec<PathBuf> {
         .collect()
 }
 
-/// Moves this process onto `build`'s own C library, when the build carries one and the
-/// process is not on it yet: re-executes it through the build's loader (on success this does
-/// not return). `Ok` when there is nothing to do.
-pub fn enter(build: &MesaBuild) -> Result<(), String> {
-    let Some(loader) = &build.loader else {
-        return Ok(());
-    };
+/// Moves this process onto `build`'s own C library when it is not on it yet: re-executes it
+/// through the build's loader (on success this does not return). `Ok` when there is nothing
+/// to do.
+pub fn enter(build: &Own) -> Result<(), String> {
+    let loader = build.loader;
     if on_build_libc(build) {
         return Ok(());
     }
@@ -91,7 +98,7 @@ pub fn enter(build: &MesaBuild) -> Result<(), String> {
     let argv0 = args.next().unwrap_or_else(|| exe.clone().into_os_string());
     let mut cmd = std::process::Command::new(loader);
     cmd.arg("--library-path")
-        .arg(search_path(build))
+        .arg(search_path(build.dirs))
         .arg("--argv0")
         .arg(argv0)
         .arg(&exe)
@@ -106,23 +113,23 @@ pub fn enter(build: &MesaBuild) -> Result<(), String> {
 
 /// A command that runs `program` on `build`'s libraries: through the build's own loader
 /// when it carries one (`LOADER --library-path DIRS PROGRAM`), else the program itself (the
-/// build's `env()` then points the loaders at it).
-pub fn command(build: Option<&MesaBuild>, program: &Path) -> std::process::Command {
-    match build.and_then(|b| b.loader.as_ref().map(|l| (b, l))) {
-        Some((b, loader)) => {
-            let mut cmd = std::process::Command::new(loader);
-            cmd.arg("--library-path").arg(search_path(b)).arg(program);
+/// build's loader variables then point the GL and Vulkan loaders at it).
+pub fn command(build: Option<&Own>, program: &Path) -> std::process::Command {
+    match build {
+        Some(b) => {
+            let mut cmd = std::process::Command::new(b.loader);
+            cmd.arg("--library-path")
+                .arg(search_path(b.dirs))
+                .arg(program);
             cmd
         }
         None => std::process::Command::new(program),
     }
 }
 
-/// The build's library directories, as one `:`-separated search path.
-fn search_path(build: &MesaBuild) -> String {
-    build
-        .lib_dirs
-        .iter()
+/// Library directories as one `:`-separated search path.
+pub fn search_path(dirs: &[PathBuf]) -> String {
+    dirs.iter()
         .map(|d| d.to_string_lossy().into_owned())
         .collect::<Vec<_>>()
         .join(":")
@@ -138,56 +145,35 @@ fn machine_loader() -> Option<PathBuf> {
     })
 }
 
-/// The libraries a backend's driver loads from the build: glvnd's EGL vendor, lavapipe,
-/// gallium and its siblings, one DRI driver.
-fn key_libraries(build: &MesaBuild) -> Vec<PathBuf> {
-    let mut libs: Vec<PathBuf> = build.egl.iter().chain(&build.lavapipe).cloned().collect();
-    for d in &build.lib_dirs {
-        let Ok(rd) = std::fs::read_dir(d) else {
-            continue;
-        };
-        let mut gallium: Vec<PathBuf> = rd
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| {
-                p.file_name().is_some_and(|n| {
-                    let n = n.to_string_lossy();
-                    n.starts_with("libgallium") && n.contains(".so")
-                })
-            })
-            .collect();
-        gallium.sort();
-        libs.extend(gallium);
-    }
-    if let (Some(dri), Some(first)) = (&build.dri, build.dri_drivers.first()) {
-        libs.push(dri.join(format!("{first}_dri.so")));
-    }
-    libs.dedup();
-    libs
-}
-
-/// Checks that the loader the workers will use finds every library the build's drivers link
-/// against, with the symbol versions they need. `Err` names what is missing and the fix.
-pub fn check_loadable(build: &MesaBuild) -> Result<(), String> {
-    let (loader, own) = match &build.loader {
-        Some(l) => (l.clone(), true),
+/// Checks that the loader the workers will use (the build's own, else this machine's) finds
+/// every library of `libs` (the ones the build's drivers load) and what they link against,
+/// with the symbol versions they need. `dirs` are the build's library directories. `Err`
+/// names what is missing and the fix.
+pub fn check_loadable(
+    root: &Path,
+    loader: Option<&Path>,
+    dirs: &[PathBuf],
+    libs: &[PathBuf],
+) -> Result<(), String> {
+    let (loader, own) = match loader {
+        Some(l) => (l.to_path_buf(), true),
         None => match machine_loader() {
             Some(l) => (l, false),
             None => return Ok(()),
         },
     };
-    let libs = key_libraries(build);
     let machine = machine_glibc();
     let mut problems: Vec<(String, String)> = match (&machine, own) {
-        (Some(m), false) => newer_glibc(&libs, m),
+        (Some(m), false) => newer_glibc(libs, m),
         _ => Vec::new(),
     };
-    for lib in &libs {
+    for lib in libs {
         let mut cmd = std::process::Command::new(&loader);
         if own {
-            cmd.arg("--library-path").arg(search_path(build));
+            cmd.arg("--library-path").arg(search_path(dirs));
         } else {
             // What a worker gets: the build's directories before the machine's.
-            let mut dirs = search_path(build);
+            let mut dirs = search_path(dirs);
             if let Ok(old) = std::env::var("LD_LIBRARY_PATH") {
                 dirs = format!("{dirs}:{old}");
             }
@@ -212,14 +198,14 @@ pub fn check_loadable(build: &MesaBuild) -> Result<(), String> {
         format!(
             "the build was made for a newer C library than this machine's (glibc {}); fix: `cargo xtask fetch-mesa --suite SUITE --dir {}` unpacks the suite's Mesa with everything it links against, its own C library and loader included, and umbra starts the build's driver processes through that loader",
             machine.as_deref().unwrap_or("version unknown"),
-            build.root.display()
+            root.display()
         )
     } else {
         "fix: install or unpack the libraries named (for Debian packages, `cargo xtask fetch-mesa --suite SUITE` brings them)".to_string()
     };
     Err(format!(
         "the Mesa in {} cannot be loaded here ({}): {}; {fix}",
-        build.root.display(),
+        root.display(),
         if own {
             "through its own loader"
         } else {

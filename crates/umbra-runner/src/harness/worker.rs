@@ -114,7 +114,7 @@ pub fn main(args: &Args) -> i32 {
                 return 0;
             }
             // A build with its own C library: this process continues on it (re-executed).
-            if let Err(e) = crate::harness::own_libc::enter(&b) {
+            if let Err(e) = b.enter() {
                 say(
                     &mut out,
                     serde_json::json!({ "refused": format!("{id}: {e}") }),
@@ -132,9 +132,7 @@ pub fn main(args: &Args) -> i32 {
             let libs = crate::harness::mesa_build::loaded_libs();
             if let Some(build) = &build {
                 if build.layout != "fake (tests)" {
-                    if let Err(e) = crate::harness::mesa_build::check_loaded(&build.root, &libs)
-                        .and_then(|()| crate::harness::own_libc::check_on_build_libc(build))
-                    {
+                    if let Err(e) = crate::harness::mesa_build::check_loaded(&build.root, &libs) {
                         say(
                             &mut out,
                             serde_json::json!({ "refused": format!("{id}: {e}") }),

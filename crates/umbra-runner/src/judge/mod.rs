@@ -1,11 +1,12 @@
 //! Judging glue: one point rendered and judged ([`run`]) against the shared judging basis
-//! ([`judge_cache`], keyed by [`basis_key`]), its golden ([`golden`]), its pictures ([`pictures`]), what a raw outcome
+//! ([`judge_cache`], keyed by [`basis_key`]), its golden ([`golden`], the store's records in [`blessings`]), its pictures ([`pictures`]), what a raw outcome
 //! becomes under the checked-in expectations ([`expectations`]), and how a failing run
 //! compares with the other drivers' runs of its point ([`consensus`]), and the check
 //! across one backend's runs of a sweep ([`falls_along`]). Depends on nothing else in the
 //! runner but the glob matcher.
 
 pub mod basis_key;
+pub mod blessings;
 pub mod consensus;
 pub mod expectations;
 pub mod falls_along;

@@ -1,0 +1,326 @@
+//! The golden store's records (`golden/`, see [`crate::judge::golden`] for the check): each
+//! run's golden file name ([`stem`]), the manifest of the Mesa releases goldens were blessed
+//! on (`blessed-on.json`, checksummed), each release's own pictures (`mesa-RELEASE/`), the
+//! confirmations a whole bless leaves (`BACKEND@RELEASE`), and from them which golden holds
+//! for a run on a driver and how strictly ([`held`]).
+//!
+//! A golden is strict on the release it was blessed or confirmed on; on another, the check
+//! lets the judge decide every pixel it compared. Blessing on a release never overwrites
+//! another release's golden: its differing picture goes to that release's directory, so a
+//! new release records what differs, not a second copy of everything.
+
+use std::path::Path;
+
+/// The golden's file stem for run `name`: letters, digits, `-` and `_` only (insta reads the
+/// first `.` as the start of the extension), then a 32-bit FNV-1a hash of the full name so
+/// that ids differing only in punctuation stay apart.
+pub fn stem(name: &str) -> String {
+    let plain: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    format!("{plain}-{:08x}", umbra_report::names::fnv1a(name))
+}
+
+/// The release a driver version belongs to for goldens: its numeric parts (`26.2.6-1` →
+/// `26.2.6`), so a distribution's packaging suffix does not matter.
+pub fn release(version: &str) -> String {
+    crate::judge::expectations::version_parts(version)
+        .iter()
+        .map(u32::to_string)
+        .collect::<Vec<_>>()
+        .join(".")
+}
+
+/// The directory of release `version`'s goldens inside the golden directory: the pictures
+/// that differ on that release from the golden blessed on another (`golden/mesa-26.2.6/`).
+pub fn release_dir(dir: &Path, version: &str) -> std::path::PathBuf {
+    dir.join(format!("mesa-{}", release(version)))
+}
+
+/// The run being checked: which golden and which driver.
+pub struct Subject<'a> {
+    /// The backend id.
+    pub backend: &'a str,
+    /// The run name.
+    pub name: &'a str,
+    /// The Mesa version the driver reports (none: not a Mesa driver, or the reference).
+    pub driver: Option<&'a str>,
+}
+
+/// Where a run's golden is read and written, and how strictly it holds on this driver.
+#[derive(Clone, Debug)]
+pub struct Held {
+    /// The golden file (`STEM.snap.png`), where one exists on any release.
+    pub file: Option<std::path::PathBuf>,
+    /// Where a new golden for this driver is written (and insta's pending snapshot): the
+    /// golden directory, or the release directory when the golden was blessed on another
+    /// release (which never overwrites the other release's golden).
+    pub write_dir: std::path::PathBuf,
+    /// The Mesa version the golden was blessed on, where known.
+    pub blessed_on: Option<String>,
+    /// Whether this driver's release is one the golden was blessed or confirmed on
+    /// ([`confirmed`]), or either version is unknown: then any difference outside the
+    /// tolerance is a change to review. Otherwise a difference whose every pixel the judge
+    /// holds legal is reported, not failed.
+    pub strict: bool,
+}
+
+/// Which golden holds for `run` in `dir`: this release's own (`mesa-RELEASE/STEM`), else the
+/// golden directory's; strict on the release it was blessed on or confirmed on.
+pub fn held(dir: &Path, run: &Subject) -> Held {
+    let stem = stem(run.name);
+    let file_in = |d: &Path| {
+        let f = d.join(format!("{stem}.snap.png"));
+        f.is_file().then_some(f)
+    };
+    let Some(driver) = run.driver else {
+        return Held {
+            file: file_in(dir),
+            write_dir: dir.to_path_buf(),
+            blessed_on: None,
+            strict: true,
+        };
+    };
+    let own = release_dir(dir, driver);
+    if let Some(f) = file_in(&own) {
+        return Held {
+            file: Some(f),
+            write_dir: own,
+            blessed_on: Some(release(driver)),
+            strict: true,
+        };
+    }
+    let base = file_in(dir);
+    let blessed_on = blessed_on(dir, run.backend, run.name);
+    let same = blessed_on
+        .as_deref()
+        .is_none_or(|b| same_release(b, driver));
+    // A golden of another release is never overwritten from this one: this release's
+    // differing picture goes beside it. A run with no golden anywhere starts one here.
+    let write_dir = if base.is_some() && !same {
+        own
+    } else {
+        dir.to_path_buf()
+    };
+    let strict = same || (base.is_some() && confirmed(dir, run.backend, driver));
+    Held {
+        file: base,
+        write_dir,
+        blessed_on,
+        strict,
+    }
+}
+
+/// The manifest of driver versions the goldens were blessed on, in the golden directory.
+pub const MANIFEST: &str = "blessed-on.json";
+
+/// The key of [`MANIFEST`] that holds the checksum of its other entries.
+const MANIFEST_SUM: &str = "#fnv1a64";
+
+/// The manifest's entries, if it is there and whole: its checksum (64-bit FNV-1a of the
+/// other entries as compact JSON, keys sorted) must match. `Err` says what is wrong.
+pub(crate) fn manifest(
+    dir: &Path,
+) -> Result<Option<std::collections::BTreeMap<String, String>>, String> {
+    let path = dir.join(MANIFEST);
+    let text = match std::fs::read_to_string(&path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(format!("cannot be read ({e})")),
+    };
+    let mut map: std::collections::BTreeMap<String, String> =
+        serde_json::from_str(&text).map_err(|e| format!("is not a JSON map of strings ({e})"))?;
+    let Some(sum) = map.remove(MANIFEST_SUM) else {
+        return Err(format!("has no \"{MANIFEST_SUM}\" entry"));
+    };
+    let want = manifest_sum(&map);
+    if sum != want {
+        return Err(format!(
+            "fails its checksum (\"{MANIFEST_SUM}\": {sum:?}, its entries give {want:?}): edited by hand or damaged"
+        ));
+    }
+    Ok(Some(map))
+}
+
+fn manifest_sum(map: &std::collections::BTreeMap<String, String>) -> String {
+    let text = serde_json::to_string(map).unwrap_or_default();
+    let h = text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    });
+    format!("{h:016x}")
+}
+
+/// Checks [`MANIFEST`] in `dir` once for a run: `Some(warning)` when it is there but damaged
+/// (its versions are then not used: a golden blessed on another driver is judged as any
+/// other, without the version note).
+pub fn check_manifest(dir: &Path) -> Option<String> {
+    manifest(dir).err().map(|why| {
+        format!(
+            "warning: {} {why}; its driver versions are not used; restore it from git, or rewrite it with `cargo xtask bless`",
+            dir.join(MANIFEST).display()
+        )
+    })
+}
+
+/// The Mesa version the golden of run `name` on backend `id` was blessed on, if recorded: the
+/// golden's own entry (written when that golden was written), else the backend's (the
+/// version the backend's goldens were first blessed on). Nothing from a damaged manifest
+/// ([`check_manifest`] says so once per run).
+pub fn blessed_on(dir: &Path, id: &str, name: &str) -> Option<String> {
+    let map = manifest(dir).ok()??;
+    map.get(&stem(name)).or(map.get(id)).cloned()
+}
+
+/// Records blessings: `(key, version)` where the key is a golden's stem (that golden was
+/// written on that version) or a backend id (set only if the backend has no entry yet). Keeps
+/// every other entry of a whole manifest; leaves the file untouched when nothing changes.
+/// The checksum is written with the entries.
+pub fn record_blessed(dir: &Path, entries: &[(String, String)]) -> std::io::Result<()> {
+    let path = dir.join(MANIFEST);
+    let mut map = manifest(dir).ok().flatten().unwrap_or_default();
+    for (key, v) in entries {
+        if key.contains('/') && !key.contains('@') {
+            map.entry(key.clone()).or_insert_with(|| v.clone());
+        } else {
+            map.insert(key.clone(), v.clone());
+        }
+    }
+    let sum = manifest_sum(&map);
+    map.insert(MANIFEST_SUM.to_string(), sum);
+    let text = serde_json::to_string_pretty(&map).unwrap_or_default() + "\n";
+    if std::fs::read_to_string(&path).is_ok_and(|t| t == text) {
+        return Ok(());
+    }
+    crate::atomic_file::write(&path, text.as_bytes())
+}
+
+/// The manifest key that confirms backend `id`'s goldens on `version`'s release.
+fn confirmation_key(id: &str, version: &str) -> String {
+    format!("{id}@{}", release(version))
+}
+
+/// A digest of backend `id`'s goldens in `dir` itself (not a release's): every
+/// `STEM.snap.png` of its runs, by name and bytes. A confirmation holds only while this is
+/// what it was.
+pub fn backend_digest(dir: &Path, id: &str) -> String {
+    let prefix = format!("{}_", stem(id).rsplit_once('-').map_or("", |(p, _)| p));
+    let mut files: Vec<std::path::PathBuf> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            p.file_name().is_some_and(|n| {
+                let n = n.to_string_lossy();
+                n.starts_with(&prefix) && n.ends_with(".snap.png")
+            })
+        })
+        .collect();
+    files.sort();
+    let h = crate::judge::basis_key::hash_files(crate::judge::basis_key::FNV_START, dir, &files)
+        .unwrap_or(0);
+    format!("{h:016x}")
+}
+
+/// Whether backend `id`'s goldens in `dir` were confirmed on `version`'s release by a whole
+/// bless there (`cargo xtask bless --mesa DIR` over every point of the backend) and are still
+/// the goldens it confirmed: then a golden with no picture of that release's own holds on
+/// it strictly, as on the release it was blessed on. The goldens' digest is computed once per
+/// process and backend (a worker checks hundreds of runs; nothing writes goldens while it
+/// runs but a bless, which records its confirmations after its workers are gone).
+pub fn confirmed(dir: &Path, id: &str, version: &str) -> bool {
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+    static DIGESTS: OnceLock<Mutex<HashMap<String, String>>> = OnceLock::new();
+    let Some(want) = manifest(dir)
+        .ok()
+        .flatten()
+        .and_then(|m| m.get(&confirmation_key(id, version)).cloned())
+    else {
+        return false;
+    };
+    let key = format!("{}|{id}", dir.display());
+    let digests = DIGESTS.get_or_init(Mutex::default);
+    let cached = digests.lock().ok().and_then(|c| c.get(&key).cloned());
+    let have = cached.unwrap_or_else(|| {
+        let d = backend_digest(dir, id);
+        if let Ok(mut c) = digests.lock() {
+            c.insert(key, d.clone());
+        }
+        d
+    });
+    have == want
+}
+
+/// The manifest entry that confirms backend `id`'s goldens (as they are now in `dir`) on
+/// `version`'s release: for [`record_blessed`] after a whole bless there.
+pub fn confirmation(dir: &Path, id: &str, version: &str) -> (String, String) {
+    (confirmation_key(id, version), backend_digest(dir, id))
+}
+
+/// Whether backend `id` has goldens in `dir`: the manifest names it (blessing records every
+/// backend it wrote for), or a golden of one of its runs is there (the ids are told apart by
+/// the name each snapshot records, not by the file stem, whose punctuation is flattened).
+/// A device's backend without goldens (a device umbra has never seen) is judged by the specs
+/// and the reference alone; `cargo xtask bless --backend ID` starts its goldens. This build's
+/// own ids are never asked: a golden of theirs that is missing is a change to review.
+pub fn has_goldens(dir: &Path, id: &str) -> bool {
+    if manifest(dir)
+        .ok()
+        .flatten()
+        .is_some_and(|m| m.contains_key(id))
+    {
+        return true;
+    }
+    let prefix = format!("{}_", stem(id).rsplit_once('-').map_or("", |(p, _)| p));
+    let marker = format!("colour of {id}/");
+    std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .any(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            name.starts_with(&prefix)
+                && name.ends_with(".snap")
+                && std::fs::read_to_string(e.path()).is_ok_and(|t| t.contains(&marker))
+        })
+}
+
+/// Whether two Mesa versions are the same release for goldens (numeric parts only, so a
+/// distribution's packaging suffix does not matter).
+pub fn same_release(a: &str, b: &str) -> bool {
+    release(a) == release(b)
+}
+
+#[cfg(test)]
+mod manifest_tests {
+    use super::*;
+
+    #[test]
+    fn the_committed_manifest_is_whole_and_a_damaged_one_is_refused() {
+        let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../golden");
+        assert_eq!(check_manifest(&golden), None);
+        assert!(blessed_on(&golden, "gl33/llvmpipe", "gl33/llvmpipe/x").is_some());
+        let dir = std::env::temp_dir().join(format!("umbra-manifest-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("dir");
+        record_blessed(&dir, &[("ref".into(), "1.0".into())]).expect("write");
+        assert_eq!(check_manifest(&dir), None);
+        assert_eq!(blessed_on(&dir, "ref", "ref/x").as_deref(), Some("1.0"));
+        let path = dir.join(MANIFEST);
+        let edited = std::fs::read_to_string(&path)
+            .expect("manifest")
+            .replace("1.0", "9.9");
+        std::fs::write(&path, edited).expect("edit");
+        assert!(check_manifest(&dir).is_some_and(|w| w.contains("fails its checksum")));
+        assert_eq!(blessed_on(&dir, "ref", "ref/x"), None);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
