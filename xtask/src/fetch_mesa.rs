@@ -89,6 +89,7 @@ impl Apt {
             dir.join("cache").join("archives").join("partial"),
             dir.join("debs"),
             dir.join("sources.list.d"),
+            dir.join("preferences.d"),
         ] {
             std::fs::create_dir_all(&d)
                 .map_err(|e| format!("cannot create {}: {e}", d.display()))?;
@@ -142,6 +143,21 @@ impl Apt {
         opt(
             &mut cmd,
             format!("Dir::State::status={}", self.dir.join("status").display()),
+        );
+        // The system's pins would choose other versions than the suite's own.
+        opt(
+            &mut cmd,
+            format!(
+                "Dir::Etc::preferences={}",
+                self.dir.join("preferences").display()
+            ),
+        );
+        opt(
+            &mut cmd,
+            format!(
+                "Dir::Etc::preferencesparts={}",
+                self.dir.join("preferences.d").display()
+            ),
         );
         opt(
             &mut cmd,
@@ -236,6 +252,14 @@ fn newer(a: &str, b: &str) -> bool {
         .is_ok_and(|s| s.success())
 }
 
+/// Whether the machine has package `name` installed (for its architecture).
+fn installed(name: &str) -> bool {
+    Command::new("dpkg-query")
+        .args(["-W", "-f=${Status}", name])
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).contains("install ok installed"))
+}
+
 /// The machine's C library version (dpkg's libc6), if dpkg knows it.
 fn machine_libc() -> Option<String> {
     let o = Command::new("dpkg-query")
@@ -294,7 +318,24 @@ fn fetch(suite: &str, dir: Option<PathBuf>, root: &Path) -> Result<(), String> {
             let roots: Vec<&str> = PACKAGES.iter().chain(LOADERS).copied().collect();
             apt.closure(&roots)?
         }
-        None => PACKAGES.iter().map(|p| p.to_string()).collect(),
+        // Mesa's own packages, and whatever else they link against that this machine lacks
+        // (a newer LLVM, say): the machine's libraries serve the rest.
+        None => {
+            let mut names: Vec<String> = PACKAGES.iter().map(|p| p.to_string()).collect();
+            let lacking: Vec<String> = apt
+                .closure(PACKAGES)?
+                .into_iter()
+                .filter(|p| !names.contains(p) && !installed(p))
+                .collect();
+            if !lacking.is_empty() {
+                println!(
+                    "fetch-mesa: this machine lacks {} of what {suite}'s Mesa links against: unpacked too",
+                    lacking.join(", ")
+                );
+            }
+            names.extend(lacking);
+            names
+        }
     };
     let versions = apt.versions(&names)?;
     let missing: Vec<&String> = names
@@ -352,7 +393,13 @@ fn fetch(suite: &str, dir: Option<PathBuf>, root: &Path) -> Result<(), String> {
             packages.len()
         ));
     }
-    let partial = dir.with_extension("partial");
+    // Beside DIR, named after it (DIR.partial, DIR.old), whatever dots its name has.
+    let beside = |suffix: &str| {
+        let mut name = dir.file_name().unwrap_or_default().to_os_string();
+        name.push(suffix);
+        dir.with_file_name(name)
+    };
+    let partial = beside(".partial");
     let _ = std::fs::remove_dir_all(&partial);
     std::fs::create_dir_all(&partial)
         .map_err(|e| format!("cannot create {}: {e}", partial.display()))?;
@@ -378,9 +425,12 @@ fn fetch(suite: &str, dir: Option<PathBuf>, root: &Path) -> Result<(), String> {
     let text = serde_json::to_string_pretty(&record).unwrap_or_default() + "\n";
     std::fs::write(partial.join(FETCHED), text)
         .map_err(|e| format!("cannot write {}: {e}", partial.join(FETCHED).display()))?;
-    let old = dir.with_extension("old");
-    let _ = std::fs::remove_dir_all(&old);
+    // The old tree moves aside only once the new one is whole; a fetch that died between
+    // the two renames left DIR.old as the only whole build, and it stays until this one is
+    // in place.
+    let old = beside(".old");
     if dir.exists() {
+        let _ = std::fs::remove_dir_all(&old);
         std::fs::rename(&dir, &old).map_err(|e| format!("cannot move {}: {e}", dir.display()))?;
     }
     std::fs::rename(&partial, &dir)

@@ -16,30 +16,50 @@
 # `umbra backends` found) and run.log; OUT/run/latest/ holds report.html and the pictures.
 # Exit status: umbra conformance's (0 as expected, 1 a failure, 125 nothing could run).
 set -u
+# Ids and paths are taken as they are: no pathname expansion of a glob-like id.
+set -f
 here=$(cd "$(dirname "$0")" && pwd)
 out="$here/results"
 loaders="$here/loaders"
 backends=""
+need() {
+    if [ $# -lt 2 ]; then
+        echo "run.sh: $1 needs a value (see ./run.sh --help)" >&2
+        exit 125
+    fi
+}
 while [ $# -gt 0 ]; do
     case "$1" in
-        --out) out="$2"; shift 2 ;;
-        --backend) backends="$backends --backend $2"; shift 2 ;;
-        --loaders) loaders="$2"; shift 2 ;;
+        --out) need "$@"; out="$2"; shift 2 ;;
+        --backend) need "$@"; backends="$backends --backend $2"; shift 2 ;;
+        --loaders) need "$@"; loaders="$2"; shift 2 ;;
         --) shift; break ;;
-        -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
         *) echo "run.sh: unknown argument $1 (see ./run.sh --help)" >&2; exit 125 ;;
     esac
 done
 [ -n "$backends" ] || backends="--backend hw"
 mkdir -p "$out" || exit 125
 out=$(cd "$out" && pwd)
+# Nothing of an earlier run may pass for this one's.
+rm -f "$out/.rc" "$out/report.json" "$out/results.csv" "$out/drivers.txt" \
+    "$out/failures.csv" "$out/junit.xml" "$out/backends.txt" "$out/run.log"
+rm -f "$out/run/latest"
+trap 'echo "run.sh: interrupted" >&2; exit 125' INT TERM
 
 # The loaders, where the machine has none of its own.
-if ls "$loaders"/*.deb >/dev/null 2>&1; then
-    for f in "$loaders"/*.deb; do dpkg-deb -x "$f" "$here/.root" || exit 125; done
+unpacked=0
+set +f
+for f in "$loaders"/*.deb; do
+    [ -f "$f" ] || continue
+    dpkg-deb -x "$f" "$here/.root" || exit 125
+    unpacked=$((unpacked + 1))
+done
+set -f
+if [ "$unpacked" -gt 0 ]; then
     lib="$here/.root/usr/lib/x86_64-linux-gnu:$here/.root/lib/x86_64-linux-gnu"
     export LD_LIBRARY_PATH="$lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
-    echo "run.sh: loaders from $loaders unpacked into $here/.root"
+    echo "run.sh: $unpacked loader packages from $loaders unpacked into $here/.root"
 fi
 # NVIDIA's ICD and EGL vendor files where a container keeps them outside the loaders' paths.
 for f in /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json; do

@@ -197,15 +197,16 @@ pub struct GoldenChange {
     pub blessed_on: Option<String>,
     /// The Mesa version of this run's driver, where it is a Mesa driver.
     pub driver: Option<String>,
-    /// Pixels with a channel more than one step from the golden's (every pixel when there
-    /// is no golden or its size differs).
+    /// Pixels with a channel more than one step from the golden's (every pixel of the frame
+    /// when there is no golden or its size differs).
     pub pixels: u64,
     /// The largest channel difference, in 8-bit steps.
     pub max_step: u8,
     /// No golden on any release yet.
     pub new: bool,
     /// Of the changed pixels, those the judge found illegal on this driver (the run fails
-    /// the judge's own checks there: value, coverage, colour).
+    /// the judge's own checks there: value, coverage, colour). For a new picture (no golden
+    /// anywhere) 1 when the judge failed the run, else 0.
     #[serde(default)]
     pub illegal: u64,
     /// Of the changed pixels, those the judge did not compare (the background): no check but
@@ -285,10 +286,13 @@ pub struct RunResult {
     pub failed: Vec<FailedCheck>,
     /// What became of its golden: `unchanged`, `written`, `written-for-release` (blessed as
     /// this Mesa release's golden beside another release's), `changed`,
-    /// `changed-other-driver` (differs where the judge does not hold every pixel legal, and
-    /// was blessed on another Mesa version: failed, with both versions named), or
-    /// `changed-legal` (differs from another release's golden only where every pixel is legal:
-    /// not a failure; `metrics.golden_change` says how).
+    /// `changed-other-driver` (differs from another release's golden where the judge does not
+    /// look, the background or the frame's size: failed, with both versions named),
+    /// `changed-legal` (differs from another release's golden only where every pixel is legal,
+    /// or has no golden on any release and passes: not a failure), or `changed-judged`
+    /// (differs from another release's golden where some pixels are illegal: the judge's own
+    /// checks fail the run there, the golden adds no failure); `metrics.golden_change` says
+    /// how.
     pub golden: Option<String>,
     /// Wall time of the run including retries, seconds.
     pub time_s: f64,

@@ -83,9 +83,6 @@ struct Settings {
     verbose: bool,
     /// `--bless`: workers may write goldens.
     bless: bool,
-    /// Every point of every backend run (no `--filter`, no `--shard`): a bless then confirms
-    /// each backend's goldens on its driver's release.
-    whole: bool,
 }
 
 /// Runs the command; returns the process exit code.
@@ -556,7 +553,6 @@ fn settings(
         expectations: opts.expectations.clone(),
         verbose: args.has("verbose"),
         bless: opts.bless,
-        whole: opts.filter == "*" && opts.shard.1 == 1,
     }
 }
 
@@ -975,26 +971,46 @@ fn record_blessings(g: &Gathered, settings: &Settings) {
             entries.push((crate::judge::golden::stem(&r.name), v));
         }
     }
-    // A whole bless (every point of each backend: no --filter, no --shard) on a release its
-    // goldens were not blessed on confirms them there: the goldens of that release's own
-    // (written now where a picture differs) and the rest, as they are now, hold strictly on
-    // it from here on.
-    if settings.whole {
-        let mut seen: Vec<&str> = Vec::new();
-        for r in g.results.iter().filter(|r| r.golden.is_some()) {
-            if seen.contains(&r.backend.as_str()) {
-                continue;
+    // Goldens of another release this bless compared and found unchanged: confirmed on this
+    // one, so they hold strictly here too (exactly those: a filtered bless confirms what it
+    // ran).
+    let mut confirm: std::collections::BTreeMap<String, Vec<(String, PathBuf)>> =
+        Default::default();
+    for r in g
+        .results
+        .iter()
+        .filter(|r| r.golden.as_deref() == Some("unchanged"))
+    {
+        let Some(v) = version_of(&r.backend) else {
+            continue;
+        };
+        let held = crate::judge::golden::held(
+            dir,
+            &crate::judge::golden::Subject {
+                backend: &r.backend,
+                name: &r.name,
+                driver: Some(&v),
+            },
+        );
+        let other_release = held
+            .blessed_on
+            .as_deref()
+            .is_some_and(|b| !crate::judge::golden::same_release(b, &v));
+        if let (true, Some(file)) = (other_release, held.file) {
+            if file.parent() == Some(dir.as_path()) {
+                confirm
+                    .entry(v.clone())
+                    .or_default()
+                    .push((crate::judge::golden::stem(&r.name), file));
             }
-            seen.push(&r.backend);
-            let Some(v) = version_of(&r.backend) else {
-                continue;
-            };
-            // The release the backend's goldens were first blessed on (the manifest keeps it;
-            // a backend blessed for the first time now has none yet).
-            let base = crate::judge::golden::blessed_on(dir, &r.backend, &r.backend);
-            if base.is_some_and(|b| !crate::judge::golden::same_release(&b, &v)) {
-                entries.push(crate::judge::golden::confirmation(dir, &r.backend, &v));
-            }
+        }
+    }
+    for (v, goldens) in &confirm {
+        if let Err(e) = crate::judge::golden::record_confirmed(dir, v, goldens) {
+            eprintln!(
+                "error: cannot record the goldens confirmed on Mesa {v} in {}: {e}",
+                crate::judge::golden::release_dir(dir, v).display()
+            );
         }
     }
     // Nothing Mesa-backed was blessed: the manifest stays as it is.

@@ -93,6 +93,11 @@ pub fn enter(build: &Own) -> Result<(), String> {
     if on_build_libc(build) {
         return Ok(());
     }
+    // Started through a loader already, yet not on the build's C library: executing again
+    // would loop; say what this process runs on instead.
+    if std::env::current_exe().is_ok_and(|e| is_loader(&e)) {
+        return check_on_build_libc(build);
+    }
     let exe = self_exe().map_err(|e| format!("cannot find this executable: {e}"))?;
     let mut args = std::env::args_os();
     let argv0 = args.next().unwrap_or_else(|| exe.clone().into_os_string());
@@ -179,8 +184,15 @@ pub fn check_loadable(
             }
             cmd.env("LD_LIBRARY_PATH", dirs);
         }
-        let Ok(out) = cmd.arg("--list").arg(lib).output() else {
-            continue;
+        let out = match cmd.arg("--list").arg(lib).output() {
+            Ok(out) => out,
+            Err(e) => {
+                problems.push((
+                    format!("the loader {} cannot run ({e})", loader.display()),
+                    String::new(),
+                ));
+                continue;
+            }
         };
         let text = String::from_utf8_lossy(&out.stdout).into_owned()
             + &String::from_utf8_lossy(&out.stderr);

@@ -67,8 +67,8 @@ pub struct Held {
     pub blessed_on: Option<String>,
     /// Whether this driver's release is one the golden was blessed or confirmed on
     /// ([`confirmed`]), or either version is unknown: then any difference outside the
-    /// tolerance is a change to review. Otherwise a difference whose every pixel the judge
-    /// holds legal is reported, not failed.
+    /// tolerance is a change to review. Otherwise the judge decides each changed pixel it
+    /// compared ([`crate::judge::golden::check`]).
     pub strict: bool,
 }
 
@@ -109,7 +109,10 @@ pub fn held(dir: &Path, run: &Subject) -> Held {
     } else {
         dir.to_path_buf()
     };
-    let strict = same || (base.is_some() && confirmed(dir, run.backend, driver));
+    let strict = same
+        || base
+            .as_deref()
+            .is_some_and(|f| confirmed(dir, &stem, f, driver));
     Held {
         file: base,
         write_dir,
@@ -186,7 +189,7 @@ pub fn record_blessed(dir: &Path, entries: &[(String, String)]) -> std::io::Resu
     let path = dir.join(MANIFEST);
     let mut map = manifest(dir).ok().flatten().unwrap_or_default();
     for (key, v) in entries {
-        if key.contains('/') && !key.contains('@') {
+        if key.contains('/') {
             map.entry(key.clone()).or_insert_with(|| v.clone());
         } else {
             map.insert(key.clone(), v.clone());
@@ -201,68 +204,89 @@ pub fn record_blessed(dir: &Path, entries: &[(String, String)]) -> std::io::Resu
     crate::atomic_file::write(&path, text.as_bytes())
 }
 
-/// The manifest key that confirms backend `id`'s goldens on `version`'s release.
-fn confirmation_key(id: &str, version: &str) -> String {
-    format!("{id}@{}", release(version))
+/// The file of a release's directory that lists the goldens of other releases a bless on it
+/// compared and found unchanged: `STEM HASH` per line (HASH: 64-bit FNV-1a of the golden's
+/// PNG bytes then), sorted.
+pub const CONFIRMED: &str = "confirmed.txt";
+
+/// 64-bit FNV-1a of a golden's bytes, as [`CONFIRMED`] records it.
+fn bytes_hash(bytes: &[u8]) -> String {
+    umbra_report::names::fnv64(bytes.iter().copied())
 }
 
-/// A digest of backend `id`'s goldens in `dir` itself (not a release's): every
-/// `STEM.snap.png` of its runs, by name and bytes. A confirmation holds only while this is
-/// what it was.
-pub fn backend_digest(dir: &Path, id: &str) -> String {
-    let prefix = format!("{}_", stem(id).rsplit_once('-').map_or("", |(p, _)| p));
-    let mut files: Vec<std::path::PathBuf> = std::fs::read_dir(dir)
-        .into_iter()
-        .flatten()
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| {
-            p.file_name().is_some_and(|n| {
-                let n = n.to_string_lossy();
-                n.starts_with(&prefix) && n.ends_with(".snap.png")
-            })
-        })
-        .collect();
-    files.sort();
-    let h = crate::judge::basis_key::hash_files(crate::judge::basis_key::FNV_START, dir, &files)
-        .unwrap_or(0);
-    format!("{h:016x}")
-}
-
-/// Whether backend `id`'s goldens in `dir` were confirmed on `version`'s release by a whole
-/// bless there (`cargo xtask bless --mesa DIR` over every point of the backend) and are still
-/// the goldens it confirmed: then a golden with no picture of that release's own holds on
-/// it strictly, as on the release it was blessed on. The goldens' digest is computed once per
-/// process and backend (a worker checks hundreds of runs; nothing writes goldens while it
-/// runs but a bless, which records its confirmations after its workers are gone).
-pub fn confirmed(dir: &Path, id: &str, version: &str) -> bool {
+/// The confirmations of `version`'s release in `dir` (stem → hash of the golden confirmed),
+/// parsed once per process and version of the file (a worker checks hundreds of runs: one
+/// `stat` each, not a parse).
+fn confirmations(dir: &Path, version: &str) -> std::collections::HashMap<String, String> {
     use std::collections::HashMap;
     use std::sync::{Mutex, OnceLock};
-    static DIGESTS: OnceLock<Mutex<HashMap<String, String>>> = OnceLock::new();
-    let Some(want) = manifest(dir)
+    type Parsed = (
+        Option<(u64, std::time::SystemTime)>,
+        HashMap<String, String>,
+    );
+    static READ: OnceLock<Mutex<HashMap<std::path::PathBuf, Parsed>>> = OnceLock::new();
+    let path = release_dir(dir, version).join(CONFIRMED);
+    let stamp = std::fs::metadata(&path)
         .ok()
-        .flatten()
-        .and_then(|m| m.get(&confirmation_key(id, version)).cloned())
-    else {
-        return false;
-    };
-    let key = format!("{}|{id}", dir.display());
-    let digests = DIGESTS.get_or_init(Mutex::default);
-    let cached = digests.lock().ok().and_then(|c| c.get(&key).cloned());
-    let have = cached.unwrap_or_else(|| {
-        let d = backend_digest(dir, id);
-        if let Ok(mut c) = digests.lock() {
-            c.insert(key, d.clone());
-        }
-        d
-    });
-    have == want
+        .and_then(|m| Some((m.len(), m.modified().ok()?)));
+    let read = READ.get_or_init(Mutex::default);
+    if let Some((_, m)) = read
+        .lock()
+        .ok()
+        .and_then(|c| c.get(&path).filter(|(s, _)| *s == stamp).cloned())
+    {
+        return m;
+    }
+    let m = parse_confirmed(&std::fs::read_to_string(&path).unwrap_or_default());
+    if let Ok(mut c) = read.lock() {
+        c.insert(path, (stamp, m.clone()));
+    }
+    m
 }
 
-/// The manifest entry that confirms backend `id`'s goldens (as they are now in `dir`) on
-/// `version`'s release: for [`record_blessed`] after a whole bless there.
-pub fn confirmation(dir: &Path, id: &str, version: &str) -> (String, String) {
-    (confirmation_key(id, version), backend_digest(dir, id))
+fn parse_confirmed(text: &str) -> std::collections::HashMap<String, String> {
+    text.lines()
+        .filter_map(|l| {
+            let (stem, hash) = l.trim().split_once(' ')?;
+            Some((stem.to_string(), hash.trim().to_string()))
+        })
+        .collect()
+}
+
+/// Whether the golden `file` of run `stem` (a golden of another release) was compared on
+/// `version`'s release by a bless there and found unchanged, and is still the golden it
+/// found: then it holds on that release strictly, as on its own. A golden changed since
+/// (blessed again on its release) is lenient there again until a bless on that release
+/// compares it anew.
+pub fn confirmed(dir: &Path, stem: &str, file: &Path, version: &str) -> bool {
+    confirmations(dir, version)
+        .get(stem)
+        .is_some_and(|want| std::fs::read(file).is_ok_and(|b| bytes_hash(&b) == *want))
+}
+
+/// Records that a bless on `version`'s release compared these goldens of other releases and
+/// found them unchanged: `(stem, golden file)` each, added to (or renewed in) the release's
+/// [`CONFIRMED`], kept sorted. A bless confirms exactly what it compared, filtered or not.
+pub fn record_confirmed(
+    dir: &Path,
+    version: &str,
+    goldens: &[(String, std::path::PathBuf)],
+) -> std::io::Result<()> {
+    if goldens.is_empty() {
+        return Ok(());
+    }
+    let release = release_dir(dir, version);
+    let path = release.join(CONFIRMED);
+    let mut map: std::collections::BTreeMap<String, String> =
+        parse_confirmed(&std::fs::read_to_string(&path).unwrap_or_default())
+            .into_iter()
+            .collect();
+    for (stem, file) in goldens {
+        map.insert(stem.clone(), bytes_hash(&std::fs::read(file)?));
+    }
+    let text: String = map.iter().map(|(s, h)| format!("{s} {h}\n")).collect();
+    std::fs::create_dir_all(&release)?;
+    crate::atomic_file::write(&path, text.as_bytes())
 }
 
 /// Whether backend `id` has goldens in `dir`: the manifest names it (blessing records every
@@ -270,7 +294,8 @@ pub fn confirmation(dir: &Path, id: &str, version: &str) -> (String, String) {
 /// the name each snapshot records, not by the file stem, whose punctuation is flattened).
 /// A device's backend without goldens (a device umbra has never seen) is judged by the specs
 /// and the reference alone; `cargo xtask bless --backend ID` starts its goldens. This build's
-/// own ids are never asked: a golden of theirs that is missing is a change to review.
+/// own ids are never asked: a golden of theirs that is missing is a change to review (on the
+/// release their goldens were blessed on; see [`crate::judge::golden`] for another).
 pub fn has_goldens(dir: &Path, id: &str) -> bool {
     if manifest(dir)
         .ok()

@@ -5,7 +5,11 @@
 //! golden's own bytes with themselves; its clean-up of the snapshot's pending files is done by
 //! name), so an unchanged picture never churns the file. A result outside it hands its new
 //! bytes to insta, which records a pending snapshot for `cargo insta review` and fails the
-//! run. A missing golden is a change too. Under `CI=true` insta is not called at all and
+//! run. A missing golden is a change too, on the release the backend's goldens were blessed
+//! on; on another, a run with no golden on any release that the judge passes is a new
+//! picture (a feature the new release runs that the old one skipped), reported as a changed
+//! picture and not failed: the CI on the blessed release still fails a golden that was
+//! deleted or never blessed. Under `CI=true` insta is not called at all and
 //! nothing under `golden/` is created, changed or deleted (pending files included): a change
 //! fails the run and says how to review it locally.
 //!
@@ -25,10 +29,10 @@
 //!   golden of the release they were blessed on ([`held`]): a new release records what
 //!   differs, not a second copy of everything. Blessing on a release never overwrites another
 //!   release's golden.
-//! - A whole bless on a release (`cargo xtask bless --mesa DIR`, every point of a backend)
-//!   confirms that backend's goldens there (`BACKEND@RELEASE` in the manifest, with a digest
-//!   of its goldens), so the rest hold strictly on it too, for as long as they are the goldens
-//!   it confirmed ([`confirmed`]).
+//! - A bless on a release (`cargo xtask bless --mesa DIR`) confirms there every golden of
+//!   another release it compared and found unchanged (`mesa-RELEASE/confirmed.txt`: stem and
+//!   hash), so those hold strictly on it too, for as long as they are the goldens it
+//!   confirmed ([`confirmed`]).
 //! - On a release where its golden is not strict, a picture that differs is judged pixel by
 //!   pixel ([`check`]): where every changed pixel is one the judge holds legal on this driver,
 //!   it is a changed picture (`changed-legal`), reported with both versions (terminal,
@@ -48,8 +52,8 @@ use std::path::Path;
 use umbra_case::Frame;
 
 pub use crate::judge::blessings::{
-    Held, MANIFEST, Subject, blessed_on, check_manifest, confirmation, confirmed, has_goldens,
-    held, record_blessed, release, release_dir, same_release, stem,
+    Held, MANIFEST, Subject, blessed_on, check_manifest, confirmed, has_goldens, held,
+    record_blessed, record_confirmed, release, release_dir, same_release, stem,
 };
 
 /// What happened to a run's golden.
@@ -537,19 +541,21 @@ mod release_tests {
         let lenient = held(&dir, &run("26.1.6"));
         assert!(!lenient.strict);
         assert_eq!(lenient.write_dir, release_dir(&dir, "26.1.6"));
-        // A confirmation of the backend's goldens as they are makes that release strict, until
-        // a golden of the backend changes.
-        record_blessed(&dir, &[confirmation(&dir, "gl33/llvmpipe", "26.1.6")]).expect("confirm");
-        assert!(confirmed(&dir, "gl33/llvmpipe", "26.1.6-1"));
-        std::fs::write(dir.join(format!("{stem}.snap.png")), png(&other)).expect("png");
-        assert_ne!(
-            crate::judge::blessings::backend_digest(&dir, "gl33/llvmpipe"),
-            crate::judge::blessings::manifest(&dir)
-                .ok()
-                .flatten()
-                .expect("manifest")["gl33/llvmpipe@26.1.6"],
+        // A bless on 26.1.6 that compared the golden and found it unchanged confirms it
+        // there: strict from then on, until the golden changes.
+        let base = dir.join(format!("{stem}.snap.png"));
+        record_confirmed(&dir, "26.1.6", &[(stem.clone(), base.clone())]).expect("confirm");
+        let text = std::fs::read_to_string(release_dir(&dir, "26.1.6").join("confirmed.txt"))
+            .expect("confirmed.txt");
+        assert!(text.starts_with(&format!("{stem} ")), "{text}");
+        assert!(confirmed(&dir, &stem, &base, "26.1.6-1"));
+        assert!(held(&dir, &run("26.1.6-1")).strict);
+        std::fs::write(&base, png(&other)).expect("png");
+        assert!(
+            !confirmed(&dir, &stem, &base, "26.1.6-1"),
             "a changed golden no longer matches its confirmation"
         );
+        assert!(!held(&dir, &run("26.1.6-1")).strict);
         let _ = std::fs::remove_dir_all(&dir);
     }
 

@@ -39,6 +39,14 @@ pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> i32 {
         );
         return 125;
     }
+    // A build with its own C library: this process continues on it (re-executed).
+    if let Some(Err(e)) = crate::harness::mesa_build::selected()
+        .filter(|_| crate::harness::mesa_build::is_mesa_backed(backend_id))
+        .map(crate::harness::mesa_build::MesaBuild::enter)
+    {
+        eprintln!("error: {backend_id}: {e}");
+        return 125;
+    }
     let mut backend = match crate::harness::registry::create(backend_id) {
         Ok(b) => b,
         Err(e) => {
