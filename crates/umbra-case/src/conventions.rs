@@ -115,7 +115,7 @@ impl Convention {
 
     /// Perspective projection (`gluPerspective` for GL; its [0,1] form otherwise).
     pub fn perspective(self, fov_y_rad: f32, aspect: f32, near: f32, far: f32) -> Mat4 {
-        let f = 1.0 / (0.5 * fov_y_rad).tan();
+        let f = 1.0 / crate::math::tanf(0.5 * fov_y_rad);
         let (z, zw) = match self.clip {
             ClipDepth::MinusOneToOne => {
                 ((far + near) / (near - far), 2.0 * far * near / (near - far))

@@ -123,7 +123,7 @@ impl DepthFormat {
                 if max_abs_z == 0.0 {
                     return f32::MIN_POSITIVE;
                 }
-                let e = max_abs_z.abs().log2().floor() as i32;
+                let e = crate::math::log2f(max_abs_z.abs()).floor() as i32;
                 2f32.powi(e - 23)
             }
         }

@@ -19,6 +19,7 @@
 use std::collections::BTreeMap;
 
 use crate::format::*;
+use crate::math::{cos, sin};
 
 /// A small deterministic generator (SplitMix64): the same seed gives the same cases
 /// everywhere, with no dependency.
@@ -52,8 +53,10 @@ impl Rng {
 
     /// Log-uniform in [lo, hi), rounded to 3 significant digits.
     fn log_range(&mut self, lo: f64, hi: f64) -> f32 {
-        let x = (lo.ln() + (hi.ln() - lo.ln()) * self.unit()).exp();
-        let digits = 2 - x.log10().floor() as i32;
+        let x = crate::math::exp(
+            crate::math::ln(lo) + (crate::math::ln(hi) - crate::math::ln(lo)) * self.unit(),
+        );
+        let digits = 2 - crate::math::log10(x).floor() as i32;
         round(x, digits)
     }
 
@@ -369,9 +372,9 @@ impl Gen {
         let elevation = self.rng.range(20.0, 70.0, 1).to_radians() as f64;
         let distance = f64::from(self.rng.range(11.0, 22.0, 1));
         let eye = [
-            round(distance * elevation.cos() * azimuth.sin(), 2),
-            round(distance * elevation.sin(), 2),
-            round(distance * elevation.cos() * azimuth.cos(), 2),
+            round(distance * cos(elevation) * sin(azimuth), 2),
+            round(distance * sin(elevation), 2),
+            round(distance * cos(elevation) * cos(azimuth), 2),
         ];
         let size = if self.rng.chance(0.85) {
             [200, 150]
@@ -426,9 +429,9 @@ impl Gen {
                     let d = 45.0;
                     (
                         Some([
-                            round(d * e.cos() * a.sin(), 2),
-                            round(d * e.sin(), 2),
-                            round(d * e.cos() * a.cos(), 2),
+                            round(d * cos(e) * sin(a), 2),
+                            round(d * sin(e), 2),
+                            round(d * cos(e) * cos(a), 2),
                         ]),
                         None,
                         None,

@@ -9,6 +9,7 @@
 //!   only place a projection is built.
 //! - [`light`] and [`prepare`]: the light faces and camera of a run, fitted where asked.
 //! - [`depth`]: storage per depth format and the polygon-offset unit.
+//! - [`math`]: the transcendental functions, the same on every C library (musl's, in Rust).
 //! - [`frame`] and [`backend`]: what a backend returns and the trait it implements.
 //! - [`profile`]: what an API lets an implementation do differently (the judge's input), and
 //!   the driver deviations diagnosed in Mesa's sources that expectations can name.
@@ -33,6 +34,7 @@ pub mod generate;
 pub mod light;
 pub mod lit_shader;
 pub mod load;
+pub mod math;
 pub mod memory;
 pub mod offset;
 pub mod prepare;

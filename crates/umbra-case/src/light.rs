@@ -21,7 +21,8 @@ pub fn direction_from_angles(azimuth_deg: f32, elevation_deg: f32) -> Vec3 {
         f64::from(azimuth_deg).to_radians(),
         f64::from(elevation_deg).to_radians(),
     );
-    glam::DVec3::new(e.cos() * a.sin(), e.sin(), e.cos() * a.cos()).as_vec3()
+    use crate::math::{cos, sin};
+    glam::DVec3::new(cos(e) * sin(a), sin(e), cos(e) * cos(a)).as_vec3()
 }
 
 /// A projection before a convention is chosen.

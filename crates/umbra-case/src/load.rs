@@ -250,7 +250,11 @@ fn axis_values(axis: &SweepAxis) -> Result<Vec<Value>, AxisError> {
             };
             let x = match axis.scale {
                 SweepScale::Linear => from + (to - from) * t,
-                SweepScale::Log => 10f64.powf(from.log10() + (to.log10() - from.log10()) * t),
+                SweepScale::Log => crate::math::pow(
+                    10.0,
+                    crate::math::log10(from)
+                        + (crate::math::log10(to) - crate::math::log10(from)) * t,
+                ),
             };
             number(x)
         })

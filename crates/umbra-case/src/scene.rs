@@ -232,9 +232,9 @@ impl Builder {
                 put(
                     self,
                     DVec3::new(
-                        theta.sin() * phi.sin(),
-                        theta.cos(),
-                        theta.sin() * phi.cos(),
+                        crate::math::sin(theta) * crate::math::sin(phi),
+                        crate::math::cos(theta),
+                        crate::math::sin(theta) * crate::math::cos(phi),
                     ),
                 );
             }

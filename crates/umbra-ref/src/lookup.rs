@@ -365,7 +365,7 @@ impl Lookup<'_> {
         let t = self.footprint(nb);
         let dx = t[1][2] - t[1][1];
         let dy = t[2][1] - t[1][1];
-        dx.length().max(dy.length()).log2()
+        umbra_case::math::log2(dx.length().max(dy.length()))
     }
 
     /// The LODs a conformant sampler may compute at this pixel (a closed interval):
@@ -417,7 +417,10 @@ impl Lookup<'_> {
             Spec::Gl => vulkan.max(sx.1.max(sy.1) + tx.1.max(ty.1)),
             Spec::Vulkan => vulkan,
         };
-        (lo.log2() - LOD_SLACK, hi.log2() + LOD_SLACK)
+        (
+            umbra_case::math::log2(lo) - LOD_SLACK,
+            umbra_case::math::log2(hi) + LOD_SLACK,
+        )
     }
 
     /// The level the reference reads for NEAREST between levels at LOD `lod`, or the two it
@@ -1635,7 +1638,7 @@ mod mip_tests {
                                         rho.push(mu + mv);
                                     }
                                     for r in rho {
-                                        let lod = r.log2();
+                                        let lod = umbra_case::math::log2f(r);
                                         assert!(
                                             range.0 <= lod && lod <= range.1,
                                             "LOD {lod} outside [{}, {}]",

@@ -474,7 +474,7 @@ impl Tri {
                 (self.x[b] - self.x[a]) as f64,
                 (self.y[b] - self.y[a]) as f64,
             );
-            dx.hypot(dy)
+            umbra_case::math::hypot(dx, dy)
         };
         let longest = len(0).max(len(1)).max(len(2));
         self.area as f64 / longest / ONE as f64

@@ -7,6 +7,7 @@
 
 use glam::Vec3;
 use umbra_case::format::{Shading, ShadingModel};
+use umbra_case::math::powf;
 
 use crate::rounding::unorm8;
 use crate::surface::Surfaces;
@@ -59,7 +60,7 @@ pub fn shade_run(
             }
             for [ndl, _, x] in scratch.iter_mut() {
                 *x = if *ndl > 0.0 {
-                    s.specular * x.powf(s.shininess)
+                    s.specular * powf(*x, s.shininess)
                 } else {
                     0.0
                 };
@@ -113,7 +114,7 @@ pub fn shade_linear(
             let kept = s.dimming + (1.0 - s.dimming) * visibility;
             let spec = if ndl > 0.0 {
                 let h = (to_light + to_eye).normalize_or_zero();
-                s.specular * n.dot(h).max(0.0).powf(s.shininess)
+                s.specular * powf(n.dot(h).max(0.0), s.shininess)
             } else {
                 0.0
             };
@@ -158,11 +159,11 @@ pub fn shade_tolerance(
             let x = n.dot(h).max(0.0);
             let e = s.shininess;
             let moves = s.specular
-                * (e * x.powf((e - 1.0).max(0.0)) * dot_err
-                    + x.powf(e) * (e * 2f32.powi(-21) + 8.0 * u));
+                * (e * powf(x, (e - 1.0).max(0.0)) * dot_err
+                    + powf(x, e) * (e * 2f32.powi(-21) + 8.0 * u));
             // The gate itself undecided: the term may be there or not.
             let gate = if ndl.abs() <= dot_err {
-                s.specular * x.powf(e)
+                s.specular * powf(x, e)
             } else {
                 0.0
             };

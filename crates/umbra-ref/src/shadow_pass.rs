@@ -121,7 +121,12 @@ impl Freedom {
                     r_hi = r_hi.max(4.0 / f64::from((1u32 << n) - 1));
                 }
             }
-            ((m_max - snap).max(0.0), dx.hypot(dy) + snap, r_lo, r_hi)
+            (
+                (m_max - snap).max(0.0),
+                umbra_case::math::hypot(dx, dy) + snap,
+                r_lo,
+                r_hi,
+            )
         };
         let ends = |a: f64, b: f64, k: f64| {
             let (x, y) = (a * k, b * k);
