@@ -1638,7 +1638,7 @@ mod mip_tests {
                                         rho.push(mu + mv);
                                     }
                                     for r in rho {
-                                        let lod = umbra_case::math::log2f(r);
+                                        let lod = umbra_case::math::log2(r);
                                         assert!(
                                             range.0 <= lod && lod <= range.1,
                                             "LOD {lod} outside [{}, {}]",
