@@ -20,8 +20,9 @@
 //! **What it leaves.** DIR (default `target/mesa/SUITE`) holds the unpacked packages and
 //! `umbra-mesa.json` (suite, Mesa and glibc versions, every package with its version), which
 //! `--mesa DIR` reports in drivers.txt. The new tree is unpacked beside the old one and
-//! renamed into place, so an interrupted fetch never leaves a half build under DIR; a fetch
-//! that finds the same package versions already there does nothing.
+//! renamed into place, so an interrupted fetch (or a full disk) never leaves a half build
+//! under DIR; a fetch that finds the same package versions already there does nothing; a
+//! second fetch of the same suite while one runs is refused with the first one's pid.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -244,6 +245,47 @@ fn parse_closure(text: &str) -> Vec<String> {
     names
 }
 
+/// One fetch of a suite at a time: a directory made atomically, holding the fetching
+/// process's id; one left by a process that is gone is taken over. Removed when dropped.
+struct Lock(PathBuf);
+
+impl Lock {
+    fn take(path: &Path, suite: &str) -> Result<Lock, String> {
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent)
+                .map_err(|e| format!("cannot create {}: {e}", parent.display()))?;
+        }
+        for _ in 0..2 {
+            match std::fs::create_dir(path) {
+                Ok(()) => {
+                    let _ = std::fs::write(path.join("pid"), std::process::id().to_string());
+                    return Ok(Lock(path.to_path_buf()));
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    let pid = std::fs::read_to_string(path.join("pid")).unwrap_or_default();
+                    let pid = pid.trim();
+                    if !pid.is_empty() && Path::new("/proc").join(pid).exists() {
+                        return Err(format!(
+                            "another fetch-mesa (pid {pid}) is fetching {suite} now; wait for it (or remove {} if no such fetch runs)",
+                            path.display()
+                        ));
+                    }
+                    // Left by a fetch that was killed: take it over.
+                    let _ = std::fs::remove_dir_all(path);
+                }
+                Err(e) => return Err(format!("cannot create {}: {e}", path.display())),
+            }
+        }
+        Err(format!("cannot take {}", path.display()))
+    }
+}
+
+impl Drop for Lock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
 /// Whether Debian version `a` is newer than `b` (`dpkg --compare-versions`).
 fn newer(a: &str, b: &str) -> bool {
     Command::new("dpkg")
@@ -285,6 +327,7 @@ fn fetch(suite: &str, dir: Option<PathBuf>, root: &Path) -> Result<(), String> {
     let started = Instant::now();
     let mesa_dir = root.join("target").join("mesa");
     let dir = dir.unwrap_or_else(|| mesa_dir.join(suite));
+    let _lock = Lock::take(&mesa_dir.join(format!(".{suite}.lock")), suite)?;
     let apt = Apt::new(mesa_dir.join(".apt").join(suite), suite)?;
     let update = apt
         .command("apt-get")
