@@ -204,12 +204,32 @@ fn expectations_apply_to_the_driver_versions_they_name() {
         drivers.contains("expectations: ") && drivers.contains("fake.txt"),
         "{drivers}"
     );
-    // 2.0.0 is not: the same failure is a regression, and no file applied.
+    // 2.0.0 is past the range the fix closed: the same failure is a regression that names
+    // the deviation as come back, and drivers.txt says the line's runs are held to pass.
     let (o, drivers) = run(&fake_build("fake-200", "2.0.0", true), "exp-200");
     let t = text(&o);
     assert_eq!(o.status.code(), Some(1), "{t}");
     assert!(t.contains("regression: Fail fake/mesa/l-occluder"), "{t}");
-    assert!(!drivers.contains("fake.txt"), "{drivers}");
+    assert!(
+        t.contains(
+            "a deviation that Mesa 2 fixed matches this failure, inverted shadows in 1.1.x ("
+        ) && t.contains("fake.txt:2): it may be back"),
+        "{t}"
+    );
+    assert!(drivers.contains("expectations: none"), "{drivers}");
+    assert!(
+        drivers.contains("closed before this release (deviations fixed; their runs must pass): ")
+            && drivers.contains("fake.txt (1)"),
+        "{drivers}"
+    );
+    // Below the range (1.0.0) the line never applied and nothing is closed.
+    let (o, drivers) = run(&fake_build("fake-100", "1.0.0", true), "exp-100");
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(
+        !t.contains("may be back") && !drivers.contains("fake.txt"),
+        "{t}"
+    );
 }
 
 fn git(dir: &Path, args: &[&str]) -> String {

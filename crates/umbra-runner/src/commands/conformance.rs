@@ -1217,8 +1217,12 @@ fn run_group(
             .and_then(|u| u.as_str())
             .map(str::to_string),
         start_error,
-        // Expectations for this backend's driver (`@applies`).
+        // Expectations for this backend's driver (`@applies`), and those a release before it
+        // closed (their deviations were fixed: a failure they match may be one come back).
         expectations: settings.expectations.for_driver(
+            &crate::judge::expectations::DriverFacts::from_hello(&hello["ready"]),
+        ),
+        closed: settings.expectations.closed_for(
             &crate::judge::expectations::DriverFacts::from_hello(&hello["ready"]),
         ),
         settings,
@@ -1287,6 +1291,8 @@ struct Group<'a> {
     unavailable: Option<String>,
     start_error: Option<String>,
     expectations: Expectations,
+    /// Expectations whose range an earlier release closed ([`Expectations::closed_for`]).
+    closed: Expectations,
     settings: &'a Settings,
 }
 
@@ -1334,11 +1340,27 @@ fn describe_driver(g: &Group, hello: &serde_json::Value) -> (String, serde_json:
             crate::judge::golden::NONE_FOR_BACKEND
         ));
     }
+    // Deviations a release before this driver fixed: their runs are held to pass here.
+    let closed: Vec<String> = g
+        .closed
+        .files()
+        .iter()
+        .map(|(f, n)| format!("{f} ({n})"))
+        .collect();
+    let closed_line = if closed.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "  closed before this release (deviations fixed; their runs must pass): {}\n",
+            closed.join(", ")
+        )
+    };
     let line = format!(
-        "{}{device}{}",
+        "{}{device}{}{closed_line}",
         driver_line,
         match (&build, files.is_empty()) {
-            (Some(b), _) => format!("  build: {b}; expectations: {}\n", files.join(", ")),
+            (Some(b), true) => format!("  build: {b}; expectations: none\n"),
+            (Some(b), false) => format!("  build: {b}; expectations: {}\n", files.join(", ")),
             (None, false) => format!("  expectations: {}\n", files.join(", ")),
             (None, true) => String::new(),
         }
@@ -1359,6 +1381,7 @@ fn describe_driver(g: &Group, hello: &serde_json::Value) -> (String, serde_json:
         "unavailable": hello.get("unavailable"),
         "refused": g.refused,
         "expectations": files,
+        "closed_expectations": closed,
     });
     (line, row)
 }
@@ -1464,6 +1487,10 @@ impl Group<'_> {
             }
             (_, Some(why)) if reason.is_empty() => format!("expectation: {why}"),
             (_, Some(why)) => format!("{reason} (expectation: {why})"),
+            (s, None) if s.is_regression() => match self.closed.come_back(&name, &p.case) {
+                Some(back) => format!("{reason} ({back})"),
+                None => reason,
+            },
             (_, None) => reason,
         };
         let result = RunResult {

@@ -398,6 +398,32 @@ impl Selector {
         Ok(Selector(terms))
     }
 
+    /// The release that closed this selector's range for driver `d`: where every term
+    /// matches `d` but an upper bound (`mesa<25.2`, `mesa<=25.1`) that `d`'s version is past,
+    /// that bound's version (`25.2`). The deviation the lines below it describe was fixed
+    /// by then, and on `d` their runs must pass ([`Expectations::closed_for`]).
+    pub fn closed_at(&self, d: &DriverFacts) -> Option<String> {
+        let mut closed = None;
+        for t in &self.0 {
+            let one = Selector(vec![t.clone()]);
+            if one.matches(d) {
+                continue;
+            }
+            match t {
+                Term::Mesa(op, want) if (op == "<" || op == "<=") && d.mesa.is_some() => {
+                    closed = Some(
+                        want.iter()
+                            .map(u32::to_string)
+                            .collect::<Vec<_>>()
+                            .join("."),
+                    );
+                }
+                _ => return None,
+            }
+        }
+        closed
+    }
+
     /// Whether a driver matches every term.
     pub fn matches(&self, d: &DriverFacts) -> bool {
         self.0.iter().all(|t| match t {
@@ -593,6 +619,44 @@ impl Expectations {
                 .cloned()
                 .collect(),
         )
+    }
+
+    /// The expectations whose range a release before driver `d`'s closed (the deviation was
+    /// fixed: [`Selector::closed_at`]): on `d` their runs must pass. A run of `d` that fails
+    /// where one of them matches is a deviation come back, and its reason says which
+    /// ([`Expectations::come_back`]).
+    pub fn closed_for(&self, d: &DriverFacts) -> Expectations {
+        Expectations(
+            self.0
+                .iter()
+                .filter(|e| e.applies.closed_at(d).is_some())
+                .cloned()
+                .collect(),
+        )
+    }
+
+    /// For a run that failed on a driver where these closed expectations (from
+    /// [`Expectations::closed_for`]) no longer apply: the one that matches it, as words for
+    /// its reason.
+    pub fn come_back(&self, name: &str, case: &serde_json::Value) -> Option<String> {
+        let e = self.find(name, case)?;
+        Some(format!(
+            "a deviation that Mesa {} fixed matches this failure, {} ({}): it may be back",
+            e.applies
+                .0
+                .iter()
+                .find_map(|t| match t {
+                    Term::Mesa(op, v) if op.starts_with('<') => Some(format!(
+                        "{}{}",
+                        if op == "<" { "" } else { "after " },
+                        v.iter().map(u32::to_string).collect::<Vec<_>>().join(".")
+                    )),
+                    _ => None,
+                })
+                .unwrap_or_default(),
+            e.reason,
+            e.source
+        ))
     }
 
     /// The files these expectations come from, each with how many of its lines are here.
@@ -959,6 +1023,31 @@ mod tests {
             DriverFacts::from_hello(&hello).mesa.as_deref(),
             Some("25.0.7-2~bpo12+1")
         );
+    }
+
+    #[test]
+    fn a_range_closed_by_a_fix_is_told_apart_from_one_that_never_applied() {
+        let sel = Selector::parse("mesa>=22.3 mesa<25.2").expect("parse");
+        let on = |v: &str, r: &str| DriverFacts {
+            mesa: Some(v.into()),
+            renderer: r.into(),
+        };
+        assert_eq!(sel.closed_at(&on("25.0.7-2~bpo12+1", "zink")), None);
+        assert_eq!(
+            sel.closed_at(&on("26.2.6-1", "zink")).as_deref(),
+            Some("25.2")
+        );
+        // Below the range it never applied: not closed.
+        assert_eq!(sel.closed_at(&on("21.0.0", "zink")), None);
+        // Another term that does not match: not this driver's line at all.
+        let zink = Selector::parse("mesa<25.2 renderer=*zink*").expect("parse");
+        assert_eq!(zink.closed_at(&on("26.2.6", "llvmpipe")), None);
+        assert_eq!(
+            zink.closed_at(&on("26.2.6", "zink (llvmpipe)")).as_deref(),
+            Some("25.2")
+        );
+        // Not a Mesa driver (the reference): nothing closed.
+        assert_eq!(sel.closed_at(&DriverFacts::default()), None);
     }
 
     #[test]
