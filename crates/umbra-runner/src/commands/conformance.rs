@@ -1219,10 +1219,11 @@ fn run_group(
         start_error,
         // Expectations for this backend's driver (`@applies`), and those a release before it
         // closed (their deviations were fixed: a failure they match may be one come back).
-        expectations: settings.expectations.for_driver(
+        // Only the lines that can name this backend's runs, so drivers.txt counts its own.
+        expectations: settings.expectations.for_backend(backend).for_driver(
             &crate::judge::expectations::DriverFacts::from_hello(&hello["ready"]),
         ),
-        closed: settings.expectations.closed_for(
+        closed: settings.expectations.for_backend(backend).closed_for(
             &crate::judge::expectations::DriverFacts::from_hello(&hello["ready"]),
         ),
         settings,

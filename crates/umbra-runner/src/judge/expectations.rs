@@ -610,6 +610,19 @@ impl Expectations {
         Ok(())
     }
 
+    /// The expectations whose pattern can match a run of `backend` (a run name starts with
+    /// `BACKEND/`): what drivers.txt counts per backend, so gl33/llvmpipe's line does not
+    /// count softpipe's or zink's lines.
+    pub fn for_backend(&self, backend: &str) -> Expectations {
+        Expectations(
+            self.0
+                .iter()
+                .filter(|e| crate::glob::never_matches(&e.pattern, &[backend]).is_none())
+                .cloned()
+                .collect(),
+        )
+    }
+
     /// The expectations that apply to a backend with driver `d`.
     pub fn for_driver(&self, d: &DriverFacts) -> Expectations {
         Expectations(
@@ -1048,6 +1061,36 @@ mod tests {
         );
         // Not a Mesa driver (the reference): nothing closed.
         assert_eq!(sel.closed_at(&DriverFacts::default()), None);
+    }
+
+    #[test]
+    fn a_backend_counts_only_the_lines_that_can_name_its_runs() {
+        let dir = std::env::temp_dir().join(format!("umbra-exp-backend-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        std::fs::write(
+            dir.join("mesa.txt"),
+            "gl33/zink/*,Deviation:offset-unit-x4,zink\n\
+             gl33/softpipe/beyond-far@*,Fail:value<=1,softpipe\n\
+             gl33/*/grazing,Fail:value<=1,any gl33\n\
+             */zink/contact,Fail:value<=1,any zink\n",
+        )
+        .expect("write");
+        let all = Expectations::load(&dir).expect("load");
+        let names = |b: &str| {
+            all.for_backend(b)
+                .0
+                .iter()
+                .map(|x| x.pattern.clone())
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(
+            names("gl33/zink"),
+            ["gl33/zink/*", "gl33/*/grazing", "*/zink/contact"]
+        );
+        assert_eq!(names("gl33/llvmpipe"), ["gl33/*/grazing", "*/zink/contact"]);
+        // A wildcard before the backend id is kept (it may match): never a line lost.
+        assert_eq!(names("gles3/softpipe"), ["*/zink/contact"]);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -5,9 +5,19 @@
 use std::path::PathBuf;
 use std::process::Output;
 
-/// A fresh, empty directory for one test (per process, so parallel test binaries never meet).
+/// A fresh, empty directory for one test: `target/tmp/umbra-test/BINARY/NAME`, per test
+/// binary so that parallel test binaries never meet, and the same path on every run, so that
+/// a run replaces what the last one left instead of adding to it (named by process id under
+/// /tmp, the suite's conformance runs and judging caches left about 150 MB a run behind).
 pub fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("umbra-test-{}-{name}", std::process::id()));
+    let exe = std::env::current_exe().unwrap_or_default();
+    let stem = exe.file_stem().and_then(|s| s.to_str()).unwrap_or("test");
+    // Cargo names test binaries NAME-HASH; the hash changes with every build.
+    let binary = stem.rsplit_once('-').map_or(stem, |(b, _)| b);
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join("umbra-test")
+        .join(binary)
+        .join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("scratch dir");
     dir
