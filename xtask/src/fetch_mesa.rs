@@ -120,56 +120,30 @@ impl Apt {
     /// `program` (apt-get or apt-cache) with the private configuration.
     fn command(&self, program: &str) -> Command {
         let mut cmd = Command::new(program);
-        let opt = |cmd: &mut Command, o: String| {
-            cmd.arg("-o").arg(o);
-        };
-        opt(
-            &mut cmd,
-            format!(
-                "Dir::Etc::sourcelist={}",
-                self.dir.join("sources.list").display()
-            ),
-        );
-        opt(
-            &mut cmd,
-            format!(
-                "Dir::Etc::sourceparts={}",
-                self.dir.join("sources.list.d").display()
-            ),
-        );
-        opt(
-            &mut cmd,
-            format!("Dir::State::Lists={}", self.dir.join("lists").display()),
-        );
-        opt(
-            &mut cmd,
-            format!("Dir::State::status={}", self.dir.join("status").display()),
-        );
-        // The system's pins would choose other versions than the suite's own.
-        opt(
-            &mut cmd,
-            format!(
-                "Dir::Etc::preferences={}",
-                self.dir.join("preferences").display()
-            ),
-        );
-        opt(
-            &mut cmd,
-            format!(
-                "Dir::Etc::preferencesparts={}",
-                self.dir.join("preferences.d").display()
-            ),
-        );
-        opt(
-            &mut cmd,
-            format!("Dir::Cache={}", self.dir.join("cache").display()),
-        );
-        opt(&mut cmd, "Debug::NoLocking=1".into());
-        // A snapshot mirror's Release files carry a Valid-Until long past.
-        opt(&mut cmd, "Acquire::Check-Valid-Until=false".into());
-        // As root apt would hand downloads to the _apt user, who cannot write here.
-        opt(&mut cmd, "APT::Sandbox::User=root".into());
-        opt(&mut cmd, format!("APT::Default-Release={}", self.suite));
+        // apt's own state, each a path under the private directory. The preferences are
+        // private too: the system's pins would choose other versions than the suite's own.
+        for (option, path) in [
+            ("Dir::Etc::sourcelist", "sources.list"),
+            ("Dir::Etc::sourceparts", "sources.list.d"),
+            ("Dir::State::Lists", "lists"),
+            ("Dir::State::status", "status"),
+            ("Dir::Etc::preferences", "preferences"),
+            ("Dir::Etc::preferencesparts", "preferences.d"),
+            ("Dir::Cache", "cache"),
+        ] {
+            cmd.arg("-o")
+                .arg(format!("{option}={}", self.dir.join(path).display()));
+        }
+        for option in [
+            "Debug::NoLocking=1".to_string(),
+            // A snapshot mirror's Release files carry a Valid-Until long past.
+            "Acquire::Check-Valid-Until=false".to_string(),
+            // As root apt would hand downloads to the _apt user, who cannot write here.
+            "APT::Sandbox::User=root".to_string(),
+            format!("APT::Default-Release={}", self.suite),
+        ] {
+            cmd.arg("-o").arg(option);
+        }
         cmd
     }
 

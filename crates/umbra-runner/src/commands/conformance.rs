@@ -1206,6 +1206,9 @@ fn run_group(
         Ok(w) => (w.hello.clone(), None),
         Err(e) => (serde_json::json!({ "unavailable": e }), Some(e.clone())),
     };
+    // Only the lines that can name this backend's runs, so drivers.txt counts its own.
+    let own = settings.expectations.for_backend(backend);
+    let facts = crate::judge::expectations::DriverFacts::from_hello(&hello["ready"]);
     let group = Group {
         backend,
         refused: hello
@@ -1219,13 +1222,8 @@ fn run_group(
         start_error,
         // Expectations for this backend's driver (`@applies`), and those a release before it
         // closed (their deviations were fixed: a failure they match may be one come back).
-        // Only the lines that can name this backend's runs, so drivers.txt counts its own.
-        expectations: settings.expectations.for_backend(backend).for_driver(
-            &crate::judge::expectations::DriverFacts::from_hello(&hello["ready"]),
-        ),
-        closed: settings.expectations.for_backend(backend).closed_for(
-            &crate::judge::expectations::DriverFacts::from_hello(&hello["ready"]),
-        ),
+        expectations: own.for_driver(&facts),
+        closed: own.closed_for(&facts),
         settings,
     };
     if let Some(mut d) = done.lock().ok().filter(|_| first) {
@@ -1301,12 +1299,7 @@ struct Group<'a> {
 /// expectation files that apply) and its row in report.json's `drivers`.
 fn describe_driver(g: &Group, hello: &serde_json::Value) -> (String, serde_json::Value) {
     let (backend, settings) = (g.backend, g.settings);
-    let files: Vec<String> = g
-        .expectations
-        .files()
-        .iter()
-        .map(|(f, n)| format!("{f} ({n})"))
-        .collect();
+    let files = g.expectations.file_counts();
     let facts = crate::judge::expectations::DriverFacts::from_hello(&hello["ready"]);
     let build = hello["ready"]["build"].as_str().map(str::to_string);
     let driver_line = match (hello.get("ready"), hello.get("unavailable")) {
@@ -1342,12 +1335,7 @@ fn describe_driver(g: &Group, hello: &serde_json::Value) -> (String, serde_json:
         ));
     }
     // Deviations a release before this driver fixed: their runs are held to pass here.
-    let closed: Vec<String> = g
-        .closed
-        .files()
-        .iter()
-        .map(|(f, n)| format!("{f} ({n})"))
-        .collect();
+    let closed = g.closed.file_counts();
     let closed_line = if closed.is_empty() {
         String::new()
     } else {

@@ -614,24 +614,17 @@ impl Expectations {
     /// `BACKEND/`): what drivers.txt counts per backend, so gl33/llvmpipe's line does not
     /// count softpipe's or zink's lines.
     pub fn for_backend(&self, backend: &str) -> Expectations {
-        Expectations(
-            self.0
-                .iter()
-                .filter(|e| crate::glob::never_matches(&e.pattern, &[backend]).is_none())
-                .cloned()
-                .collect(),
-        )
+        self.keep(|e| crate::glob::never_matches(&e.pattern, &[backend]).is_none())
+    }
+
+    /// The expectations `keep` holds for, in their order.
+    fn keep(&self, keep: impl Fn(&Expectation) -> bool) -> Expectations {
+        Expectations(self.0.iter().filter(|e| keep(e)).cloned().collect())
     }
 
     /// The expectations that apply to a backend with driver `d`.
     pub fn for_driver(&self, d: &DriverFacts) -> Expectations {
-        Expectations(
-            self.0
-                .iter()
-                .filter(|e| e.applies.matches(d))
-                .cloned()
-                .collect(),
-        )
+        self.keep(|e| e.applies.matches(d))
     }
 
     /// The expectations whose range a release before driver `d`'s closed (the deviation was
@@ -639,13 +632,7 @@ impl Expectations {
     /// where one of them matches is a deviation come back, and its reason says which
     /// ([`Expectations::come_back`]).
     pub fn closed_for(&self, d: &DriverFacts) -> Expectations {
-        Expectations(
-            self.0
-                .iter()
-                .filter(|e| e.applies.closed_at(d).is_some())
-                .cloned()
-                .collect(),
-        )
+        self.keep(|e| e.applies.closed_at(d).is_some())
     }
 
     /// For a run that failed on a driver where these closed expectations (from
@@ -670,6 +657,14 @@ impl Expectations {
             e.reason,
             e.source
         ))
+    }
+
+    /// [`Expectations::files`] as drivers.txt and report.json name them: `FILE (LINES)`.
+    pub fn file_counts(&self) -> Vec<String> {
+        self.files()
+            .iter()
+            .map(|(f, n)| format!("{f} ({n})"))
+            .collect()
     }
 
     /// The files these expectations come from, each with how many of its lines are here.
