@@ -4,6 +4,8 @@
 //!   `cases/README.md`).
 //! - [`validate`] and [`load`]: parsing with errors that name the file, the JSON path and the
 //!   fix; sweep expansion into [`load::CasePoint`]s.
+//! - [`schema`]: the format as a schema that conditions over a case point (`@when`) are
+//!   checked against, and the precision their numbers compare at.
 //! - [`scene`]: the one tessellation every backend draws.
 //! - [`conventions`]: clip ranges, projections, the bias matrix, window mapping, compares. The
 //!   only place a projection is built.
@@ -40,6 +42,7 @@ pub mod offset;
 pub mod prepare;
 pub mod profile;
 pub mod scene;
+pub mod schema;
 pub mod technique;
 pub mod twin;
 pub mod validate;

@@ -317,16 +317,16 @@ pub(crate) fn set_path<'v>(doc: &'v mut Value, path: &str) -> Result<&'v mut Val
 pub fn get_path<'v>(doc: &'v Value, path: &str) -> Option<&'v Value> {
     let mut cur = doc;
     for seg in path.split('.') {
-        let (key, index) = match seg.find('[') {
-            Some(open) if seg.ends_with(']') => (
-                &seg[..open],
-                Some(seg[open + 1..seg.len() - 1].parse::<usize>().ok()?),
-            ),
-            _ => (seg, None),
-        };
+        let (key, mut rest) = seg.split_at(seg.find('[').unwrap_or(seg.len()));
         cur = cur.as_object()?.get(key)?;
-        if let Some(i) = index {
-            cur = cur.as_array()?.get(i)?;
+        // Indices, one or more (`positions[3][1]`).
+        while let Some(inner) = rest.strip_prefix('[') {
+            let close = inner.find(']')?;
+            cur = cur.as_array()?.get(inner[..close].parse::<usize>().ok()?)?;
+            rest = &inner[close + 1..];
+        }
+        if !rest.is_empty() {
+            return None;
         }
     }
     Some(cur)

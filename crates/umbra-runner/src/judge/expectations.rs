@@ -223,34 +223,55 @@ impl Condition {
                 always = true;
                 continue;
             }
-            let Some((at, op)) = ["!=", "<=", ">=", "=", "<", ">"]
-                .into_iter()
-                .find_map(|op| t.find(op).map(|at| (at, op)))
-            else {
+            // The operator is the first operator character and what follows it (`<=`), so
+            // `a>>0` is `a` `>` `>0`, and `>0` is then refused as a value.
+            let Some(at) = t.find(['!', '<', '>', '=']) else {
                 return Err(format!(
                     "@when term {t:?} is not PATH=VALUE (or !=, <, >, <=, >=), e.g. shadow.bias.polygon_offset[1]!=0"
                 ));
             };
+            let op = ["!=", "<=", ">=", "=", "<", ">"]
+                .into_iter()
+                .find(|op| t[at..].starts_with(op))
+                .ok_or_else(|| {
+                    format!(
+                        "@when term {t:?}: {:?} is not an operator (=, !=, <, >, <=, >=)",
+                        &t[at..at + 1]
+                    )
+                })?;
             let (path, value) = (&t[..at], &t[at + op.len()..]);
             if path.is_empty() || value.is_empty() {
                 return Err(format!("@when term {t:?} needs a path and a value"));
             }
-            // A value is JSON where it parses (0, 1.5, null, "x"), else a bare word.
-            let value = serde_json::from_str(value)
-                .unwrap_or_else(|_| serde_json::Value::String(value.to_string()));
+            // A value is JSON where it parses (0, 1.5, null, "x", [0,0]), else a bare word
+            // (an enum's name: depth16, linear).
+            let value = match serde_json::from_str(value) {
+                Ok(v) => v,
+                Err(_) if value.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') => {
+                    serde_json::Value::String(value.to_string())
+                }
+                Err(_) => {
+                    return Err(format!(
+                        "@when term {t:?}: {value:?} is neither JSON (0.5, \"x\", [0,0], null) nor a bare word (depth16)"
+                    ));
+                }
+            };
+            umbra_case::schema::check_term(path, op, &value)
+                .map_err(|e| format!("@when term {t:?}: {e}"))?;
             terms.push((path.to_string(), op.to_string(), value));
         }
         Ok(Condition { terms, always })
     }
 
     /// Whether case point `case` (as JSON, defaults included) satisfies every term; a path the
-    /// case lacks reads as null.
+    /// case lacks (another variant's, an absent option) reads as null. Numbers compare at the
+    /// case's f32 precision ([`umbra_case::schema::compare_numbers`]).
     pub fn holds(&self, case: &serde_json::Value) -> bool {
         use std::cmp::Ordering;
         self.terms.iter().all(|(path, op, want)| {
             let have = umbra_case::get_path(case, path).unwrap_or(&serde_json::Value::Null);
             let order = match (have.as_f64(), want.as_f64()) {
-                (Some(a), Some(b)) => a.partial_cmp(&b),
+                (Some(a), Some(b)) => umbra_case::schema::compare_numbers(a, b),
                 _ => same(have, want).then_some(Ordering::Equal),
             };
             match op.as_str() {
@@ -275,7 +296,12 @@ impl Condition {
 fn same(a: &serde_json::Value, b: &serde_json::Value) -> bool {
     use serde_json::Value;
     match (a, b) {
-        (Value::Number(x), Value::Number(y)) => x.as_f64() == y.as_f64(),
+        (Value::Number(x), Value::Number(y)) => match (x.as_f64(), y.as_f64()) {
+            (Some(x), Some(y)) => {
+                umbra_case::schema::compare_numbers(x, y).is_some_and(|o| o.is_eq())
+            }
+            _ => false,
+        },
         (Value::Array(x), Value::Array(y)) => {
             x.len() == y.len() && x.iter().zip(y).all(|(p, q)| same(p, q))
         }
@@ -1160,6 +1186,19 @@ mod tests {
         assert!(!Condition::parse("always").expect("always").is_empty());
         let e = Condition::parse("shadow.format").expect_err("no operator");
         assert!(e.contains("PATH=VALUE"), "{e}");
+        // Issue 36's probes: each once misfired silently.
+        let e = Condition::parse("shadow.bais.constant>0").expect_err("mistyped path");
+        assert!(e.contains("names no field"), "{e}");
+        let e = Condition::parse("shadow.bias.constant>>0").expect_err("malformed term");
+        assert!(e.contains("\">0\""), "{e}");
+        assert!(Condition::parse("shadow.format=depth17").is_err());
+        // A case's f32 0.0005 equals the decimal 0.0005 it was written as.
+        let widened =
+            serde_json::json!({ "shadow": { "bias": { "constant": f64::from(0.0005f32) } } });
+        let on = |t: &str| Condition::parse(t).expect("parse").holds(&widened);
+        assert!(on("shadow.bias.constant=0.0005") && on("shadow.bias.constant=5e-4"));
+        assert!(!on("shadow.bias.constant!=0.0005") && !on("shadow.bias.constant>0.0005"));
+        assert!(on("shadow.bias.constant<=0.0005") && on("shadow.bias.constant>0.0004"));
     }
 
     /// A cause expectation (`@when` … `Deviation:NAME`): the failure the deviation explains is
