@@ -160,6 +160,12 @@ pub trait Backend {
     /// Renders one run. Per-run GPU state is created and destroyed inside.
     fn render(&mut self, run: &Prepared) -> Result<Frame, BackendError>;
 
+    /// After a run that failed: returns the backend to the state a fresh one has, or says why
+    /// it cannot (then the worker is replaced, so one run's error never reaches the next).
+    fn restore(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+
     /// Whether `a` and `b` render identically on this backend *by construction*: they differ
     /// only in settings it never reads, so a metamorphic twin between them would be the same
     /// render twice and is not rendered (the report says so). By default only equal cases do;

@@ -203,6 +203,10 @@ impl Backend for GlBackend {
         self.renderer.render(run)
     }
 
+    fn restore(&mut self) -> Result<(), String> {
+        self.renderer.restore()
+    }
+
     fn render_twin(
         &mut self,
         twin: &Prepared,

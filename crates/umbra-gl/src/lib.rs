@@ -22,6 +22,7 @@ pub mod backend;
 pub mod caps;
 pub mod context;
 pub mod driver;
+pub mod inject;
 pub mod platform;
 pub mod record;
 pub mod render;

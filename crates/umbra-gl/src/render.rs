@@ -327,6 +327,39 @@ impl Renderer {
         }
     }
 
+    /// After a failed run: the context as a fresh run needs it (errors drained, the default
+    /// framebuffer, program and vertex array bound), then proved by a timer query begun and
+    /// ended without an error. An error means the context cannot be trusted for another run:
+    /// the worker is replaced.
+    pub fn restore(&mut self) -> Result<(), String> {
+        self.ctx
+            .make_current()
+            .map_err(|e| format!("make current: {}", e.0))?;
+        self.release_kept();
+        let drained = self.check("restore").err();
+        let gl = &self.g();
+        // SAFETY: binding defaults and a probe query on the current context.
+        unsafe {
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+            gl.use_program(None);
+            if self.api != Api::Gles2 {
+                gl.bind_vertex_array(None);
+            }
+            gl.bind_buffer(glow::ARRAY_BUFFER, None);
+            gl.active_texture(glow::TEXTURE0);
+            if self.caps.timer_queries {
+                let probe = Timer::new(gl).map_err(|e| e.to_string())?;
+                probe.begin(gl, 0);
+                probe.end(gl);
+                probe.delete(gl);
+            }
+        }
+        self.check("restore").map_err(|e| match drained {
+            Some(before) => format!("{e} (after {before})"),
+            None => e.to_string(),
+        })
+    }
+
     /// One run, in stages: upload, the shadow pass (timed), the map's readback (GL 3.3), the
     /// lit pass (timed, read back), the frame.
     fn render_with(
@@ -340,15 +373,18 @@ impl Renderer {
         self.check("before the run")?;
         self.upload(&p, res)?;
         let shadow_programs = self.shadow_programs(&p)?;
-        let timer = if self.caps.timer_queries {
-            Some(Timer::new(&self.g())?)
-        } else {
-            None
-        };
+        // The timer belongs to the run's resources: a stage that fails with its query open
+        // leaves it to `Resources::delete`, which ends it (a query left active makes every
+        // later glBeginQuery of the context fail).
+        if self.caps.timer_queries {
+            res.timer = Some(Timer::new(&self.g())?);
+        }
+        let timer = res.timer.clone();
         let shadow_start = Instant::now();
         if let Some(t) = &timer {
             t.begin(&self.g(), 0);
         }
+        crate::inject::gl_error(&self.g(), run.case());
         let map = self.shadow_map(&p, &shadow_programs, res, reuse)?;
         let shadow_wall = self.end_stage(timer.as_ref(), shadow_start);
         let shadow_map = if p.api == Api::Gl33 && reuse.is_none() {
@@ -370,9 +406,6 @@ impl Renderer {
             Some((a, b)) if a <= shadow_wall && b <= lit_wall => (a, b, Clock::Gpu),
             _ => (shadow_wall, lit_wall, Clock::CpuWall),
         };
-        if let Some(t) = timer {
-            t.delete(gl);
-        }
         self.check("timer queries")?;
         let [w, h] = run.camera.size;
         let (visibility, surface) = readback::decode_visibility(&vis);
@@ -514,6 +547,8 @@ impl<'a> RunPlan<'a> {
 /// GL objects of one run, deleted at its end whatever happened.
 #[derive(Default)]
 struct Resources {
+    /// The stages' timer queries (ended if a stage failed with one active).
+    timer: Option<Timer>,
     /// The run's shadow map (taken out when it is kept for the run's twins).
     shadow_map: Option<glow::Texture>,
     buffers: Vec<glow::Buffer>,
@@ -525,6 +560,9 @@ struct Resources {
 
 impl Resources {
     fn delete(self, gl: &Gl) {
+        if let Some(t) = self.timer {
+            t.delete(gl);
+        }
         // SAFETY: deleting objects this run created on the current context.
         unsafe {
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
@@ -547,9 +585,12 @@ impl Resources {
     }
 }
 
-/// Two GL_TIME_ELAPSED queries (shadow pass, lit pass).
+/// Two GL_TIME_ELAPSED queries (shadow pass, lit pass), and which one is active. Cloned
+/// handles share the state.
+#[derive(Clone)]
 struct Timer {
     queries: [glow::Query; 2],
+    active: std::rc::Rc<std::cell::Cell<bool>>,
 }
 
 impl Timer {
@@ -561,16 +602,19 @@ impl Timer {
                     gl.create_query().map_err(|e| gl_err("timer", e))?,
                     gl.create_query().map_err(|e| gl_err("timer", e))?,
                 ],
+                active: Default::default(),
             })
         }
     }
     fn begin(&self, gl: &Gl, i: usize) {
         // SAFETY: one query active at a time.
         unsafe { gl.begin_query(glow::TIME_ELAPSED, self.queries[i]) }
+        self.active.set(true);
     }
     fn end(&self, gl: &Gl) {
         // SAFETY: ends the active query.
         unsafe { gl.end_query(glow::TIME_ELAPSED) }
+        self.active.set(false);
     }
     fn read(&self, gl: &Gl) -> (Duration, Duration) {
         // SAFETY: the queries have ended; the result waits for them.
@@ -580,7 +624,11 @@ impl Timer {
             Duration::from_nanos(ns(self.queries[1])),
         )
     }
+    /// Ends the active query, if a stage failed with one open, and deletes both.
     fn delete(self, gl: &Gl) {
+        if self.active.get() {
+            self.end(gl);
+        }
         // SAFETY: deleting this timer's queries.
         unsafe {
             for q in self.queries {

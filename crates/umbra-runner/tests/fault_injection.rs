@@ -702,6 +702,13 @@ fn configuration_mistakes_are_usage_errors_that_name_the_flag() {
             "ref/square*,Crash,one\nref/*,Timeout,two\n",
             "both match run ref/square-occluder",
         ),
+        // Conditions the case format cannot satisfy (issue 36): they once never applied.
+        (
+            "@when shadow.bais.constant>0\nref/*,Fail,typo\n",
+            "names no field",
+        ),
+        ("@when shadow.bias.constant>>0\nref/*,Fail,typo\n", "\">0\""),
+        ("@when shadow.format=depth17\nref/*,Fail,x\n", "depth17"),
     ] {
         std::fs::write(exp.join("e.txt"), lines).expect("expectations");
         let o = base(&["--expectations", s(&exp), "--golden", "none"]);
@@ -754,4 +761,37 @@ fn a_damaged_blessed_on_manifest_is_said_and_not_used() {
         1,
         "said once: {t}"
     );
+}
+
+/// A GL error in one run's shadow pass stays in that run (issue 36: the timer query it had
+/// begun stayed open, and every later run on that worker failed in glBeginQuery): the
+/// injected error fails its own run, naming the stage, and the run after it on the same
+/// worker passes.
+#[test]
+fn a_gl_error_stays_in_its_run() {
+    let out = scratch("fi-gl-error");
+    let o = umbra(
+        &[
+            "conformance",
+            "--backend",
+            "gl33/llvmpipe",
+            "--cases",
+            "cases/basics",
+            "--golden",
+            "none",
+            "--jobs",
+            "1",
+            "--out",
+            s(&out),
+        ],
+        &[("UMBRA_INJECT_GL_ERROR", "l-occluder")],
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(
+        t.contains("Fail gl33/llvmpipe/l-occluder") && t.contains("GL_INVALID_ENUM"),
+        "{t}"
+    );
+    assert!(t.contains("Pass gl33/llvmpipe/square-occluder"), "{t}");
+    assert!(t.contains("1 passed, 1 failed"), "{t}");
 }

@@ -15,6 +15,19 @@ use common::{scratch, text};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use umbra_runner::shards::record::{seal, unseal};
+
+/// A shard record's JSON (inside its checksum seal).
+fn read_record(path: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).expect("record");
+    serde_json::from_str(unseal(&text).expect("sealed")).expect("record JSON")
+}
+
+/// `v` written as a record another run of umbra would have written (sealed).
+fn write_record(path: &Path, v: &serde_json::Value) {
+    std::fs::write(path, seal(v.to_string().as_bytes())).expect("write record");
+}
+
 /// The test's cases: the two basic scenes and the resolution sweep (error_falls_along),
 /// copied into a directory of their own under `root`.
 fn cases(root: &Path) -> PathBuf {
@@ -274,12 +287,9 @@ fn a_merge_refuses_what_would_make_its_report_wrong_and_names_it() {
     let edited = |label: &str, change: &dyn Fn(&mut serde_json::Value)| {
         let copy = root.join(format!("edited-{label}"));
         std::fs::create_dir_all(&copy).expect("copy dir");
-        let record_path = shards[2].join("latest/shard.json");
-        let mut v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&record_path).expect("record"))
-                .expect("record JSON");
+        let mut v = read_record(&shards[2].join("latest/shard.json"));
         change(&mut v);
-        std::fs::write(copy.join("shard.json"), v.to_string()).expect("write record");
+        write_record(&copy.join("shard.json"), &v);
         copy
     };
     let llvmpipe_row = |v: &mut serde_json::Value, key: &str, value: &str| {
@@ -326,7 +336,43 @@ fn a_merge_refuses_what_would_make_its_report_wrong_and_names_it() {
     std::fs::create_dir_all(&damaged).expect("dir");
     let bytes = std::fs::read(shards[1].join("latest/shard.json")).expect("record");
     std::fs::write(damaged.join("shard.json"), &bytes[..bytes.len() / 2]).expect("write");
-    refused(&[&shards[0], &damaged, &shards[2]], "damaged or truncated");
+    refused(&[&shards[0], &damaged, &shards[2]], "not a sealed record");
+    // A record edited by hand, still valid JSON: a failing run made a pass (issue 36).
+    let forged = root.join("forged");
+    std::fs::create_dir_all(&forged).expect("dir");
+    let record = std::fs::read_to_string(shards[1].join("latest/shard.json")).expect("record");
+    assert!(
+        record.contains("\"status\":\"Fail\""),
+        "shard 2/3 holds a failing run"
+    );
+    std::fs::write(
+        forged.join("shard.json"),
+        record.replacen("\"status\":\"Fail\"", "\"status\":\"Pass\"", 1),
+    )
+    .expect("write");
+    refused(
+        &[&shards[0], &forged, &shards[2]],
+        "does not match its contents",
+    );
+    // A run directory given directly that carries the INCOMPLETE marker (a full disk on the
+    // `latest` switch leaves its record and the marker).
+    let marked = root.join("marked");
+    std::fs::create_dir_all(&marked).expect("dir");
+    std::fs::copy(
+        shards[1].join("latest/shard.json"),
+        marked.join("shard.json"),
+    )
+    .expect("copy");
+    std::fs::write(
+        marked.join("INCOMPLETE"),
+        "the disk filled while publishing\n",
+    )
+    .expect("marker");
+    refused(&[&shards[0], &marked, &shards[2]], "did not complete");
+    // -o naming one of the inputs would replace that shard's `latest`.
+    let o = merge(&[&shards[0], &shards[1], &shards[2]], &shards[1]);
+    assert_eq!(o.status.code(), Some(125), "{}", text(&o));
+    assert!(text(&o).contains("is one of the shards"), "{}", text(&o));
     // Not a shard at all.
     refused(&[&root.join("nowhere")], "no shard's results there");
     // An interrupted shard: its run directory is marked incomplete and has no `latest`.
@@ -371,16 +417,13 @@ fn falls_along_is_judged_across_shards(shards: &[PathBuf], dir: &Path) {
     assert_ne!(k, k_before, "a stride of three puts neighbours apart");
     let edited = dir.join("edited");
     std::fs::create_dir_all(&edited).expect("dir");
-    let mut v: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(shards[k].join("latest/shard.json")).expect("record"),
-    )
-    .expect("record JSON");
+    let mut v = read_record(&shards[k].join("latest/shard.json"));
     for r in v["runs"].as_array_mut().expect("runs") {
         if r["name"] == last {
             r["metrics"]["false_shadow"] = 1_000_000.into();
         }
     }
-    std::fs::write(edited.join("shard.json"), v.to_string()).expect("write record");
+    write_record(&edited.join("shard.json"), &v);
     let mut dirs: Vec<&Path> = shards.iter().map(PathBuf::as_path).collect();
     dirs[k] = &edited;
     let out = dir.join("merged-edited");

@@ -56,7 +56,8 @@ pub fn main(args: &Args) -> i32 {
         Ok(s) => s,
         Err(e) => return refuse(&e),
     };
-    if let Err(e) = same_inputs(&shards)
+    if let Err(e) = out_apart(&out, &shards)
+        .and_then(|()| same_inputs(&shards))
         .and_then(|()| complete_plans(&shards))
         .and_then(|()| disjoint(&shards))
     {
@@ -145,12 +146,13 @@ fn read_all(dirs: &[String]) -> Result<Vec<Shard>, String> {
 /// link an artifact store dropped, or a copy of its `runs/`).
 fn locate(dir: &Path) -> Result<PathBuf, String> {
     if dir.join(FILE).is_file() {
-        return Ok(dir.to_path_buf());
+        return complete(dir).map(|()| dir.to_path_buf());
     }
     let latest = dir.join("latest");
     if latest.join(FILE).is_file() {
         let shown =
             std::fs::canonicalize(&latest).map_err(|e| format!("{}: {e}", latest.display()))?;
+        complete(&shown)?;
         warn_if_newer_incomplete(dir, &shown);
         return Ok(shown);
     }
@@ -198,6 +200,36 @@ fn locate(dir: &Path) -> Result<PathBuf, String> {
                 .join(", ")
         )),
     }
+}
+
+/// Refuses a run directory that carries the INCOMPLETE marker, record or not (a full disk
+/// while publishing leaves both).
+fn complete(run: &Path) -> Result<(), String> {
+    match std::fs::read_to_string(run.join(crate::run_dir::INCOMPLETE)) {
+        Ok(why) => Err(format!(
+            "{}: the shard did not complete ({}); run it again",
+            run.display(),
+            why.trim()
+        )),
+        Err(_) => Ok(()),
+    }
+}
+
+/// Refuses an `-o` that is one of the shards (or holds one): the merge would replace that
+/// shard's `latest`, or publish beside it.
+fn out_apart(out: &Path, shards: &[Shard]) -> Result<(), String> {
+    let out = std::fs::canonicalize(out).unwrap_or_else(|_| out.to_path_buf());
+    for s in shards {
+        let given = std::fs::canonicalize(&s.given).unwrap_or_else(|_| s.given.clone());
+        if given.starts_with(&out) || s.run.starts_with(&out) {
+            return Err(format!(
+                "-o {} is one of the shards ({}): the merge would replace its latest; give -o a directory of its own",
+                out.display(),
+                s.given.display()
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A run under `dir/runs` newer than the one `latest` shows that did not complete (a shard

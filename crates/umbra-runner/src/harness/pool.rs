@@ -27,6 +27,8 @@ pub struct Worker {
     lines: Receiver<String>,
     /// What the worker said when it started: driver info, or why it cannot run.
     pub hello: serde_json::Value,
+    /// How it was started, to start a fresh one when it retires.
+    start: (std::path::PathBuf, String, Vec<(String, String)>, Duration),
 }
 
 impl Worker {
@@ -81,6 +83,7 @@ impl Worker {
             stdin,
             lines: rx,
             hello: serde_json::Value::Null,
+            start: (exe.to_path_buf(), id.to_string(), env.to_vec(), limit),
         };
         match w.lines.recv_timeout(limit) {
             Ok(line) => {
@@ -112,8 +115,13 @@ impl Worker {
                 .min(deadline.saturating_duration_since(Instant::now()));
             match self.lines.recv_timeout(tick) {
                 Ok(line) => {
-                    return match serde_json::from_str(&line) {
-                        Ok(r) => Reply::Report(Box::new(r)),
+                    return match serde_json::from_str::<RunReport>(&line) {
+                        Ok(mut r) => {
+                            if let Some(why) = r.retired.clone() {
+                                r.reason.push_str(&self.replace(&why));
+                            }
+                            Reply::Report(Box::new(r))
+                        }
                         Err(e) => Reply::Crashed(format!("unreadable answer {line:?}: {e}")),
                     };
                 }
@@ -136,6 +144,25 @@ impl Worker {
                 }
                 Err(RecvTimeoutError::Disconnected) => return Reply::Crashed(self.stop()),
             }
+        }
+    }
+
+    /// Starts a fresh worker in place of one that retired (its backend could not be restored
+    /// after a failed run); what to add to that run's details.
+    fn replace(&mut self, why: &str) -> String {
+        let (exe, id, env, limit) = self.start.clone();
+        self.stop();
+        match Worker::start_exe(&exe, &id, &env, limit) {
+            Ok(fresh) => {
+                *self = fresh;
+                format!(
+                    "; the worker could not restore its context after this run ({why}): a fresh worker takes the next run"
+                )
+            }
+            // The next run finds the old worker gone and reports it: a crash, with this reason.
+            Err(e) => format!(
+                "; the worker could not restore its context after this run ({why}), and a fresh one did not start: {e}"
+            ),
         }
     }
 

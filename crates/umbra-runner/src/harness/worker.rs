@@ -78,6 +78,11 @@ pub struct RunReport {
     /// stands, but its report would be incomplete, so the conformance run is not published.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub storage: Option<String>,
+    /// Set when the run failed and the backend could not be returned to a fresh state
+    /// ([`umbra_case::Backend::restore`]): why. The worker exits after this answer and the
+    /// parent starts a fresh one for the next run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub retired: Option<String>,
 }
 
 /// Runs the worker loop; returns the exit code.
@@ -165,7 +170,7 @@ pub fn main(args: &Args) -> i32 {
     };
     for line in std::io::stdin().lock().lines() {
         let Ok(line) = line else { break };
-        let report = match serde_json::from_str::<Request>(&line) {
+        let mut report = match serde_json::from_str::<Request>(&line) {
             Ok(req) => handle(backend.as_mut(), &req),
             Err(e) => RunReport {
                 outcome: "fail".into(),
@@ -173,12 +178,20 @@ pub fn main(args: &Args) -> i32 {
                 ..Default::default()
             },
         };
+        // A failed run's errors stay in that run: the backend restores its state (GL errors
+        // drained, queries ended, defaults bound), or this worker retires.
+        if report.outcome == "fail" {
+            report.retired = backend.restore().err();
+        }
         let _ = writeln!(
             out,
             "{}",
             serde_json::to_string(&report).unwrap_or_default()
         );
         let _ = out.flush();
+        if report.retired.is_some() {
+            break;
+        }
     }
     0
 }
@@ -410,6 +423,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 measured: None,
                 failed,
                 fingerprint: (!j.fingerprint.is_empty()).then(|| j.fingerprint.clone()),
+                retired: None,
             }
         }
     }

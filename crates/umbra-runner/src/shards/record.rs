@@ -197,16 +197,21 @@ impl Record {
     }
 
     /// Writes the record into the run's directory `dir`, synced (a full disk is an error
-    /// here, not a short file later).
+    /// here, not a short file later), sealed with the checksum of its own bytes
+    /// ([`seal`]).
     pub fn write(&self, dir: &Path) -> std::io::Result<()> {
         let json = serde_json::to_vec(self).map_err(std::io::Error::other)?;
-        umbra_report::write_synced(&dir.join(FILE), &json)
+        umbra_report::write_synced(&dir.join(FILE), &seal(&json))
     }
 
-    /// Reads a record; an error names the file and says what is wrong with it.
+    /// Reads a record; an error names the file and says what is wrong with it. A record
+    /// whose checksum does not match its bytes (damaged, or edited by hand: a Fail made a
+    /// Pass) is refused, as one from an umbra before checksums is.
     pub fn read(path: &Path) -> Result<Record, String> {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+        let text =
+            unseal(&text).map_err(|e| format!("{}: {e}; run the shard again", path.display()))?;
+        let v: serde_json::Value = serde_json::from_str(text).map_err(|e| {
             format!(
                 "{}: not JSON ({e}): a damaged or truncated record; run the shard again",
                 path.display()
@@ -231,8 +236,56 @@ impl Record {
     }
 }
 
+/// What a sealed record starts with; the checksum (16 hex digits) follows, then `","record":`.
+const SEAL: &str = "{\"checksum\":\"";
+const RECORD: &str = "\",\"record\":";
+
+/// `{"checksum":"H","record":R}`: R is the record's JSON, byte for byte as written, and H the
+/// FNV-1a hash of those bytes, so a change to any byte of R (a status, a metric, a name) no
+/// longer matches H. An accidental-damage and hand-edit check, not a cryptographic one.
+pub fn seal(record: &[u8]) -> Vec<u8> {
+    let h = crate::judge::basis_key::fnv(crate::judge::basis_key::FNV_START, record);
+    let mut out = format!("{SEAL}{h:016x}{RECORD}").into_bytes();
+    out.extend_from_slice(record);
+    out.push(b'}');
+    out
+}
+
+/// The record's JSON inside a sealed file, if its checksum holds.
+pub fn unseal(text: &str) -> Result<&str, String> {
+    let body = text
+        .strip_prefix(SEAL)
+        .and_then(|t| Some((t.get(..16)?, t.get(16..)?.strip_prefix(RECORD)?)))
+        .and_then(|(h, t)| Some((h, t.strip_suffix('}')?)));
+    let Some((h, record)) = body else {
+        return Err("not a sealed record (no checksum: damaged, or written by an umbra before records were checksummed)".into());
+    };
+    let sum = crate::judge::basis_key::fnv(crate::judge::basis_key::FNV_START, record.as_bytes());
+    if format!("{sum:016x}") != h {
+        return Err(format!(
+            "its checksum {h} does not match its contents ({sum:016x}): the record was damaged or edited after the run wrote it"
+        ));
+    }
+    Ok(record)
+}
+
 #[cfg(test)]
 mod tests {
+    /// A record edited after it was written (a Fail made a Pass, keeping valid JSON) fails
+    /// its checksum; the untouched record reads back.
+    #[test]
+    fn an_edited_record_is_refused() {
+        let record = br#"{"schema":1,"runs":[{"name":"a","status":"Fail"}]}"#;
+        let sealed = String::from_utf8(super::seal(record)).expect("utf-8");
+        assert_eq!(super::unseal(&sealed).expect("intact").as_bytes(), record);
+        let forged = sealed.replace("\"Fail\"", "\"Pass\"");
+        let e = super::unseal(&forged).expect_err("forged");
+        assert!(e.contains("does not match its contents"), "{e}");
+        let e = super::unseal(std::str::from_utf8(record).expect("utf-8")).expect_err("unsealed");
+        assert!(e.contains("not a sealed record"), "{e}");
+        assert!(super::unseal(&sealed[..sealed.len() - 1]).is_err());
+    }
+
     use super::*;
 
     #[test]
