@@ -189,7 +189,49 @@ fn expand(base: &Value, case: &Case, file: &Path) -> Result<Vec<CasePoint>, Case
             values,
         });
     }
+    distinct(&points, file)?;
     Ok(points)
+}
+
+/// Refuses two sweep points with one id (a value repeated, or written twice: `0.0005` and
+/// `5e-4`), which would be two runs, two report rows and one golden under one name, and two
+/// points that are one case (values that round to the same f32): the same run twice.
+fn distinct(points: &[CasePoint], file: &Path) -> Result<(), CaseErrors> {
+    let mut ids = std::collections::HashMap::new();
+    let mut cases = std::collections::HashMap::new();
+    for (i, p) in points.iter().enumerate() {
+        let id = p.id();
+        let axes: Vec<&str> = p.values.iter().map(|(a, _)| a.as_str()).collect();
+        let field = format!("sweep.{}", axes.join("+"));
+        if let Some(first) = ids.insert(id.clone(), i) {
+            return Err(CaseError::new(
+                file,
+                field,
+                format!(
+                    "sweep points {} and {} of {} are both {id:?} (a value given twice, or written two ways): two runs, two report rows and one golden under one name",
+                    first + 1,
+                    i + 1,
+                    points.len()
+                ),
+                "give each value once",
+            )
+            .into());
+        }
+        let key = serde_json::to_string(&p.case).unwrap_or_default();
+        if let Some(first) = cases.insert(key, i) {
+            return Err(CaseError::new(
+                file,
+                field,
+                format!(
+                    "sweep points {:?} and {id:?} are the same case (their values are the same f32): the same run twice",
+                    points[first].id()
+                ),
+                "give values that differ at f32 precision, or one of them",
+            )
+            .into());
+        }
+    }
+    Ok(())
 }
 
 type AxisError = (&'static str, String, &'static str);

@@ -616,3 +616,26 @@ fn mipmaps_validate_and_name_the_field_that_breaks_them() {
         "expected `rendered` or `averaged`",
     );
 }
+
+/// Two sweep points with one name (a value repeated or written two ways) would be two runs,
+/// two report rows and one golden under one name (issue 36); two values that round to one
+/// f32 would be the same run twice.
+#[test]
+fn sweep_points_with_one_name_or_one_case() {
+    let doc = set(
+        base(),
+        "/sweep",
+        json!({ "shadow.bias.constant": { "values": [0.0005, 0.0005, 5e-4] } }),
+    );
+    assert_error(
+        doc,
+        "sweep.shadow.bias.constant",
+        "sweep points 1 and 2 of 3 are both",
+    );
+    let doc = set(
+        base(),
+        "/sweep",
+        json!({ "shadow.bias.constant": { "values": [0.0005, 0.00050000001] } }),
+    );
+    assert_error(doc, "sweep.shadow.bias.constant", "are the same case");
+}

@@ -151,3 +151,63 @@ fn listed_names_are_safe_for_deqp_runner_s_files_and_name_their_runs() {
     );
     assert!(rows.iter().any(|r| r[2] == "Cause"));
 }
+
+/// Configuration mistakes are said as such, never as a driver's failure (issue 36): a backend
+/// this umbra does not have is an InternalError naming it, one the machine lacks is
+/// NotSupported with the worker's reason (not a Crash of a worker that exited as it should);
+/// a mistyped flag, two case files of one name and pictures inside the cases are refused.
+#[test]
+fn configuration_mistakes_are_not_driver_failures() {
+    let dir = scratch("deqp-config");
+    let names = [
+        "umbra.gl34.llvmpipe.formats.1",
+        "umbra.gl33.radeonsi.7.formats.1",
+    ];
+    let (got, stdout) = run_tests(&dir, &names, &[]);
+    assert_eq!(got[0].1, "InternalError", "{stdout}");
+    assert!(stdout.contains("does not have"), "{stdout}");
+    assert_eq!(got[1].1, "NotSupported", "{stdout}");
+    assert!(stdout.contains("unavailable"), "{stdout}");
+    assert!(!stdout.contains("Crash"), "{stdout}");
+
+    let refused = |args: &[String], says: &[&str]| {
+        let o = umbra(args, &[]);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(125), "{args:?}: {t}");
+        for s in says {
+            assert!(t.contains(s), "{args:?} must say {s}: {t}");
+        }
+    };
+    let caselist = dir.join("caselist.txt");
+    let list = format!("--deqp-caselist-file={}", caselist.display());
+    refused(
+        &["deqp".into(), list.clone(), "--umbra-picture=x".into()],
+        &["--umbra-picture=x", "--umbra-pictures"],
+    );
+    let cases = dir.join("cases");
+    std::fs::create_dir_all(&cases).expect("cases");
+    let square = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases/basics/square-occluder.json"),
+    )
+    .expect("case");
+    std::fs::write(cases.join("a.json"), &square).expect("a");
+    std::fs::write(cases.join("b.json"), &square).expect("b");
+    refused(
+        &[
+            "deqp".into(),
+            list.clone(),
+            format!("--cases={}", cases.display()),
+        ],
+        &["a.json", "b.json", "\"name\""],
+    );
+    std::fs::remove_file(cases.join("b.json")).expect("rm");
+    refused(
+        &[
+            "deqp".into(),
+            list,
+            format!("--cases={}", cases.display()),
+            format!("--umbra-pictures={}", cases.join("pictures").display()),
+        ],
+        &["inside the case directory"],
+    );
+}

@@ -731,6 +731,28 @@ fn configuration_mistakes_are_usage_errors_that_name_the_flag() {
         "{t}"
     );
 
+    // Reports inside the case directory would be read as cases by the next run.
+    let inside = cases.join("reports");
+    let o = umbra(
+        &[
+            "conformance",
+            "--backend",
+            "ref",
+            "--cases",
+            s(&cases),
+            "--out",
+            s(&inside),
+        ],
+        &[("CI", "true")],
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(
+        t.contains("--out") && t.contains("inside the case directory"),
+        "{t}"
+    );
+    assert!(!inside.exists(), "a refused run writes nothing");
+
     // More shards than runs: an empty shard succeeds, with a note.
     let o = base(&["--golden", "none", "--shard", "5/9"]);
     let t = text(&o);

@@ -266,6 +266,9 @@ impl Options {
             ),
         };
         let cases_dir = PathBuf::from(args.value("cases").unwrap_or("cases"));
+        let out = PathBuf::from(args.value("out").unwrap_or("target/umbra"));
+        outside_cases(&out, &cases_dir)
+            .map_err(|e| usage(&format!("--out {}: {e}", out.display())))?;
         let files = match umbra_case::case_files(&cases_dir) {
             Ok(f) if !f.is_empty() => f,
             Ok(_) => {
@@ -301,7 +304,7 @@ impl Options {
         };
         Ok(Options {
             build,
-            out: PathBuf::from(args.value("out").unwrap_or("target/umbra")),
+            out,
             filter: args.value("filter").unwrap_or("*").to_string(),
             backends,
             shard,
@@ -1049,6 +1052,37 @@ pub(crate) fn exit_code(
     } else {
         0
     }
+}
+
+/// Refuses an output directory inside the case directory: its reports (report.json,
+/// shard.json) would be read as cases by the next run.
+pub fn outside_cases(out: &Path, cases: &Path) -> Result<(), String> {
+    // The deepest existing ancestor, resolved (the output may not exist yet).
+    let resolve = |p: &Path| {
+        let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+        let mut head = abs.clone();
+        let mut tail = Vec::new();
+        while !head.exists() {
+            match (head.file_name().map(|n| n.to_os_string()), head.parent()) {
+                (Some(n), Some(parent)) => {
+                    tail.push(n);
+                    head = parent.to_path_buf();
+                }
+                _ => return abs,
+            }
+        }
+        let mut real = std::fs::canonicalize(&head).unwrap_or(head);
+        real.extend(tail.iter().rev());
+        real
+    };
+    let (out, cases) = (resolve(out), resolve(cases));
+    if out.starts_with(&cases) {
+        return Err(format!(
+            "is inside the case directory {}: the next run would read its reports as cases; write them elsewhere (the default is target/umbra)",
+            cases.display()
+        ));
+    }
+    Ok(())
 }
 
 /// Two case files that give one case name (their runs would share a name, a row and a

@@ -73,6 +73,43 @@ fn values<'a>(argv: &'a [String], name: &str) -> Vec<&'a str> {
         .collect()
 }
 
+/// The flags `umbra deqp` takes (`--NAME=V`, or bare); any `--deqp-*` flag is deqp-runner's
+/// and accepted.
+const FLAGS: &[&str] = &[
+    "cases",
+    "backend",
+    "expectations",
+    "umbra-expectations",
+    "umbra-pictures",
+    "umbra-judge-cache",
+];
+
+/// Refuses a flag umbra deqp does not take (a mistyped `--umbra-picture=` would otherwise
+/// leave no pictures and say nothing), naming it and the ones it takes.
+fn known_flags(argv: &[String]) -> Result<(), String> {
+    for a in argv {
+        if a.starts_with("--deqp-") || a == "--list" {
+            continue;
+        }
+        let name = a
+            .strip_prefix("--")
+            .map(|n| n.split('=').next().unwrap_or(n));
+        match name {
+            Some(n) if FLAGS.contains(&n) && a.contains('=') => {}
+            Some(n) if FLAGS.contains(&n) => {
+                return Err(format!("--{n} takes a value: --{n}=VALUE"));
+            }
+            _ => {
+                return Err(format!(
+                    "unknown argument {a:?}; it takes --list, --{}=VALUE and deqp-runner's --deqp-* flags",
+                    FLAGS.join("=VALUE, --")
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// `umbra deqp --help`.
 const HELP: &str = "umbra deqp: umbra as a dEQP test binary, for Mesa's deqp-runner (cargo xtask mesa-ci writes the suite)
 
@@ -93,7 +130,17 @@ pub fn main(argv: &[String]) -> i32 {
         print!("{HELP}");
         return 0;
     }
+    if let Err(e) = known_flags(argv) {
+        eprintln!("error: umbra deqp: {e}\n{HELP}");
+        return 125;
+    }
     let cases = PathBuf::from(values(argv, "cases").first().copied().unwrap_or("cases"));
+    if let Some(pictures) = values(argv, "umbra-pictures").first() {
+        if let Err(e) = crate::commands::conformance::outside_cases(Path::new(pictures), &cases) {
+            eprintln!("error: umbra deqp: --umbra-pictures={pictures}: {e}");
+            return 125;
+        }
+    }
     let index = match CaseIndex::load(&cases) {
         Ok(i) => i,
         Err(e) => {
@@ -176,6 +223,14 @@ impl CaseIndex {
             let points = umbra_case::load_file(&f).map_err(|e| e.to_string())?;
             if let Some(first) = points.first() {
                 let abs = std::fs::canonicalize(&f).unwrap_or(f.clone());
+                if let Some((other, _)) = map.get(&first.case.name) {
+                    return Err(format!(
+                        "{} and {} both have \"name\": {:?}; their tests would be one; rename one (the field `name`)",
+                        Path::new(other).display(),
+                        abs.display(),
+                        first.case.name
+                    ));
+                }
                 map.insert(
                     first.case.name.clone(),
                     (
@@ -283,12 +338,31 @@ impl Session {
             crate::judge::judge_cache::ENV.into(),
             self.cache.to_string_lossy().into_owned(),
         ));
+        if !crate::harness::registry::is_known(backend) {
+            return (
+                "InternalError",
+                format!(
+                    "{name} names backend {backend}, which this umbra does not have (`umbra backends` lists them)"
+                ),
+            );
+        }
         let timeout = self.timeout;
         let start = || Worker::start(backend, &env, timeout);
         let worker = self
             .workers
             .entry(backend.to_string())
             .or_insert_with(&start);
+        // A backend that cannot run here says why in its hello: not supported (a missing
+        // driver, a device the machine lacks) or refused (a Mesa build without its driver),
+        // never a crash of a worker that exited as it should.
+        if let Ok(w) = worker.as_ref() {
+            if let Some(why) = w.hello["unavailable"].as_str() {
+                return ("NotSupported", format!("{backend} is unavailable: {why}"));
+            }
+            if let Some(why) = w.hello["refused"].as_str() {
+                return ("InternalError", why.to_string());
+            }
+        }
         if let Ok(w) = worker.as_ref() {
             self.facts.entry(backend.to_string()).or_insert_with(|| {
                 crate::judge::expectations::DriverFacts::from_hello(&w.hello["ready"])
