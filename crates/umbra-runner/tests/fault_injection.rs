@@ -817,3 +817,62 @@ fn a_gl_error_stays_in_its_run() {
     assert!(t.contains("Pass gl33/llvmpipe/square-occluder"), "{t}");
     assert!(t.contains("1 passed, 1 failed"), "{t}");
 }
+
+/// A golden that cannot be written is said, never reported as a pending snapshot that does
+/// not exist, and `--bless` that blesses nothing fails (issue 36): here insta's files are
+/// blocked by directories of their names (what a read-only golden directory does for a user
+/// who is not root). A case name far longer than a file name may be still gets its golden:
+/// the stem keeps the name's first 160 characters and the hash of all of it.
+#[test]
+fn a_golden_that_cannot_be_written_is_said() {
+    let root = scratch("fi-unwritable");
+    let (golden, out) = (root.join("golden"), root.join("out"));
+    let stem = umbra_runner::judge::golden::stem("ref/square-occluder");
+    for blocker in [format!("{stem}.snap"), format!("{stem}.snap.new")] {
+        std::fs::create_dir_all(golden.join(blocker)).expect("blocker");
+    }
+    for (extra, env) in [
+        (vec!["--bless"], ("CI", "false")),
+        (vec![], ("CI", "false")),
+    ] {
+        let o = golden_run(&golden, &out, &extra, &[env]);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{extra:?}: {t}");
+        assert!(t.contains("could not be written"), "{extra:?}: {t}");
+        assert!(!t.contains("pending"), "{extra:?}: {t}");
+    }
+
+    let cases = root.join("cases");
+    std::fs::create_dir_all(&cases).expect("cases");
+    let long = "l".repeat(240);
+    let square =
+        std::fs::read_to_string(repo().join("cases/basics/square-occluder.json")).expect("case");
+    std::fs::write(
+        cases.join("long.json"),
+        square.replace("\"square-occluder\"", &format!("\"{long}\"")),
+    )
+    .expect("case");
+    let golden = root.join("golden-long");
+    std::fs::create_dir_all(&golden).expect("golden");
+    let args = [
+        "conformance",
+        "--backend",
+        "ref",
+        "--cases",
+        s(&cases),
+        "--golden",
+        s(&golden),
+        "--out",
+        s(&out),
+        "--bless",
+    ];
+    let o = umbra(&args, &[("CI", "false")]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let written = umbra_runner::judge::golden::stem(&format!("ref/{long}"));
+    assert!(written.len() < 200, "{written}");
+    assert!(
+        golden.join(format!("{written}.snap")).is_file(),
+        "{}",
+        text(&o)
+    );
+}

@@ -11,12 +11,19 @@
 
 use std::path::Path;
 
+/// How many characters of a run's name its golden's stem keeps.
+pub const STEM_PLAIN: usize = 160;
+
 /// The golden's file stem for run `name`: letters, digits, `-` and `_` only (insta reads the
 /// first `.` as the start of the extension), then a 32-bit FNV-1a hash of the full name so
 /// that ids differing only in punctuation stay apart.
 pub fn stem(name: &str) -> String {
+    // At most STEM_PLAIN characters of the name (the hash is of the whole name, so stems
+    // stay distinct): `STEM.snap.new.png` then fits in a file name (255 bytes) whatever the
+    // length of the case's name and its sweep values.
     let plain: String = name
         .chars()
+        .take(STEM_PLAIN)
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '-' {
                 c

@@ -328,6 +328,28 @@ pub fn check(
         settings.bind(|| insta::assert_binary_snapshot!(name_ext.as_str(), bytes.clone()));
     }));
     std::panic::set_hook(hook);
+    // What insta should have left: the written golden, or the pending snapshot a review
+    // reads. Where it is not there (a read-only golden directory, a full disk), the run says
+    // the golden could not be written, never that a snapshot it cannot find is pending.
+    let left = match (&outcome, within) {
+        (Ok(()), true) => None,
+        (Ok(()), false) => Some(held.write_dir.join(format!("{stem}.snap"))),
+        (Err(_), _) => Some(held.write_dir.join(format!("{stem}.snap.new"))),
+    };
+    if let Some(file) = left.filter(|f| !f.is_file()) {
+        return Checked {
+            golden: Golden::Changed,
+            message: format!(
+                "the colour image {what}, and its golden could not be written: {} ({}); make the golden directory writable and run again{versions}",
+                file.display(),
+                unwritable(&held.write_dir)
+            ),
+            ssim,
+            identical,
+            held,
+            change: Some(change),
+        };
+    }
     let for_release = held.write_dir != dir;
     let (golden, message) = match (outcome, within) {
         (Ok(()), true) => (Golden::Unchanged, String::new()),
@@ -369,6 +391,18 @@ pub fn check(
         identical,
         held,
         change: Some(change),
+    }
+}
+
+/// Why nothing could be written in `dir`, as far as a probe file can tell.
+fn unwritable(dir: &Path) -> String {
+    let probe = dir.join(format!(".umbra-probe-{}", std::process::id()));
+    match std::fs::write(&probe, b"") {
+        Ok(()) => {
+            let _ = std::fs::remove_file(&probe);
+            "insta wrote nothing there".into()
+        }
+        Err(e) => e.to_string(),
     }
 }
 
