@@ -99,9 +99,36 @@ impl RunDir {
             None => format!("{} was not written", self.out.join("latest").display()),
         };
         eprintln!(
-            "error: {why}: this run's partial results are in {} (not published; remove it when done); {latest}",
+            "error: {why}: this run's partial results ({}) are in {} (not published; remove it when done); {latest}",
+            self.holds(),
             self.dir.display()
         );
+    }
+
+    /// What the run's directory holds, said as it is (`results.csv, junit.xml, pictures/`, or
+    /// `nothing`), so the message never promises verdicts that are not there.
+    fn holds(&self) -> String {
+        let mut names: Vec<String> = std::fs::read_dir(&self.dir)
+            .map(|d| {
+                d.flatten()
+                    .filter(|e| e.file_name() != INCOMPLETE)
+                    .map(|e| {
+                        let n = e.file_name().to_string_lossy().into_owned();
+                        if e.path().is_dir() {
+                            format!("{n}/")
+                        } else {
+                            n
+                        }
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        names.sort();
+        if names.is_empty() {
+            "nothing".into()
+        } else {
+            names.join(", ")
+        }
     }
 }
 

@@ -272,6 +272,30 @@ fn wait_for(child: &mut Child, limit: Duration) -> Option<std::process::ExitStat
     None
 }
 
+/// The live processes whose environment names judging cache `cache` or a directory in it
+/// (the workers of the runs given it).
+fn workers_of(cache: &Path) -> Vec<u32> {
+    let needle = format!("UMBRA_JUDGE_CACHE={}", cache.display());
+    let Ok(procs) = std::fs::read_dir("/proc") else {
+        return Vec::new();
+    };
+    procs
+        .flatten()
+        .filter_map(|e| e.file_name().to_str()?.parse::<u32>().ok())
+        .filter(|pid| {
+            let env = std::fs::read(format!("/proc/{pid}/environ")).unwrap_or_default();
+            let zombie = std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|s| {
+                s.rsplit_once(')')
+                    .is_some_and(|(_, r)| r.trim_start().starts_with('Z'))
+            });
+            !zombie
+                && env
+                    .split(|b| *b == 0)
+                    .any(|v| v.starts_with(needle.as_bytes()))
+        })
+        .collect()
+}
+
 #[test]
 fn a_killed_or_interrupted_run_leaves_the_previous_latest_intact() {
     let (out, cache) = (scratch("fi-kill"), scratch("fi-kill-cache"));
@@ -306,6 +330,17 @@ fn a_killed_or_interrupted_run_leaves_the_previous_latest_intact() {
         std::thread::sleep(Duration::from_millis(at));
         let _ = child.kill();
         let _ = child.wait();
+        // Its workers die with it, the one hanging in fake/hang included (issue 36: they
+        // lived on, parent PID 1, after every CI run).
+        let deadline = Instant::now() + Duration::from_secs(3);
+        while !workers_of(&cache).is_empty() && Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        assert_eq!(
+            workers_of(&cache),
+            Vec::<u32>::new(),
+            "killed at {at} ms: workers outlived it"
+        );
         assert_eq!(
             latest_id(&out).as_deref(),
             Some(before.as_str()),
@@ -351,6 +386,22 @@ fn a_killed_or_interrupted_run_leaves_the_previous_latest_intact() {
         .filter(|e| e.path().join("INCOMPLETE").is_file())
         .count();
     assert!(unfinished >= 1, "the interrupted run is marked");
+    // The verdicts of the runs that finished are there, as the message says (issue 36: it
+    // said "partial results" of a directory holding pictures only).
+    assert!(
+        said.contains("results.csv") && said.contains("junit.xml"),
+        "{said}"
+    );
+    let partial = std::fs::read_dir(out.join("runs"))
+        .expect("runs")
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| {
+            std::fs::read_to_string(p.join("INCOMPLETE")).is_ok_and(|w| w.contains("SIGTERM"))
+        })
+        .expect("the interrupted run's directory");
+    let verdicts = std::fs::read_to_string(partial.join("results.csv")).expect("results.csv");
+    assert!(verdicts.contains("ref/square-occluder,Pass"), "{verdicts}");
     // The next run publishes, and sweeps what killed processes left in the cache: a worker
     // killed while computing an entry leaves its lock (a parent's SIGKILL alone does not: its
     // workers see their input close and finish), and one killed mid-write its temporary.

@@ -624,6 +624,25 @@ struct Gathered {
     build: Option<&'static crate::harness::mesa_build::MesaBuild>,
 }
 
+/// The verdicts of the runs that finished, for a run that will not be published
+/// (interrupted, or a full disk): results.csv, failures.csv, errors.csv and junit.xml of those
+/// runs, sorted by name, as far as they can be written. Their pictures are there already.
+fn write_partial(dir: &Path, results: &mut [RunResult]) {
+    results.sort_by(|a, b| a.name.cmp(&b.name));
+    let tables = umbra_report::csv::tables(results);
+    for (name, text) in [
+        ("results.csv", tables.results),
+        ("failures.csv", tables.failures),
+        ("errors.csv", tables.errors),
+        ("junit.xml", umbra_report::junit::junit(results)),
+    ] {
+        // A short file (a full disk) would read as fewer runs: none rather than that.
+        if umbra_report::write_synced(&dir.join(name), text.as_bytes()).is_err() {
+            let _ = std::fs::remove_file(dir.join(name));
+        }
+    }
+}
+
 /// Puts the workers' findings together. An interrupted run (130) or one whose pictures could
 /// not be written (125, a full disk) is abandoned here: its report would be incomplete, so
 /// `latest` keeps pointing at the last whole one.
@@ -645,6 +664,9 @@ fn gather(
         ..
     } = collected;
     progress.close();
+    if crate::harness::interrupt::requested().is_some() || !storage.is_empty() {
+        write_partial(&run_dir.dir, &mut results);
+    }
     if let Some(sig) = crate::harness::interrupt::requested() {
         run_dir.abandon(&format!(
             "interrupted by {} after {} of {total} runs",

@@ -1,7 +1,7 @@
 //! Orchestration: backends by id ([`registry`], with the test doubles in [`fake`]), the Mesa
 //! build a worker runs on ([`mesa_build`], and its own C library where it carries one:
-//! [`own_libc`]), one process per backend ([`worker`], [`child`]) kept
-//! in a [`pool`] under a memory limit ([`memory_limit`]), sweep timings ([`measure`]) and the
+//! [`own_libc`]), one process per backend ([`worker`], [`child`]), which dies with its parent
+//! ([`orphan`]), kept in a [`pool`] under a memory limit ([`memory_limit`]), sweep timings ([`measure`]) and the
 //! terminal's progress line ([`progress`]). Uses the judge; knows no command.
 
 pub mod child;
@@ -10,6 +10,7 @@ pub mod interrupt;
 pub mod measure;
 pub mod memory_limit;
 pub mod mesa_build;
+pub mod orphan;
 pub mod own_libc;
 pub mod pool;
 pub mod progress;

@@ -53,6 +53,7 @@ impl Worker {
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit());
         without_inherited_insta(&mut cmd);
+        cmd.env(crate::harness::orphan::ENV, std::process::id().to_string());
         for v in crate::harness::registry::env_removed(id) {
             cmd.env_remove(v);
         }

@@ -87,6 +87,7 @@ pub struct RunReport {
 
 /// Runs the worker loop; returns the exit code.
 pub fn main(args: &Args) -> i32 {
+    crate::harness::orphan::watch();
     let Some(id) = args.value("backend") else {
         eprintln!("error: umbra worker needs --backend ID");
         return 2;
