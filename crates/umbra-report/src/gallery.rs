@@ -90,6 +90,7 @@ pub fn section(results: &[RunResult], pictures: &Path) -> String {
             "r": r.reason,
             "d": r.diagnosis.as_ref().map(|d| d.message.clone()),
             "x": r.reproduce,
+            "e": (!r.stderr.is_empty()).then(|| r.stderr.clone()),
             // A failed frame's bug report for the driver's developers (`umbra repro`).
             "y": (r.status == crate::model::Status::Fail && r.backend != "ref").then(|| {
                 crate::names::repro_command(&r.name, crate::names::mesa_of(&r.reproduce).as_deref())
@@ -124,7 +125,7 @@ pub fn section(results: &[RunResult], pictures: &Path) -> String {
          <span id=\"g-count\"></span></div>\
          <div id=\"g-grid\"></div>\
          <div id=\"g-detail\" hidden><div class=\"g-box\"><button id=\"g-close\" type=\"button\">close (Esc)</button>\
-         <h3 id=\"g-title\"></h3><p id=\"g-reason\"></p><p>reproduce: <code id=\"g-reproduce\"></code></p>\
+         <h3 id=\"g-title\"></h3><p id=\"g-reason\"></p><p>reproduce: <code id=\"g-reproduce\"></code></p><details id=\"g-stderr-box\" hidden><summary>the worker's stderr during the run</summary><pre id=\"g-stderr\"></pre></details>\
          <p id=\"g-repro-line\" hidden>bug report for the driver's developers (reduced case, standalone repro.c, API capture, issue.md): <code id=\"g-repro\"></code></p>\
          <div id=\"g-pictures\"></div></div></div>\
          <script type=\"application/json\" id=\"g-data\">{data}</script><script>{SCRIPT}</script>",
@@ -205,6 +206,8 @@ const SCRIPT: &str = r#"(function () {
     document.getElementById('g-reason').textContent = (r.r || '') + (r.d ? ' | consensus: ' + r.d : '') +
       (r.gc ? ' | golden: ' + r.gc : '');
     document.getElementById('g-reproduce').textContent = r.x;
+    document.getElementById('g-stderr').textContent = r.e || '';
+    document.getElementById('g-stderr-box').hidden = !r.e;
     document.getElementById('g-repro').textContent = r.y || '';
     document.getElementById('g-repro-line').hidden = !r.y;
     var box = document.getElementById('g-pictures');

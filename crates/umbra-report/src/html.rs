@@ -78,7 +78,7 @@ pub fn report(
         let dir = failures_dir.join(crate::names::file_name(&r.name));
         let _ = write!(
             s,
-            "<div class=\"failure\"><h3><span class=\"{}\">{}</span> {}</h3><p>{}</p>{}<p>reproduce: <code>{}</code></p>{}{}{}{}{}{}</div>",
+            "<div class=\"failure\"><h3><span class=\"{}\">{}</span> {}</h3><p>{}</p>{}<p>reproduce: <code>{}</code></p>{}{}{}{}{}{}{}</div>",
             r.status.name(),
             r.status,
             esc(&r.name),
@@ -99,6 +99,14 @@ pub fn report(
                 )
             } else {
                 String::new()
+            },
+            if r.stderr.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "<details class=\"stderr\"><summary>the worker's stderr during the run</summary><pre>{}</pre></details>",
+                    esc(&r.stderr)
+                )
             },
             img(&dir, "reference.png", "reference"),
             img(&dir, "color.png", "backend"),

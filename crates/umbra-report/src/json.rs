@@ -42,6 +42,7 @@ pub fn report(
                 "failed": r.failed,
                 "diagnosis": r.diagnosis,
                 "reproduce": r.reproduce,
+                "stderr": (!r.stderr.is_empty()).then_some(&r.stderr),
             })
         })
         .collect();

@@ -42,6 +42,10 @@ pub fn junit(results: &[RunResult]) -> String {
             }
             _ => {}
         }
+        // The worker's stderr of a run that did not pass: its evidence (a crash's last words).
+        if !r.stderr.is_empty() {
+            let _ = write!(s, "<system-err>{}</system-err>", xml(&r.stderr));
+        }
         s.push_str("</testcase>\n");
     }
     s.push_str("</testsuite>\n</testsuites>\n");

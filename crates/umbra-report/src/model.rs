@@ -302,6 +302,11 @@ pub struct RunResult {
     /// (the consensus diagnosis), when any other ran the point.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub diagnosis: Option<Diagnosis>,
+    /// What the worker wrote on stderr during a run that did not pass (a driver's warnings;
+    /// before a crash, the C library's or the driver's last words), its last lines: the
+    /// run's evidence, in report.json, junit.xml's `<system-err>` and the HTML report.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub stderr: String,
     /// Where the run broke the model (what the diagnosis compares; not reported itself).
     #[serde(skip)]
     pub fingerprint: Option<umbra_compare::consensus::Fingerprint>,

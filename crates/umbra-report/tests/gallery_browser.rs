@@ -45,6 +45,7 @@ fn run(backend: &str, case: &str, status: Status) -> RunResult {
         time_s: 0.1,
         reproduce: format!("cargo run --bin umbra -- render cases/{case}.json --backend {backend}"),
         diagnosis: None,
+        stderr: String::new(),
         fingerprint: None,
         details: String::new(),
     }

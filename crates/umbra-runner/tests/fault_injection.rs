@@ -927,3 +927,60 @@ fn a_golden_that_cannot_be_written_is_said() {
         text(&o)
     );
 }
+
+/// A crash leaves its evidence with its run (issue 36): the worker's stderr (the C library's
+/// or the driver's last words) in the reason, report.json, junit.xml and the HTML report, the
+/// signal, and the driver variables the run inherited in its reproduce command, so that it
+/// reproduces (LP_NATIVE_VECTOR_WIDTH=128 made lavapipe corrupt its heap on Mesa 22.3.6).
+#[test]
+fn a_crash_leaves_its_evidence_with_its_run() {
+    let out = scratch("fi-crash-evidence");
+    let o = umbra(
+        &[
+            "conformance",
+            "--backend",
+            "fake/crash",
+            "--filter",
+            "square*",
+            "--golden",
+            "none",
+            "--out",
+            s(&out),
+        ],
+        &[("LP_NATIVE_VECTOR_WIDTH", "128")],
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(
+        t.contains("SIGABRT") && t.contains("its last stderr line: corrupted size"),
+        "{t}"
+    );
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("latest/report.json")).expect("report.json"),
+    )
+    .expect("JSON");
+    let run = report["runs"]
+        .as_array()
+        .and_then(|r| r.iter().find(|r| r["name"] == "fake/crash/square-occluder"))
+        .unwrap_or_else(|| panic!("the run in {report}"));
+    assert_eq!(run["status"], "Crash", "{run}");
+    assert!(
+        run["stderr"]
+            .as_str()
+            .is_some_and(|e| e.contains("corrupted size")),
+        "{run}"
+    );
+    assert!(
+        run["reproduce"]
+            .as_str()
+            .is_some_and(|c| c.starts_with("LP_NATIVE_VECTOR_WIDTH=128 ")),
+        "{run}"
+    );
+    let junit = std::fs::read_to_string(out.join("latest/junit.xml")).expect("junit.xml");
+    assert!(junit.contains("<system-err>corrupted size"), "{junit}");
+    let html = std::fs::read_to_string(out.join("latest/report.html")).expect("report.html");
+    assert!(
+        html.contains("corrupted size"),
+        "report.html lacks the stderr"
+    );
+}

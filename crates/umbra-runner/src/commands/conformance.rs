@@ -464,6 +464,7 @@ fn unloadable(f: &Path, why: &str) -> RunResult {
         time_s: 0.0,
         reproduce: format!("cargo run --bin umbra -- render {}", f.display()),
         diagnosis: None,
+        stderr: String::new(),
         fingerprint: None,
         details: String::new(),
     }
@@ -1506,6 +1507,7 @@ impl Group<'_> {
             fingerprint,
             under_deviation,
             storage,
+            stderr,
         } = outcome;
         let unchecked: &[&str] =
             if settings.golden.is_none() || settings.no_goldens.contains(&p.backend) {
@@ -1538,6 +1540,7 @@ impl Group<'_> {
             },
             (_, None) => reason,
         };
+        let passes = result_passes(&status);
         let result = RunResult {
             name,
             backend: p.backend.clone(),
@@ -1552,6 +1555,8 @@ impl Group<'_> {
             time_s: t0.elapsed().as_secs_f64(),
             reproduce: reproduce_command(p),
             diagnosis: None,
+            // A pass's stderr is noise; any other status keeps it as evidence.
+            stderr: if passes { String::new() } else { stderr },
             fingerprint,
             details,
         };
@@ -1561,8 +1566,13 @@ impl Group<'_> {
 
 /// The command that renders run `p` again, on the run's Mesa build when it used one.
 fn reproduce_command(p: &Planned) -> String {
+    // The driver variables the run inherited go first: without them it may not reproduce.
+    let env: String = crate::harness::registry::inherited_driver_env(&p.backend)
+        .iter()
+        .map(|(k, v)| format!("{k}={} ", shell_word(v)))
+        .collect();
     format!(
-        "cargo run --bin umbra -- render {} --backend {} --point {}{}",
+        "{env}cargo run --bin umbra -- render {} --backend {} --point {}{}",
         shell_word(&p.file.display().to_string()),
         p.backend,
         shell_word(&p.id),
@@ -1586,6 +1596,13 @@ pub(crate) struct Attempt {
     fingerprint: Option<umbra_compare::consensus::Fingerprint>,
     pub(crate) under_deviation: Option<Vec<umbra_report::FailedCheck>>,
     storage: Option<String>,
+    /// What the worker wrote on stderr during the attempt ([`Worker::stderr`]).
+    pub(crate) stderr: String,
+}
+
+/// Whether a run's status is a plain pass (its stderr is not kept).
+fn result_passes(status: &Status) -> bool {
+    matches!(status, Status::Pass)
 }
 
 impl Attempt {
@@ -1600,6 +1617,7 @@ impl Attempt {
             fingerprint: None,
             under_deviation: None,
             storage: None,
+            stderr: String::new(),
         }
     }
 }
@@ -1618,22 +1636,39 @@ pub(crate) fn attempt(
         Ok(w) => w,
         Err(e) => return Attempt::bare(Status::Crash, format!("no worker: {e}")),
     };
-    match w.run(req, limit) {
+    let reply = w.run(req, limit);
+    let stderr = w.stderr();
+    let mut a = match reply {
         Reply::Report(r) => from_report(*r),
         Reply::Crashed(how) => {
             *worker = Err(how.clone());
-            Attempt::bare(Status::Crash, format!("the worker died: {how}"))
+            Attempt::bare(
+                Status::Crash,
+                format!("the worker died: {how}{}", last_words(&stderr)),
+            )
         }
         Reply::TimedOut => {
             *worker = Err("timed out".into());
             Attempt::bare(
                 Status::Timeout,
                 format!(
-                    "no answer within {} s; the worker was killed",
-                    limit.as_secs()
+                    "no answer within {} s; the worker was killed{}",
+                    limit.as_secs(),
+                    last_words(&stderr)
                 ),
             )
         }
+    };
+    a.stderr = stderr;
+    a
+}
+
+/// The last stderr line of a worker that died, for its run's one-line reason (the whole tail
+/// is the run's `stderr`).
+fn last_words(stderr: &str) -> String {
+    match stderr.lines().rev().find(|l| !l.trim().is_empty()) {
+        Some(l) => format!("; its last stderr line: {}", l.trim()),
+        None => String::new(),
     }
 }
 
@@ -1661,5 +1696,6 @@ fn from_report(r: RunReport) -> Attempt {
         fingerprint: r.fingerprint,
         under_deviation: r.under_deviation,
         storage: r.storage,
+        stderr: String::new(),
     }
 }

@@ -421,7 +421,8 @@ fn compile(source: &Path, binary: &Path) -> Result<(), String> {
     }
 }
 
-/// The environment that selects `backend`'s driver (and the `--mesa` build's loaders).
+/// The environment that selects `backend`'s driver (and the `--mesa` build's loaders), and
+/// the driver variables the run inherited ([`registry::inherited_driver_env`]).
 fn program_env(backend: &str) -> Vec<(String, String)> {
     let mut env: Vec<(String, String)> = registry::driver_env(backend)
         .unwrap_or_default()
@@ -433,6 +434,7 @@ fn program_env(backend: &str) -> Vec<(String, String)> {
     {
         env.extend(build.env());
     }
+    env.extend(registry::inherited_driver_env(backend));
     env
 }
 

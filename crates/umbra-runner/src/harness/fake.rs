@@ -118,7 +118,13 @@ impl Backend for Fake {
         }
         let mut frame = umbra_ref::render(run, umbra_case::ClipDepth::MinusOneToOne);
         match self.id {
-            "fake/crash" => std::process::abort(),
+            "fake/crash" => {
+                // What a driver's heap corruption leaves on stderr before the signal.
+                eprintln!(
+                    "corrupted size vs. prev_size (fake/crash: the last words of a heap corruption)"
+                );
+                std::process::abort()
+            }
             "fake/hang" => loop {
                 std::thread::sleep(std::time::Duration::from_secs(3600));
             },

@@ -29,7 +29,14 @@ pub struct Worker {
     pub hello: serde_json::Value,
     /// How it was started, to start a fresh one when it retires.
     start: (std::path::PathBuf, String, Vec<(String, String)>, Duration),
+    /// What it wrote on stderr since the current run began ([`Worker::stderr`]).
+    stderr: std::sync::Arc<std::sync::Mutex<Vec<String>>>,
+    /// The thread reading its stderr (ends at the worker's end).
+    stderr_reader: Option<std::thread::JoinHandle<()>>,
 }
+
+/// The most stderr lines a run keeps (the last ones: a crash's messages come last).
+pub const STDERR_LINES: usize = 200;
 
 impl Worker {
     /// Starts `umbra worker --backend id` with `env`; waits up to `limit` for its hello.
@@ -51,7 +58,9 @@ impl Worker {
         cmd.args(["worker", "--backend", id])
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
-            .stderr(Stdio::inherit());
+            .stderr(Stdio::piped())
+            // glibc's fatal messages ("malloc(): invalid next size") to stderr, not the tty.
+            .env("LIBC_FATAL_STDERR_", "1");
         without_inherited_insta(&mut cmd);
         cmd.env(crate::harness::orphan::ENV, std::process::id().to_string());
         for v in crate::harness::registry::env_removed(id) {
@@ -65,6 +74,25 @@ impl Worker {
             .map_err(|e| format!("cannot start a worker: {e}"))?;
         let stdin = child.stdin.take().ok_or("worker has no stdin")?;
         let stdout = child.stdout.take().ok_or("worker has no stdout")?;
+        let stderr_pipe = child.stderr.take().ok_or("worker has no stderr")?;
+        let stderr = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+        let kept = std::sync::Arc::clone(&stderr);
+        let label = id.to_string();
+        // The worker's stderr is the run's evidence (a driver's warnings, glibc's heap
+        // messages before a SIGSEGV): kept for the run in flight, and shown on the terminal
+        // under the backend's name.
+        let stderr_reader = std::thread::spawn(move || {
+            for line in BufReader::new(stderr_pipe).lines() {
+                let Ok(line) = line else { break };
+                eprintln!("{label}: {line}");
+                if let Ok(mut k) = kept.lock() {
+                    if k.len() == STDERR_LINES {
+                        k.remove(0);
+                    }
+                    k.push(line);
+                }
+            }
+        });
         let (tx, rx) = channel();
         std::thread::spawn(move || {
             for line in BufReader::new(stdout).lines() {
@@ -85,6 +113,8 @@ impl Worker {
             lines: rx,
             hello: serde_json::Value::Null,
             start: (exe.to_path_buf(), id.to_string(), env.to_vec(), limit),
+            stderr,
+            stderr_reader: Some(stderr_reader),
         };
         match w.lines.recv_timeout(limit) {
             Ok(line) => {
@@ -99,8 +129,30 @@ impl Worker {
         }
     }
 
+    /// What the worker wrote on stderr during the last run ([`Worker::run`]); after a crash,
+    /// everything up to its end.
+    pub fn stderr(&mut self) -> String {
+        if self.child.try_wait().is_ok_and(|s| s.is_some()) {
+            // Dead: its stderr is closed, and the reader reaches the end at once.
+            // (Bounded: a grandchild holding the pipe open must not hang the run.)
+            let until = Instant::now() + Duration::from_millis(500);
+            while self
+                .stderr_reader
+                .as_ref()
+                .is_some_and(|r| !r.is_finished())
+                && Instant::now() < until
+            {
+                std::thread::sleep(Duration::from_millis(5));
+            }
+        }
+        self.stderr.lock().map(|k| k.join("\n")).unwrap_or_default()
+    }
+
     /// Runs one request.
     pub fn run(&mut self, req: &Request, limit: Duration) -> Reply {
+        if let Ok(mut k) = self.stderr.lock() {
+            k.clear();
+        }
         let line = serde_json::to_string(req).unwrap_or_default();
         if writeln!(self.stdin, "{line}")
             .and_then(|_| self.stdin.flush())

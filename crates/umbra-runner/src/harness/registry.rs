@@ -307,6 +307,45 @@ pub fn worker_env(id: &str) -> Vec<(String, String)> {
     env
 }
 
+/// Prefixes of the variables that steer a driver (Mesa's, the Vulkan loader's, glvnd's,
+/// wgpu's, the NVIDIA and AMD drivers'): a run's behaviour can depend on any of them.
+pub const DRIVER_VARIABLES: &[&str] = &[
+    "MESA_",
+    "LP_",
+    "GALLIUM_",
+    "ZINK_",
+    "VK_",
+    "LIBGL_",
+    "EGL_",
+    "GBM_",
+    "NIR_",
+    "RADV_",
+    "ANV_",
+    "AMD_",
+    "RADEON",
+    "NOUVEAU_",
+    "__GL",
+    "__EGL",
+    "DRI_",
+    "WGPU_",
+    "vblank_mode",
+];
+
+/// The driver variables a worker for `id` inherits from this process's environment (an
+/// `LP_NATIVE_VECTOR_WIDTH=128` in the shell, a CI file's `MESA_DEBUG`): those umbra neither
+/// sets itself ([`worker_env`]) nor removes ([`env_removed`]). A run's reproduce command and
+/// its repro bundle carry them, since without them the run may not reproduce.
+pub fn inherited_driver_env(id: &str) -> Vec<(String, String)> {
+    let own: Vec<String> = worker_env(id).into_iter().map(|(k, _)| k).collect();
+    let removed = env_removed(id);
+    let mut env: Vec<(String, String)> = std::env::vars()
+        .filter(|(k, _)| DRIVER_VARIABLES.iter().any(|p| k.starts_with(p)))
+        .filter(|(k, _)| !own.contains(k) && !removed.contains(&k.as_str()))
+        .collect();
+    env.sort();
+    env
+}
+
 /// Whether this process can host the id (its driver environment is in place, and the
 /// selected Mesa build's, which only a fresh process can load).
 pub fn hostable_here(id: &str) -> bool {

@@ -121,6 +121,7 @@ mod tests {
             time_s: 0.0,
             reproduce: String::new(),
             diagnosis: None,
+            stderr: String::new(),
             fingerprint,
             details: String::new(),
         }
