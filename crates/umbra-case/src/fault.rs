@@ -505,6 +505,28 @@ impl Fault {
         }
     }
 
+    /// Checks this process's `UMBRA_FAULT` before anything runs: a name no fault has is an
+    /// error (else every run would silently run no fault, and a self-test pair would read as
+    /// the judge missing it); one without `UMBRA_SELFTEST=1` is said to do nothing.
+    pub fn check_env() -> Result<Option<String>, String> {
+        let Ok(name) = std::env::var("UMBRA_FAULT") else {
+            return Ok(None);
+        };
+        if Fault::parse(&name).is_none() {
+            let names: Vec<String> = Fault::ALL.iter().map(|f| f.name()).collect();
+            return Err(format!(
+                "UMBRA_FAULT={name:?} names no fault; the faults are {}, face<0-5>-<orientation>, map-<orientation> and PARAM@E (`umbra selftest --help`); or unset UMBRA_FAULT",
+                names.join(", ")
+            ));
+        }
+        if std::env::var("UMBRA_SELFTEST").ok().as_deref() != Some("1") {
+            return Ok(Some(format!(
+                "UMBRA_FAULT={name} does nothing without UMBRA_SELFTEST=1 (the self-test sets both)"
+            )));
+        }
+        Ok(None)
+    }
+
     /// The active fault of this process, if the self-test turned one on.
     pub fn active() -> Option<Fault> {
         if std::env::var("UMBRA_SELFTEST").ok().as_deref() != Some("1") {

@@ -280,7 +280,7 @@ pub struct Spec {
 pub const COMMANDS: &[Spec] = &[
     Spec {
         name: "render",
-        about: "Render one case on one backend and write its pictures (colour, visibility, truth, error heat map, shadow map) and figures",
+        about: "Render one case on one backend and write its pictures (colour, visibility, truth, error heat map, shadow map) and figures (exit 0 every point within the specs, 1 a point fails, 125 could not run: a missing or invalid case, an unknown backend, a --point that matches nothing)",
         positional: Some(("CASE.json", "the case file")),
         flags: &["backend", "out", "point", "mesa", "max-memory", "explain"],
         required: &[],

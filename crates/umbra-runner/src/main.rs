@@ -12,6 +12,14 @@ use umbra_runner::{cli, harness};
 
 fn main() -> ExitCode {
     quiet_on_closed_pipe();
+    match umbra_case::fault::Fault::check_env() {
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(125);
+        }
+        Ok(Some(warning)) => eprintln!("warning: {warning}"),
+        Ok(None) => {}
+    }
     let argv: Vec<String> = std::env::args().collect();
     // dEQP's protocol (deqp-runner): its `--deqp-*=V` flags are not umbra's to parse.
     if argv.get(1).is_some_and(|a| a == "deqp") {

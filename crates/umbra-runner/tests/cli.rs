@@ -187,3 +187,40 @@ fn without_a_vulkan_driver_wgpu_vk_runs_are_skips_that_name_the_package() {
     );
     assert!(t.contains("mesa-vulkan-drivers"), "{t}");
 }
+
+/// `umbra render` says "could not run" (125, as its help says) for a missing case, an invalid
+/// one, an unknown backend and a --point that matches nothing; never 1 (a failing point) or 2
+/// (issue 36).
+#[test]
+fn render_that_cannot_run_exits_125() {
+    let dir = scratch("render-125");
+    let invalid = dir.join("invalid.json");
+    std::fs::write(&invalid, "{\"name\": \"x\"}").expect("case");
+    let invalid = invalid.to_string_lossy().into_owned();
+    for (args, says) in [
+        (vec!["render", "cases/nosuch.json"], "cannot read the file"),
+        (vec!["render", invalid.as_str()], "invalid.json"),
+        (
+            vec![
+                "render",
+                "cases/basics/square-occluder.json",
+                "--backend",
+                "gl99/x",
+            ],
+            "unknown backend",
+        ),
+        (
+            vec![
+                "render",
+                "cases/basics/square-occluder.json",
+                "--point",
+                "nothing*",
+            ],
+            "matches no sweep point",
+        ),
+    ] {
+        let o = umbra(&args);
+        assert_eq!(o.status.code(), Some(125), "{args:?}: {}", text(&o));
+        assert!(text(&o).contains(says), "{args:?}: {}", text(&o));
+    }
+}

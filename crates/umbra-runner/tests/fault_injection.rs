@@ -768,6 +768,20 @@ fn configuration_mistakes_are_usage_errors_that_name_the_flag() {
         assert!(t.contains(says) && t.contains("e.txt:"), "{lines:?}: {t}");
     }
 
+    // A line that matches no run of the catalogue on any backend is said (issue 36).
+    std::fs::write(
+        exp.join("e.txt"),
+        "ref/square-occluder,Crash,live\nref/no-such-case,Crash,a renamed case\n",
+    )
+    .expect("expectations");
+    let o = base(&["--expectations", s(&exp), "--golden", "none"]);
+    let t = text(&o);
+    assert!(
+        t.contains("warning: expectation") && t.contains("e.txt:2") && t.contains("stale"),
+        "{t}"
+    );
+    assert!(!t.contains("e.txt:1 "), "{t}");
+
     // Two case files with one name.
     let cases = scratch("fi-usage-cases");
     let square =
@@ -779,6 +793,29 @@ fn configuration_mistakes_are_usage_errors_that_name_the_flag() {
     assert_eq!(o.status.code(), Some(125), "{t}");
     assert!(
         t.contains("a.json") && t.contains("b.json") && t.contains("name"),
+        "{t}"
+    );
+
+    // A fault name no fault has once ran no fault, silently.
+    let o = umbra(
+        &[
+            "conformance",
+            "--backend",
+            "ref",
+            "--filter",
+            "square*",
+            "--out",
+            s(&out),
+        ],
+        &[
+            ("UMBRA_SELFTEST", "1"),
+            ("UMBRA_FAULT", "offset-units-lowe"),
+        ],
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(
+        t.contains("\"offset-units-lowe\" names no fault") && t.contains("offset-units-low"),
         "{t}"
     );
 
@@ -983,4 +1020,27 @@ fn a_crash_leaves_its_evidence_with_its_run() {
         html.contains("corrupted size"),
         "report.html lacks the stderr"
     );
+}
+
+/// A damaged golden PNG is said to be one, naming the file, not "differs" (issue 36).
+#[test]
+fn a_golden_that_cannot_be_decoded_is_said() {
+    let root = scratch("fi-damaged-golden");
+    let (golden, out) = (root.join("golden"), root.join("out"));
+    std::fs::create_dir_all(&golden).expect("golden");
+    let o = golden_run(&golden, &out, &["--bless"], &[("CI", "false")]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let png = walk(&golden)
+        .into_iter()
+        .find(|p| p.to_string_lossy().ends_with(".snap.png"))
+        .expect("a blessed golden");
+    std::fs::write(&png, b"<<<<<<< HEAD\nnot a PNG\n").expect("damage");
+    let o = golden_run(&golden, &out, &[], &[("CI", "true")]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(
+        t.contains("cannot be decoded as a PNG") && t.contains(".snap.png"),
+        "{t}"
+    );
+    assert!(!t.contains("differs from its golden"), "{t}");
 }

@@ -119,3 +119,67 @@ fn a_point_that_passes_is_not_reduced() {
         "{t}"
     );
 }
+
+/// `--point` takes the glob its help offers (one point must match; several are refused by
+/// name), and a second `--backend` is refused rather than dropped (issue 36).
+#[test]
+fn point_globs_select_one_point_and_one_backend_is_asked() {
+    let out = scratch("reduce-args").join("x.json");
+    let out = out.to_str().unwrap_or_default();
+    let glob = umbra(
+        &[
+            "reduce",
+            "cases/basics/square-occluder.json",
+            "--point",
+            "square-*",
+            "--backend",
+            "gl33/llvmpipe",
+            "-o",
+            out,
+        ],
+        None,
+    );
+    let t = text(&glob);
+    assert_eq!(glob.status.code(), Some(1), "{t}");
+    assert!(
+        t.contains("reduce needs a point whose own frame fails"),
+        "the glob selected it: {t}"
+    );
+    let many = umbra(
+        &[
+            "reduce",
+            "cases/bias/acne-remedies.json",
+            "--point",
+            "*",
+            "--backend",
+            "gl33/llvmpipe",
+            "-o",
+            out,
+        ],
+        None,
+    );
+    let t = text(&many);
+    assert_eq!(many.status.code(), Some(125), "{t}");
+    assert!(
+        t.contains("matches") && t.contains("a reduction takes one"),
+        "{t}"
+    );
+    let two = umbra(
+        &[
+            "reduce",
+            "cases/basics/square-occluder.json",
+            "--point",
+            "square-occluder",
+            "--backend",
+            "gl33/llvmpipe",
+            "--backend",
+            "gl33/zink",
+            "-o",
+            out,
+        ],
+        None,
+    );
+    let t = text(&two);
+    assert_eq!(two.status.code(), Some(125), "{t}");
+    assert!(t.contains("give --backend once"), "{t}");
+}

@@ -410,6 +410,7 @@ fn plan_runs(opts: &Options) -> Result<Plan, i32> {
         }
     }
     validate_expectations(opts, &plan)?;
+    warn_stale_expectations(opts, &points);
     let selected = plan.len();
     if selected == 0 && results.is_empty() {
         eprintln!("error: --filter {:?} selects no run", opts.filter);
@@ -484,6 +485,25 @@ fn validate_expectations(opts: &Options, plan: &[Planned]) -> Result<(), i32> {
         eprintln!("error: {e}");
         125
     })
+}
+
+/// Says each expectation line that matches no run of every case point loaded on any of this
+/// build's backends (whatever --filter, --backend and --shard select): stale or mistyped.
+fn warn_stale_expectations(opts: &Options, points: &[(PathBuf, Vec<PointPlan>)]) {
+    let known = crate::harness::registry::known();
+    let ids: Vec<&str> = known.iter().map(String::as_str).collect();
+    let all: Vec<(String, &serde_json::Value)> = points
+        .iter()
+        .flat_map(|(_, ids)| ids.iter().map(|(id, _, case)| (id.clone(), &**case)))
+        .collect();
+    for e in opts.expectations.stale(&ids, &all) {
+        eprintln!(
+            "warning: expectation {} ({}) matches no run of the {} case points loaded on any of this build's backends: stale (its case renamed or removed) or mistyped; it expects nothing",
+            e.source,
+            e.pattern,
+            all.len()
+        );
+    }
 }
 
 /// Blessing's preconditions, and the backends judged without goldens: a device umbra has

@@ -231,6 +231,12 @@ fn target(args: &Args) -> Result<(umbra_case::CasePoint, String), i32> {
     let (Some(point_id), Some(backend)) = (args.value("point"), args.value("backend")) else {
         return Err(usage("give --point ID and --backend ID"));
     };
+    if let [_, _, ..] = args.values("backend").as_slice() {
+        return Err(usage(&format!(
+            "--backend {}: a reduction keeps one backend's failure; give --backend once (run umbra reduce once per backend)",
+            args.values("backend").join(" --backend ")
+        )));
+    }
     let fail = |e: String| {
         eprintln!("error: {e}");
         125
@@ -243,11 +249,26 @@ fn target(args: &Args) -> Result<(umbra_case::CasePoint, String), i32> {
         )));
     }
     let points = umbra_case::load_file(Path::new(file)).map_err(|e| fail(e.to_string()))?;
-    match points.iter().find(|p| p.id() == point_id) {
-        Some(p) => Ok((p.clone(), backend.to_string())),
-        None => Err(fail(format!(
+    // An id, or a glob over the ids (as --help offers) that selects exactly one.
+    let exact: Vec<&umbra_case::CasePoint> = points.iter().filter(|p| p.id() == point_id).collect();
+    let matching = if exact.is_empty() {
+        points
+            .iter()
+            .filter(|p| crate::glob::matches(point_id, &p.id()))
+            .collect()
+    } else {
+        exact
+    };
+    match matching.as_slice() {
+        [p] => Ok(((*p).clone(), backend.to_string())),
+        [] => Err(fail(format!(
             "{file} has no point {point_id:?}; its points: {}",
             points.iter().map(|p| p.id()).collect::<Vec<_>>().join(", ")
+        ))),
+        many => Err(fail(format!(
+            "--point {point_id:?} matches {} points of {file} ({}); a reduction takes one: give its id, or a glob that selects only it",
+            many.len(),
+            many.iter().map(|p| p.id()).collect::<Vec<_>>().join(", ")
         ))),
     }
 }

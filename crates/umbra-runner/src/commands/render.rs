@@ -28,6 +28,12 @@ pub fn main(args: &Args) -> i32 {
     };
     let backend_id = args.value("backend").unwrap_or("ref");
     let out = PathBuf::from(args.value("out").unwrap_or("target/umbra/render"));
+    if !crate::harness::registry::is_known(backend_id) {
+        return usage_error(&format!(
+            "unknown backend {backend_id:?}; this build has: {} (`umbra backends` lists this machine's devices too)",
+            crate::harness::registry::known().join(", ")
+        ));
+    }
     if !crate::harness::registry::hostable_here(backend_id) {
         let env = crate::harness::registry::worker_env(backend_id);
         // The same command line, in a process with the backend's environment.
@@ -68,8 +74,9 @@ pub fn main(args: &Args) -> i32 {
     let points = match umbra_case::load_file(Path::new(case)) {
         Ok(p) => p,
         Err(e) => {
+            // A case that cannot be read or is invalid: nothing could run (125), not a failure.
             eprintln!("error: {e}");
-            return 1;
+            return 125;
         }
     };
     let selected: Vec<_> = points
@@ -84,7 +91,7 @@ pub fn main(args: &Args) -> i32 {
             "error: --point {:?} matches no sweep point of {case}",
             args.value("point").unwrap_or("")
         );
-        return 1;
+        return 125;
     }
     // Refuse what cannot fit before anything renders, then watch what does.
     let mut estimated = 0;
@@ -304,5 +311,5 @@ fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
 
 fn usage_error(msg: &str) -> i32 {
     eprintln!("error: {msg}\nusage: {}", crate::cli::usage("render"));
-    2
+    125
 }

@@ -504,6 +504,27 @@ impl fmt::Display for Selector {
 pub struct Expectations(pub Vec<Expectation>);
 
 impl Expectations {
+    /// The lines that match no run at all: no `BACKEND/POINT` of `ids` × `points` (each
+    /// point's id and JSON) matches the line's pattern with its `@when` holding. Against the
+    /// whole catalogue and every backend of the build, such a line is stale (its case was
+    /// renamed or removed) or mistyped: it expects nothing, and says nothing, until reported.
+    pub fn stale(
+        &self,
+        ids: &[&str],
+        points: &[(String, &serde_json::Value)],
+    ) -> Vec<&Expectation> {
+        self.0
+            .iter()
+            .filter(|e| {
+                !ids.iter().any(|b| {
+                    points.iter().any(|(id, case)| {
+                        crate::glob::matches(&e.pattern, &format!("{b}/{id}")) && e.when.holds(case)
+                    })
+                })
+            })
+            .collect()
+    }
+
     /// Reads `dir/*.txt`. A directory that is not there is an error (a mistyped
     /// `--expectations` would turn every expected failure into a regression); an empty one
     /// means no expectations.
@@ -1199,6 +1220,28 @@ mod tests {
         assert!(on("shadow.bias.constant=0.0005") && on("shadow.bias.constant=5e-4"));
         assert!(!on("shadow.bias.constant!=0.0005") && !on("shadow.bias.constant>0.0005"));
         assert!(on("shadow.bias.constant<=0.0005") && on("shadow.bias.constant>0.0004"));
+    }
+
+    /// A line whose pattern or condition matches no point of the catalogue on any backend is
+    /// stale (issue 36: such lines went unreported).
+    #[test]
+    fn lines_that_match_no_run_are_stale() {
+        let dir = std::env::temp_dir().join(format!("umbra-exp-stale-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        std::fs::write(
+            dir.join("s.txt"),
+            "gl33/zink/square-occluder,Crash,live\n\
+             gl33/zink/renamed-case,Crash,stale\n\
+             @when shadow.format=depth16\n\
+             gl33/zink/square-occluder,Crash,stale by condition\n",
+        )
+        .expect("write");
+        let all = Expectations::load(&dir).expect("load");
+        let case = serde_json::json!({ "shadow": { "format": "depth24" } });
+        let stale = all.stale(&["gl33/zink", "ref"], &[("square-occluder".into(), &case)]);
+        let reasons: Vec<&str> = stale.iter().map(|e| e.reason.as_str()).collect();
+        assert_eq!(reasons, ["stale", "stale by condition"]);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     /// A cause expectation (`@when` … `Deviation:NAME`): the failure the deviation explains is

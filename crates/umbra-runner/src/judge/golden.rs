@@ -180,10 +180,25 @@ pub fn check(
     let stem = stem(run.name);
     let held = held(dir, run);
     let existing = held.file.as_ref().and_then(|f| std::fs::read(f).ok());
-    let decoded = existing
-        .as_deref()
-        .and_then(|bytes| image::load_from_memory(bytes).ok())
-        .map(|i| i.to_rgba8());
+    let decoding = existing.as_deref().map(image::load_from_memory);
+    // A golden that is there but cannot be decoded (a damaged file, a merge conflict's
+    // markers, a Git LFS pointer) is said as such: never "differs", never a new picture that a
+    // release other than the golden's would report as legal.
+    if let (Some(Err(e)), Some(file)) = (&decoding, &held.file) {
+        return Checked {
+            golden: Golden::Changed,
+            message: format!(
+                "the golden {} cannot be decoded as a PNG ({e}): a damaged file; restore it (`git checkout -- {}`), or bless again after review",
+                file.display(),
+                file.display()
+            ),
+            ssim: None,
+            identical: false,
+            held,
+            change: None,
+        };
+    }
+    let decoded = decoding.and_then(Result::ok).map(|i| i.to_rgba8());
     let same_size = decoded
         .as_ref()
         .is_some_and(|img| img.dimensions() == (frame.width, frame.height));

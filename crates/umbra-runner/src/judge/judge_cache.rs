@@ -26,14 +26,17 @@
 //! by the twin's point).
 //!
 //! Nothing read back is trusted: an entry ends with a checksum of everything before it (which
-//! includes the key it was made for), and a truth read back is recomputed at a sample of its
+//! includes the key it was made for), keyed with the cache's own secret (`DIR/secret`, 16
+//! random bytes, mode 0600: an entry resealed with the published algorithm but without the
+//! secret fails), and a truth read back is recomputed at a sample of its
 //! pixels ([`SAMPLE`], exact rays, compared bit for bit: the build is the same, so the answer
 //! must be). An empty, truncated, damaged or foreign entry, or one that disagrees with the
 //! sample, is never used: it is recomputed and rewritten, with a one-line warning naming the
 //! file (once per file and process). A cache directory that cannot be written is said once,
 //! by [`prepare`]; the run goes on computing every basis where it is needed. The reference
-//! backend is judged against the same basis in every run, so damage that got past both
-//! checks still shows as the reference failing its own check, not as a pass.
+//! backend is judged against the same basis in every run, so damage that narrows or moves an
+//! interval shows as the reference failing its own check; damage that only widens one would
+//! not (the reference's answer stays inside), which is why the checksum is keyed.
 //!
 //! Formats, little-endian, each starting with a magic, width and height (u32) and a u64 key
 //! check (FNV-1a of the resolved case point, and of the profile's name for a judged render),
@@ -157,7 +160,12 @@ pub fn prepare(root: &Path) -> PathBuf {
     }
     let dir = root.join(build_id());
     let probe = std::fs::create_dir_all(&dir)
-        .and_then(|()| crate::atomic_file::write(&dir.join("writable"), b"umbra"));
+        .and_then(|()| crate::atomic_file::write(&dir.join("writable"), b"umbra"))
+        .and_then(|()| {
+            load_secret(&dir)
+                .then_some(())
+                .ok_or_else(|| std::io::Error::other("its secret cannot be made"))
+        });
     if let Err(e) = probe {
         eprintln!(
             "warning: the judging cache {} cannot be written ({e}): every worker computes the truth and the reference itself (same results, slower); give --judge-cache a writable directory",
@@ -279,7 +287,7 @@ fn cached<T>(
     compute: impl FnOnce() -> T,
 ) -> T {
     // No cache, or one that is not a directory ([`prepare`] said so, once, for the run).
-    let Some(dir) = dir.filter(|d| d.is_dir()) else {
+    let Some(dir) = dir.filter(|d| d.is_dir() && load_secret(d)) else {
         return compute();
     };
     let file = dir.join(format!("{kind}-{key:016x}.bin"));
@@ -360,18 +368,71 @@ fn warn_once(file: &Path, what: &str) {
     }
 }
 
-/// The checksum that ends every entry: 64-bit FNV-1a over its bytes taken eight at a time
-/// (zero-padded), then the length (an accidental-damage check at memory speed, not a
-/// cryptographic one; the sampled truth and the reference's own check each run stand behind
-/// it).
+/// The checksum that ends every entry: SipHash-2-4 of its bytes keyed with the cache's own
+/// secret ([`SECRET`]), so an entry edited and resealed by anyone who has not read that secret
+/// fails it. It guards against damage and against edits that recompute a published checksum,
+/// not against someone who can read the cache's secret: the cache is trusted as far as its
+/// directory is; the truth's sampled recomputation stands behind it for truths.
 fn checksum(bytes: &[u8]) -> u64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for chunk in bytes.chunks(8) {
-        let mut word = [0u8; 8];
-        word[..chunk.len()].copy_from_slice(chunk);
-        h = (h ^ u64::from_le_bytes(word)).wrapping_mul(0x0100_0000_01b3);
+    use std::hash::Hasher as _;
+    let (k0, k1) = SECRET.get().copied().unwrap_or_default();
+    #[allow(deprecated)] // std's one keyed SipHash; stable, deprecated only for its name.
+    let mut h = std::hash::SipHasher::new_with_keys(k0, k1);
+    h.write(bytes);
+    h.write_usize(bytes.len());
+    h.finish()
+}
+
+/// The key of this process's cache (read once from `DIR/secret`); unset (zero) where no
+/// cache is used, when nothing is read back.
+static SECRET: std::sync::OnceLock<(u64, u64)> = std::sync::OnceLock::new();
+
+/// The file holding a cache directory's secret.
+const SECRET_FILE: &str = "secret";
+
+/// Reads `dir`'s secret into [`SECRET`], making it first if the directory has none (16 bytes
+/// from the kernel's random source, mode 0600, linked into place so that of two workers
+/// making it at once one wins and both read the winner's). `false`: no cache can be trusted.
+fn load_secret(dir: &Path) -> bool {
+    if SECRET.get().is_some() {
+        return true;
     }
-    (h ^ bytes.len() as u64).wrapping_mul(0x0100_0000_01b3)
+    let file = dir.join(SECRET_FILE);
+    if !file.is_file() {
+        let mut bytes = [0u8; 16];
+        let made = std::fs::File::open("/dev/urandom")
+            .and_then(|mut r| r.read_exact(&mut bytes))
+            .and_then(|()| {
+                use std::os::unix::fs::OpenOptionsExt as _;
+                let tmp = dir.join(format!(".secret.{}", std::process::id()));
+                let mut f = std::fs::OpenOptions::new()
+                    .write(true)
+                    .create(true)
+                    .truncate(true)
+                    .mode(0o600)
+                    .open(&tmp)?;
+                f.write_all(&bytes)?;
+                f.sync_all()?;
+                let linked = std::fs::hard_link(&tmp, &file);
+                let _ = std::fs::remove_file(&tmp);
+                match linked {
+                    Err(e) if e.kind() != std::io::ErrorKind::AlreadyExists => Err(e),
+                    _ => Ok(()),
+                }
+            });
+        if made.is_err() {
+            return false;
+        }
+    }
+    match std::fs::read(&file) {
+        Ok(b) if b.len() == 16 => {
+            let k0 = u64::from_le_bytes(b[..8].try_into().unwrap_or_default());
+            let k1 = u64::from_le_bytes(b[8..].try_into().unwrap_or_default());
+            let _ = SECRET.set((k0, k1));
+            true
+        }
+        _ => false,
+    }
 }
 
 /// `bytes` with its checksum appended.
@@ -789,6 +850,30 @@ mod tests {
             );
             assert_eq!(std::fs::read(&entry).expect("rewritten"), good);
         }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// An entry edited and resealed with the checksum's published algorithm but without the
+    /// cache's secret (issue 36: a judged entry with widened intervals and a valid FNV
+    /// checksum was used) fails its checksum.
+    #[test]
+    fn an_entry_resealed_without_the_cache_secret_is_refused() {
+        let dir = std::env::temp_dir().join(format!("umbra-secret-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        assert!(load_secret(&dir));
+        let body = b"UMBJ5 an entry whose intervals were widened".to_vec();
+        assert!(unsealed(&sealed(body.clone())).is_ok());
+        let mut forged = body.clone();
+        let unkeyed = {
+            use std::hash::Hasher as _;
+            #[allow(deprecated)]
+            let mut h = std::hash::SipHasher::new_with_keys(0, 0);
+            h.write(&body);
+            h.write_usize(body.len());
+            h.finish()
+        };
+        forged.extend_from_slice(&unkeyed.to_le_bytes());
+        assert!(unsealed(&forged).is_err_and(|e| e.contains("checksum")));
         let _ = std::fs::remove_dir_all(&dir);
     }
 
