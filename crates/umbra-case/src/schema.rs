@@ -236,9 +236,9 @@ mod tests {
         assert!(ok("scene.objects[0].mesh.positions[9][1]", ">", json!(0)).is_ok());
         assert!(ok("scene.objects[0].mesh.positions[9][3]", ">", json!(0)).is_err());
         // The probes of issue 36: a mistyped path, a malformed value, words a field never holds.
-        let err = ok("shadow.bais.constant", ">", json!(0)).unwrap_err();
+        let err = ok("shadow.bais.constant", ">", json!(0)).expect_err("mistyped path");
         assert!(err.contains("names no field"), "{err}");
-        let err = ok("shadow.bias.constant", ">", json!(">0")).unwrap_err();
+        let err = ok("shadow.bias.constant", ">", json!(">0")).expect_err("malformed value");
         assert!(err.contains("compares numbers"), "{err}");
         assert!(ok("shadow.bias.constant", "=", json!("x")).is_err());
         assert!(ok("shadow.format", "=", json!("depth17")).is_err());
@@ -296,7 +296,7 @@ mod tests {
             for point in crate::load::load_file(&file).expect("a catalogue case loads") {
                 let mut paths = Vec::new();
                 leaves(
-                    &serde_json::to_value(&point.case).unwrap(),
+                    &serde_json::to_value(&point.case).expect("a case serializes"),
                     String::new(),
                     &mut paths,
                 );

@@ -99,7 +99,7 @@ fn a_malformed_case_fails_the_run_with_its_file_path_and_fix() {
         "--cases",
         dir.to_str().unwrap_or_default(),
         "--out",
-        dir.join("out").to_str().unwrap_or_default(),
+        scratch("cases-out").to_str().unwrap_or_default(),
     ]);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     let t = text(&o);
