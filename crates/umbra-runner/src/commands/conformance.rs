@@ -1505,6 +1505,8 @@ impl Group<'_> {
                         "failed first ({}: {}), passed on rerun",
                         first.status, first.reason
                     ),
+                    // The evidence is the failed attempt's.
+                    stderr: first.stderr,
                     ..second
                 }
             }
