@@ -368,7 +368,7 @@ pub const COMMANDS: &[Spec] = &[
     },
     Spec {
         name: "sweep",
-        about: "Measure speed against error over a technique matrix per backend: sweep.csv, a Pareto plot (SVG, PNG) and an HTML section",
+        about: "Measure speed against error over a technique matrix per backend: sweep.csv, a Pareto plot (SVG, PNG) and an HTML section (exit 125 when it cannot run: an unknown backend, a missing case or point, a bad value)",
         positional: None,
         flags: &[
             "scene",

@@ -253,7 +253,7 @@ pub fn main(args: &Args) -> i32 {
     }
     if let Err(e) = crate::harness::memory_limit::select(args.value("max-memory"), 1) {
         eprintln!("error: {e}\nusage: {}", crate::cli::usage("sweep"));
-        return 2;
+        return 125;
     }
     let scene = PathBuf::from(args.value("scene").unwrap_or(DEFAULT_SCENE.0));
     let repeat = match args.value("repeat").map(str::parse::<u32>).transpose() {
@@ -263,7 +263,7 @@ pub fn main(args: &Args) -> i32 {
                 "error: --repeat takes a positive number\nusage: {}",
                 crate::cli::usage("sweep")
             );
-            return 2;
+            return 125;
         }
     };
     let timeout = match args.value("timeout").map(str::parse::<u64>).transpose() {
@@ -273,7 +273,7 @@ pub fn main(args: &Args) -> i32 {
                 "error: --timeout takes whole seconds\nusage: {}",
                 crate::cli::usage("sweep")
             );
-            return 2;
+            return 125;
         }
     };
     let out = PathBuf::from(args.value("out").unwrap_or("target/umbra/sweep"));
@@ -282,14 +282,14 @@ pub fn main(args: &Args) -> i32 {
         Ok(b) => b,
         Err(e) => {
             eprintln!("error: {e}");
-            return 2;
+            return 125;
         }
     };
     let points = match umbra_case::load_file(&scene) {
         Ok(p) => p,
         Err(e) => {
             eprintln!("error: {e}");
-            return 2;
+            return 125;
         }
     };
     let wanted = match (args.value("point"), args.value("scene")) {
@@ -307,7 +307,7 @@ pub fn main(args: &Args) -> i32 {
                     scene.display(),
                     points.iter().map(|p| p.id()).collect::<Vec<_>>().join(", ")
                 );
-                return 2;
+                return 125;
             }
         },
     };

@@ -90,7 +90,7 @@ pub fn main(args: &Args) -> i32 {
     crate::harness::orphan::watch();
     let Some(id) = args.value("backend") else {
         eprintln!("error: umbra worker needs --backend ID");
-        return 2;
+        return 125;
     };
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
