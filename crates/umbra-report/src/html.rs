@@ -78,7 +78,7 @@ pub fn report(
         let dir = failures_dir.join(crate::names::file_name(&r.name));
         let _ = write!(
             s,
-            "<div class=\"failure\"><h3><span class=\"{}\">{}</span> {}</h3><p>{}</p>{}<p>reproduce: <code>{}</code></p>{}{}{}{}{}{}{}</div>",
+            "<div class=\"failure\"><h3><span class=\"{}\">{}</span> {}</h3><p>{}</p>{}<p>reproduce: <code>{}</code></p>{}{}{}{}{}{}{}{}</div>",
             r.status.name(),
             r.status,
             esc(&r.name),
@@ -100,6 +100,7 @@ pub fn report(
             } else {
                 String::new()
             },
+            checks_line(r),
             if r.stderr.is_empty() {
                 String::new()
             } else {
@@ -449,4 +450,25 @@ fn twins_section(results: &[RunResult]) -> String {
     }
     s.push_str("</table>");
     s
+}
+
+/// A failing run's checks, each with what it holds the run to and the spec text behind it.
+fn checks_line(r: &RunResult) -> String {
+    if r.failed.is_empty() {
+        return String::new();
+    }
+    let items: Vec<String> = r
+        .failed
+        .iter()
+        .map(|f| {
+            format!(
+                "<li><b>{}</b> ({}): {}; <i>{}</i></li>",
+                esc(&f.check.name()),
+                f.count,
+                esc(f.check.about()),
+                esc(f.check.clause())
+            )
+        })
+        .collect();
+    format!("<ul class=\"checks\">{}</ul>", items.join(""))
 }

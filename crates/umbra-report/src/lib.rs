@@ -15,6 +15,7 @@
 
 use std::path::Path;
 
+pub mod check;
 pub mod csv;
 pub mod error_curves;
 pub mod escape;

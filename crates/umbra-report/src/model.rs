@@ -70,9 +70,8 @@ impl fmt::Display for Status {
 /// One failed check of a run: its name and how many pixels failed it.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct FailedCheck {
-    /// `value`, `nan`, `coverage`, `colour`, `map`, `interior`, `twin:NAME`, `golden`,
-    /// `falls-along`.
-    pub check: String,
+    /// Which check ([`crate::check::Check`]; written by its name).
+    pub check: crate::check::Check,
     /// Pixels that failed it (1 for checks that are not counted in pixels).
     pub count: u64,
 }

@@ -197,7 +197,7 @@ pub const FLAGS: &[Flag] = &[
     repeated(
         "check",
         "CHECK",
-        "keep failing this check while reducing (value, coverage, colour, map, interior, twin:NAME, golden, falls-along; repeatable) [default: a subset of the failed checks]",
+        "keep failing this check while reducing (value, nan, coverage, colour, map, interior, golden, falls-along, memory, render and twin:NAME; repeatable) [default: a subset of the failed checks]",
     ),
     valued("src", "DIR", "Mesa source tree at the commit to test"),
     valued(
@@ -628,6 +628,20 @@ mod tests {
                 assert!(spec.flags.contains(name), "{}: --{name}", spec.name);
             }
         }
+    }
+
+    /// `--check`'s help names every check the judge has (it once left out `nan`).
+    #[test]
+    fn check_help_names_every_check() {
+        let help = FLAGS
+            .iter()
+            .find(|f| f.name == "check")
+            .map(|f| f.help)
+            .unwrap_or_default();
+        for c in umbra_report::check::FIXED {
+            assert!(help.contains(&c.name()), "--check's help lacks {c}");
+        }
+        assert!(help.contains("twin:NAME"));
     }
 
     #[test]

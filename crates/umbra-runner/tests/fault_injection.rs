@@ -765,6 +765,8 @@ fn configuration_mistakes_are_usage_errors_that_name_the_flag() {
         ),
         ("@when shadow.bias.constant>>0\nref/*,Fail,typo\n", "\">0\""),
         ("@when shadow.format=depth17\nref/*,Fail,x\n", "depth17"),
+        // A check no run names: the nearest is offered.
+        ("ref/*,Fail:color<=3,typo\n", "did you mean colour?"),
     ] {
         std::fs::write(exp.join("e.txt"), lines).expect("expectations");
         let o = base(&["--expectations", s(&exp), "--golden", "none"]);

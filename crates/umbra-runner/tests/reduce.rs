@@ -182,4 +182,23 @@ fn point_globs_select_one_point_and_one_backend_is_asked() {
     let t = text(&two);
     assert_eq!(two.status.code(), Some(125), "{t}");
     assert!(t.contains("give --backend once"), "{t}");
+    // --check takes the judge's vocabulary, checked when read (issue 37: it was not).
+    let typo = umbra(
+        &[
+            "reduce",
+            "cases/basics/square-occluder.json",
+            "--point",
+            "square-occluder",
+            "--backend",
+            "gl33/llvmpipe",
+            "--check",
+            "color",
+            "-o",
+            out,
+        ],
+        None,
+    );
+    let t = text(&typo);
+    assert_eq!(typo.status.code(), Some(125), "{t}");
+    assert!(t.contains("did you mean colour?"), "{t}");
 }

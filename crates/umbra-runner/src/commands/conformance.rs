@@ -1531,9 +1531,9 @@ impl Group<'_> {
             storage,
             stderr,
         } = outcome;
-        let unchecked: &[&str] =
+        let unchecked: &[umbra_report::check::Check] =
             if settings.golden.is_none() || settings.no_goldens.contains(&p.backend) {
-                &["golden"]
+                &[umbra_report::check::Check::Golden]
             } else {
                 &[]
             };

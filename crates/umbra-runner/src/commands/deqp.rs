@@ -392,7 +392,7 @@ impl Session {
             a.status.clone(),
             &a.failed,
             a.under_deviation.as_deref(),
-            &["golden"],
+            &[umbra_report::check::Check::Golden],
         );
         let by_cause = expectations
             .find(&run, json)

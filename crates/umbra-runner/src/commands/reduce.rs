@@ -31,6 +31,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use serde_json::Value;
+use umbra_report::check::Check;
 
 use crate::args::Args;
 use crate::harness::pool::{Reply, Worker};
@@ -42,7 +43,7 @@ pub enum Verdict {
     /// Passed.
     Pass,
     /// Failed these checks (twins and goldens aside).
-    Fail(BTreeSet<String>),
+    Fail(BTreeSet<Check>),
     /// The worker died or hung.
     Crash(String),
     /// Skipped, or the case did not load.
@@ -56,7 +57,7 @@ impl std::fmt::Display for Verdict {
             Verdict::Fail(c) => write!(
                 f,
                 "fails {}",
-                c.iter().cloned().collect::<Vec<_>>().join("+")
+                c.iter().map(Check::name).collect::<Vec<_>>().join("+")
             ),
             Verdict::Crash(how) => write!(f, "crash ({how})"),
             Verdict::Other(why) => f.write_str(why),
@@ -105,7 +106,7 @@ struct Judge {
     /// Why the last candidate was not kept.
     last: String,
     /// Checks every candidate must still fail (`--check`).
-    required: BTreeSet<String>,
+    required: BTreeSet<Check>,
 }
 
 impl Judge {
@@ -163,7 +164,7 @@ impl Judge {
                     r.failed
                         .iter()
                         .map(|c| c.check.clone())
-                        .filter(|c| !c.starts_with("twin:") && c != "golden")
+                        .filter(|c| !matches!(c, Check::Twin(_) | Check::Golden))
                         .collect(),
                 ),
                 _ => Verdict::Other(format!("{}: {}", r.outcome, r.reason)),
@@ -299,6 +300,18 @@ impl Reducer {
                 .and_then(|t| t.parse().ok())
                 .unwrap_or(120),
         );
+        let required = match args
+            .values("check")
+            .into_iter()
+            .map(Check::parse)
+            .collect::<Result<BTreeSet<Check>, String>>()
+        {
+            Ok(r) => r,
+            Err(e) => {
+                eprintln!("error: --check: {e}");
+                return Err(125);
+            }
+        };
         let dir = std::env::temp_dir().join(format!("umbra-reduce-{}", std::process::id()));
         let _ = std::fs::create_dir_all(&dir);
         let mut judge = Judge {
@@ -309,7 +322,7 @@ impl Reducer {
             dir: dir.clone(),
             tried: 0,
             last: String::new(),
-            required: args.values("check").into_iter().map(String::from).collect(),
+            required,
         };
         let Ok(mut case) = serde_json::to_value(&point.case) else {
             eprintln!("error: cannot write the point as JSON");
@@ -335,10 +348,10 @@ impl Reducer {
                     judge
                         .required
                         .iter()
-                        .cloned()
+                        .map(Check::name)
                         .collect::<Vec<_>>()
                         .join(" --check "),
-                    c.iter().cloned().collect::<Vec<_>>().join("+")
+                    c.iter().map(Check::name).collect::<Vec<_>>().join("+")
                 );
                 return Err(gone(125));
             }

@@ -662,7 +662,7 @@ impl Faulted {
                     &r.failed,
                     r.under_deviation.as_deref(),
                     // The self-test runs without goldens.
-                    &["golden"],
+                    &[umbra_report::check::Check::Golden],
                 );
                 let checks = crate::judge::expectations::signature(&r.failed);
                 if self.verbose {

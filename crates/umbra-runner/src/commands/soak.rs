@@ -174,7 +174,7 @@ impl Table {
                     if model {
                         row[5] += 1;
                     }
-                    let checks: Vec<&str> = r.failed.iter().map(|c| c.check.as_str()).collect();
+                    let checks: Vec<String> = r.failed.iter().map(|c| c.check.name()).collect();
                     let what = if checks.is_empty() {
                         short(&r.reason)
                     } else {

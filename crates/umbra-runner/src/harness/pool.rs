@@ -171,7 +171,12 @@ impl Worker {
                     return match serde_json::from_str::<RunReport>(&line) {
                         Ok(mut r) => {
                             if let Some(why) = r.retired.clone() {
+                                // The run's stderr is the retiring worker's: kept past the swap.
+                                let said = self.stderr();
                                 r.reason.push_str(&self.replace(&why));
+                                if let Ok(mut k) = self.stderr.lock() {
+                                    k.extend(said.lines().map(str::to_string));
+                                }
                             }
                             Reply::Report(Box::new(r))
                         }

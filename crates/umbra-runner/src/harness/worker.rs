@@ -229,7 +229,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 point.id()
             ),
             failed: vec![umbra_report::FailedCheck {
-                check: "memory".into(),
+                check: umbra_report::check::Check::Memory,
                 count: 1,
             }],
             ..Default::default()
@@ -359,7 +359,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 if checked.golden == crate::judge::golden::Golden::Changed {
                     problems.push(checked.message);
                     failed.push(umbra_report::FailedCheck {
-                        check: "golden".into(),
+                        check: umbra_report::check::Check::Golden,
                         count: 1,
                     });
                 }
@@ -403,8 +403,9 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             let under_deviation = again.filter(|_| failing).map(|(d, point)| {
                 match run_point_as(backend, point, !req.no_twins, d) {
                     Outcome::Done(j) => j.failed,
-                    Outcome::Skip(why) | Outcome::Error(why) => vec![umbra_report::FailedCheck {
-                        check: format!("render ({why})"),
+                    // Judged again, it did not render: the check that fails is rendering.
+                    Outcome::Skip(_) | Outcome::Error(_) => vec![umbra_report::FailedCheck {
+                        check: umbra_report::check::Check::Render,
                         count: 1,
                     }],
                 }

@@ -45,6 +45,7 @@ use std::fmt;
 use std::path::Path;
 
 use umbra_report::Status;
+use umbra_report::check::Check;
 
 /// What an expectation expects of a run.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -65,23 +66,11 @@ pub enum Expected {
 /// One check of an expected failure and the most pixels it may fail on.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Bound {
-    /// The check's name (`value`, `map`, `twin:bias-order`, ...).
-    pub check: String,
+    /// The check (`value`, `map`, `twin:bias-order`, ...).
+    pub check: Check,
     /// The most pixels (or texels, or 1) it may fail on.
     pub max: u64,
 }
-
-/// The checks a failing run may name (`twin:` takes the twin's name).
-pub const CHECKS: &[&str] = &[
-    "value",
-    "nan",
-    "coverage",
-    "colour",
-    "map",
-    "interior",
-    "golden",
-    "falls-along",
-];
 
 impl Expected {
     /// Parses the STATUS field of an expectation line.
@@ -123,23 +112,12 @@ impl Expected {
             let Some((check, max)) = item.split_once("<=") else {
                 return Err(format!("{item:?} is not CHECK<=N"));
             };
-            let check = check.trim();
-            let known = CHECKS.contains(&check)
-                || check.strip_prefix("twin:").is_some_and(|n| !n.is_empty());
-            if !known {
-                return Err(format!(
-                    "unknown check {check:?}; the checks are {} and twin:NAME",
-                    CHECKS.join(", ")
-                ));
-            }
+            let check = Check::parse(check)?;
             let max = max
                 .trim()
                 .parse()
                 .map_err(|_| format!("{max:?} in {item:?} is not a whole number"))?;
-            bounds.push(Bound {
-                check: check.to_string(),
-                max,
-            });
+            bounds.push(Bound { check, max });
         }
         Ok(Expected::Fail(bounds))
     }
@@ -769,7 +747,7 @@ impl Expectations {
         raw: Status,
         failed: &[umbra_report::FailedCheck],
         under_deviation: Option<&[umbra_report::FailedCheck]>,
-        unchecked: &[&str],
+        unchecked: &[Check],
     ) -> (Status, Option<String>) {
         let Some(e) = self.find(name, case) else {
             return (raw, None);
@@ -784,8 +762,7 @@ impl Expectations {
         };
         match (&raw, &e.expected) {
             (_, Expected::Fail(bounds))
-                if !bounds.is_empty()
-                    && bounds.iter().all(|b| unchecked.contains(&b.check.as_str())) =>
+                if !bounds.is_empty() && bounds.iter().all(|b| unchecked.contains(&b.check)) =>
             {
                 (
                     raw,
@@ -793,7 +770,7 @@ impl Expectations {
                         "not applicable: it names only {}, which this run did not check; {why}",
                         bounds
                             .iter()
-                            .map(|b| b.check.as_str())
+                            .map(|b| b.check.name())
                             .collect::<Vec<_>>()
                             .join(" and ")
                     )),
@@ -918,7 +895,7 @@ mod tests {
             Status::Pass,
             &[],
             None,
-            &["golden"],
+            &[Check::Golden],
         );
         assert_eq!(status, Status::Pass);
         assert!(
@@ -942,7 +919,7 @@ mod tests {
             Status::Fail,
             &failed(&[("value", 3)]),
             None,
-            &["golden"],
+            &[Check::Golden],
         );
         assert_eq!(status, Status::Fail);
         // An expectation that names a check the run did make still applies.
@@ -952,7 +929,7 @@ mod tests {
             Status::Pass,
             &[],
             None,
-            &["golden"],
+            &[Check::Golden],
         );
         assert_eq!(status, Status::UnexpectedPass);
     }
@@ -961,7 +938,7 @@ mod tests {
         checks
             .iter()
             .map(|(c, n)| umbra_report::FailedCheck {
-                check: c.to_string(),
+                check: Check::parse(c).expect("a check"),
                 count: *n,
             })
             .collect()

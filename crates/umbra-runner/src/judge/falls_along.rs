@@ -61,7 +61,7 @@ impl FallsAlong {
                         if e > *prev && !r.status.is_regression() {
                             r.status = Status::Fail;
                             r.failed.push(umbra_report::FailedCheck {
-                                check: "falls-along".into(),
+                                check: umbra_report::check::Check::FallsAlong,
                                 count: 1,
                             });
                             r.reason = format!(

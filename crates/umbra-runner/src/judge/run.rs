@@ -11,6 +11,7 @@ use umbra_compare::TruthError;
 use umbra_compare::consensus::{Failed, Fingerprint};
 use umbra_compare::reference::RefAgreement;
 use umbra_ref::truth::Truth;
+use umbra_report::check::Check;
 use umbra_report::{FailedCheck, TwinMetric};
 
 /// One judged run.
@@ -119,7 +120,7 @@ pub fn run_point_as(
                 a.illegal_map
             ));
             failed.push(FailedCheck {
-                check: "value".into(),
+                check: Check::Value,
                 count: a.illegal.max(a.illegal_map),
             });
         }
@@ -158,7 +159,7 @@ pub fn run_point_as(
     for t in &twins {
         if !t.ok {
             failed.push(FailedCheck {
-                check: format!("twin:{}", t.name),
+                check: Check::Twin(t.name.clone()),
                 count: t.pair.illegal.max(1),
             });
             problems.push(format!(
@@ -178,17 +179,14 @@ pub fn run_point_as(
     if let Some(a) = agreement.as_ref().filter(|_| !is_ref) {
         if (a.illegal > 0 || a.illegal_map > 0) && prepared.case().expect.backends_agree {
             for (check, count) in [
-                ("value", a.illegal_value),
-                ("nan", a.illegal_nan),
-                ("coverage", a.illegal_coverage),
-                ("colour", a.illegal_colour),
-                ("map", a.illegal_map),
+                (Check::Value, a.illegal_value),
+                (Check::Nan, a.illegal_nan),
+                (Check::Coverage, a.illegal_coverage),
+                (Check::Colour, a.illegal_colour),
+                (Check::Map, a.illegal_map),
             ] {
                 if count > 0 {
-                    failed.push(FailedCheck {
-                        check: check.into(),
-                        count,
-                    });
+                    failed.push(FailedCheck { check, count });
                 }
             }
             problems.push(format!(
@@ -212,7 +210,7 @@ pub fn run_point_as(
     };
     if shadow_bad || light_bad {
         failed.push(FailedCheck {
-            check: "interior".into(),
+            check: Check::Interior,
             count: a.false_shadow * u64::from(shadow_bad) + a.false_light * u64::from(light_bad),
         });
         problems.push(format!(

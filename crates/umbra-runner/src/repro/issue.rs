@@ -115,26 +115,17 @@ fn s<'a>(v: &'a Value, key: &str) -> &'a str {
     v[key].as_str().unwrap_or("")
 }
 
-/// The failed checks as words, with the clause each is held to.
+/// The failed checks as words, with the clause each is held to
+/// ([`umbra_report::check::Check::counted`]).
 fn violated(facts: &Value) -> String {
     let mut parts = Vec::new();
     for f in facts["failed"].as_array().into_iter().flatten() {
         let n = f["count"].as_u64().unwrap_or(0);
-        let what = match f["check"].as_str().unwrap_or("") {
-            "map" => format!(
-                "{n} shadow-map texels stored outside the depths GL 4.6 §14.6.5 (polygon offset) allows"
-            ),
-            "value" => format!(
-                "{n} pixels' shadow test outside what GL 4.6 §8.23.1 (depth texture comparison) allows"
-            ),
-            "coverage" => {
-                format!("{n} pixels show another surface than rasterization (§14.5) allows")
-            }
-            "colour" => format!("{n} pixels' colour is not the shading of their own shadow test"),
-            "nan" => format!("{n} pixels NaN"),
-            other => format!("{other} ({n})"),
-        };
-        parts.push(what);
+        let name = f["check"].as_str().unwrap_or("");
+        parts.push(match umbra_report::check::Check::parse(name) {
+            Ok(c) => c.counted(n),
+            Err(_) => format!("{name} ({n})"),
+        });
     }
     parts.join("; ")
 }
