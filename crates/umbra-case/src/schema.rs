@@ -209,6 +209,26 @@ pub fn check_term(path: &str, op: &str, value: &Value) -> Result<(), String> {
     Err(refusal)
 }
 
+/// A case point as conditions read it: its JSON with the defaults serde leaves out written
+/// in (`scene.offset` `[0, 0, 0]`, `shadow.beyond_far` `compare`, `shadow.bias.n_dot_l.light`
+/// `direction`), so `@when shadow.beyond_far=compare` holds where the case did not write it.
+pub fn condition_json(case: &crate::format::Case) -> Value {
+    let mut v = serde_json::to_value(case).unwrap_or_default();
+    let mut put = |pointer: &str, key: &str, value: Value| {
+        if let Some(obj) = v.pointer_mut(pointer).and_then(Value::as_object_mut) {
+            obj.entry(key).or_insert(value);
+        }
+    };
+    put("/scene", "offset", serde_json::json!([0, 0, 0]));
+    put("/shadow", "beyond_far", serde_json::json!("compare"));
+    put(
+        "/shadow/bias/n_dot_l",
+        "light",
+        serde_json::json!("direction"),
+    );
+    v
+}
+
 /// Orders a case's number against a condition's: at `f32`, the precision every number of the
 /// case format has, so the decimal a user writes in a condition means what the same decimal
 /// means in a case file.
@@ -246,6 +266,26 @@ mod tests {
         assert!(ok("shadow.size[0]", "=", json!(1.5)).is_err());
         assert!(ok("shadow.bias.polygon_offset[2]", "=", json!(0)).is_err());
         assert!(ok("shadow.bias.constant", "=", Value::Null).is_err());
+    }
+
+    /// Fields serde skips at their default read as that default, not as absent.
+    #[test]
+    fn skipped_defaults_are_written_in_for_conditions() {
+        let case: crate::format::Case = serde_json::from_str(EXEMPLARS[0]).expect("case");
+        let v = condition_json(&case);
+        assert_eq!(
+            v.pointer("/scene/offset"),
+            Some(&serde_json::json!([0, 0, 0]))
+        );
+        assert_eq!(
+            v.pointer("/shadow/beyond_far"),
+            Some(&serde_json::json!("compare"))
+        );
+        let full: crate::format::Case = serde_json::from_str(EXEMPLARS[1]).expect("case");
+        assert_eq!(
+            condition_json(&full).pointer("/shadow/beyond_far"),
+            Some(&serde_json::json!("lit"))
+        );
     }
 
     #[test]

@@ -86,29 +86,27 @@ fn backend(id: &str, what: &str, aliases: Option<&str>) -> Value {
             .stderr(std::process::Stdio::null())
             .output()
     });
-    let hello: Value = out
-        .ok()
-        .and_then(|o| {
-            String::from_utf8_lossy(&o.stdout)
-                .lines()
-                .next()
-                .and_then(|l| serde_json::from_str(l).ok())
-        })
-        .unwrap_or(Value::Null);
+    let hello: Option<crate::harness::worker::Hello> = out.ok().and_then(|o| {
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .next()
+            .and_then(|l| serde_json::from_str(l).ok())
+    });
     let (api, driver) = id.split_once('/').unwrap_or((id, ""));
-    let mut v = match (&hello["ready"], &hello["unavailable"]) {
-        (Value::Object(r), _) => json!({
+    use crate::harness::worker::Hello;
+    let mut v = match &hello {
+        Some(Hello::Ready(r)) => json!({
             "id": id, "api": api, "driver": driver, "available": true, "reached": reach,
-            "vendor": r.get("vendor"), "renderer": r.get("renderer"), "version": r.get("version"),
-            "device": r.get("device"),
-            "egl": r.get("extensions").and_then(Value::as_array)
-                .and_then(|e| e.iter().filter_map(Value::as_str).find(|s| s.starts_with("EGL ")))
+            "vendor": r.vendor, "renderer": r.renderer, "version": r.version,
+            "device": r.device,
+            "egl": r.extensions.iter().find(|s| s.starts_with("EGL "))
                 .map(|s| s.trim_start_matches("EGL ")),
         }),
-        (_, Value::String(why)) => json!({
+        // A refused Mesa build once read as a worker that said nothing.
+        Some(Hello::Unavailable(why) | Hello::Refused(why)) => json!({
             "id": id, "api": api, "driver": driver, "available": false, "reached": reach, "why": why,
         }),
-        _ => json!({
+        None => json!({
             "id": id, "api": api, "driver": driver, "available": false, "reached": reach,
             "why": "its worker did not start or said nothing",
         }),

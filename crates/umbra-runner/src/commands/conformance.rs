@@ -32,7 +32,7 @@ use std::time::{Duration, Instant};
 
 use crate::args::Args;
 use crate::harness::pool::{Reply, Worker};
-use crate::harness::worker::{Request, RunReport};
+use crate::harness::worker::{Hello, Request, RunReport, RunVerdict};
 use crate::judge::expectations::Expectations;
 use crate::judge::falls_along::FallsAlong;
 use crate::run_dir::RunDir;
@@ -377,7 +377,7 @@ fn plan_runs(opts: &Options) -> Result<Plan, i32> {
                     f.clone(),
                     p.iter()
                         .map(|p| {
-                            let case = serde_json::to_value(&p.case).unwrap_or_default();
+                            let case = umbra_case::schema::condition_json(&p.case);
                             (p.id(), p.values.clone(), std::sync::Arc::new(case))
                         })
                         .collect(),
@@ -496,7 +496,22 @@ fn warn_stale_expectations(opts: &Options, points: &[(PathBuf, Vec<PointPlan>)])
         .iter()
         .flat_map(|(_, ids)| ids.iter().map(|(id, _, case)| (id.clone(), &**case)))
         .collect();
-    for e in opts.expectations.stale(&ids, &all) {
+    // A line for a device this build does not list (gl33/radeonsi/*) is not stale here.
+    let on_device = |e: &&crate::judge::expectations::Expectation| {
+        let mut parts = e.pattern.splitn(3, '/');
+        let backend = format!(
+            "{}/{}",
+            parts.next().unwrap_or(""),
+            parts.next().unwrap_or("")
+        );
+        !backend.contains(['*', '?']) && crate::harness::registry::is_device_id(&backend)
+    };
+    for e in opts
+        .expectations
+        .stale(&ids, &all)
+        .iter()
+        .filter(|e| !on_device(e))
+    {
         eprintln!(
             "warning: expectation {} ({}) matches no run of the {} case points loaded on any of this build's backends: stale (its case renamed or removed) or mistyped; it expects nothing",
             e.source,
@@ -1269,7 +1284,7 @@ fn run_group(
         if let Some(ms) = w
             .as_ref()
             .ok()
-            .and_then(|w| w.hello["ready"]["create_ms"].as_f64())
+            .and_then(|w| w.hello.ready().map(|r| r.create_ms))
         {
             CONTEXT_US.fetch_add((ms * 1e3) as u64, Ordering::Relaxed);
         }
@@ -1281,21 +1296,15 @@ fn run_group(
     // can never read as a clean run.
     let (hello, start_error) = match &worker {
         Ok(w) => (w.hello.clone(), None),
-        Err(e) => (serde_json::json!({ "unavailable": e }), Some(e.clone())),
+        Err(e) => (Hello::Unavailable(e.clone()), Some(e.clone())),
     };
     // Only the lines that can name this backend's runs, so drivers.txt counts its own.
     let own = settings.expectations.for_backend(backend);
-    let facts = crate::judge::expectations::DriverFacts::from_hello(&hello["ready"]);
+    let facts = hello.facts();
     let group = Group {
         backend,
-        refused: hello
-            .get("refused")
-            .and_then(|u| u.as_str())
-            .map(str::to_string),
-        unavailable: hello
-            .get("unavailable")
-            .and_then(|u| u.as_str())
-            .map(str::to_string),
+        refused: hello.refused().map(str::to_string),
+        unavailable: hello.unavailable().map(str::to_string),
         start_error,
         // Expectations for this backend's driver (`@applies`), and those a release before it
         // closed (their deviations were fixed: a failure they match may be one come back).
@@ -1374,34 +1383,25 @@ struct Group<'a> {
 
 /// The backend's lines for drivers.txt (driver strings, device, goldens, build and the
 /// expectation files that apply) and its row in report.json's `drivers`.
-fn describe_driver(g: &Group, hello: &serde_json::Value) -> (String, serde_json::Value) {
+fn describe_driver(g: &Group, hello: &Hello) -> (String, serde_json::Value) {
     let (backend, settings) = (g.backend, g.settings);
     let files = g.expectations.file_counts();
-    let facts = crate::judge::expectations::DriverFacts::from_hello(&hello["ready"]);
-    let build = hello["ready"]["build"].as_str().map(str::to_string);
-    let driver_line = match (hello.get("ready"), hello.get("unavailable")) {
-        (Some(r), _) => format!(
+    let ready = hello.ready();
+    let facts = hello.facts();
+    let build = ready.and_then(|r| r.build.clone());
+    let driver_line = match hello {
+        Hello::Ready(r) => format!(
             "{backend}: {} | {} | {} | {}\n",
-            r["vendor"].as_str().unwrap_or(""),
-            r["renderer"].as_str().unwrap_or(""),
-            r["version"].as_str().unwrap_or(""),
-            r["extensions"]
-                .as_array()
-                .map(|v| v
-                    .iter()
-                    .filter_map(|x| x.as_str())
-                    .collect::<Vec<_>>()
-                    .join(" "))
-                .unwrap_or_default()
+            r.vendor,
+            r.renderer,
+            r.version,
+            r.extensions.join(" ")
         ),
-        (_, Some(u)) => format!("{backend}: unavailable: {}\n", u.as_str().unwrap_or("")),
-        _ => match &g.refused {
-            Some(why) => format!("{backend}: refused: {why}\n"),
-            None => format!("{backend}: said {hello}\n"),
-        },
+        Hello::Unavailable(u) => format!("{backend}: unavailable: {u}\n"),
+        Hello::Refused(why) => format!("{backend}: refused: {why}\n"),
     };
-    let mut device = hello["ready"]["device"]
-        .as_str()
+    let mut device = ready
+        .map(|r| r.device.as_str())
         .filter(|d| !d.is_empty())
         .map_or(String::new(), |d| format!("  device: {d}\n"));
     let no_goldens = settings.no_goldens.contains(backend);
@@ -1433,10 +1433,10 @@ fn describe_driver(g: &Group, hello: &serde_json::Value) -> (String, serde_json:
     );
     let row = serde_json::json!({
         "backend": backend,
-        "vendor": hello["ready"]["vendor"],
-        "renderer": hello["ready"]["renderer"],
-        "version": hello["ready"]["version"],
-        "device": hello["ready"]["device"],
+        "vendor": ready.map(|r| &r.vendor),
+        "renderer": ready.map(|r| &r.renderer),
+        "version": ready.map(|r| &r.version),
+        "device": ready.map(|r| &r.device),
         "goldens": if no_goldens {
             serde_json::json!(crate::judge::golden::NONE_FOR_BACKEND)
         } else {
@@ -1444,7 +1444,7 @@ fn describe_driver(g: &Group, hello: &serde_json::Value) -> (String, serde_json:
         },
         "mesa": facts.mesa,
         "build": build,
-        "unavailable": hello.get("unavailable"),
+        "unavailable": hello.unavailable(),
         "refused": g.refused,
         "expectations": files,
         "closed_expectations": closed,
@@ -1695,10 +1695,10 @@ fn last_words(stderr: &str) -> String {
 }
 
 fn from_report(r: RunReport) -> Attempt {
-    let status = match r.outcome.as_str() {
-        "pass" => Status::Pass,
-        "skip" => Status::Skip(r.reason.clone()),
-        _ => Status::Fail,
+    let status = match r.outcome {
+        RunVerdict::Pass => Status::Pass,
+        RunVerdict::Skip => Status::Skip(r.reason.clone()),
+        RunVerdict::Fail => Status::Fail,
     };
     let mut reason = r.reason;
     if status == Status::Fail && !r.failed.is_empty() {

@@ -237,7 +237,7 @@ impl CaseIndex {
                         abs,
                         points
                             .iter()
-                            .map(|p| (p.id(), serde_json::to_value(&p.case).unwrap_or_default()))
+                            .map(|p| (p.id(), umbra_case::schema::condition_json(&p.case)))
                             .collect(),
                     ),
                 );
@@ -356,17 +356,17 @@ impl Session {
         // driver, a device the machine lacks) or refused (a Mesa build without its driver),
         // never a crash of a worker that exited as it should.
         if let Ok(w) = worker.as_ref() {
-            if let Some(why) = w.hello["unavailable"].as_str() {
+            if let Some(why) = w.hello.unavailable() {
                 return ("NotSupported", format!("{backend} is unavailable: {why}"));
             }
-            if let Some(why) = w.hello["refused"].as_str() {
+            if let Some(why) = w.hello.refused() {
                 return ("InternalError", why.to_string());
             }
         }
         if let Ok(w) = worker.as_ref() {
-            self.facts.entry(backend.to_string()).or_insert_with(|| {
-                crate::judge::expectations::DriverFacts::from_hello(&w.hello["ready"])
-            });
+            self.facts
+                .entry(backend.to_string())
+                .or_insert_with(|| w.hello.facts());
         }
         let expectations = self
             .facts
@@ -442,7 +442,7 @@ fn list(argv: &[String], index: &CaseIndex) -> i32 {
             &crate::harness::registry::worker_env(backend),
             Duration::from_secs(60),
         ) {
-            Ok(w) => crate::judge::expectations::DriverFacts::from_hello(&w.hello["ready"]),
+            Ok(w) => w.hello.facts(),
             Err(e) => {
                 eprintln!("error: {backend}: no worker ({e})");
                 return 125;

@@ -205,14 +205,17 @@ fn locate(dir: &Path) -> Result<PathBuf, String> {
 /// Refuses a run directory that carries the INCOMPLETE marker, record or not (a full disk
 /// while publishing leaves both).
 fn complete(run: &Path) -> Result<(), String> {
-    match std::fs::read_to_string(run.join(crate::run_dir::INCOMPLETE)) {
-        Ok(why) => Err(format!(
-            "{}: the shard did not complete ({}); run it again",
-            run.display(),
-            why.trim()
-        )),
-        Err(_) => Ok(()),
+    let marker = run.join(crate::run_dir::INCOMPLETE);
+    if !marker.exists() {
+        return Ok(());
     }
+    let why = std::fs::read_to_string(&marker)
+        .unwrap_or_else(|e| format!("its marker cannot be read: {e}"));
+    Err(format!(
+        "{}: the shard did not complete ({}); run it again",
+        run.display(),
+        why.trim()
+    ))
 }
 
 /// Refuses an `-o` that is one of the shards (or holds one): the merge would replace that

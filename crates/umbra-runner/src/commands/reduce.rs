@@ -35,7 +35,7 @@ use umbra_report::check::Check;
 
 use crate::args::Args;
 use crate::harness::pool::{Reply, Worker};
-use crate::harness::worker::Request;
+use crate::harness::worker::{Request, RunVerdict};
 
 /// How a run ended, in the terms "fails the same way" compares.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -135,7 +135,7 @@ impl Judge {
             let env = crate::harness::registry::worker_env(&id);
             match Worker::start(&id, &env, self.timeout) {
                 Ok(w) => {
-                    if let Some(u) = w.hello.get("unavailable").or(w.hello.get("refused")) {
+                    if let Some(u) = w.hello.unavailable().or(w.hello.refused()) {
                         return Verdict::Other(format!("{id} cannot run: {u}"));
                     }
                     *slot = Some(w);
@@ -157,17 +157,19 @@ impl Judge {
             deviation: None,
         };
         let v = match w.run(&req, self.timeout) {
-            Reply::Report(r) => match r.outcome.as_str() {
-                "pass" => Verdict::Pass,
-                "fail" if r.failed.is_empty() => Verdict::Other(format!("error: {}", r.reason)),
-                "fail" => Verdict::Fail(
+            Reply::Report(r) => match r.outcome {
+                RunVerdict::Pass => Verdict::Pass,
+                RunVerdict::Fail if r.failed.is_empty() => {
+                    Verdict::Other(format!("error: {}", r.reason))
+                }
+                RunVerdict::Fail => Verdict::Fail(
                     r.failed
                         .iter()
                         .map(|c| c.check.clone())
                         .filter(|c| !matches!(c, Check::Twin(_) | Check::Golden))
                         .collect(),
                 ),
-                _ => Verdict::Other(format!("{}: {}", r.outcome, r.reason)),
+                RunVerdict::Skip => Verdict::Other(format!("{}: {}", r.outcome, r.reason)),
             },
             Reply::Crashed(how) => {
                 *slot = None;

@@ -456,7 +456,7 @@ fn env_text(env: &[(String, String)], out: &Path) -> String {
                 }
                 _ => v.clone(),
             };
-            format!("{k}={v}")
+            format!("{k}={}", umbra_report::escape::shell_word(&v))
         })
         .collect::<Vec<_>>()
         .join(" ")

@@ -608,17 +608,13 @@ impl Faulted {
         ]);
         let worker = Worker::start(backend, &env, how.timeout)
             .map_err(|e| (format!("no worker: {e}"), false))?;
-        if let Some(u) = worker.hello.get("unavailable") {
+        if let Some(u) = worker.hello.unavailable() {
             return Err((format!("backend unavailable: {u}"), false));
         }
-        if let Some(why) = worker.hello.get("refused").and_then(|v| v.as_str()) {
+        if let Some(why) = worker.hello.refused() {
             return Err((format!("refused the Mesa build: {why}"), true));
         }
-        let expectations =
-            how.expectations
-                .for_driver(&crate::judge::expectations::DriverFacts::from_hello(
-                    &worker.hello["ready"],
-                ));
+        let expectations = how.expectations.for_driver(&worker.hello.facts());
         Ok(Faulted {
             backend: backend.to_string(),
             env,
@@ -633,7 +629,7 @@ impl Faulted {
     /// Runs point `index` of `file` and judges it as a conformance run would.
     pub(crate) fn run(&mut self, file: &Path, index: usize, point: &umbra_case::CasePoint) -> Seen {
         let name = format!("{}/{}", self.backend, point.id());
-        let case = serde_json::to_value(&point.case).unwrap_or_default();
+        let case = umbra_case::schema::condition_json(&point.case);
         let req = Request {
             file: file.to_path_buf(),
             index,
@@ -654,7 +650,7 @@ impl Faulted {
                 Err(_) => Seen::CaughtThenGone(how),
             };
         match self.worker.run(&req, self.timeout) {
-            Reply::Report(r) if r.outcome == "fail" => {
+            Reply::Report(r) if r.outcome == crate::harness::worker::RunVerdict::Fail => {
                 let (status, _) = self.expectations.apply(
                     &name,
                     &case,

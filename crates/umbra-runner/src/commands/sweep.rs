@@ -24,7 +24,7 @@ use serde_json::{Value, json};
 use crate::args::Args;
 use crate::harness::measure::Measured;
 use crate::harness::pool::{Reply, Worker};
-use crate::harness::worker::Request;
+use crate::harness::worker::{Request, RunVerdict};
 use umbra_report::escape::esc;
 
 /// Backends swept when none is named: the reference and one of each GPU API family.
@@ -351,11 +351,11 @@ pub fn main(args: &Args) -> i32 {
                     continue;
                 }
             };
-            if let Some(why) = w.hello.get("refused").and_then(Value::as_str) {
+            if let Some(why) = w.hello.refused() {
                 eprintln!("error: {why}");
                 return 125;
             }
-            if let Some(why) = w.hello.get("unavailable").and_then(Value::as_str) {
+            if let Some(why) = w.hello.unavailable() {
                 rows.push(Row {
                     backend: backend.clone(),
                     technique: t.clone(),
@@ -375,9 +375,9 @@ pub fn main(args: &Args) -> i32 {
                 deviation: None,
             };
             let (result, skipped) = match w.run(&req, timeout) {
-                Reply::Report(r) => match (r.outcome.as_str(), r.measured) {
-                    ("pass", Some(m)) => (Ok(m), false),
-                    ("skip", _) => (Err(r.reason), true),
+                Reply::Report(r) => match (r.outcome, r.measured) {
+                    (RunVerdict::Pass, Some(m)) => (Ok(m), false),
+                    (RunVerdict::Skip, _) => (Err(r.reason), true),
                     _ => (Err(r.reason), false),
                 },
                 Reply::Crashed(why) => {
@@ -453,10 +453,10 @@ pub fn measure_backends(
             let mut env = crate::harness::registry::worker_env(b);
             env.extend(extra_env.iter().cloned());
             let result = Worker::start_exe(exe, b, &env, timeout).and_then(|mut w| {
-                if let Some(why) = w.hello.get("unavailable").and_then(Value::as_str) {
+                if let Some(why) = w.hello.unavailable() {
                     return Err(format!("unavailable: {why}"));
                 }
-                if let Some(why) = w.hello.get("refused").and_then(Value::as_str) {
+                if let Some(why) = w.hello.refused() {
                     return Err(format!("refused the Mesa build: {why}"));
                 }
                 let req = Request {

@@ -119,7 +119,9 @@ impl Backend for Fake {
         let mut frame = umbra_ref::render(run, umbra_case::ClipDepth::MinusOneToOne);
         match self.id {
             "fake/crash" => {
-                // What a driver's heap corruption leaves on stderr before the signal.
+                // What a driver's heap corruption leaves on stderr before the signal, after a
+                // line that is not UTF-8 (a driver may write any bytes).
+                let _ = std::io::Write::write_all(&mut std::io::stderr(), b"\xff\xfe bytes\n");
                 eprintln!(
                     "corrupted size vs. prev_size (fake/crash: the last words of a heap corruption)"
                 );

@@ -15,4 +15,5 @@ pub mod own_libc;
 pub mod pool;
 pub mod progress;
 pub mod registry;
+pub mod stderr_log;
 pub mod worker;

@@ -8,7 +8,8 @@ use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
 use std::time::{Duration, Instant};
 
-use crate::harness::worker::{Request, RunReport};
+use crate::harness::stderr_log::StderrLog;
+use crate::harness::worker::{Hello, Request, RunReport};
 
 /// What a worker answered for one run.
 pub enum Reply {
@@ -25,18 +26,17 @@ pub struct Worker {
     child: Child,
     stdin: ChildStdin,
     lines: Receiver<String>,
-    /// What the worker said when it started: driver info, or why it cannot run.
-    pub hello: serde_json::Value,
+    /// What the worker said when it started: its driver, or why it cannot run.
+    pub hello: Hello,
     /// How it was started, to start a fresh one when it retires.
     start: (std::path::PathBuf, String, Vec<(String, String)>, Duration),
-    /// What it wrote on stderr since the current run began ([`Worker::stderr`]).
-    stderr: std::sync::Arc<std::sync::Mutex<Vec<String>>>,
-    /// The thread reading its stderr (ends at the worker's end).
-    stderr_reader: Option<std::thread::JoinHandle<()>>,
+    /// Its stderr, kept per run ([`Worker::stderr`]).
+    log: StderrLog,
+    /// The marks its stderr had when the current run began.
+    marks: u64,
+    /// Why it cannot take another run (a fresh worker after a retirement did not come up).
+    dead: Option<String>,
 }
-
-/// The most stderr lines a run keeps (the last ones: a crash's messages come last).
-pub const STDERR_LINES: usize = 200;
 
 impl Worker {
     /// Starts `umbra worker --backend id` with `env`; waits up to `limit` for its hello.
@@ -75,24 +75,7 @@ impl Worker {
         let stdin = child.stdin.take().ok_or("worker has no stdin")?;
         let stdout = child.stdout.take().ok_or("worker has no stdout")?;
         let stderr_pipe = child.stderr.take().ok_or("worker has no stderr")?;
-        let stderr = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
-        let kept = std::sync::Arc::clone(&stderr);
-        let label = id.to_string();
-        // The worker's stderr is the run's evidence (a driver's warnings, glibc's heap
-        // messages before a SIGSEGV): kept for the run in flight, and shown on the terminal
-        // under the backend's name.
-        let stderr_reader = std::thread::spawn(move || {
-            for line in BufReader::new(stderr_pipe).lines() {
-                let Ok(line) = line else { break };
-                eprintln!("{label}: {line}");
-                if let Ok(mut k) = kept.lock() {
-                    if k.len() == STDERR_LINES {
-                        k.remove(0);
-                    }
-                    k.push(line);
-                }
-            }
-        });
+        let log = StderrLog::spawn(stderr_pipe, id.to_string());
         let (tx, rx) = channel();
         std::thread::spawn(move || {
             for line in BufReader::new(stdout).lines() {
@@ -111,10 +94,11 @@ impl Worker {
             child,
             stdin,
             lines: rx,
-            hello: serde_json::Value::Null,
+            hello: Hello::Unavailable("it has not said hello yet".into()),
             start: (exe.to_path_buf(), id.to_string(), env.to_vec(), limit),
-            stderr,
-            stderr_reader: Some(stderr_reader),
+            log,
+            marks: 0,
+            dead: None,
         };
         match w.lines.recv_timeout(limit) {
             Ok(line) => {
@@ -133,26 +117,19 @@ impl Worker {
     /// everything up to its end.
     pub fn stderr(&mut self) -> String {
         if self.child.try_wait().is_ok_and(|s| s.is_some()) {
-            // Dead: its stderr is closed, and the reader reaches the end at once.
-            // (Bounded: a grandchild holding the pipe open must not hang the run.)
-            let until = Instant::now() + Duration::from_millis(500);
-            while self
-                .stderr_reader
-                .as_ref()
-                .is_some_and(|r| !r.is_finished())
-                && Instant::now() < until
-            {
-                std::thread::sleep(Duration::from_millis(5));
-            }
+            // Dead: its stderr closes, and the reader reaches the end (bounded: a grandchild
+            // holding the pipe open must not hang the run).
+            self.log.wait_closed(Duration::from_millis(500));
         }
-        self.stderr.lock().map(|k| k.join("\n")).unwrap_or_default()
+        self.log.text()
     }
 
     /// Runs one request.
     pub fn run(&mut self, req: &Request, limit: Duration) -> Reply {
-        if let Ok(mut k) = self.stderr.lock() {
-            k.clear();
+        if let Some(why) = &self.dead {
+            return Reply::Crashed(why.clone());
         }
+        self.marks = self.log.begin();
         let line = serde_json::to_string(req).unwrap_or_default();
         if writeln!(self.stdin, "{line}")
             .and_then(|_| self.stdin.flush())
@@ -170,13 +147,13 @@ impl Worker {
                 Ok(line) => {
                     return match serde_json::from_str::<RunReport>(&line) {
                         Ok(mut r) => {
+                            // The run's last stderr lines are in before its answer is used.
+                            self.log.wait_mark(self.marks, Duration::from_secs(1));
                             if let Some(why) = r.retired.clone() {
                                 // The run's stderr is the retiring worker's: kept past the swap.
-                                let said = self.stderr();
+                                let said = self.log.text();
                                 r.reason.push_str(&self.replace(&why));
-                                if let Ok(mut k) = self.stderr.lock() {
-                                    k.extend(said.lines().map(str::to_string));
-                                }
+                                self.log.set(&said);
                             }
                             Reply::Report(Box::new(r))
                         }
@@ -211,6 +188,16 @@ impl Worker {
         let (exe, id, env, limit) = self.start.clone();
         self.stop();
         match Worker::start_exe(&exe, &id, &env, limit) {
+            Ok(fresh) if fresh.hello.ready().is_none() => {
+                let said = format!(
+                    "a fresh worker for {id} did not come up after a retirement: {:?}",
+                    fresh.hello
+                );
+                self.dead = Some(said.clone());
+                format!(
+                    "; the worker could not restore its context after this run ({why}), and {said}"
+                )
+            }
             Ok(fresh) => {
                 *self = fresh;
                 format!(

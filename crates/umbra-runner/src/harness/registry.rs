@@ -338,7 +338,9 @@ pub const DRIVER_VARIABLES: &[&str] = &[
 pub fn inherited_driver_env(id: &str) -> Vec<(String, String)> {
     let own: Vec<String> = worker_env(id).into_iter().map(|(k, _)| k).collect();
     let removed = env_removed(id);
-    let mut env: Vec<(String, String)> = std::env::vars()
+    // vars_os: a variable that is not UTF-8 (any program may set one) is skipped, not a panic.
+    let mut env: Vec<(String, String)> = std::env::vars_os()
+        .filter_map(|(k, v)| Some((k.into_string().ok()?, v.into_string().ok()?)))
         .filter(|(k, _)| DRIVER_VARIABLES.iter().any(|p| k.starts_with(p)))
         .filter(|(k, _)| !own.contains(k) && !removed.contains(&k.as_str()))
         .collect();

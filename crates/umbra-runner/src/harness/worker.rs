@@ -1,7 +1,8 @@
 //! `umbra worker --backend ID`: one backend in one process, fed runs on stdin.
 //!
 //! Protocol, one JSON object per line:
-//! - worker → parent, once: `{"ready": DriverInfo}` or `{"unavailable": "reason"}`;
+//! - worker → parent, once: a [`Hello`] (`{"ready": {...}}`, `{"unavailable": "reason"}` or
+//!   `{"refused": "reason"}`);
 //! - parent → worker: `{"file": "cases/x.json", "index": 3, "failures": "target/umbra/..."}`;
 //! - worker → parent: a [`RunReport`].
 //!
@@ -17,6 +18,78 @@ use serde::{Deserialize, Serialize};
 use crate::args::Args;
 use crate::judge::run::{Outcome, describe, run_point, run_point_as};
 use umbra_report::Metrics;
+
+/// What a worker says once, when it has started: its driver, or why it cannot run. On the
+/// wire, `{"ready": {...}}`, `{"unavailable": "why"}` or `{"refused": "why"}`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Hello {
+    /// The backend came up on this driver.
+    Ready(Ready),
+    /// The backend cannot run here (a missing driver or device): its runs are skips.
+    Unavailable(String),
+    /// The `--mesa` build asked for lacks the driver, or it loaded from elsewhere: never a
+    /// silent run on the system's Mesa.
+    Refused(String),
+}
+
+/// The driver a ready worker runs on.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Ready {
+    /// GL_VENDOR, or the adapter's vendor.
+    pub vendor: String,
+    /// GL_RENDERER, or the adapter's name.
+    pub renderer: String,
+    /// GL_VERSION, or the adapter's driver version.
+    pub version: String,
+    /// What the backend reports beside them (extensions, wgpu's driver notes).
+    pub extensions: Vec<String>,
+    /// The device and how it is reached.
+    pub device: String,
+    /// How long creating the context or device took, ms.
+    pub create_ms: f64,
+    /// The `--mesa` build it runs on, described.
+    pub build: Option<String>,
+    /// The Mesa libraries the process loaded.
+    pub mesa_libs: Vec<PathBuf>,
+}
+
+impl Hello {
+    /// The driver, when the worker is ready.
+    pub fn ready(&self) -> Option<&Ready> {
+        match self {
+            Hello::Ready(r) => Some(r),
+            _ => None,
+        }
+    }
+
+    /// Why the backend cannot run here, when it cannot.
+    pub fn unavailable(&self) -> Option<&str> {
+        match self {
+            Hello::Unavailable(why) => Some(why),
+            _ => None,
+        }
+    }
+
+    /// The driver's facts that select expectations (none where it did not come up).
+    pub fn facts(&self) -> crate::judge::expectations::DriverFacts {
+        self.ready().map_or_else(Default::default, |r| {
+            crate::judge::expectations::DriverFacts::from_driver(
+                &r.version,
+                &r.renderer,
+                &r.extensions,
+            )
+        })
+    }
+
+    /// Why the Mesa build was refused, when it was.
+    pub fn refused(&self) -> Option<&str> {
+        match self {
+            Hello::Refused(why) => Some(why),
+            _ => None,
+        }
+    }
+}
 
 /// A request for one run.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -47,11 +120,34 @@ pub struct Request {
     pub deviation: Option<String>,
 }
 
+/// A run's raw verdict, before expectations (the parent's business).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RunVerdict {
+    /// Every check held.
+    Pass,
+    /// A check failed, or the run could not be made (the reason says which).
+    #[default]
+    Fail,
+    /// The backend cannot run this case (the reason says why).
+    Skip,
+}
+
+impl std::fmt::Display for RunVerdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            RunVerdict::Pass => "pass",
+            RunVerdict::Fail => "fail",
+            RunVerdict::Skip => "skip",
+        })
+    }
+}
+
 /// What one run produced (the raw outcome; expectations are the parent's business).
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct RunReport {
-    /// `pass`, `fail`, `skip`.
-    pub outcome: String,
+    /// Pass, fail or skip (`"pass"`, `"fail"`, `"skip"` on the wire).
+    pub outcome: RunVerdict,
     /// Why, for fail and skip.
     pub reason: String,
     /// The multi-line description of a judged run.
@@ -102,29 +198,23 @@ pub fn main(args: &Args) -> i32 {
         .ok()
         .filter(|_| crate::harness::mesa_build::is_mesa_backed(id))
         .map(|root| crate::harness::mesa_build::MesaBuild::open(std::path::Path::new(&root)));
-    let say = |out: &mut std::io::StdoutLock, v: serde_json::Value| {
-        let _ = writeln!(out, "{v}");
+    let say = |out: &mut std::io::StdoutLock, hello: Hello| {
+        let _ = writeln!(out, "{}", serde_json::to_string(&hello).unwrap_or_default());
         let _ = out.flush();
     };
     let build = match build {
         Some(Err(e)) => {
-            say(
-                &mut out,
-                serde_json::json!({ "refused": format!("--mesa: {e}") }),
-            );
+            say(&mut out, Hello::Refused(format!("--mesa: {e}")));
             return 0;
         }
         Some(Ok(b)) => {
             if let Some(why) = b.lacks(id) {
-                say(&mut out, serde_json::json!({ "unavailable": why }));
+                say(&mut out, Hello::Unavailable(why.to_string()));
                 return 0;
             }
             // A build with its own C library: this process continues on it (re-executed).
             if let Err(e) = b.enter() {
-                say(
-                    &mut out,
-                    serde_json::json!({ "refused": format!("{id}: {e}") }),
-                );
+                say(&mut out, Hello::Refused(format!("{id}: {e}")));
                 return 0;
             }
             Some(b)
@@ -139,31 +229,32 @@ pub fn main(args: &Args) -> i32 {
             if let Some(build) = &build {
                 if build.layout != "fake (tests)" {
                     if let Err(e) = crate::harness::mesa_build::check_loaded(&build.root, &libs) {
-                        say(
-                            &mut out,
-                            serde_json::json!({ "refused": format!("{id}: {e}") }),
-                        );
+                        say(&mut out, Hello::Refused(format!("{id}: {e}")));
                         return 0;
                     }
                 }
             }
-            let hello = serde_json::json!({ "ready": {
-                "vendor": i.vendor, "renderer": i.renderer, "version": i.version,
-                "extensions": i.extensions, "device": i.device, "create_ms": create_ms,
-                "build": build.as_ref().map(|b| b.describe()),
-                "mesa_libs": libs,
-            } });
+            let hello = Hello::Ready(Ready {
+                vendor: i.vendor,
+                renderer: i.renderer,
+                version: i.version,
+                extensions: i.extensions,
+                device: i.device,
+                create_ms,
+                build: build.as_ref().map(|b| b.describe()),
+                mesa_libs: libs,
+            });
             say(&mut out, hello);
             b
         }
         Err(e) => {
             let v = match &build {
                 // The build has the driver (lacks() said so), yet it did not come up.
-                Some(b) => serde_json::json!({ "refused": format!(
+                Some(b) => Hello::Refused(format!(
                     "{id}: the driver of the Mesa build in {} did not load: {e}",
                     b.root.display()
-                ) }),
-                None => serde_json::json!({ "unavailable": e.to_string() }),
+                )),
+                None => Hello::Unavailable(e.to_string()),
             };
             say(&mut out, v);
             return 0;
@@ -174,16 +265,18 @@ pub fn main(args: &Args) -> i32 {
         let mut report = match serde_json::from_str::<Request>(&line) {
             Ok(req) => handle(backend.as_mut(), &req),
             Err(e) => RunReport {
-                outcome: "fail".into(),
+                outcome: RunVerdict::Fail,
                 reason: format!("bad request: {e}"),
                 ..Default::default()
             },
         };
         // A failed run's errors stay in that run: the backend restores its state (GL errors
         // drained, queries ended, defaults bound), or this worker retires.
-        if report.outcome == "fail" {
+        if report.outcome == RunVerdict::Fail {
             report.retired = backend.restore().err();
         }
+        // The end of this run's stderr, before its answer (the parent waits for it).
+        eprintln!("{}", crate::harness::stderr_log::MARK);
         let _ = writeln!(
             out,
             "{}",
@@ -202,7 +295,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
         Ok(p) => p,
         Err(e) => {
             return RunReport {
-                outcome: "fail".into(),
+                outcome: RunVerdict::Fail,
                 reason: e.to_string(),
                 ..Default::default()
             };
@@ -210,7 +303,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
     };
     let Some(point) = points.into_iter().nth(req.index) else {
         return RunReport {
-            outcome: "fail".into(),
+            outcome: RunVerdict::Fail,
             reason: format!("{} has no sweep point {}", req.file.display(), req.index),
             ..Default::default()
         };
@@ -222,7 +315,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
         .refuse(crate::harness::memory_limit::budget())
     {
         return RunReport {
-            outcome: "fail".into(),
+            outcome: RunVerdict::Fail,
             reason: format!(
                 "{} point {}: refused before rendering: {why}",
                 req.file.display(),
@@ -239,17 +332,17 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
         use crate::harness::measure::{Measurement, measure};
         return match measure(backend, point, n) {
             Measurement::Done(m) => RunReport {
-                outcome: "pass".into(),
+                outcome: RunVerdict::Pass,
                 measured: Some(m),
                 ..Default::default()
             },
             Measurement::Skip(why) => RunReport {
-                outcome: "skip".into(),
+                outcome: RunVerdict::Skip,
                 reason: why,
                 ..Default::default()
             },
             Measurement::Error(e) => RunReport {
-                outcome: "fail".into(),
+                outcome: RunVerdict::Fail,
                 reason: e,
                 ..Default::default()
             },
@@ -259,7 +352,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
         Ok(d) => d,
         Err(d) => {
             return RunReport {
-                outcome: "fail".into(),
+                outcome: RunVerdict::Fail,
                 reason: format!("unknown deviation {d:?} in the request"),
                 ..Default::default()
             };
@@ -268,12 +361,12 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
     let again = (!deviations.is_empty()).then(|| (deviations, point.clone()));
     match run_point(backend, point, !req.no_twins) {
         Outcome::Skip(why) => RunReport {
-            outcome: "skip".into(),
+            outcome: RunVerdict::Skip,
             reason: why,
             ..Default::default()
         },
         Outcome::Error(e) => RunReport {
-            outcome: "fail".into(),
+            outcome: RunVerdict::Fail,
             reason: e,
             ..Default::default()
         },
@@ -414,9 +507,9 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 under_deviation,
                 storage,
                 outcome: if failing {
-                    "fail".into()
+                    RunVerdict::Fail
                 } else {
-                    "pass".into()
+                    RunVerdict::Pass
                 },
                 reason: problems.join("; "),
                 details: describe(&j),

@@ -317,15 +317,11 @@ pub struct DriverFacts {
 }
 
 impl DriverFacts {
-    /// From a worker's `ready` hello.
-    pub fn from_hello(ready: &serde_json::Value) -> DriverFacts {
-        let s = |k: &str| ready[k].as_str().unwrap_or("").to_string();
-        let (version, renderer) = (s("version"), s("renderer"));
+    /// From what a driver reports: its version and renderer strings and its other notes.
+    pub fn from_driver(version: &str, renderer: &str, notes: &[String]) -> DriverFacts {
+        let (version, renderer) = (version.to_string(), renderer.to_string());
         // wgpu reports the driver's version among its notes ("driver_info Mesa 22.3.6 ...").
-        let notes: Vec<&str> = ready["extensions"]
-            .as_array()
-            .map(|a| a.iter().filter_map(|e| e.as_str()).collect())
-            .unwrap_or_default();
+        let notes: Vec<&str> = notes.iter().map(String::as_str).collect();
         DriverFacts {
             mesa: reported_version(
                 [version.as_str(), renderer.as_str()]
@@ -1047,12 +1043,14 @@ mod tests {
 
     #[test]
     fn a_wgpu_hello_gives_its_mesa_version_from_the_driver_info() {
-        let hello = serde_json::json!({
-            "vendor": "0x10005", "renderer": "llvmpipe (LLVM 15.0.6, 256 bits)", "version": "",
-            "extensions": ["backend Vulkan", "driver_info Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)"],
-        });
+        let notes = [
+            "backend Vulkan".to_string(),
+            "driver_info Mesa 25.0.7-2~bpo12+1 (LLVM 15.0.6)".to_string(),
+        ];
         assert_eq!(
-            DriverFacts::from_hello(&hello).mesa.as_deref(),
+            DriverFacts::from_driver("", "llvmpipe (LLVM 15.0.6, 256 bits)", &notes)
+                .mesa
+                .as_deref(),
             Some("25.0.7-2~bpo12+1")
         );
     }

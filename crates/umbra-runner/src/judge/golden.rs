@@ -184,7 +184,9 @@ pub fn check(
     // A golden that is there but cannot be decoded (a damaged file, a merge conflict's
     // markers, a Git LFS pointer) is said as such: never "differs", never a new picture that a
     // release other than the golden's would report as legal.
-    if let (Some(Err(e)), Some(file)) = (&decoding, &held.file) {
+    // Blessing replaces it (as if there were none): what its message says to do.
+    let blessing = std::env::var("INSTA_UPDATE").is_ok_and(|v| v == "always");
+    if let (Some(Err(e)), Some(file), false) = (&decoding, &held.file, blessing) {
         return Checked {
             golden: Golden::Changed,
             message: format!(
@@ -352,13 +354,24 @@ pub fn check(
         (Err(_), _) => Some(held.write_dir.join(format!("{stem}.snap.new"))),
     };
     if let Some(file) = left.filter(|f| !f.is_file()) {
+        let unwritten = format!(
+            "its golden could not be written: {} ({}); make the golden directory writable and run again",
+            file.display(),
+            unwritable(&held.write_dir)
+        );
+        // A change the judge decides (on a release other than the golden's) stays what the
+        // judge says it is; anything else fails, saying the write failed.
+        let (golden, message) = if judged_change && outcome.is_err() {
+            (reported, format!("{}; {unwritten}", change.describe()))
+        } else {
+            (
+                Golden::Changed,
+                format!("the colour image {what}, and {unwritten}{versions}"),
+            )
+        };
         return Checked {
-            golden: Golden::Changed,
-            message: format!(
-                "the colour image {what}, and its golden could not be written: {} ({}); make the golden directory writable and run again{versions}",
-                file.display(),
-                unwritable(&held.write_dir)
-            ),
+            golden,
+            message,
             ssim,
             identical,
             held,

@@ -253,7 +253,9 @@ pub fn seal(record: &[u8]) -> Vec<u8> {
 
 /// The record's JSON inside a sealed file, if its checksum holds.
 pub fn unseal(text: &str) -> Result<&str, String> {
+    // A newline an artifact store or an editor added after the seal is not damage.
     let body = text
+        .trim_end()
         .strip_prefix(SEAL)
         .and_then(|t| Some((t.get(..16)?, t.get(16..)?.strip_prefix(RECORD)?)))
         .and_then(|(h, t)| Some((h, t.strip_suffix('}')?)));
