@@ -10,6 +10,9 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+/// The name of the built-in twin (`umbra_case::twin`), which a case's own twins may not take.
+pub const BIAS_ORDER: &str = "bias-order";
+
 /// A 3-vector as written in JSON: `[x, y, z]`.
 pub type V3 = [f32; 3];
 

@@ -3,7 +3,8 @@
 //! - [`format`]: the JSON a user writes (serde types; every default documented there and in
 //!   `cases/README.md`).
 //! - [`validate`] and [`load`]: parsing with errors that name the file, the JSON path and the
-//!   fix; sweep expansion into [`load::CasePoint`]s.
+//!   fix; sweep expansion into [`point::CasePoint`]s ([`point`]: a point and the JSON paths
+//!   into a case, below the loader and the twins).
 //! - [`schema`]: the format as a schema that conditions over a case point (`@when`) are
 //!   checked against, and the precision their numbers compare at.
 //! - [`scene`]: the one tessellation every backend draws.
@@ -39,6 +40,7 @@ pub mod load;
 pub mod math;
 pub mod memory;
 pub mod offset;
+pub mod point;
 pub mod prepare;
 pub mod profile;
 pub mod scene;

@@ -7,7 +7,7 @@ use glam::{Mat4, Vec3};
 
 use crate::conventions::{Convention, look_at};
 use crate::light::LightSetup;
-use crate::load::CasePoint;
+use crate::point::CasePoint;
 use crate::scene::{Geometry, tessellate};
 
 /// The camera of a case.

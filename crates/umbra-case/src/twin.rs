@@ -11,11 +11,11 @@ use serde_json::Value;
 
 use crate::error::{CaseError, CaseErrors};
 use crate::format::{BiasMatrix, Case, TwinAgree};
-use crate::load::{CasePoint, parse_value, set_path};
+use crate::point::{CasePoint, parse_value, set_path};
 use crate::validate::validate;
 
 /// Name of the built-in twin.
-pub const BIAS_ORDER: &str = "bias-order";
+pub use crate::format::BIAS_ORDER;
 
 /// One twin of a case point, ready to run (or why it cannot be built).
 pub struct TwinPlan {

@@ -223,7 +223,7 @@ impl Validator<'_> {
     }
 
     fn twins(&mut self, twins: &[crate::format::Twin]) {
-        let mut seen = std::collections::BTreeSet::from([crate::twin::BIAS_ORDER]);
+        let mut seen = std::collections::BTreeSet::from([crate::format::BIAS_ORDER]);
         for (i, t) in twins.iter().enumerate() {
             let p = format!("expect.twins[{i}]");
             if !identifier(&t.name) {

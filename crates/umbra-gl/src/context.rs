@@ -21,9 +21,8 @@ use crate::platform::Platform;
 /// same pictures.
 pub const PBUFFER_ENV: &str = "UMBRA_EGL_PBUFFER";
 
-/// Why a context could not be made: always a reason a person can act on.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Unavailable(pub String);
+// Why a context could not be made, and loading libEGL: the platform's, below this module.
+pub use crate::platform::{Unavailable, load_egl};
 
 /// A current GL context and the EGL objects that keep it alive.
 pub struct GlContext {
@@ -214,16 +213,6 @@ fn surface_for(
         })
 }
 
-/// Loads libEGL (1.5), or says which packages to install.
-pub fn load_egl() -> Result<egl::DynamicInstance<egl::EGL1_5>, Unavailable> {
-    // SAFETY: loading libEGL runs its initialisers; it is the system's EGL library.
-    unsafe { egl::DynamicInstance::<egl::EGL1_5>::load_required() }.map_err(|e| {
-        Unavailable(format!(
-            "cannot load libEGL 1.5 ({e}); install the Debian packages libegl1 and libegl-mesa0"
-        ))
-    })
-}
-
 /// The signature of `glPolygonOffsetClamp[EXT]`.
 pub type PolygonOffsetClamp = unsafe extern "system" fn(f32, f32, f32);
 
@@ -263,4 +252,40 @@ impl Drop for GlContext {
         }
         let _ = self.egl.terminate(self.display);
     }
+}
+
+/// What a context made on one EGL device reports.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DeviceContext {
+    /// The API asked for.
+    pub api: crate::api::Api,
+    /// GL_VENDOR, GL_RENDERER, GL_VERSION, or why no context could be made.
+    pub strings: Result<[String; 3], String>,
+}
+
+/// Every EGL device this process's EGL library lists, each with the GL 3.3 core, GLES 3 and
+/// GLES 2 contexts it can make (`umbra backends`). Mesa's software device renders with the
+/// driver this process's environment selects (llvmpipe by default).
+pub fn discover() -> Result<Vec<(crate::platform::EglDevice, Vec<DeviceContext>)>, Unavailable> {
+    let egl = load_egl()?;
+    let list: Vec<crate::platform::EglDevice> = crate::platform::devices(&egl)?
+        .into_iter()
+        .map(|(d, _)| d)
+        .collect();
+    Ok(list
+        .into_iter()
+        .map(|d| {
+            let contexts = crate::api::Api::ALL
+                .into_iter()
+                .map(|api| DeviceContext {
+                    api,
+                    strings: load_egl()
+                        .and_then(|egl| GlContext::on(egl, api, Platform::Device(d.index)))
+                        .map(|ctx| ctx.strings())
+                        .map_err(|e| e.0),
+                })
+                .collect();
+            (d, contexts)
+        })
+        .collect())
 }

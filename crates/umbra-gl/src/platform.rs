@@ -12,7 +12,19 @@ use std::ffi::c_void;
 
 use khronos_egl as egl;
 
-use crate::context::Unavailable;
+/// Why a context could not be made: always a reason a person can act on.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Unavailable(pub String);
+
+/// Loads libEGL (1.5), or says which packages to install.
+pub fn load_egl() -> Result<egl::DynamicInstance<egl::EGL1_5>, Unavailable> {
+    // SAFETY: loading libEGL runs its initialisers; it is the system's EGL library.
+    unsafe { egl::DynamicInstance::<egl::EGL1_5>::load_required() }.map_err(|e| {
+        Unavailable(format!(
+            "cannot load libEGL 1.5 ({e}); install the Debian packages libegl1 and libegl-mesa0"
+        ))
+    })
+}
 
 /// `EGL_PLATFORM_SURFACELESS_MESA`.
 pub const PLATFORM_SURFACELESS_MESA: egl::Enum = 0x31DD;
@@ -244,41 +256,6 @@ pub fn devices(
                 },
                 h,
             )
-        })
-        .collect())
-}
-
-/// What a context made on one EGL device reports.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct DeviceContext {
-    /// The API asked for.
-    pub api: crate::api::Api,
-    /// GL_VENDOR, GL_RENDERER, GL_VERSION, or why no context could be made.
-    pub strings: Result<[String; 3], String>,
-}
-
-/// Every EGL device this process's EGL library lists, each with the GL 3.3 core, GLES 3 and
-/// GLES 2 contexts it can make (`umbra backends`). Mesa's software device renders with the
-/// driver this process's environment selects (llvmpipe by default).
-pub fn discover() -> Result<Vec<(EglDevice, Vec<DeviceContext>)>, Unavailable> {
-    let egl = crate::context::load_egl()?;
-    let list: Vec<EglDevice> = devices(&egl)?.into_iter().map(|(d, _)| d).collect();
-    Ok(list
-        .into_iter()
-        .map(|d| {
-            let contexts = crate::api::Api::ALL
-                .into_iter()
-                .map(|api| DeviceContext {
-                    api,
-                    strings: crate::context::load_egl()
-                        .and_then(|egl| {
-                            crate::context::GlContext::on(egl, api, Platform::Device(d.index))
-                        })
-                        .map(|ctx| ctx.strings())
-                        .map_err(|e| e.0),
-                })
-                .collect();
-            (d, contexts)
         })
         .collect())
 }

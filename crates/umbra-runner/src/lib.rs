@@ -7,6 +7,7 @@
 
 pub mod args;
 pub mod atomic_file;
+pub mod case_size;
 pub mod cli;
 pub mod commands;
 pub mod glob;

@@ -5,8 +5,8 @@
 use std::process::ExitCode;
 
 use umbra_runner::commands::{
-    backends, bisect, conformance, deqp, drivers, merge, reduce, render, repro, selftest, soak,
-    sweep,
+    backends, bisect, conformance, deqp, drivers, merge, reduce, render, repro, selftest_modes,
+    soak, sweep,
 };
 use umbra_runner::{cli, harness};
 
@@ -35,7 +35,7 @@ fn main() -> ExitCode {
             "render" => render::main(&args),
             "conformance" => conformance::main(&args),
             "merge" => merge::main(&args),
-            "selftest" => selftest::main(&args),
+            "selftest" => selftest_modes::main(&args),
             "soak" => soak::main(&args),
             "sweep" => sweep::main(&args),
             "drivers" => drivers::main(&args),

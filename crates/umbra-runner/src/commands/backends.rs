@@ -146,7 +146,7 @@ fn egl_devices() -> Value {
     let names = umbra_gl::context::load_egl()
         .and_then(|egl| umbra_gl::platform::named_devices(&egl))
         .unwrap_or_default();
-    match umbra_gl::platform::discover() {
+    match umbra_gl::context::discover() {
         Err(e) => json!({ "unavailable": e.0 }),
         Ok(list) => Value::Array(
             list.into_iter()

@@ -12,6 +12,7 @@ pub mod reduce;
 pub mod render;
 pub mod repro;
 pub mod selftest;
+pub mod selftest_modes;
 pub mod soak;
 pub mod sweep;
 pub mod thresholds;

@@ -31,6 +31,8 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use serde_json::Value;
+
+use crate::case_size::Size;
 use umbra_report::check::Check;
 
 use crate::args::Args;
@@ -62,36 +64,6 @@ impl std::fmt::Display for Verdict {
             Verdict::Crash(how) => write!(f, "crash ({how})"),
             Verdict::Other(why) => f.write_str(why),
         }
-    }
-}
-
-/// Size figures of a case, for the before/after line.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Size {
-    /// Triangles drawn.
-    pub triangles: usize,
-    /// Camera pixels.
-    pub pixels: u64,
-    /// Shadow-map texels (all faces).
-    pub texels: u64,
-}
-
-impl Size {
-    /// The size of a case given as JSON (None if it does not load).
-    pub fn of(case: &Value) -> Option<Size> {
-        let points = umbra_case::load_str(&case.to_string(), Path::new("reduce.json")).ok()?;
-        let p = points.into_iter().next()?;
-        let g = umbra_case::tessellate(&p.case.scene);
-        let faces = if matches!(p.case.light, umbra_case::format::Light::Point(_)) {
-            6
-        } else {
-            1
-        };
-        Some(Size {
-            triangles: g.triangles.len(),
-            pixels: u64::from(p.case.camera.size[0]) * u64::from(p.case.camera.size[1]),
-            texels: faces * u64::from(p.case.shadow.size[0]) * u64::from(p.case.shadow.size[1]),
-        })
     }
 }
 

@@ -194,11 +194,45 @@ impl Hunt {
     }
 }
 
-/// Runs the command; returns the exit code.
-pub fn main(args: &Args) -> i32 {
+/// What every mode of the self-test works from: the command line checked, the case points
+/// loaded, the expectations and the judging cache ready ([`setup`]).
+pub(crate) struct Setup {
+    /// The case points, with their file and index.
+    pub(crate) points: Vec<(PathBuf, usize, umbra_case::CasePoint)>,
+    /// The backends selected (every backend of the build but ref by default).
+    pub(crate) backends: Vec<String>,
+    /// Whether `--backend` chose them.
+    pub(crate) chosen: bool,
+    faults: Vec<Fault>,
+    expectations: Expectations,
+    cache: PathBuf,
+    timeout: Duration,
+    verbose: bool,
+    /// The generated cases' directory (`--seed`/`--count`).
+    generated: Option<PathBuf>,
+    /// Worker processes at once.
+    pub(crate) jobs: usize,
+}
+
+impl Setup {
+    /// How every hunt of this setup runs.
+    pub(crate) fn how(&self) -> How<'_> {
+        How {
+            expectations: &self.expectations,
+            cache: &self.cache,
+            timeout: self.timeout,
+            verbose: self.verbose,
+            every_point: self.generated.is_some(),
+        }
+    }
+}
+
+/// Checks the command line and loads what every mode needs; an error is printed and is its
+/// exit code (125).
+pub(crate) fn setup(args: &Args) -> Result<Setup, i32> {
     if let Err(e) = crate::harness::mesa_build::select(args.value("mesa")) {
         eprintln!("error: {e}");
-        return 125;
+        return Err(125);
     }
     // `--seed S --count N`: the faults on generated cases, every exercising point run, and
     // the catch rate reported (how the judge's sensitivity holds off the catalogue).
@@ -206,14 +240,13 @@ pub fn main(args: &Args) -> i32 {
         Ok(g) => g,
         Err(e) => {
             eprintln!("error: {e}\nusage: {}", crate::cli::usage("selftest"));
-            return 125;
+            return Err(125);
         }
     };
     let cases = match &generated {
         Some(dir) => dir.clone(),
         None => PathBuf::from(args.value("cases").unwrap_or("cases")),
     };
-    let thresholds = args.has("thresholds");
     let timeout = Duration::from_secs(
         args.value("timeout")
             .and_then(|t| t.parse().ok())
@@ -226,7 +259,7 @@ pub fn main(args: &Args) -> i32 {
         .max(1);
     if let Err(e) = crate::harness::memory_limit::select(args.value("max-memory"), jobs) {
         eprintln!("error: {e}\nusage: {}", crate::cli::usage("selftest"));
-        return 125;
+        return Err(125);
     }
     let expectations = match Expectations::load(Path::new(
         args.value("expectations").unwrap_or("expectations"),
@@ -234,7 +267,7 @@ pub fn main(args: &Args) -> i32 {
         Ok(e) => e,
         Err(e) => {
             eprintln!("error: {e}");
-            return 125;
+            return Err(125);
         }
     };
     let default = crate::harness::registry::known()
@@ -245,7 +278,7 @@ pub fn main(args: &Args) -> i32 {
         Ok(b) => b,
         Err(e) => {
             eprintln!("error: {e}");
-            return 125;
+            return Err(125);
         }
     };
     let mut faults: Vec<Fault> = Vec::new();
@@ -265,60 +298,69 @@ pub fn main(args: &Args) -> i32 {
                         .join(", "),
                     Param::ALL.map(|p| p.name()).join(", ")
                 );
-                return 125;
+                return Err(125);
             }
         }
     }
     if faults.is_empty() {
         faults = Fault::ALL.to_vec();
     }
-    let verbose = args.has("verbose");
     let mut points = Vec::new();
     for f in umbra_case::case_files(&cases).unwrap_or_default() {
         match umbra_case::load_file(&f) {
             Ok(p) => points.extend(p.into_iter().enumerate().map(|(i, p)| (f.clone(), i, p))),
             Err(e) => {
                 eprintln!("error: {e}");
-                return 125;
+                return Err(125);
             }
         }
     }
     if points.is_empty() {
         eprintln!("error: no case under {}", cases.display());
-        return 125;
-    }
-    if args.has("orientations") {
-        let points: Vec<umbra_case::CasePoint> = points.into_iter().map(|p| p.2).collect();
-        return super::orientations::main(&points);
+        return Err(125);
     }
     // The judging basis of each point does not depend on the fault: the self-test shares
     // conformance's content-addressed cache (judge_cache), and so reads what a conformance run
     // of this build computed.
-    let cache = crate::judge::judge_cache::prepare(std::path::Path::new(
-        args.value("judge-cache")
-            .unwrap_or(crate::judge::judge_cache::DEFAULT_ROOT),
-    ));
-    let pairs: Vec<(String, Fault)> = backends
+    // (--orientations judges nothing and touches no cache.)
+    let cache = if args.has("orientations") {
+        PathBuf::new()
+    } else {
+        crate::judge::judge_cache::prepare(std::path::Path::new(
+            args.value("judge-cache")
+                .unwrap_or(crate::judge::judge_cache::DEFAULT_ROOT),
+        ))
+    };
+    Ok(Setup {
+        points,
+        chosen: !args.values("backend").is_empty(),
+        backends,
+        faults,
+        expectations,
+        cache,
+        timeout,
+        verbose: args.has("verbose"),
+        generated,
+        jobs,
+    })
+}
+
+/// The self-test proper: every fault hunted on every backend it applies to; exit 1 when one
+/// goes unseen.
+pub(crate) fn hunt_all(setup: &Setup) -> i32 {
+    let pairs: Vec<(String, Fault)> = setup
+        .backends
         .iter()
         .flat_map(|b| {
-            faults
+            setup
+                .faults
                 .iter()
                 .copied()
                 .filter(|f| applies(*f, b))
                 .map(move |f| (b.clone(), f))
         })
         .collect();
-    let how = How {
-        expectations: &expectations,
-        cache: &cache,
-        timeout,
-        verbose,
-        every_point: generated.is_some(),
-    };
-    if thresholds {
-        let chosen = (!args.values("backend").is_empty()).then_some(&backends[..]);
-        return super::thresholds::main(&points, chosen, &how, jobs);
-    }
+    let (points, how, jobs) = (&setup.points, setup.how(), setup.jobs);
     let queue = Mutex::new(pairs.clone());
     let results = Mutex::new(Vec::new());
     std::thread::scope(|s| {
@@ -326,7 +368,7 @@ pub fn main(args: &Args) -> i32 {
             s.spawn(|| {
                 let next = || queue.lock().ok().and_then(|mut q| q.pop());
                 while let Some((backend, fault)) = next() {
-                    let h = hunt(&backend, fault, &points, &how);
+                    let h = hunt(&backend, fault, points, &how);
                     println!("{}", line(fault, &backend, &h));
                     if let Ok(mut r) = results.lock() {
                         r.push((backend, fault, h));
@@ -337,7 +379,7 @@ pub fn main(args: &Args) -> i32 {
     });
     let mut results = results.into_inner().unwrap_or_default();
     results.sort_by(|a, b| (a.1.name(), &a.0).cmp(&(b.1.name(), &b.0)));
-    if generated.is_some() {
+    if setup.generated.is_some() {
         return rates(&results);
     }
     summary(&results)

@@ -142,9 +142,8 @@ pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> i32 {
             return 125;
         }
     };
-    let size =
-        crate::commands::reduce::Size::of(&serde_json::to_value(&point.case).unwrap_or_default())
-            .unwrap_or_default();
+    let size = crate::case_size::Size::of(&serde_json::to_value(&point.case).unwrap_or_default())
+        .unwrap_or_default();
     let facts = json!({
         "backend": backend_id,
         "profile": profile_name,
