@@ -161,7 +161,7 @@ impl Check {
         }
         let mut near: Vec<(usize, &str)> = FIXED
             .iter()
-            .map(|c| (distance(s, c.fixed_name()), c.fixed_name()))
+            .map(|c| (crate::names::edits(s, c.fixed_name()), c.fixed_name()))
             .filter(|(d, _)| *d <= 2)
             .collect();
         near.sort();
@@ -180,22 +180,6 @@ impl Check {
 pub fn vocabulary() -> String {
     let names: Vec<&str> = FIXED.iter().map(Check::fixed_name).collect();
     format!("{} and twin:NAME", names.join(", "))
-}
-
-/// Levenshtein distance (names are short).
-fn distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let cur = row[j + 1];
-            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
-            prev = cur;
-        }
-    }
-    row[b.len()]
 }
 
 impl fmt::Display for Check {

@@ -1310,25 +1310,7 @@ fn near_miss<'a>(id: &str, known: &[&'a str]) -> Option<&'a str> {
     known
         .iter()
         .copied()
-        .find(|k| *k != id && edits(k, id) <= 2)
-}
-
-/// The Levenshtein distance between `a` and `b`.
-fn edits(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let here = row[j + 1];
-            row[j + 1] = (row[j] + 1)
-                .min(here + 1)
-                .min(prev + usize::from(ca != *cb));
-            prev = here;
-        }
-    }
-    row[b.len()]
+        .find(|k| *k != id && umbra_report::names::edits(k, id) <= 2)
 }
 
 #[cfg(test)]
@@ -1342,6 +1324,6 @@ mod near_miss_tests {
         assert_eq!(near_miss("gles3/sofpipe", &known), Some("gles3/softpipe"));
         assert_eq!(near_miss("gl33/radeonsi", &known), None);
         assert_eq!(near_miss("wgpu-vk/radv", &known), None);
-        assert_eq!(edits("kitten", "sitting"), 3);
+        assert_eq!(umbra_report::names::edits("kitten", "sitting"), 3);
     }
 }

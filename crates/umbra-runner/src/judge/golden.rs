@@ -330,56 +330,37 @@ pub fn check(
         (Some(b), true) => b.clone(),
         _ => png(frame),
     };
-    let mut settings = insta::Settings::clone_current();
-    settings.set_snapshot_path(&held.write_dir);
-    settings.set_prepend_module_to_snapshot(false);
-    settings.set_omit_expression(true);
-    settings.set_description(format!("umbra golden: colour of {}", run.name));
-    let name_ext = format!("{stem}.png");
-    // insta reports a mismatch by panicking: keep that panic (and, with RUST_BACKTRACE set,
-    // its backtrace) off the output; the run's reason says what happened and how to review
-    // it, in one line. The hook is global, and workers render on one thread.
-    let hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(|_| {}));
-    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        settings.bind(|| insta::assert_binary_snapshot!(name_ext.as_str(), bytes.clone()));
-    }));
-    std::panic::set_hook(hook);
+    let outcome = snapshot(&held.write_dir, &stem, run.name, bytes);
     // What insta should have left: the written golden, or the pending snapshot a review
     // reads. Where it is not there (a read-only golden directory, a full disk), the run says
     // the golden could not be written, never that a snapshot it cannot find is pending.
     let left = match (&outcome, within) {
         (Ok(()), true) => None,
         (Ok(()), false) => Some(held.write_dir.join(format!("{stem}.snap"))),
-        (Err(_), _) => Some(held.write_dir.join(format!("{stem}.snap.new"))),
+        (Err(()), _) => Some(held.write_dir.join(format!("{stem}.snap.new"))),
     };
-    if let Some(file) = left.filter(|f| !f.is_file()) {
-        let unwritten = format!(
+    let unwritten = left.filter(|f| !f.is_file()).map(|file| {
+        format!(
             "its golden could not be written: {} ({}); make the golden directory writable and run again",
             file.display(),
             unwritable(&held.write_dir)
-        );
-        // A change the judge decides (on a release other than the golden's) stays what the
-        // judge says it is; anything else fails, saying the write failed.
-        let (golden, message) = if judged_change && outcome.is_err() {
-            (reported, format!("{}; {unwritten}", change.describe()))
-        } else {
-            (
-                Golden::Changed,
-                format!("the colour image {what}, and {unwritten}{versions}"),
-            )
-        };
-        return Checked {
-            golden,
-            message,
-            ssim,
-            identical,
-            held,
-            change: Some(change),
-        };
-    }
+        )
+    });
     let for_release = held.write_dir != dir;
     let (golden, message) = match (outcome, within) {
+        // A change the judge decides (on a release other than the golden's) stays what the
+        // judge says it is; anything else fails, saying the write failed.
+        (Err(()), _) if judged_change && unwritten.is_some() => (
+            reported,
+            format!("{}; {}", change.describe(), unwritten.unwrap_or_default()),
+        ),
+        _ if unwritten.is_some() => (
+            Golden::Changed,
+            format!(
+                "the colour image {what}, and {}{versions}",
+                unwritten.unwrap_or_default()
+            ),
+        ),
         (Ok(()), true) => (Golden::Unchanged, String::new()),
         (Ok(()), false) if for_release => (
             Golden::WrittenForRelease,
@@ -393,7 +374,7 @@ pub fn check(
             ),
         ),
         (Ok(()), false) => (Golden::Written, format!("golden {stem} written")),
-        (Err(_), _) if judged_change => (
+        (Err(()), _) if judged_change => (
             reported,
             format!(
                 "{}; pending as this release's golden: {}/{stem}.snap.new (`cargo insta review` or `cargo xtask bless`)",
@@ -401,7 +382,7 @@ pub fn check(
                 held.write_dir.display()
             ),
         ),
-        (Err(_), _) => {
+        (Err(()), _) => {
             let how = format!(
                 "review it with `cargo insta review` (pending {}/{stem}.snap.new) or accept all with `cargo xtask bless`",
                 held.write_dir.display()
@@ -420,6 +401,27 @@ pub fn check(
         held,
         change: Some(change),
     }
+}
+
+/// Hands `bytes` to insta as run `name`'s golden `stem` in `dir`: `Ok` when it matched or was
+/// written (blessing), `Err` when insta left a pending snapshot (or failed to). insta reports
+/// a mismatch by panicking: that panic (and, with RUST_BACKTRACE set, its backtrace) is kept
+/// off the output; the run's reason says what happened and how to review it, in one line. The
+/// hook is global, and workers render on one thread.
+fn snapshot(dir: &Path, stem: &str, name: &str, bytes: Vec<u8>) -> Result<(), ()> {
+    let mut settings = insta::Settings::clone_current();
+    settings.set_snapshot_path(dir);
+    settings.set_prepend_module_to_snapshot(false);
+    settings.set_omit_expression(true);
+    settings.set_description(format!("umbra golden: colour of {name}"));
+    let name_ext = format!("{stem}.png");
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        settings.bind(|| insta::assert_binary_snapshot!(name_ext.as_str(), bytes.clone()));
+    }));
+    std::panic::set_hook(hook);
+    outcome.map_err(|_| ())
 }
 
 /// Why nothing could be written in `dir`, as far as a probe file can tell.
