@@ -1,5 +1,5 @@
 //! Every checked-in case parses, validates and has a unique id; the seed set-ups of
-//! EDGE_CASES.md 14 carry the write-ups' parameters.
+//! docs/catalogue.md §14 carry the write-ups' parameters.
 
 use std::collections::BTreeSet;
 

@@ -1,6 +1,6 @@
 //! `cargo xtask fetch-mesa [--suite SUITE] [--dir DIR]`: any Debian suite's Mesa, beside the
-//! system's and without changing it, for `--mesa DIR` (../shared/PLATFORM.md, last section;
-//! ../shared/ECOSYSTEM.md, "Current Mesa on this machine kind").
+//! system's and without changing it, for `--mesa DIR` (docs/platform.md, last section;
+//! docs/platform.md, "Current Mesa on this machine kind").
 //!
 //! apt is pointed at the one suite through a private sources list, lists directory, cache and
 //! an empty dpkg status (`-o Dir::Etc::sourcelist=…`), so the system's apt configuration and
@@ -28,7 +28,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-/// The packages that make a complete Mesa for umbra's drivers (PLATFORM.md): EGL (glvnd
+/// The packages that make a complete Mesa for umbra's drivers (docs/platform.md): EGL (glvnd
 /// vendor), gallium (llvmpipe, softpipe, zink), the DRI loaders, lavapipe, and the libdrm
 /// they were built against.
 pub const PACKAGES: &[&str] = &[
@@ -303,17 +303,78 @@ fn fetch(suite: &str, dir: Option<PathBuf>, root: &Path) -> Result<(), String> {
     let dir = dir.unwrap_or_else(|| mesa_dir.join(suite));
     let _lock = Lock::take(&mesa_dir.join(format!(".{suite}.lock")), suite)?;
     let apt = Apt::new(mesa_dir.join(".apt").join(suite), suite)?;
-    let update = apt
+    update(&apt, suite)?;
+    let (own_libc, names) = packages_to_unpack(&apt, suite)?;
+    let versions = suite_versions(&apt, suite, &names)?;
+    let mesa = versions
+        .iter()
+        .find(|(p, _)| p == "mesa-libgallium" || p == "libegl-mesa0")
+        .map(|(_, v)| v.clone())
+        .unwrap_or_default();
+    let packages: Vec<String> = versions.iter().map(|(p, v)| format!("{p}={v}")).collect();
+    let record = serde_json::json!({
+        "suite": suite,
+        "mesa": mesa,
+        "own_libc": own_libc,
+        "packages": packages,
+    });
+    if std::fs::read_to_string(dir.join(FETCHED))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .is_some_and(|old| old == record)
+    {
+        println!(
+            "fetch-mesa: Mesa {mesa} from {suite} is already in {} (the same {} packages); use it with --mesa {}",
+            dir.display(),
+            packages.len(),
+            dir.display()
+        );
+        return Ok(());
+    }
+    let debs = download(&apt, suite, &packages)?;
+    let partial = beside(&dir, ".partial");
+    let (unpacked, downloaded) = unpack(&debs, &partial)?;
+    let text = serde_json::to_string_pretty(&record).unwrap_or_default() + "\n";
+    std::fs::write(partial.join(FETCHED), text)
+        .map_err(|e| format!("cannot write {}: {e}", partial.join(FETCHED).display()))?;
+    replace(&dir, &partial)?;
+    println!(
+        "fetch-mesa: Mesa {mesa} from {suite}: {} packages ({:.0} MB downloaded){} unpacked in {} in {:.0} s\nfetch-mesa: use it with --mesa {} (e.g. cargo xtask conformance --mesa {}, cargo xtask drivers --baseline system --candidate {})",
+        unpacked,
+        downloaded as f64 / 1e6,
+        own_libc
+            .as_deref()
+            .map(|v| format!(", its own glibc {v},"))
+            .unwrap_or_default(),
+        dir.display(),
+        started.elapsed().as_secs_f64(),
+        dir.display(),
+        dir.display(),
+        dir.display()
+    );
+    Ok(())
+}
+
+/// `apt-get update` of the private list.
+fn update(apt: &Apt, suite: &str) -> Result<(), String> {
+    let updated = apt
         .command("apt-get")
         .args(["-qq", "update"])
         .status()
         .map_err(|e| format!("cannot run apt-get: {e}; fix: run on a Debian machine with apt"))?;
-    if !update.success() {
+    if !updated.success() {
         return Err(format!(
             "apt-get update of the private list failed; fix: check that the mirror serves suite {suite:?} ({}/sources.list)",
             apt.dir.display()
         ));
     }
+    Ok(())
+}
+
+/// Whether Mesa needs the suite's own C library (its version, when so), and the packages to
+/// unpack: the whole closure of Mesa and the loaders then, else Mesa's own packages and what
+/// they link against that this machine lacks.
+fn packages_to_unpack(apt: &Apt, suite: &str) -> Result<(Option<String>, Vec<String>), String> {
     let libc = apt
         .versions(&["libc6".to_string()])?
         .into_iter()
@@ -354,7 +415,16 @@ fn fetch(suite: &str, dir: Option<PathBuf>, root: &Path) -> Result<(), String> {
             names
         }
     };
-    let versions = apt.versions(&names)?;
+    Ok((own_libc, names))
+}
+
+/// The suite's version of each of `names`; an error names those the suite does not carry.
+fn suite_versions(
+    apt: &Apt,
+    suite: &str,
+    names: &[String],
+) -> Result<Vec<(String, String)>, String> {
+    let versions = apt.versions(names)?;
     let missing: Vec<&String> = names
         .iter()
         .filter(|n| !versions.iter().any(|(p, _)| p == *n))
@@ -369,59 +439,47 @@ fn fetch(suite: &str, dir: Option<PathBuf>, root: &Path) -> Result<(), String> {
                 .join(", ")
         ));
     }
-    let mesa = versions
-        .iter()
-        .find(|(p, _)| p == "mesa-libgallium" || p == "libegl-mesa0")
-        .map(|(_, v)| v.clone())
-        .unwrap_or_default();
-    let packages: Vec<String> = versions.iter().map(|(p, v)| format!("{p}={v}")).collect();
-    let record = serde_json::json!({
-        "suite": suite,
-        "mesa": mesa,
-        "own_libc": own_libc,
-        "packages": packages,
-    });
-    if std::fs::read_to_string(dir.join(FETCHED))
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-        .is_some_and(|old| old == record)
-    {
-        println!(
-            "fetch-mesa: Mesa {mesa} from {suite} is already in {} (the same {} packages); use it with --mesa {}",
-            dir.display(),
-            packages.len(),
-            dir.display()
-        );
-        return Ok(());
-    }
+    Ok(versions)
+}
+
+/// `apt-get download` of `packages` (`NAME=VERSION`) into a fresh `debs` directory of the
+/// private state, which it returns.
+fn download(apt: &Apt, suite: &str, packages: &[String]) -> Result<PathBuf, String> {
     let debs = apt.dir.join("debs");
     let _ = std::fs::remove_dir_all(&debs);
     std::fs::create_dir_all(&debs).map_err(|e| format!("cannot create {}: {e}", debs.display()))?;
-    let download = apt
+    let downloaded = apt
         .command("apt-get")
         .args(["-qq", "download"])
-        .args(&packages)
+        .args(packages)
         .current_dir(&debs)
         .status()
         .map_err(|e| format!("cannot run apt-get: {e}"))?;
-    if !download.success() {
+    if !downloaded.success() {
         return Err(format!(
             "apt-get download failed for {} packages of {suite}",
             packages.len()
         ));
     }
-    // Beside DIR, named after it (DIR.partial, DIR.old), whatever dots its name has.
-    let beside = |suffix: &str| {
-        let mut name = dir.file_name().unwrap_or_default().to_os_string();
-        name.push(suffix);
-        dir.with_file_name(name)
-    };
-    let partial = beside(".partial");
-    let _ = std::fs::remove_dir_all(&partial);
-    std::fs::create_dir_all(&partial)
+    Ok(debs)
+}
+
+/// The path beside `dir`, named after it with `suffix` (DIR.partial, DIR.old), whatever dots
+/// its name has.
+fn beside(dir: &Path, suffix: &str) -> PathBuf {
+    let mut name = dir.file_name().unwrap_or_default().to_os_string();
+    name.push(suffix);
+    dir.with_file_name(name)
+}
+
+/// Every `.deb` in `debs` unpacked (`dpkg-deb -x`, in name order) into a fresh `partial`:
+/// how many packages, and their bytes downloaded.
+fn unpack(debs: &Path, partial: &Path) -> Result<(usize, u64), String> {
+    let _ = std::fs::remove_dir_all(partial);
+    std::fs::create_dir_all(partial)
         .map_err(|e| format!("cannot create {}: {e}", partial.display()))?;
     let mut downloaded = 0u64;
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&debs)
+    let mut files: Vec<PathBuf> = std::fs::read_dir(debs)
         .map_err(|e| format!("cannot read {}: {e}", debs.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x == "deb"))
@@ -432,41 +490,30 @@ fn fetch(suite: &str, dir: Option<PathBuf>, root: &Path) -> Result<(), String> {
         let ok = Command::new("dpkg-deb")
             .arg("-x")
             .arg(p)
-            .arg(&partial)
+            .arg(partial)
             .status()
             .is_ok_and(|s| s.success());
         if !ok {
             return Err(format!("dpkg-deb -x {} failed", p.display()));
         }
     }
-    let text = serde_json::to_string_pretty(&record).unwrap_or_default() + "\n";
-    std::fs::write(partial.join(FETCHED), text)
-        .map_err(|e| format!("cannot write {}: {e}", partial.join(FETCHED).display()))?;
+    Ok((files.len(), downloaded))
+}
+
+/// The new tree `partial` moved into place as `dir`, the old one (if any) set aside as
+/// DIR.old until then.
+fn replace(dir: &Path, partial: &Path) -> Result<(), String> {
     // The old tree moves aside only once the new one is whole; a fetch that died between
     // the two renames left DIR.old as the only whole build, and it stays until this one is
     // in place.
-    let old = beside(".old");
+    let old = beside(dir, ".old");
     if dir.exists() {
         let _ = std::fs::remove_dir_all(&old);
-        std::fs::rename(&dir, &old).map_err(|e| format!("cannot move {}: {e}", dir.display()))?;
+        std::fs::rename(dir, &old).map_err(|e| format!("cannot move {}: {e}", dir.display()))?;
     }
-    std::fs::rename(&partial, &dir)
+    std::fs::rename(partial, dir)
         .map_err(|e| format!("cannot move {} into place: {e}", partial.display()))?;
     let _ = std::fs::remove_dir_all(&old);
-    println!(
-        "fetch-mesa: Mesa {mesa} from {suite}: {} packages ({:.0} MB downloaded){} unpacked in {} in {:.0} s\nfetch-mesa: use it with --mesa {} (e.g. cargo xtask conformance --mesa {}, cargo xtask drivers --baseline system --candidate {})",
-        files.len(),
-        downloaded as f64 / 1e6,
-        own_libc
-            .as_deref()
-            .map(|v| format!(", its own glibc {v},"))
-            .unwrap_or_default(),
-        dir.display(),
-        started.elapsed().as_secs_f64(),
-        dir.display(),
-        dir.display(),
-        dir.display()
-    );
     Ok(())
 }
 

@@ -1,4 +1,4 @@
-//! The system packages the GPU backends need (../shared/PLATFORM.md): Mesa's EGL, GL and GLES
+//! The system packages the GPU backends need (docs/platform.md): Mesa's EGL, GL and GLES
 //! drivers (llvmpipe, softpipe, zink) and its Vulkan drivers (lavapipe). Installed with apt when
 //! missing, if this process may (root, or passwordless sudo); otherwise the exact command is
 //! printed and the run goes on: backends that need a missing package report a skip that names
@@ -6,7 +6,7 @@
 
 use std::process::{Command, Stdio};
 
-/// The packages, as PLATFORM.md lists them.
+/// The packages, as docs/platform.md lists them.
 pub const PACKAGES: &[&str] = &[
     "libegl1",
     "libegl-mesa0",

@@ -1,7 +1,7 @@
 //! Depth and coordinate conventions: the one place where projections, the bias matrix, window
 //! mapping and depth compares are defined. No backend builds a projection inline.
 //!
-//! Two clip conventions exist (NUMERICS.md, "Clip space"):
+//! Two clip conventions exist (docs/platform.md, "Clip space"):
 //! - [`ClipDepth::MinusOneToOne`] (OpenGL): −w ≤ z ≤ w, window z = 0.5·z_ndc + 0.5, window y
 //!   up (row 0 of a framebuffer or texture is the *bottom*), texture v up.
 //! - [`ClipDepth::ZeroToOne`] (Vulkan, wgpu): 0 ≤ z ≤ w, window z = z_ndc, framebuffer y down
@@ -11,7 +11,7 @@
 //! offsets x, y, z by 0.5; the zero-to-one convention does x the same way, flips y
 //! (v = 0.5 − 0.5·y) and leaves z alone. Either may be applied before the perspective divide
 //! (`textureProj` of B·P·V·x, the classic texture matrix) or after it; in real arithmetic they
-//! agree, in f32 they differ by an ulp or two (EDGE_CASES.md 1).
+//! agree, in f32 they differ by an ulp or two (docs/catalogue.md §1).
 //!
 //! Reversed depth multiplies the projection by a z flip (GL: z → −z, zero-to-one: z → w − z),
 //! so window depth becomes 1 − depth; clears, compares and bias signs follow from

@@ -1,5 +1,5 @@
 //! Named faults a backend can be run with, to prove that the harness catches real mistakes
-//! (EDGE_CASES.md, "Faults the harness must catch"). A fault is active only when the process
+//! (docs/catalogue.md, "Faults the harness must catch"). A fault is active only when the process
 //! has `UMBRA_SELFTEST=1` *and* `UMBRA_FAULT=<name>`: `cargo xtask selftest` sets both in its
 //! worker processes, and no other path can turn one on.
 //!

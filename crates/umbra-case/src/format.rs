@@ -33,7 +33,7 @@ pub struct Case {
     /// The shadow-mapping technique. Default: every field's default.
     #[serde(default)]
     pub shadow: Shadow,
-    /// The illumination model of EDGE_CASES.md 17. Default: every field's default.
+    /// The illumination model of docs/catalogue.md §17. Default: every field's default.
     #[serde(default)]
     pub shading: Shading,
     /// Parameters to sweep: JSON path (dots, as `light.directional.azimuth_deg`) to an axis.
@@ -373,7 +373,7 @@ pub struct Shadow {
     pub mipmaps: Option<Mipmaps>,
 }
 
-/// A mipmapped shadow map (EDGE_CASES 12): level k is max(1, ⌊size / 2ᵏ⌋) texels a side,
+/// A mipmapped shadow map (docs/catalogue.md §12): level k is max(1, ⌊size / 2ᵏ⌋) texels a side,
 /// and the sampler picks levels by the lookup's screen-space footprint (the LOD,
 /// λ = log₂ ρ), so a receiver far from the camera reads coarse levels. Only for 2D maps
 /// (spot and directional lights), the sampler's compare (`compare: hardware`), a `nearest`
@@ -623,7 +623,7 @@ pub enum DepthOrder {
     Reversed,
 }
 
-/// The illumination model (EDGE_CASES.md 17); `shade` ∈ [0,1] is the shadow lookup.
+/// The illumination model (docs/catalogue.md §17); `shade` ∈ [0,1] is the shadow lookup.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Shading {

@@ -1,8 +1,8 @@
 //! Metamorphic twins: variants of a case that must relate to it in a known way on *every*
-//! backend (EDGE_CASES 1–4 and the metamorphic list). A twin is the case with a few
+//! backend (docs/catalogue.md §1–4 and the metamorphic list). A twin is the case with a few
 //! dotted paths set, exactly like a sweep point, so it is parsed and validated like a file.
 //!
-//! One twin is built in: `bias-order`, the other bias-matrix order (EDGE_CASES 1), held to
+//! One twin is built in: `bias-order`, the other bias-matrix order (docs/catalogue.md §1), held to
 //! `legal`, so that every case on every backend shows both orders agree except at ties.
 
 use std::collections::BTreeMap;

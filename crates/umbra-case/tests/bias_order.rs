@@ -1,4 +1,4 @@
-//! EDGE_CASES 1, as a property: the bias matrix applied before the perspective divide
+//! docs/catalogue.md §1, as a property: the bias matrix applied before the perspective divide
 //! (`textureProj(B·P·V·x)`) and after it (`0.5·(P·V·x)/w + 0.5`) are equal in real
 //! arithmetic; in f32 they differ by rounding. For random light set-ups (perspective and
 //! orthographic) and random points inside the light's frustum, both orders are computed in f32
@@ -8,7 +8,7 @@
 //! Bound (common::Setup::bound, derived in conventions.rs from Higham's model): each order's
 //! depth is within γ₈·(|B||P||V|·|p|)_z/|w| + |d|·γ₈·(…)_w/|w| + 3u·|d| + u of the exact depth
 //! (u = 2⁻²⁴); the two orders are within the sum of their bounds of each other. In D24 steps
-//! (1/(2²⁴−1)) that is a few steps for typical lights: EDGE_CASES quotes about 1.5 steps before
+//! (1/(2²⁴−1)) that is a few steps for typical lights: docs/catalogue.md quotes about 1.5 steps before
 //! and 0.75 after. A texel choice may differ between the orders only where the exact
 //! coordinate lies within the summed coordinate bound of a texel boundary (a legal tie of the
 //! texel-boundary kind), and the depth may land on another D24 code only within the depth

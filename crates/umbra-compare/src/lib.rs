@@ -276,7 +276,7 @@ pub fn agreement(a: &Frame, b: &Frame, radius: u32) -> Agreement {
 
 /// SSIM of two frames' shaded colour (image-compare's MSSIMSimple on luma, 8x8 windows, as
 /// [`ssim::mssim`] computes it bit for bit):
-/// 1.0 means identical. NUMERICS.md: a 3-pixel shift of a shadowed scene scores about 0.96,
+/// 1.0 means identical. docs/platform.md: a 3-pixel shift of a shadowed scene scores about 0.96,
 /// so only values very close to 1 mean "the same picture". Reported, not thresholded here.
 pub fn ssim(a: &Frame, b: &Frame) -> Option<f64> {
     let luma = |f: &Frame| {

@@ -1,5 +1,5 @@
 //! EGL without a window system or display server, one context per process: Mesa's
-//! surfaceless platform, or an EGL device ([`crate::platform`]; ../shared/PLATFORM.md, "EGL
+//! surfaceless platform, or an EGL device ([`crate::platform`]; docs/platform.md, "EGL
 //! facts").
 //!
 //! libEGL is loaded at run time (khronos-egl's `dynamic` feature), so a machine without Mesa

@@ -32,7 +32,7 @@ impl Driver {
     }
 
     /// The environment that selects the driver (zink alone fails without
-    /// LIBGL_ALWAYS_SOFTWARE=1 on this Mesa; ../shared/PLATFORM.md).
+    /// LIBGL_ALWAYS_SOFTWARE=1 on this Mesa; docs/platform.md).
     pub fn env(self) -> Vec<(&'static str, &'static str)> {
         match self {
             Driver::Llvmpipe => vec![("GALLIUM_DRIVER", "llvmpipe")],

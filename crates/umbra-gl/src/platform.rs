@@ -1,6 +1,6 @@
 //! How EGL reaches the driver: Mesa's surfaceless platform (EGL_MESA_platform_surfaceless),
 //! or an EGL device (EGL_EXT_platform_device over EGL_EXT_device_enumeration), which is what
-//! EGL implementations without the surfaceless platform offer (NVIDIA's, ECOSYSTEM.md) and
+//! EGL implementations without the surfaceless platform offer (NVIDIA's, docs/platform.md) and
 //! how a machine's render nodes are reached one by one.
 //!
 //! The choice is made once per process: `UMBRA_EGL_PLATFORM=surfaceless|device|device:N`, or

@@ -1,5 +1,5 @@
 //! GL errors are surfaced with the stage that caused them, never turned into a garbage image
-//! (EDGE_CASES.md 13: an unsized DEPTH_COMPONENT with a wrong type is an INVALID_ENUM or
+//! (docs/catalogue.md §13: an unsized DEPTH_COMPONENT with a wrong type is an INVALID_ENUM or
 //! INVALID_OPERATION on GLES, and the harness must say so).
 #![allow(unsafe_code)]
 

@@ -1,14 +1,14 @@
 //! The GL backend on every Mesa driver: variants that must not change the shadows.
 //!
-//! - `depth_only` vs `with_color` (EDGE_CASES.md 3, "AMD needs a colour attachment"): the
+//! - `depth_only` vs `with_color` (docs/catalogue.md §3, "AMD needs a colour attachment"): the
 //!   colour attachment must not change a single bit of the visibility.
-//! - Hardware vs manual compare at NEAREST (EDGE_CASES.md 4): the sampler's compare and the
+//! - Hardware vs manual compare at NEAREST (docs/catalogue.md §4): the sampler's compare and the
 //!   shader's `texelFetch(...).r <= ref` may differ only where the reference's own lookup was a
 //!   depth tie (the compared texel within the stored depth's freedom) or at a texel boundary
 //!   (hardware texel selection need only be 4 sub-texel bits exact; the shader computes
 //!   floor(u·size) in f32). Both are counted and printed.
 //!
-//! - GLES 2's packed RGBA8 depth vs GLES 3's D24 (EDGE_CASES.md 4): within the packing's
+//! - GLES 2's packed RGBA8 depth vs GLES 3's D24 (docs/catalogue.md §4): within the packing's
 //!   precision (see `packed_vs_d24`).
 //!
 //! Mesa picks its driver when EGL loads, so `variants_on_every_driver` runs this test binary
@@ -228,7 +228,7 @@ fn twin_shares_the_shadow_pass(backend: &mut GlBackend, base: &umbra_case::CaseP
     );
 }
 
-/// EDGE_CASES 4 on one driver: GLES 2's depth packed into RGBA8 (compared by hand) against
+/// docs/catalogue.md §4 on one driver: GLES 2's depth packed into RGBA8 (compared by hand) against
 /// GLES 3's D24 depth texture (hardware compare), NEAREST, same case, same driver.
 ///
 /// Precision of the packing (crates/umbra-gl/src/shaders.rs, `pack_depth`): four base-255

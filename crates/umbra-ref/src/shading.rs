@@ -1,4 +1,4 @@
-//! The illumination model of EDGE_CASES.md 17, shared by every backend's shader.
+//! The illumination model of docs/catalogue.md §17, shared by every backend's shader.
 //!
 //! `dimmed`: (ambient + (dimming + (1 − dimming)·shade)·diffuse)·albedo + shade·specular,
 //! diffuse = max(N·L, 0), specular = k·max(N·H, 0)^shininess where N·L > 0 (Blinn-Phong, white

@@ -40,7 +40,7 @@ pub struct DepthLayer {
     pub maybe: Vec<bool>,
 }
 
-/// The freedom of a stored depth, per candidate triangle and texel centre (NUMERICS.md):
+/// The freedom of a stored depth, per candidate triangle and texel centre (docs/platform.md):
 ///
 /// - **Vertex snapping** ([`SNAP_PX`]): the depth plane at the centre moves by up to
 ///   (|∂z/∂x| + |∂z/∂y|)·δ·Σ|bᵢ|, and the slopes m is made of by up to

@@ -110,7 +110,7 @@ impl Check {
                 "GL 4.6 §14.6 polygon rasterization (sample point inside, tie-breaking)"
             }
             Check::Colour => {
-                "umbra's shading model (cases/README.md, EDGE_CASES.md 17) at 8-bit unorm output, GL 4.6 §2.3.5.2"
+                "umbra's shading model (cases/README.md, docs/catalogue.md §17) at 8-bit unorm output, GL 4.6 §2.3.5.2"
             }
             Check::Map => {
                 "GL 4.6 §14.6.5 depth offset, §13.8 clipping and the viewport, §2.3.5.2 fixed-point depth conversion"

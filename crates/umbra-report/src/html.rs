@@ -32,6 +32,29 @@ pub fn report(
     command: &str,
     budget: &TimeBudget,
 ) -> String {
+    let mut s = head(results, command, budget);
+    s.push_str(&crate::gallery::section(results, pictures));
+    s.push_str(&drivers_section(drivers));
+    s.push_str(&failures_section(results, failures_dir));
+    s.push_str(&changed_pictures_section(results));
+    s.push_str(&strength_section(results));
+    s.push_str(&twins_section(results));
+    s.push_str(&crate::error_curves::section(results));
+    // The latest `umbra sweep` (speed against error), when one has run in this target dir.
+    if let Ok(sweep) =
+        std::fs::read_to_string(std::path::Path::new("target/umbra/sweep/section.html"))
+    {
+        s.push_str("<p><i>From the latest <code>cargo xtask sweep</code> (target/umbra/sweep/), not from this conformance run:</i></p>");
+        s.push_str(&sweep);
+    }
+    s.push_str(&all_runs_section(results));
+    s.push_str("</body></html>\n");
+    s
+}
+
+/// The page's head (style and the script-error recorder), its title and its summary: runs,
+/// wall time, the breakdown by status, the command and the time budget.
+fn head(results: &[RunResult], command: &str, budget: &TimeBudget) -> String {
     let (wall_s, timing) = (budget.wall_s, budget.line());
     let mut s = String::from(
         "<!doctype html><html><head><meta charset=\"utf-8\"><title>umbra conformance</title><style>\
@@ -55,7 +78,12 @@ pub fn report(
         esc(command),
         esc(&timing)
     );
-    s.push_str(&crate::gallery::section(results, pictures));
+    s
+}
+
+/// The drivers' table: each backend with its vendor, renderer, version and extensions.
+fn drivers_section(drivers: &str) -> String {
+    let mut s = String::new();
     s.push_str("<h2>Drivers</h2><table><tr><th>backend</th><th>vendor | renderer | version | extensions</th></tr>");
     for line in drivers.lines() {
         let (b, rest) = line.split_once(": ").unwrap_or((line, ""));
@@ -66,7 +94,14 @@ pub fn report(
             esc(rest)
         );
     }
-    s.push_str("</table><h2>Failures</h2>");
+    s.push_str("</table>");
+    s
+}
+
+/// Every failing or flaky run with its reason, diagnosis, checks, stderr, how to reproduce it
+/// and its pictures (reference, backend, visibility, truth, heat map).
+fn failures_section(results: &[RunResult], failures_dir: &Path) -> String {
+    let mut s = String::from("<h2>Failures</h2>");
     let failing: Vec<&RunResult> = results
         .iter()
         .filter(|r| r.status.is_regression() || r.status == Status::Flake)
@@ -124,18 +159,12 @@ pub fn report(
             ),
         );
     }
-    s.push_str(&changed_pictures_section(results));
-    s.push_str(&strength_section(results));
-    s.push_str(&twins_section(results));
-    s.push_str(&crate::error_curves::section(results));
-    // The latest `umbra sweep` (speed against error), when one has run in this target dir.
-    if let Ok(sweep) =
-        std::fs::read_to_string(std::path::Path::new("target/umbra/sweep/section.html"))
-    {
-        s.push_str("<p><i>From the latest <code>cargo xtask sweep</code> (target/umbra/sweep/), not from this conformance run:</i></p>");
-        s.push_str(&sweep);
-    }
-    s.push_str(
+    s
+}
+
+/// The table of every run: its status, error, agreement, reference figures, SSIM and time.
+fn all_runs_section(results: &[RunResult]) -> String {
+    let mut s = String::from(
         "<h2>All runs</h2><table><tr><th>run</th><th>status</th><th>false shadow</th><th>false light</th>\
          <th>interior fs/fl</th><th>agreement</th><th>illegal</th><th>compared</th><th>blind</th><th>values held</th><th>margin</th><th>SSIM ref</th><th>SSIM golden</th><th>render ms</th><th>clock</th></tr>",
     );
@@ -181,7 +210,7 @@ pub fn report(
         }
         s.push_str("</tr>");
     }
-    s.push_str("</table></body></html>\n");
+    s.push_str("</table>");
     s
 }
 

@@ -89,6 +89,30 @@ fn attribute<'a>(dom: &'a str, name: &str) -> Option<&'a str> {
 fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
     let dir = scratch("page");
     let pictures = dir.join("pictures");
+    let mut results = runs_of_every_status(&pictures);
+    let changed = changed_legal_run(&pictures);
+    results.push(changed.clone());
+    let html = umbra_report::html::report(
+        &results,
+        "ref: umbra | CPU reference",
+        &dir.join("failures"),
+        &pictures,
+        "umbra conformance",
+        &TimeBudget::default(),
+    );
+    let page = dir.join("report.html");
+    std::fs::write(&page, html).expect("write page");
+
+    let (dom, log) = dump(&page, "");
+    the_page_runs_with_one_closed_cell_per_run(&dom, &log, &results);
+    the_changed_picture_is_listed_and_opens_beside_its_golden(&page, &dom, &changed);
+    a_status_link_shows_that_status_only(&page, &results);
+    a_failing_run_opens_with_its_pictures_and_commands(&page, &results);
+}
+
+/// Runs of every status on four backends and two cases, each with its pictures where it has
+/// them (thumbnail, colour, reference, truth, heat map, golden; a pending golden on a failure).
+fn runs_of_every_status(pictures: &Path) -> Vec<RunResult> {
     let mut results = Vec::new();
     let statuses = [
         Status::Pass,
@@ -130,6 +154,12 @@ fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
             results.push(r);
         }
     }
+    results
+}
+
+/// A picture that changed on another Mesa release where the judge holds every changed pixel
+/// legal, with its thumbnail, colour and golden pictures.
+fn changed_legal_run(pictures: &Path) -> RunResult {
     // A picture that changed on another Mesa release where the judge holds every changed
     // pixel legal: a pass, shown as a changed picture beside its golden.
     let mut changed = run("gl33/zink", "filters@shadow.filter=pcf5", Status::Pass);
@@ -150,23 +180,16 @@ fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
     png(&d.join("thumb.png"), 48, 36, 90);
     png(&d.join("color.png"), 160, 120, 90);
     png(&d.join("golden.png"), 160, 120, 95);
-    results.push(changed.clone());
-    let html = umbra_report::html::report(
-        &results,
-        "ref: umbra | CPU reference",
-        &dir.join("failures"),
-        &pictures,
-        "umbra conformance",
-        &TimeBudget::default(),
-    );
-    let page = dir.join("report.html");
-    std::fs::write(&page, html).expect("write page");
+    changed
+}
 
-    let (dom, log) = dump(&page, "");
-    assert_eq!(attribute(&dom, "data-script-errors"), None, "script errors");
+/// The page (its DOM and chromium's log, loaded without a fragment) ran without a script
+/// error, with one gallery cell per run and the detail view closed.
+fn the_page_runs_with_one_closed_cell_per_run(dom: &str, log: &str, results: &[RunResult]) {
+    assert_eq!(attribute(dom, "data-script-errors"), None, "script errors");
     assert!(!log.contains("Uncaught"), "console: {log}");
     assert_eq!(
-        attribute(&dom, "data-gallery-cells"),
+        attribute(dom, "data-gallery-cells"),
         Some(results.len().to_string().as_str()),
         "one gallery cell per run"
     );
@@ -175,9 +198,16 @@ fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
         dom.contains("<div id=\"g-detail\" hidden=\"\">"),
         "the detail view starts closed"
     );
+}
 
-    // The changed picture: listed in its own table, outlined in the gallery, and its detail
-    // view says how it changed beside the golden and the frame.
+/// The changed picture: listed in its own table and outlined in the gallery (`dom`, the page
+/// loaded without a fragment), and its detail view says how it changed beside the golden and
+/// the frame.
+fn the_changed_picture_is_listed_and_opens_beside_its_golden(
+    page: &Path,
+    dom: &str,
+    changed: &RunResult,
+) {
     assert!(
         dom.contains("id=\"changed-pictures\"")
             && dom.contains(&format!(
@@ -188,7 +218,7 @@ fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
     );
     assert_eq!(dom.matches("class=\"cell Pass changed\"").count(), 1);
     let (dom, _) = dump(
-        &page,
+        page,
         &format!("#run={}", umbra_report::names::url_component(&changed.name)),
     );
     let reason = &dom[dom.find("id=\"g-reason\"").expect("reason")..];
@@ -201,9 +231,11 @@ fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
     );
     let detail = &dom[dom.find("id=\"g-pictures\"").expect("pictures box")..];
     assert_eq!(detail.matches("<figure>").count(), 2, "backend and golden");
+}
 
-    // A filter link shows just the runs of that status.
-    let (dom, _) = dump(&page, "#status=Pass");
+/// A filter link shows just the runs of that status.
+fn a_status_link_shows_that_status_only(page: &Path, results: &[RunResult]) {
+    let (dom, _) = dump(page, "#status=Pass");
     let passing = results.iter().filter(|r| r.status == Status::Pass).count();
     assert_eq!(
         attribute(&dom, "data-gallery-shown"),
@@ -215,13 +247,16 @@ fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
         Some(passing.to_string().as_str()),
         "the filtered-out cells are not laid out"
     );
+}
 
-    // A failing run with a pending golden: all six pictures side by side.
+/// A failing run with a pending golden: all six pictures side by side, its reproduce command,
+/// and the bug report command for a driver's failure only.
+fn a_failing_run_opens_with_its_pictures_and_commands(page: &Path, results: &[RunResult]) {
     let failing = results
         .iter()
         .find(|r| r.status == Status::Fail)
         .expect("a failing run");
-    let (dom, _) = dump(&page, &format!("#run={}", failing.name));
+    let (dom, _) = dump(page, &format!("#run={}", failing.name));
     assert!(
         dom.contains("<div id=\"g-detail\">"),
         "the link opens the detail view"
@@ -245,7 +280,7 @@ fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
         .iter()
         .find(|r| r.status == Status::Fail && r.backend != "ref")
         .expect("a driver's failing run");
-    let (dom, _) = dump(&page, &format!("#run={}", driver_fail.name));
+    let (dom, _) = dump(page, &format!("#run={}", driver_fail.name));
     assert!(
         dom.contains(&format!(
             "<code id=\"g-repro\">cargo run --bin umbra -- repro {} -o target/umbra/repro/{}</code>",

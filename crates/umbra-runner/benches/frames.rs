@@ -30,6 +30,15 @@ fn main() {
         .iter()
         .position(|p| p.id() == DEFAULT_SCENE.1)
         .expect("the standard point");
+    every_backend(exe, &file, index);
+    largest_frames(exe, &root);
+    reference_per_thread_count(exe, &file, index, &points[index]);
+    latest_conformance_stages(&root);
+}
+
+/// The standard point on every backend, side by side, with each one's ratio to the reference
+/// and to gl33/llvmpipe.
+fn every_backend(exe: &Path, file: &Path, index: usize) {
     // Every backend, each in a worker with its driver's environment (a backend whose driver is
     // missing says so in its row).
     let backends: Vec<String> = umbra_runner::harness::registry::known();
@@ -39,7 +48,7 @@ fn main() {
     );
     let results = measure_backends(
         exe,
-        &file,
+        file,
         index,
         &backends,
         9,
@@ -86,7 +95,10 @@ fn main() {
             r / l
         );
     }
-    // The catalogue's largest frames: most view pixels, most map texels (every face).
+}
+
+/// The catalogue's points as (file, index in it, view pixels, map texels over every face, id).
+fn catalogue_sizes(root: &Path) -> Vec<(std::path::PathBuf, usize, u64, u64, String)> {
     let mut catalogue: Vec<(std::path::PathBuf, usize, u64, u64, String)> = Vec::new();
     let files = umbra_case::case_files(&root.join("cases")).unwrap_or_default();
     for f in &files {
@@ -111,6 +123,14 @@ fn main() {
             ));
         }
     }
+    catalogue
+}
+
+/// The catalogue's largest frames (most view pixels, most map texels), the reference beside
+/// gl33/llvmpipe.
+fn largest_frames(exe: &Path, root: &Path) {
+    // The catalogue's largest frames: most view pixels, most map texels (every face).
+    let catalogue = catalogue_sizes(root);
     let largest_view = catalogue.iter().max_by_key(|p| (p.2, p.3));
     let largest_map = catalogue.iter().max_by_key(|p| (p.3, p.2));
     for (what, p) in [
@@ -157,14 +177,23 @@ fn main() {
             ),
         }
     }
+}
+
+/// The reference's passes on 1 thread and on every core, in Mpixels/s of the map and the view.
+fn reference_per_thread_count(
+    exe: &Path,
+    file: &Path,
+    index: usize,
+    point: &umbra_case::CasePoint,
+) {
     // The reference's passes per thread count, in the same run: its worker inherits
     // RAYON_NUM_THREADS (the judged variant is not timed here: see judging in the time budget).
     let view = {
-        let [w, h] = points[index].case.camera.size;
+        let [w, h] = point.case.camera.size;
         f64::from(w * h)
     };
     let map = {
-        let [w, h] = points[index].case.shadow.size;
+        let [w, h] = point.case.shadow.size;
         f64::from(w * h)
     };
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
@@ -172,7 +201,7 @@ fn main() {
         let env = [("RAYON_NUM_THREADS".to_string(), threads.to_string())];
         let r = measure_backends(
             exe,
-            &file,
+            file,
             index,
             &["ref".to_string()],
             9,
@@ -192,6 +221,11 @@ fn main() {
             None => {}
         }
     }
+}
+
+/// The per-stage share of the latest conformance run in this target directory, when there is
+/// one.
+fn latest_conformance_stages(root: &Path) {
     match std::fs::read_to_string(root.join("target/umbra/latest/report.json")) {
         Ok(text) => {
             let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();

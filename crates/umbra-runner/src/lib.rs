@@ -5,11 +5,11 @@
 //! wgpu joins it with its own crate, and per-run isolation, expectations, goldens and the full
 //! report set come with the conformance runner.
 
-pub mod args;
 pub mod atomic_file;
 pub mod case_size;
 pub mod cli;
 pub mod commands;
+pub mod exit;
 pub mod glob;
 pub mod harness;
 pub mod judge;

@@ -4,55 +4,56 @@
 
 use std::process::ExitCode;
 
+use umbra_runner::cli::{self, Command};
 use umbra_runner::commands::{
     backends, bisect, conformance, deqp, drivers, merge, reduce, render, repro, selftest_modes,
     soak, sweep,
 };
-use umbra_runner::{cli, harness};
+use umbra_runner::exit::{self, Error, Exit};
+use umbra_runner::harness;
 
 fn main() -> ExitCode {
     quiet_on_closed_pipe();
     match umbra_case::fault::Fault::check_env() {
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(125);
-        }
+        Err(e) => return ExitCode::from(Error::new(e.to_string()).report().code()),
         Ok(Some(warning)) => eprintln!("warning: {warning}"),
         Ok(None) => {}
     }
     let argv: Vec<String> = std::env::args().collect();
     // dEQP's protocol (deqp-runner): its `--deqp-*=V` flags are not umbra's to parse.
     if argv.get(1).is_some_and(|a| a == "deqp") {
-        return ExitCode::from(deqp::main(&argv[2..]).clamp(0, 255) as u8);
+        return ExitCode::from(exit::code(deqp::main(&argv[2..])));
     }
-    let code = match cli::parse(&argv) {
+    let command = match cli::parse(&argv) {
+        Ok(c) => c,
         Err(e) => {
             let usage_error = e.use_stderr();
             let _ = e.print();
-            if usage_error { 125 } else { 0 }
+            let exit = if usage_error {
+                Exit::CouldNotRun
+            } else {
+                Exit::Pass
+            };
+            return ExitCode::from(exit.code());
         }
-        Ok((name, args)) => match name.as_str() {
-            "render" => render::main(&args),
-            "conformance" => conformance::main(&args),
-            "merge" => merge::main(&args),
-            "selftest" => selftest_modes::main(&args),
-            "soak" => soak::main(&args),
-            "sweep" => sweep::main(&args),
-            "drivers" => drivers::main(&args),
-            "bisect" => bisect::main(&args),
-            "reduce" => reduce::main(&args),
-            "repro" => repro::main(&args),
-            "backends" => backends::main(&args),
-            "worker" => harness::worker::main(&args),
-            "bisect-step" => bisect::step(&args),
-            "completions" => cli::completions(args.positional.first().map_or("", String::as_str)),
-            other => {
-                eprintln!("error: command {other:?} is in the command table but not dispatched");
-                125
-            }
-        },
     };
-    ExitCode::from(code.clamp(0, 255) as u8)
+    let outcome = match &command {
+        Command::Render(a) => render::main(a),
+        Command::Conformance(a) => conformance::main(a),
+        Command::Merge(a) => merge::main(a),
+        Command::Selftest(a) => selftest_modes::main(a),
+        Command::Soak(a) => soak::main(a),
+        Command::Sweep(a) => sweep::main(a),
+        Command::Drivers(a) => drivers::main(a),
+        Command::Bisect(a) => bisect::main(a),
+        Command::Reduce(a) => reduce::main(a),
+        Command::Repro(a) => repro::main(a),
+        Command::Backends(a) => backends::main(a),
+        Command::Worker(a) => harness::worker::main(&a.backend),
+        Command::BisectStep(a) => bisect::step(a),
+        Command::Completions(a) => cli::completions(a),
+    };
+    ExitCode::from(exit::code(outcome))
 }
 
 /// `umbra render CASE | head -1`: when the reader of stdout goes away, stop quietly (exit 0,

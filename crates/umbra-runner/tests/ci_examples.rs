@@ -6,8 +6,6 @@
 
 use std::path::Path;
 
-use umbra_runner::cli::COMMANDS;
-
 /// Each `(command, flags)` an example's lines run.
 fn commands(text: &str) -> Vec<(String, Vec<String>)> {
     let mut out = Vec::new();
@@ -47,13 +45,12 @@ fn the_ci_examples_run_only_flags_umbra_takes_and_merge_their_shards() {
             "{file}: a merge step: {found:?}"
         );
         for (command, flags) in &found {
-            let spec = COMMANDS
-                .iter()
-                .find(|s| s.name == command)
-                .expect("a command of umbra");
+            let cli = umbra_runner::cli::command();
+            let spec = cli.find_subcommand(command).expect("a command of umbra");
             for f in flags {
                 assert!(
-                    spec.flags.contains(&f.as_str()),
+                    spec.get_arguments()
+                        .any(|a| a.get_long() == Some(f.as_str())),
                     "{file}: `umbra {command}` has no flag --{f}"
                 );
             }

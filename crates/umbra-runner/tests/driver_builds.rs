@@ -404,30 +404,43 @@ fn bisect_refuses_ends_that_do_not_fail_as_claimed() {
 #[test]
 fn a_golden_holds_on_its_release_and_lets_the_judge_speak_on_another() {
     let golden = scratch("golden-versions");
-    let run = |build: &Path, out: &str, bless: bool| {
-        let mut env = vec![("UMBRA_FAKE_BACKENDS", "1")];
-        // Blessing is refused under CI (and this test may run under CI=true).
-        env.push(("CI", if bless { "false" } else { "true" }));
-        let out = scratch(out);
-        let mut args = vec![
-            "conformance",
-            "--mesa",
-            build.to_str().unwrap_or_default(),
-            "--backend",
-            "fake/mesa",
-            "--filter",
-            "l-occluder",
-            "--golden",
-            golden.to_str().unwrap_or_default(),
-            "--out",
-            out.to_str().unwrap_or_default(),
-        ];
-        if bless {
-            args.push("--bless");
-        }
-        (umbra(&args, &env), out)
-    };
-    let (o, _) = run(
+    a_bless_records_its_release_and_the_same_picture_passes_on_another(&golden);
+    off_its_release_the_judge_speaks_and_the_golden_only_where_it_does_not_look(&golden);
+    a_bless_on_another_release_writes_its_picture_beside_the_old_golden(&golden);
+    a_bless_where_the_picture_is_the_same_confirms_the_golden(&golden);
+}
+
+/// A conformance run of `fake/mesa` on `l-occluder` with the fake `build`, against the
+/// goldens in `golden` (blessing them when `bless`), into the scratch directory `out`: its
+/// output and that directory.
+fn golden_versions_run(golden: &Path, build: &Path, out: &str, bless: bool) -> (Output, PathBuf) {
+    let mut env = vec![("UMBRA_FAKE_BACKENDS", "1")];
+    // Blessing is refused under CI (and this test may run under CI=true).
+    env.push(("CI", if bless { "false" } else { "true" }));
+    let out = scratch(out);
+    let mut args = vec![
+        "conformance",
+        "--mesa",
+        build.to_str().unwrap_or_default(),
+        "--backend",
+        "fake/mesa",
+        "--filter",
+        "l-occluder",
+        "--golden",
+        golden.to_str().unwrap_or_default(),
+        "--out",
+        out.to_str().unwrap_or_default(),
+    ];
+    if bless {
+        args.push("--bless");
+    }
+    (umbra(&args, &env), out)
+}
+
+/// Blessing on 1.0.0 records the release in the manifest; the same picture on 1.0.7 passes.
+fn a_bless_records_its_release_and_the_same_picture_passes_on_another(golden: &Path) {
+    let (o, _) = golden_versions_run(
+        golden,
         &fake_build("golden-100", "1.0.0", false),
         "golden-bless",
         true,
@@ -440,15 +453,23 @@ fn a_golden_holds_on_its_release_and_lets_the_judge_speak_on_another() {
         "{manifest}"
     );
     // The same picture on 1.0.7 passes: the golden guards the picture, not the version.
-    let (o, _) = run(
+    let (o, _) = golden_versions_run(
+        golden,
         &fake_build("golden-107", "1.0.7", false),
         "golden-same",
         false,
     );
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+}
+
+/// On 2.0.0, wrong shadows fail by the judge's own checks with the change reported, and a
+/// change where the judge does not look (the background) fails the golden check; on 1.0.0 it
+/// fails plainly.
+fn off_its_release_the_judge_speaks_and_the_golden_only_where_it_does_not_look(golden: &Path) {
     // Wrong shadows on 2.0.0 fail by the judge's own checks; the changed picture is reported
     // with both versions, and the golden adds no failure of its own.
-    let (o, out) = run(
+    let (o, out) = golden_versions_run(
+        golden,
         &fake_build("golden-200", "2.0.0", true),
         "golden-other",
         false,
@@ -466,7 +487,8 @@ fn a_golden_holds_on_its_release_and_lets_the_judge_speak_on_another() {
     );
     // A change where the judge does not look (the background) fails the golden check on
     // 2.0.0, naming both versions.
-    let (o, _) = run(
+    let (o, _) = golden_versions_run(
+        golden,
         &fake_build_with("golden-200-bg", "2.0.0", Some("background")),
         "golden-background",
         false,
@@ -480,7 +502,8 @@ fn a_golden_holds_on_its_release_and_lets_the_judge_speak_on_another() {
         "{t}"
     );
     // On the release it was blessed on, the same background change fails too, plainly.
-    let (o, _) = run(
+    let (o, _) = golden_versions_run(
+        golden,
         &fake_build_with("golden-100-bg", "1.0.0", Some("background")),
         "golden-background-same",
         false,
@@ -491,17 +514,25 @@ fn a_golden_holds_on_its_release_and_lets_the_judge_speak_on_another() {
         t.contains("golden=1") && !t.contains("this driver is Mesa"),
         "{t}"
     );
+}
+
+/// Blessing on 2.0.0 writes that release's picture beside the old golden (in the release's
+/// folder of the backend), which then holds strictly on 2.0.0 and leaves 1.0.0's alone.
+fn a_bless_on_another_release_writes_its_picture_beside_the_old_golden(golden: &Path) {
     // Blessing on 2.0.0 writes that release's picture beside the old golden, which stays,
     // and then holds strictly on 2.0.0.
-    let (o, _) = run(
+    let (o, _) = golden_versions_run(
+        golden,
         &fake_build_with("golden-200-bless", "2.0.0", Some("background")),
         "golden-bless-200",
         true,
     );
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     let release = golden.join("mesa-2.0.0");
-    let pictures: Vec<String> = std::fs::read_dir(&release)
-        .expect("golden/mesa-2.0.0")
+    // The release's pictures are in its folder of the backend (`fake/mesa` → `fake_mesa`).
+    let release_pictures = release.join(umbra_runner::judge::golden::folder("fake/mesa"));
+    let pictures: Vec<String> = std::fs::read_dir(&release_pictures)
+        .expect("golden/mesa-2.0.0/fake_mesa")
         .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().into_owned()))
         .collect();
     assert!(
@@ -510,30 +541,39 @@ fn a_golden_holds_on_its_release_and_lets_the_judge_speak_on_another() {
     );
     // The picture differed, so it was written, not confirmed.
     assert!(!release.join("confirmed.txt").exists());
-    let (o, _) = run(
+    let (o, _) = golden_versions_run(
+        golden,
         &fake_build_with("golden-200-bg-again", "2.0.0", Some("background")),
         "golden-background-again",
         false,
     );
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     // 1.0.0's golden is untouched: its own picture still passes there.
-    let (o, _) = run(
+    let (o, _) = golden_versions_run(
+        golden,
         &fake_build("golden-100-again", "1.0.0", false),
         "golden-same-again",
         false,
     );
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     // And the unchanged picture on 2.0.0, strict there now, fails against 2.0.0's own.
-    let (o, _) = run(
+    let (o, _) = golden_versions_run(
+        golden,
         &fake_build("golden-200-plain", "2.0.0", false),
         "golden-200-plain-out",
         false,
     );
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+}
+
+/// A bless on 3.0.0 where the picture is 1.0.0's writes nothing and confirms the golden,
+/// which then holds strictly on 3.0.0.
+fn a_bless_where_the_picture_is_the_same_confirms_the_golden(golden: &Path) {
     // A bless on 3.0.0, where the picture is 1.0.0's, writes nothing and confirms the golden
     // it compared there: from then on it holds strictly on 3.0.0, so the background change
     // fails plainly, as on 1.0.0.
-    let (o, _) = run(
+    let (o, _) = golden_versions_run(
+        golden,
         &fake_build("golden-300", "3.0.0", false),
         "golden-300-bless",
         true,
@@ -544,11 +584,12 @@ fn a_golden_holds_on_its_release_and_lets_the_judge_speak_on_another() {
     assert_eq!(confirmed.lines().count(), 1, "{confirmed}");
     assert!(
         !golden
-            .join("mesa-3.0.0/fake_mesa_l-occluder-70d5e49c.snap.png")
+            .join("mesa-3.0.0/fake_mesa/fake_mesa_l-occluder-70d5e49c.snap.png")
             .exists(),
         "nothing differed on 3.0.0"
     );
-    let (o, _) = run(
+    let (o, _) = golden_versions_run(
+        golden,
         &fake_build_with("golden-300-bg", "3.0.0", Some("background")),
         "golden-300-bg-out",
         false,

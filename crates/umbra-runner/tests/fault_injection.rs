@@ -713,21 +713,36 @@ fn hostile_text_reaches_neither_the_terminal_nor_junit_raw() {
 #[test]
 fn configuration_mistakes_are_usage_errors_that_name_the_flag() {
     let out = scratch("fi-usage");
-    let nowhere = out.join("nowhere");
     let exp = scratch("fi-usage-exp");
-    let base = |extra: &[&str]| -> Output {
-        let mut args = vec![
-            "conformance",
-            "--backend",
-            "ref",
-            "--filter",
-            "square*",
-            "--out",
-            s(&out),
-        ];
-        args.extend(extra);
-        umbra(&args, &[("CI", "true")])
-    };
+    flags_out_of_range_are_usage_errors(&out);
+    expectations_that_can_never_match_are_usage_errors(&out, &exp);
+    a_stale_expectation_line_is_said(&out, &exp);
+    let cases = two_case_files_with_one_name_are_refused(&out);
+    a_fault_name_must_name_a_fault_and_an_empty_one_is_none(&out);
+    reports_inside_the_case_directory_are_refused(&cases);
+    an_empty_shard_succeeds_with_a_note(&out);
+}
+
+/// A conformance run of the reference on one case point under CI, into `out`, with `extra`
+/// flags.
+fn usage_run(out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "conformance",
+        "--backend",
+        "ref",
+        "--filter",
+        "square*",
+        "--out",
+        s(out),
+    ];
+    args.extend(extra);
+    umbra(&args, &[("CI", "true")])
+}
+
+/// A flag's value out of its range, or a directory that is not there, is a usage error that
+/// names the flag; `--golden DIR` is not created.
+fn flags_out_of_range_are_usage_errors(out: &Path) {
+    let nowhere = out.join("nowhere");
     for (extra, says) in [
         (vec!["--timeout", "0"], "--timeout 0"),
         (vec!["--jobs", "0"], "--jobs 0"),
@@ -736,13 +751,17 @@ fn configuration_mistakes_are_usage_errors_that_name_the_flag() {
         (vec!["--expectations", s(&nowhere)], "--expectations"),
         (vec!["--golden", s(&nowhere)], "--golden"),
     ] {
-        let o = base(&extra);
+        let o = usage_run(out, &extra);
         let t = text(&o);
         assert_eq!(o.status.code(), Some(125), "{extra:?}: {t}");
         assert!(t.contains(says), "{extra:?} must name {says}: {t}");
     }
     assert!(!nowhere.exists(), "--golden DIR must not be created");
+}
 
+/// Expectation lines that can never match, or that claim one run twice, are usage errors
+/// that name the file and line.
+fn expectations_that_can_never_match_are_usage_errors(out: &Path, exp: &Path) {
     // Expectation lines that can never match, or that claim one run twice.
     for (lines, says) in [
         ("ref/square-occluder[,Crash,typo\n", "can never match"),
@@ -769,40 +788,52 @@ fn configuration_mistakes_are_usage_errors_that_name_the_flag() {
         ("ref/*,Fail:color<=3,typo\n", "did you mean colour?"),
     ] {
         std::fs::write(exp.join("e.txt"), lines).expect("expectations");
-        let o = base(&["--expectations", s(&exp), "--golden", "none"]);
+        let o = usage_run(out, &["--expectations", s(exp), "--golden", "none"]);
         let t = text(&o);
         assert_eq!(o.status.code(), Some(125), "{lines:?}: {t}");
         assert!(t.contains(says) && t.contains("e.txt:"), "{lines:?}: {t}");
     }
+}
 
+/// A line that matches no run of the catalogue on any backend is said, and only that line.
+fn a_stale_expectation_line_is_said(out: &Path, exp: &Path) {
     // A line that matches no run of the catalogue on any backend is said (issue 36).
     std::fs::write(
         exp.join("e.txt"),
         "ref/square-occluder,Crash,live\nref/no-such-case,Crash,a renamed case\n",
     )
     .expect("expectations");
-    let o = base(&["--expectations", s(&exp), "--golden", "none"]);
+    let o = usage_run(out, &["--expectations", s(exp), "--golden", "none"]);
     let t = text(&o);
     assert!(
         t.contains("warning: expectation") && t.contains("e.txt:2") && t.contains("stale"),
         "{t}"
     );
     assert!(!t.contains("e.txt:1 "), "{t}");
+}
 
+/// Two case files with one name are refused, naming both; the case directory, which
+/// [`reports_inside_the_case_directory_are_refused`] reuses.
+fn two_case_files_with_one_name_are_refused(out: &Path) -> PathBuf {
     // Two case files with one name.
     let cases = scratch("fi-usage-cases");
     let square =
         std::fs::read_to_string(repo().join("cases/basics/square-occluder.json")).expect("case");
     std::fs::write(cases.join("a.json"), &square).expect("a");
     std::fs::write(cases.join("b.json"), &square).expect("b");
-    let o = base(&["--cases", s(&cases), "--golden", "none"]);
+    let o = usage_run(out, &["--cases", s(&cases), "--golden", "none"]);
     let t = text(&o);
     assert_eq!(o.status.code(), Some(125), "{t}");
     assert!(
         t.contains("a.json") && t.contains("b.json") && t.contains("name"),
         "{t}"
     );
+    cases
+}
 
+/// A UMBRA_FAULT that names no fault is refused with the nearest name; an empty one is no
+/// fault.
+fn a_fault_name_must_name_a_fault_and_an_empty_one_is_none(out: &Path) {
     // A fault name no fault has once ran no fault, silently.
     let o = umbra(
         &[
@@ -812,7 +843,7 @@ fn configuration_mistakes_are_usage_errors_that_name_the_flag() {
             "--filter",
             "square*",
             "--out",
-            s(&out),
+            s(out),
         ],
         &[
             ("UMBRA_SELFTEST", "1"),
@@ -837,12 +868,16 @@ fn configuration_mistakes_are_usage_errors_that_name_the_flag() {
             "--golden",
             "none",
             "--out",
-            s(&out),
+            s(out),
         ],
         &[("UMBRA_FAULT", "")],
     );
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+}
 
+/// Reports inside the case directory would be read as cases by the next run: refused, and
+/// nothing written.
+fn reports_inside_the_case_directory_are_refused(cases: &Path) {
     // Reports inside the case directory would be read as cases by the next run.
     let inside = cases.join("reports");
     let o = umbra(
@@ -851,7 +886,7 @@ fn configuration_mistakes_are_usage_errors_that_name_the_flag() {
             "--backend",
             "ref",
             "--cases",
-            s(&cases),
+            s(cases),
             "--out",
             s(&inside),
         ],
@@ -864,9 +899,12 @@ fn configuration_mistakes_are_usage_errors_that_name_the_flag() {
         "{t}"
     );
     assert!(!inside.exists(), "a refused run writes nothing");
+}
 
+/// More shards than runs: an empty shard succeeds, with a note.
+fn an_empty_shard_succeeds_with_a_note(out: &Path) {
     // More shards than runs: an empty shard succeeds, with a note.
-    let o = base(&["--golden", "none", "--shard", "5/9"]);
+    let o = usage_run(out, &["--golden", "none", "--shard", "5/9"]);
     let t = text(&o);
     assert_eq!(o.status.code(), Some(0), "{t}");
     assert!(t.contains("shard 5/9 holds none"), "{t}");
@@ -940,8 +978,10 @@ fn a_golden_that_cannot_be_written_is_said() {
     let root = scratch("fi-unwritable");
     let (golden, out) = (root.join("golden"), root.join("out"));
     let stem = umbra_runner::judge::golden::stem("ref/square-occluder");
+    // The backend's folder of the golden directory holds them.
+    let folder = umbra_runner::judge::golden::folder("ref");
     for blocker in [format!("{stem}.snap"), format!("{stem}.snap.new")] {
-        std::fs::create_dir_all(golden.join(blocker)).expect("blocker");
+        std::fs::create_dir_all(golden.join(&folder).join(blocker)).expect("blocker");
     }
     for (extra, env) in [
         (vec!["--bless"], ("CI", "false")),
@@ -983,7 +1023,10 @@ fn a_golden_that_cannot_be_written_is_said() {
     let written = umbra_runner::judge::golden::stem(&format!("ref/{long}"));
     assert!(written.len() < 200, "{written}");
     assert!(
-        golden.join(format!("{written}.snap")).is_file(),
+        golden
+            .join(&folder)
+            .join(format!("{written}.snap"))
+            .is_file(),
         "{}",
         text(&o)
     );

@@ -58,7 +58,12 @@ fn goldens_fail_on_change_and_are_only_written_by_blessing() {
     let (golden, out) = (root.join("golden"), root.join("out"));
     std::fs::create_dir_all(&golden).expect("dir");
     let seeded = seed_goldens(&golden);
-    let before_ci = files(&golden);
+    // The backend's goldens are in its own folder of the golden directory, and nothing else
+    // is there beside it.
+    let folder = umbra_runner::judge::golden::folder("ref");
+    let ref_goldens = golden.join(&folder);
+    let before_ci = files(&ref_goldens);
+    assert_eq!(files(&golden), [folder.as_str()]);
 
     let o = umbra(&golden, &out, &[("CI", "true")]);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
@@ -67,18 +72,30 @@ fn goldens_fail_on_change_and_are_only_written_by_blessing() {
         "{}",
         text(&o)
     );
-    assert_eq!(files(&golden), before_ci, "CI wrote {:?}", files(&golden));
+    assert_eq!(
+        files(&ref_goldens),
+        before_ci,
+        "CI wrote {:?}",
+        files(&ref_goldens)
+    );
+    assert_eq!(
+        files(&golden),
+        [folder.as_str()],
+        "CI wrote {:?}",
+        files(&golden)
+    );
 
     let o = umbra_with(&golden, &out, &[], &["--bless"]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
-    let written: Vec<String> = files(&golden)
+    let written: Vec<String> = files(&ref_goldens)
         .into_iter()
         .filter(|f| !f.starts_with(seeded))
         .collect();
     // The golden (snapshot + picture); the reference has no driver version, so no manifest
     // of blessed drivers is written.
     assert_eq!(written.len(), 2, "{written:?}");
-    let png = golden.join(
+    assert_eq!(files(&golden), [folder.as_str()], "{:?}", files(&golden));
+    let png = ref_goldens.join(
         written
             .iter()
             .find(|f| f.ends_with(".snap.png"))
@@ -111,17 +128,22 @@ fn goldens_fail_on_change_and_are_only_written_by_blessing() {
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     assert!(text(&o).contains("differs from its golden"), "{}", text(&o));
     assert_eq!(
-        files(&golden).len(),
+        files(&ref_goldens).len(),
         4,
+        "CI must not write a pending snapshot"
+    );
+    assert_eq!(
+        files(&golden),
+        [folder.as_str()],
         "CI must not write a pending snapshot"
     );
 
     let o = umbra(&golden, &out, &[]);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     assert!(
-        files(&golden).iter().any(|f| f.ends_with(".snap.new")),
+        files(&ref_goldens).iter().any(|f| f.ends_with(".snap.new")),
         "pending snapshot for review: {:?}",
-        files(&golden)
+        files(&ref_goldens)
     );
     let _ = std::fs::remove_dir_all(&root);
 }

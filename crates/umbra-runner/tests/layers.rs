@@ -1,5 +1,5 @@
 //! The runner's layers, checked from its sources (as rust-analyzer's `tidy` checks its tree):
-//! the leaves (`args`, `glob`, `atomic_file`, `run_dir`, `case_size`) know nothing above them, `judge` (one
+//! the leaves (`exit`, `glob`, `atomic_file`, `run_dir`, `case_size`) know nothing above them, `judge` (one
 //! point judged, goldens, expectations) knows neither the harness nor a command, `harness`
 //! (workers, pool, registry, Mesa builds), `shards` and `repro` know no command, and no two
 //! modules import each other in a circle. Every module has a layer ([`layer`]): a new one that
@@ -92,15 +92,118 @@ fn imports(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
 
 /// Every module's layer; one this does not know fails the test (give it one here).
 fn layer(module: &str) -> u8 {
-    match module.split("::").next().unwrap_or("") {
+    known_layer(module)
+        .unwrap_or_else(|| panic!("module {module} has no layer: give it one in layers.rs"))
+}
+
+/// A module's layer, where this file gives it one.
+fn known_layer(module: &str) -> Option<u8> {
+    Some(match module.split("::").next().unwrap_or("") {
         // Leaves: parsing, globbing, files; used anywhere, using nothing above them.
-        "args" | "glob" | "atomic_file" | "run_dir" | "case_size" => 0,
+        "exit" | "glob" | "atomic_file" | "run_dir" | "case_size" => 0,
         "judge" => 1,
         "harness" | "shards" | "repro" => 2,
         // The command line's tables name the commands' help only; `commands` run it all.
         "cli" | "commands" => 3,
-        other => panic!("module {module} ({other}) has no layer: give it one in layers.rs"),
+        _ => return None,
+    })
+}
+
+/// The first circle among `graph`'s modules, if any.
+fn circle_in(graph: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>> {
+    fn visit(
+        m: &str,
+        graph: &BTreeMap<String, BTreeSet<String>>,
+        path: &mut Vec<String>,
+        done: &mut BTreeSet<String>,
+    ) -> Option<Vec<String>> {
+        if let Some(i) = path.iter().position(|p| p == m) {
+            let mut circle = path[i..].to_vec();
+            circle.push(m.to_string());
+            return Some(circle);
+        }
+        if done.contains(m) {
+            return None;
+        }
+        path.push(m.to_string());
+        for t in graph.get(m).into_iter().flatten() {
+            if let Some(c) = visit(t, graph, path, done) {
+                return Some(c);
+            }
+        }
+        path.pop();
+        done.insert(m.to_string());
+        None
     }
+    let mut done = BTreeSet::new();
+    graph
+        .keys()
+        .find_map(|m| visit(m, graph, &mut Vec::new(), &mut done))
+}
+
+/// Prints the runner's import graph (`cargo test -p umbra-runner --test layers -- --nocapture
+/// the_import_graph`): each module with its layer and what it imports, the arrows that point
+/// up a layer, the circles, and the largest files. `UMBRA_LAYERS_SRC=DIR` prints another
+/// tree's (an older checkout's `crates/umbra-runner/src`), for a before-and-after.
+#[test]
+fn the_import_graph() {
+    let src = std::env::var_os("UMBRA_LAYERS_SRC")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src"));
+    let graph = imports(&src);
+    let name = |m: &str| match known_layer(m) {
+        Some(l) => format!("{m} [{l}]"),
+        None => format!("{m} [?]"),
+    };
+    println!("import graph of {} (layer in brackets):", src.display());
+    for (m, named) in &graph {
+        let to: Vec<String> = named.iter().map(|t| name(t)).collect();
+        println!("  {} -> {}", name(m), to.join(", "));
+    }
+    let upward: Vec<String> = graph
+        .iter()
+        .flat_map(|(m, named)| named.iter().map(move |t| (m, t)))
+        .filter(|(m, t)| matches!((known_layer(m), known_layer(t)), (Some(a), Some(b)) if b > a))
+        .map(|(m, t)| format!("{m} -> {t}"))
+        .collect();
+    println!("arrows up a layer: {}", upward.len());
+    for u in &upward {
+        println!("  {u}");
+    }
+    for tree in [
+        src.clone(),
+        src.join("../../umbra-case/src"),
+        src.join("../../umbra-gl/src"),
+    ] {
+        match circle_in(&imports(&tree)) {
+            Some(c) => println!("circle in {}: {}", tree.display(), c.join(" -> ")),
+            None => println!("no circle in {}", tree.display()),
+        }
+    }
+    let mut sizes: Vec<(usize, String)> = Vec::new();
+    let mut stack = vec![src.clone()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).into_iter().flatten().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                let n = std::fs::read_to_string(&p).map_or(0, |t| t.lines().count());
+                let shown = p.strip_prefix(&src).unwrap_or(&p).display().to_string();
+                sizes.push((n, shown));
+            }
+        }
+    }
+    sizes.sort_by(|a, b| b.cmp(a));
+    println!(
+        "largest files ({} lines in {} files):",
+        sizes.iter().map(|s| s.0).sum::<usize>(),
+        sizes.len()
+    );
+    for (n, f) in sizes.iter().take(10) {
+        println!("  {n:5} {f}");
+    }
+    assert!(!graph.is_empty(), "no module found under {}", src.display());
 }
 
 #[test]
@@ -137,41 +240,12 @@ fn no_module_imports_in_a_circle() {
 }
 
 fn no_circle(src: &Path) {
-    let graph = imports(src);
-    // Depth-first search for a back edge; report the circle it closes.
-    fn visit(
-        m: &str,
-        graph: &BTreeMap<String, BTreeSet<String>>,
-        path: &mut Vec<String>,
-        done: &mut BTreeSet<String>,
-    ) -> Option<Vec<String>> {
-        if let Some(i) = path.iter().position(|p| p == m) {
-            let mut circle = path[i..].to_vec();
-            circle.push(m.to_string());
-            return Some(circle);
-        }
-        if done.contains(m) {
-            return None;
-        }
-        path.push(m.to_string());
-        for t in graph.get(m).into_iter().flatten() {
-            if let Some(c) = visit(t, graph, path, done) {
-                return Some(c);
-            }
-        }
-        path.pop();
-        done.insert(m.to_string());
-        None
-    }
-    let mut done = BTreeSet::new();
-    for m in graph.keys() {
-        if let Some(circle) = visit(m, &graph, &mut Vec::new(), &mut done) {
-            panic!(
-                "{}: modules import each other in a circle: {}",
-                src.display(),
-                circle.join(" → ")
-            );
-        }
+    if let Some(circle) = circle_in(&imports(src)) {
+        panic!(
+            "{}: modules import each other in a circle: {}",
+            src.display(),
+            circle.join(" → ")
+        );
     }
 }
 
@@ -192,4 +266,71 @@ fn reporting_never_names_the_runner() {
             p.display()
         );
     }
+}
+
+/// Backend identity stays in the registry (`harness::registry::Descriptor`): the files that
+/// may name the GL or wgpu crates, each for a reason of its own. A command that needs to know
+/// what a backend is asks its descriptor; a new wgpu kind or GL API is taught in the registry.
+#[test]
+fn only_the_registry_and_its_neighbours_name_the_backend_crates() {
+    const ALLOWED: &[(&str, &str)] = &[
+        (
+            "harness/registry.rs",
+            "the descriptor, and creating backends",
+        ),
+        (
+            "harness/mesa_build.rs",
+            "which of a Mesa build's libraries a driver needs",
+        ),
+        (
+            "commands/backends.rs",
+            "lists the machine's EGL devices and wgpu adapters",
+        ),
+        (
+            "repro/mod.rs",
+            "the repro replays umbra-gl's recorded GL calls as C",
+        ),
+        (
+            "repro/probes.rs",
+            "writes the probes' floats as umbra-gl's recorder does",
+        ),
+        (
+            "judge/expectations.rs",
+            "below the registry's layer: tells a device id's form from a misspelling",
+        ),
+    ];
+    let src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut stack = vec![src.clone()];
+    let mut naming = Vec::new();
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).expect("read src").flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+                continue;
+            }
+            let text = std::fs::read_to_string(&p).unwrap_or_default();
+            let code: String = text
+                .lines()
+                .map(|l| l.split("//").next().unwrap_or(""))
+                .collect::<Vec<_>>()
+                .join("\n");
+            if code.contains("umbra_gl::") || code.contains("umbra_wgpu::") {
+                let rel = p.strip_prefix(&src).unwrap_or(&p).display().to_string();
+                naming.push(rel);
+            }
+        }
+    }
+    let stray: Vec<&String> = naming
+        .iter()
+        .filter(|f| !ALLOWED.iter().any(|(a, _)| a == f))
+        .collect();
+    assert!(
+        stray.is_empty(),
+        "these runner files name umbra_gl or umbra_wgpu; ask harness::registry::Descriptor instead: {stray:?}"
+    );
+    assert!(
+        naming.iter().any(|f| f == "harness/registry.rs"),
+        "{naming:?}"
+    );
 }

@@ -246,16 +246,43 @@ fn a_merge_refuses_what_would_make_its_report_wrong_and_names_it() {
     let cases = cases(&root);
     let shards = three_shards(&cases, &root, &[]);
     let merged = root.join("merged");
-    let refused = |dirs: &[&Path], what: &str| {
-        let o = merge(dirs, &merged);
-        let t = text(&o);
-        assert_eq!(o.status.code(), Some(125), "{what}:\n{t}");
-        assert!(t.contains(what), "{what}:\n{t}");
-        assert!(
-            !merged.join("latest").exists(),
-            "a refused merge publishes nothing"
-        );
-    };
+    missing_repeated_or_overlapping_shards_are_refused(&root, &cases, &shards, &merged);
+    records_of_another_build_case_set_setting_or_driver_are_refused(&root, &shards, &merged);
+    another_renderer_on_another_host_is_kept_and_said(&root, &shards);
+    damaged_forged_or_incomplete_records_are_refused(&root, &shards, &merged);
+    an_output_among_the_inputs_or_no_shard_is_refused(&root, &shards, &merged);
+    // The three whole shards merge, given as their --out or as a copy of their `runs/` (a
+    // CI artifact, without the `latest` link).
+    let refs: Vec<&Path> = shards.iter().map(PathBuf::as_path).collect();
+    assert_eq!(merge(&refs, &merged).status.code(), Some(1));
+    let runs: Vec<PathBuf> = shards.iter().map(|s| s.join("runs")).collect();
+    let refs: Vec<&Path> = runs.iter().map(PathBuf::as_path).collect();
+    let o = merge(&refs, &root.join("merged-artifacts"));
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+}
+
+/// The merge of `dirs` into `merged` is refused (exit 125), saying `what`, and publishes
+/// nothing.
+fn assert_refused(merged: &Path, dirs: &[&Path], what: &str) {
+    let o = merge(dirs, merged);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{what}:\n{t}");
+    assert!(t.contains(what), "{what}:\n{t}");
+    assert!(
+        !merged.join("latest").exists(),
+        "a refused merge publishes nothing"
+    );
+}
+
+/// A shard missing (named, with its runs), one given twice, and runs in two shards (another
+/// plan's run of the same points) are refused.
+fn missing_repeated_or_overlapping_shards_are_refused(
+    root: &Path,
+    cases: &Path,
+    shards: &[PathBuf],
+    merged: &Path,
+) {
+    let refused = |dirs: &[&Path], what: &str| assert_refused(merged, dirs, what);
     // A shard missing: named, with its runs.
     refused(&[&shards[0], &shards[2]], "shards missing: 1/3");
     // A shard given twice.
@@ -283,22 +310,40 @@ fn a_merge_refuses_what_would_make_its_report_wrong_and_names_it() {
         &[&shards[0], &shards[1], &shards[2], &other],
         "is in two shards",
     );
-    // Shard 2/3's record as another job would have left it, edited by `change`.
-    let edited = |label: &str, change: &dyn Fn(&mut serde_json::Value)| {
-        let copy = root.join(format!("edited-{label}"));
-        std::fs::create_dir_all(&copy).expect("copy dir");
-        let mut v = read_record(&shards[2].join("latest/shard.json"));
-        change(&mut v);
-        write_record(&copy.join("shard.json"), &v);
-        copy
-    };
-    let llvmpipe_row = |v: &mut serde_json::Value, key: &str, value: &str| {
-        for d in v["drivers"].as_array_mut().expect("drivers") {
-            if d["backend"] == "gl33/llvmpipe" {
-                d["row"][key] = value.into();
-            }
+}
+
+/// Shard 2/3's record (`shard`'s) as another job would have left it, edited by `change`, in a
+/// directory `edited-LABEL` of its own under `root`.
+fn edited_record(
+    root: &Path,
+    shard: &Path,
+    label: &str,
+    change: &dyn Fn(&mut serde_json::Value),
+) -> PathBuf {
+    let copy = root.join(format!("edited-{label}"));
+    std::fs::create_dir_all(&copy).expect("copy dir");
+    let mut v = read_record(&shard.join("latest/shard.json"));
+    change(&mut v);
+    write_record(&copy.join("shard.json"), &v);
+    copy
+}
+
+/// Sets `key` of gl33/llvmpipe's row of drivers in record `v` to `value`.
+fn set_llvmpipe_row(v: &mut serde_json::Value, key: &str, value: &str) {
+    for d in v["drivers"].as_array_mut().expect("drivers") {
+        if d["backend"] == "gl33/llvmpipe" {
+            d["row"][key] = value.into();
         }
-    };
+    }
+}
+
+/// Another build of umbra, case set, timeout or driver: the record says so, and the merge is
+/// refused naming it.
+fn records_of_another_build_case_set_setting_or_driver_are_refused(
+    root: &Path,
+    shards: &[PathBuf],
+    merged: &Path,
+) {
     // Another build of umbra, case set, timeout or driver: the record says so.
     for (label, what, change) in [
         (
@@ -314,15 +359,18 @@ fn a_merge_refuses_what_would_make_its_report_wrong_and_names_it() {
             v["settings"]["timeout_s"] = 5.into()
         }),
         ("vendor", "gl33/llvmpipe ran on different drivers", &|v| {
-            llvmpipe_row(v, "vendor", "Another Vendor")
+            set_llvmpipe_row(v, "vendor", "Another Vendor")
         }),
     ] {
-        let copy = edited(label, change);
-        refused(&[&shards[0], &shards[1], &copy], what);
+        let copy = edited_record(root, &shards[2], label, change);
+        assert_refused(merged, &[&shards[0], &shards[1], &copy], what);
     }
-    // The same driver reporting another renderer on another host is kept, and said.
-    let other_host = edited("renderer", &|v| {
-        llvmpipe_row(v, "renderer", "llvmpipe (LLVM 15.0.6, 512 bits)")
+}
+
+/// The same driver reporting another renderer on another host is kept, and said.
+fn another_renderer_on_another_host_is_kept_and_said(root: &Path, shards: &[PathBuf]) {
+    let other_host = edited_record(root, &shards[2], "renderer", &|v| {
+        set_llvmpipe_row(v, "renderer", "llvmpipe (LLVM 15.0.6, 512 bits)")
     });
     let o = merge(&[&shards[0], &shards[1], &other_host], &root.join("hosts"));
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
@@ -331,6 +379,16 @@ fn a_merge_refuses_what_would_make_its_report_wrong_and_names_it() {
         drivers.contains("also renderer") && drivers.contains("512 bits"),
         "{drivers}"
     );
+}
+
+/// A damaged record, one edited by hand (a failing run made a pass), and a run directory
+/// carrying the INCOMPLETE marker are refused.
+fn damaged_forged_or_incomplete_records_are_refused(
+    root: &Path,
+    shards: &[PathBuf],
+    merged: &Path,
+) {
+    let refused = |dirs: &[&Path], what: &str| assert_refused(merged, dirs, what);
     // A damaged record.
     let damaged = root.join("damaged");
     std::fs::create_dir_all(&damaged).expect("dir");
@@ -369,6 +427,16 @@ fn a_merge_refuses_what_would_make_its_report_wrong_and_names_it() {
     )
     .expect("marker");
     refused(&[&shards[0], &marked, &shards[2]], "did not complete");
+}
+
+/// `-o` naming one of the inputs, a directory that holds no shard, and an interrupted shard
+/// (its run directory marked incomplete, no `latest`) are refused.
+fn an_output_among_the_inputs_or_no_shard_is_refused(
+    root: &Path,
+    shards: &[PathBuf],
+    merged: &Path,
+) {
+    let refused = |dirs: &[&Path], what: &str| assert_refused(merged, dirs, what);
     // -o naming one of the inputs would replace that shard's `latest`.
     let o = merge(&[&shards[0], &shards[1], &shards[2]], &shards[1]);
     assert_eq!(o.status.code(), Some(125), "{}", text(&o));
@@ -384,14 +452,6 @@ fn a_merge_refuses_what_would_make_its_report_wrong_and_names_it() {
     )
     .expect("marker");
     refused(&[&shards[0], &shards[1], &broken], "did not complete");
-    // The three whole shards merge, given as their --out or as a copy of their `runs/` (a
-    // CI artifact, without the `latest` link).
-    let refs: Vec<&Path> = shards.iter().map(PathBuf::as_path).collect();
-    assert_eq!(merge(&refs, &merged).status.code(), Some(1));
-    let runs: Vec<PathBuf> = shards.iter().map(|s| s.join("runs")).collect();
-    let refs: Vec<&Path> = runs.iter().map(PathBuf::as_path).collect();
-    let o = merge(&refs, &root.join("merged-artifacts"));
-    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
 }
 
 /// The sweep's check across runs is the merge's to make: raise the error of llvmpipe's

@@ -14,30 +14,28 @@
 
 use serde_json::{Value, json};
 
-use crate::args::Args;
+use crate::cli::BackendsArgs;
+use crate::exit::{Error, Exit, Outcome};
 use crate::harness::registry;
 
-/// Runs `umbra backends`.
-pub fn main(args: &Args) -> i32 {
+/// Runs `umbra backends`; returns its outcome.
+pub fn main(args: &BackendsArgs) -> Outcome {
     // The Vulkan loader's device-select layer complains about XDG_RUNTIME_DIR on a machine
     // without a session: enumerate in a process that has it quiet, as the workers do.
     if std::env::var_os("NODEVICE_SELECT").is_none() {
         let again: Vec<String> = std::env::args().skip(1).collect();
         return crate::harness::child::rerun(&again, &[("NODEVICE_SELECT".into(), "1".into())]);
     }
-    if args.has("ids") {
+    if args.ids {
         for d in registry::discover_here() {
             println!(
                 "{}",
                 json!({ "id": d.id, "hardware": d.hardware, "reached": d.reached })
             );
         }
-        return 0;
+        return Ok(Exit::Pass);
     }
-    if let Err(e) = crate::harness::mesa_build::select(args.value("mesa")) {
-        eprintln!("error: {e}");
-        return 125;
-    }
+    crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
     let devices = registry::discover_here();
     let listing = json!({
         "backends": registry::known().iter().filter(|id| *id != "ref")
@@ -59,7 +57,7 @@ pub fn main(args: &Args) -> i32 {
             "device": format!("0x{:04x}", a.device),
         })).collect::<Vec<_>>(),
     });
-    if args.has("json") {
+    if args.json {
         println!(
             "{}",
             serde_json::to_string_pretty(&listing).unwrap_or_default()
@@ -67,7 +65,7 @@ pub fn main(args: &Args) -> i32 {
     } else {
         print!("{}", text(&listing));
     }
-    0
+    Ok(Exit::Pass)
 }
 
 /// One backend id, opened in its own process: its strings, or why it is unavailable; `what`
@@ -123,17 +121,10 @@ fn reach(id: &str) -> String {
         .iter()
         .map(|(k, v)| format!("{k}={v}"))
         .collect();
-    let how = match umbra_wgpu::Kind::parse(id) {
-        Some(umbra_wgpu::Kind::Vulkan) => "wgpu on Vulkan, the adapter of this name",
-        Some(umbra_wgpu::Kind::Gl) => "wgpu's GL backend on EGL",
-        None if umbra_gl::parse_device_id(id).is_some() => {
-            "EGL device platform (EGL_EXT_platform_device), the device of this name"
-        }
-        None => match std::env::var(umbra_gl::platform::ENV).ok().as_deref() {
-            Some(p) if p.starts_with("device") => "EGL device (UMBRA_EGL_PLATFORM)",
-            _ => "EGL surfaceless (or the first EGL device where surfaceless is not offered)",
-        },
-    };
+    let how = registry::Descriptor::of(id).map_or(
+        "EGL surfaceless (or the first EGL device where surfaceless is not offered)",
+        |d| d.how_reached(),
+    );
     if env.is_empty() {
         how.to_string()
     } else {

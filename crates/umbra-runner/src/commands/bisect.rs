@@ -27,7 +27,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Instant;
 
-use crate::args::Args;
+use crate::cli::{BisectArgs, BisectStepArgs, Selection};
+use crate::exit::{Error, Exit, Outcome};
 
 /// The one-time configuration: the smallest Mesa that holds every driver umbra runs.
 pub const MESON_OPTIONS: &[&str] = &[
@@ -90,148 +91,178 @@ fn absolute(p: &str) -> PathBuf {
     }
 }
 
-/// Runs the command; returns the exit code (0: a first bad commit was found; 1: not found
-/// or ambiguous; 125: bad input or set-up).
-pub fn main(args: &Args) -> i32 {
-    let (Some(src), Some(good), Some(bad)) = (
-        args.value("mesa-src"),
-        args.value("good"),
-        args.value("bad"),
-    ) else {
-        return usage("give --mesa-src DIR, --good REV and --bad REV");
-    };
-    let src = absolute(src);
-    if let Err(e) = git(&src, &["rev-parse", "--git-dir"]) {
-        eprintln!(
-            "error: --mesa-src {}: not a git work tree ({e}); fix: clone Mesa, or `git init` an unpacked source and commit it",
-            src.display()
-        );
-        return 125;
-    }
-    match git(&src, &["status", "--porcelain", "--untracked-files=no"]) {
-        Ok(s) if s.is_empty() => {}
-        Ok(s) => {
-            eprintln!(
-                "error: --mesa-src {} has uncommitted changes, which bisect's checkouts would clobber:\n{s}\nfix: commit or stash them",
-                src.display()
-            );
-            return 125;
-        }
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 125;
-        }
-    }
-    for (flag, rev) in [("--good", good), ("--bad", bad)] {
-        if let Err(e) = git(
-            &src,
-            &["rev-parse", "--verify", &format!("{rev}^{{commit}}")],
-        ) {
-            eprintln!(
-                "error: {flag} {rev}: not a commit of {} ({e})",
-                src.display()
-            );
-            return 125;
-        }
-    }
-    let work = absolute(args.value("work").unwrap_or("target/umbra/bisect"));
+/// Runs the command; returns its outcome (a pass: a first bad commit was found; a failure:
+/// not found or ambiguous; could not run: bad input or set-up). The steps: check the tree
+/// and the ends' revisions, configure once, check the ends, bisect, and say what was found.
+pub fn main(args: &BisectArgs) -> Outcome {
+    let (good, bad) = (args.good.as_str(), args.bad.as_str());
+    let src = absolute(&args.mesa_src);
+    check_tree(&src, good, bad)?;
+    let work = absolute(args.work.as_deref().unwrap_or("target/umbra/bisect"));
     let _ = std::fs::create_dir_all(&work);
     let _ = std::fs::remove_file(work.join("steps.csv"));
-    let script = args.value("build-script").map(absolute);
-    if let Some(s) = &script {
-        if !s.is_file() {
-            eprintln!("error: --build-script {}: no such file", s.display());
-            return 125;
-        }
-    } else {
-        // Configure once.
-        let build = work.join("build");
-        if !build.join("build.ninja").is_file() {
-            let t = Instant::now();
-            let mut cmd = Command::new("meson");
-            cmd.arg("setup").arg(&build).arg(&src).args(MESON_OPTIONS);
-            for o in args.values("meson-option") {
-                cmd.arg(o);
-            }
-            println!("bisect: configuring once: {cmd:?}");
-            match cmd.status() {
-                Ok(s) if s.success() => println!(
-                    "bisect: configured in {:.0} s; the first build compiles all of Mesa's swrast, zink and lavapipe (about 40 min on 2 cores), later ones only what a commit touched",
-                    t.elapsed().as_secs_f64()
-                ),
-                Ok(s) => {
-                    eprintln!(
-                        "error: meson setup failed ({s}); fix: install Mesa's build dependencies (README, \"Bisecting a Mesa tree\") and check that `python3` has mako"
-                    );
-                    return 125;
-                }
-                Err(e) => {
-                    eprintln!(
-                        "error: cannot run meson: {e}; fix: apt-get install meson ninja-build"
-                    );
-                    return 125;
-                }
-            }
-        }
-    }
-    let exe = match crate::harness::own_libc::self_exe() {
-        Ok(e) => e,
-        Err(e) => {
-            eprintln!("error: cannot find this executable: {e}");
-            return 125;
-        }
-    };
-    // The step's arguments, every path absolute (git bisect run works in the source tree).
-    let mut step: Vec<String> = vec!["bisect-step".into()];
-    let cases = absolute(args.value("cases").unwrap_or("cases"));
-    let expectations = absolute(args.value("expectations").unwrap_or("expectations"));
-    for (k, v) in [
-        ("src", Some(src.display().to_string())),
-        ("work", Some(work.display().to_string())),
-        ("filter", args.value("filter").map(str::to_string)),
-        (
-            "build-script",
-            script.as_ref().map(|s| s.display().to_string()),
-        ),
-        ("cases", Some(cases.display().to_string())),
-        ("expectations", Some(expectations.display().to_string())),
-    ] {
-        if let Some(v) = v {
-            step.push(format!("--{k}"));
-            step.push(v);
-        }
-    }
-    for b in args.values("backend") {
-        step.push("--backend".into());
-        step.push(b.to_string());
-    }
+    let script = args.build_script.as_deref().map(absolute);
+    configure(args, &src, &work, script.as_deref())?;
+    let exe = crate::harness::own_libc::self_exe()
+        .map_err(|e| Error::new(format!("cannot find this executable: {e}")))?;
+    let step = step_argv(args, &src, &work, script.as_deref());
     let started = Instant::now();
     let _ = git(&src, &["bisect", "reset"]);
     // Each bisection starts its own list of steps.
     let _ = std::fs::remove_file(work.join("steps.csv"));
-    if !args.has("no-check-ends") {
-        if let Err(e) = check_ends(&src, &exe, &step, good, bad) {
-            eprintln!("error: {e}");
-            return 125;
-        }
+    if !args.no_check_ends {
+        check_ends(&src, &exe, &step, good, bad).map_err(Error::new)?;
     }
-    if let Err(e) = git(&src, &["bisect", "start", bad, good]) {
-        eprintln!("error: {e}");
-        return 125;
-    }
+    git(&src, &["bisect", "start", bad, good]).map_err(Error::new)?;
     println!(
         "bisect: {} between good {good} and bad {bad}",
         src.display()
     );
     let log_path = work.join("bisect.log");
-    // Stream git's output (each step's line among it) and keep it for the transcript.
+    let transcript = bisect_run(&src, &exe, &step, &log_path);
+    // The steps, as the step processes recorded them.
+    let steps = std::fs::read_to_string(work.join("steps.csv")).unwrap_or_default();
+    println!("\nbisect: steps (commit, build s, test s, verdict, subject):");
+    for l in steps.lines() {
+        println!("  {l}");
+    }
+    let first_bad = transcript
+        .lines()
+        .find_map(|l| l.strip_suffix(" is the first bad commit"))
+        .map(str::to_string);
+    println!(
+        "bisect: {:.0} s in all; transcript in {}",
+        started.elapsed().as_secs_f64(),
+        log_path.display()
+    );
+    match first_bad {
+        Some(sha) => say_first_bad(args, &src, &work, &sha, &log_path),
+        None => {
+            let tail: Vec<&str> = transcript.lines().rev().take(8).collect();
+            eprintln!(
+                "bisect: no single first bad commit; git said:\n{}",
+                tail.into_iter().rev().collect::<Vec<_>>().join("\n")
+            );
+            Ok(Exit::Fail)
+        }
+    }
+}
+
+/// `--mesa-src` is a clean git work tree holding `--good` and `--bad`.
+fn check_tree(src: &Path, good: &str, bad: &str) -> Result<(), Error> {
+    if let Err(e) = git(src, &["rev-parse", "--git-dir"]) {
+        return Err(Error::new(format!(
+            "--mesa-src {}: not a git work tree ({e}); fix: clone Mesa, or `git init` an unpacked source and commit it",
+            src.display()
+        )));
+    }
+    match git(src, &["status", "--porcelain", "--untracked-files=no"]) {
+        Ok(s) if s.is_empty() => {}
+        Ok(s) => {
+            return Err(Error::new(format!(
+                "--mesa-src {} has uncommitted changes, which bisect's checkouts would clobber:\n{s}\nfix: commit or stash them",
+                src.display()
+            )));
+        }
+        Err(e) => return Err(Error::new(e)),
+    }
+    for (flag, rev) in [("--good", good), ("--bad", bad)] {
+        if let Err(e) = git(
+            src,
+            &["rev-parse", "--verify", &format!("{rev}^{{commit}}")],
+        ) {
+            return Err(Error::new(format!(
+                "{flag} {rev}: not a commit of {} ({e})",
+                src.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The build: `--build-script`, which must exist, or meson, configured once in `WORK/build`.
+fn configure(
+    args: &BisectArgs,
+    src: &Path,
+    work: &Path,
+    script: Option<&Path>,
+) -> Result<(), Error> {
+    if let Some(s) = script {
+        if !s.is_file() {
+            return Err(Error::new(format!(
+                "--build-script {}: no such file",
+                s.display()
+            )));
+        }
+        return Ok(());
+    }
+    let build = work.join("build");
+    if build.join("build.ninja").is_file() {
+        return Ok(());
+    }
+    let t = Instant::now();
+    let mut cmd = Command::new("meson");
+    cmd.arg("setup").arg(&build).arg(src).args(MESON_OPTIONS);
+    cmd.args(&args.meson_option);
+    println!("bisect: configuring once: {cmd:?}");
+    match cmd.status() {
+        Ok(s) if s.success() => {
+            println!(
+                "bisect: configured in {:.0} s; the first build compiles all of Mesa's swrast, zink and lavapipe (about 40 min on 2 cores), later ones only what a commit touched",
+                t.elapsed().as_secs_f64()
+            );
+            Ok(())
+        }
+        Ok(s) => Err(Error::new(format!(
+            "meson setup failed ({s}); fix: install Mesa's build dependencies (README, \"Bisecting a Mesa tree\") and check that `python3` has mako"
+        ))),
+        Err(e) => Err(Error::new(format!(
+            "cannot run meson: {e}; fix: apt-get install meson ninja-build"
+        ))),
+    }
+}
+
+/// The step's arguments (`umbra bisect-step …`), every path absolute (git bisect run works
+/// in the source tree), in the order git's `running …` lines have always shown them.
+fn step_argv(args: &BisectArgs, src: &Path, work: &Path, script: Option<&Path>) -> Vec<String> {
+    let full =
+        |p: Option<&str>, default: &str| Some(absolute(p.unwrap_or(default)).display().to_string());
+    let selection = Selection {
+        cases: full(args.selection.cases.as_deref(), "cases"),
+        expectations: full(args.selection.expectations.as_deref(), "expectations"),
+        filter: None,
+        backend: args.selection.backend.clone(),
+    };
+    let filter = Selection {
+        filter: args.selection.filter.clone(),
+        ..Selection::default()
+    };
+    let mut step: Vec<String> = vec![
+        "bisect-step".into(),
+        "--src".into(),
+        src.display().to_string(),
+        "--work".into(),
+        work.display().to_string(),
+    ];
+    step.extend(filter.argv());
+    if let Some(s) = script {
+        step.extend(["--build-script".into(), s.display().to_string()]);
+    }
+    step.extend(selection.argv());
+    step
+}
+
+/// `git bisect run` of the step, its output streamed (each step's line among it) and kept;
+/// the transcript and git's bisect log go to `log_path`, and the tree is reset. Returns the
+/// transcript.
+fn bisect_run(src: &Path, exe: &Path, step: &[String], log_path: &Path) -> String {
     let mut transcript = String::new();
     match Command::new("git")
         .arg("-C")
-        .arg(&src)
+        .arg(src)
         .args(["bisect", "run"])
-        .arg(&exe)
-        .args(&step)
+        .arg(exe)
+        .args(step)
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
         .spawn()
@@ -249,9 +280,9 @@ pub fn main(args: &Args) -> i32 {
         }
         Err(e) => transcript = format!("cannot run git bisect run: {e}"),
     }
-    let bisect_log = git(&src, &["bisect", "log"]).unwrap_or_default();
-    let _ = git(&src, &["bisect", "reset"]);
-    if let Ok(mut f) = std::fs::File::create(&log_path) {
+    let bisect_log = git(src, &["bisect", "log"]).unwrap_or_default();
+    let _ = git(src, &["bisect", "reset"]);
+    if let Ok(mut f) = std::fs::File::create(log_path) {
         let command: Vec<String> = std::env::args().skip(1).collect();
         let _ = write!(
             f,
@@ -259,91 +290,77 @@ pub fn main(args: &Args) -> i32 {
             command.join(" ")
         );
     }
-    // The steps, as the step processes recorded them.
-    let steps = std::fs::read_to_string(work.join("steps.csv")).unwrap_or_default();
-    println!("\nbisect: steps (commit, build s, test s, verdict, subject):");
-    for l in steps.lines() {
-        println!("  {l}");
-    }
-    let first_bad = transcript
-        .lines()
-        .find_map(|l| l.strip_suffix(" is the first bad commit"))
-        .map(str::to_string);
-    println!(
-        "bisect: {:.0} s in all; transcript in {}",
-        started.elapsed().as_secs_f64(),
-        log_path.display()
-    );
-    match first_bad {
-        Some(sha) => {
-            let subject = git(&src, &["log", "-1", "--format=%h %s", &sha]).unwrap_or_default();
-            println!("bisect: first bad commit: {sha}\nbisect:   {subject}");
-            let short = git(&src, &["rev-parse", "--short=12", &sha]).unwrap_or(sha.clone());
-            let report = work
-                .join("reports")
-                .join(&short)
-                .join("latest")
-                .join("report.json");
-            if let Some(r) = std::fs::read_to_string(&report)
-                .ok()
-                .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-            {
-                println!("bisect: the case's failure on it ({}):", report.display());
-                for run in r["runs"].as_array().into_iter().flatten() {
-                    let status = run["status"].as_str().unwrap_or("");
-                    if matches!(status, "Fail" | "Crash" | "Timeout" | "UnexpectedPass") {
-                        println!(
-                            "  {status} {}: {}",
-                            run["name"].as_str().unwrap_or(""),
-                            run["reason"]
-                                .as_str()
-                                .unwrap_or("")
-                                .lines()
-                                .next()
-                                .unwrap_or("")
-                        );
-                    }
-                }
-                if let Some(dir) = args.value("repro") {
-                    return repro_first_bad(
-                        args,
-                        &r,
-                        &sha,
-                        &work.join("prefixes").join(&short),
-                        &log_path,
-                        dir,
-                    );
-                }
-            } else if args.value("repro").is_some() {
-                eprintln!(
-                    "error: --repro: no report of the first bad commit at {}",
-                    report.display()
-                );
-                return 125;
-            }
-            0
+    transcript
+}
+
+/// Says the first bad commit and the case's failure on it (from its step's report), and,
+/// with `--repro`, writes the bundle of its first failed run.
+fn say_first_bad(
+    args: &BisectArgs,
+    src: &Path,
+    work: &Path,
+    sha: &str,
+    log_path: &Path,
+) -> Outcome {
+    let subject = git(src, &["log", "-1", "--format=%h %s", sha]).unwrap_or_default();
+    println!("bisect: first bad commit: {sha}\nbisect:   {subject}");
+    let short = git(src, &["rev-parse", "--short=12", sha]).unwrap_or(sha.to_string());
+    let report = work
+        .join("reports")
+        .join(&short)
+        .join("latest")
+        .join("report.json");
+    let Some(r) = std::fs::read_to_string(&report)
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+    else {
+        if args.repro.is_some() {
+            return Err(Error::new(format!(
+                "--repro: no report of the first bad commit at {}",
+                report.display()
+            )));
         }
-        None => {
-            let tail: Vec<&str> = transcript.lines().rev().take(8).collect();
-            eprintln!(
-                "bisect: no single first bad commit; git said:\n{}",
-                tail.into_iter().rev().collect::<Vec<_>>().join("\n")
+        return Ok(Exit::Pass);
+    };
+    println!("bisect: the case's failure on it ({}):", report.display());
+    for run in r["runs"].as_array().into_iter().flatten() {
+        let status = run["status"].as_str().unwrap_or("");
+        if matches!(status, "Fail" | "Crash" | "Timeout" | "UnexpectedPass") {
+            println!(
+                "  {status} {}: {}",
+                run["name"].as_str().unwrap_or(""),
+                run["reason"]
+                    .as_str()
+                    .unwrap_or("")
+                    .lines()
+                    .next()
+                    .unwrap_or("")
             );
-            1
         }
+    }
+    match &args.repro {
+        Some(dir) => repro_first_bad(
+            args,
+            &r,
+            sha,
+            &work.join("prefixes").join(&short),
+            log_path,
+            dir,
+        ),
+        None => Ok(Exit::Pass),
     }
 }
 
 /// `--repro DIR`: the bundle of the first bad commit's first failed run (`umbra repro` on
 /// its prefix), its issue.md naming the commit and carrying the bisection log.
 fn repro_first_bad(
-    args: &Args,
+    args: &BisectArgs,
     report: &serde_json::Value,
     sha: &str,
     prefix: &Path,
     log: &Path,
     dir: &str,
-) -> i32 {
+) -> Outcome {
     let Some(run) = report["runs"]
         .as_array()
         .into_iter()
@@ -351,14 +368,14 @@ fn repro_first_bad(
         .find(|r| r["status"] == "Fail")
         .and_then(|r| r["name"].as_str())
     else {
-        eprintln!(
-            "error: --repro: the first bad commit's report has no failed run to reproduce (a crash or timeout has no frame to probe)"
-        );
-        return 125;
+        return Err(Error::new(
+            "--repro: the first bad commit's report has no failed run to reproduce (a crash or timeout has no frame to probe)",
+        ));
     };
     println!("bisect: the repro bundle of {run} on {sha}: {dir}");
     let Ok(exe) = crate::harness::own_libc::self_exe() else {
-        return 125;
+        // Not said, as before: this executable was found moments ago.
+        return Err(Error::said(Exit::CouldNotRun));
     };
     let mut cmd = Command::new(exe);
     cmd.args(["repro", run, "--out", dir, "--first-bad", sha])
@@ -366,17 +383,20 @@ fn repro_first_bad(
         .arg(prefix)
         .arg("--bisect-log")
         .arg(log);
-    for k in ["cases", "expectations"] {
-        if let Some(v) = args.value(k) {
-            cmd.arg(format!("--{k}")).arg(absolute(v));
+    // Not Selection::argv(): repro takes no --filter, and its paths are made absolute.
+    let selection = &args.selection;
+    for (flag, v) in [
+        ("--cases", &selection.cases),
+        ("--expectations", &selection.expectations),
+    ] {
+        if let Some(v) = v {
+            cmd.arg(flag).arg(absolute(v));
         }
     }
     match cmd.status() {
-        Ok(s) => s.code().unwrap_or(125),
-        Err(e) => {
-            eprintln!("error: cannot start umbra repro: {e}");
-            125
-        }
+        // umbra repro's own exit, passed on (a signal: could not run).
+        Ok(s) => Ok(s.code().map_or(Exit::CouldNotRun, Exit::of_code)),
+        Err(e) => Err(Error::new(format!("cannot start umbra repro: {e}"))),
     }
 }
 
@@ -394,7 +414,7 @@ fn check_ends(
         _ => git(src, &["rev-parse", "HEAD"])?,
     };
     let mut outcome = Ok(());
-    for (rev, want, what) in [(good, 0, "good"), (bad, 1, "bad")] {
+    for (rev, want, what) in [(good, Exit::Pass, "good"), (bad, Exit::Fail, "bad")] {
         println!("bisect: checking the {what} end, {rev}");
         if let Err(e) = git(src, &["checkout", "-q", "--detach", rev]) {
             outcome = Err(e);
@@ -406,11 +426,11 @@ fn check_ends(
             .status()
             .ok()
             .and_then(|s| s.code());
-        if code == Some(want) {
+        if code == Some(i32::from(want.code())) {
             continue;
         }
         outcome = Err(match (what, code) {
-            (_, Some(125)) => format!(
+            (_, Some(SKIP)) => format!(
                 "the {what} commit {rev} could not be built or tested (see its logs under the work directory); pick another {what} commit"
             ),
             ("good", _) => format!(
@@ -426,19 +446,14 @@ fn check_ends(
     outcome
 }
 
-fn usage(msg: &str) -> i32 {
-    eprintln!("error: {msg}\nusage: {}", crate::cli::usage("bisect"));
-    125
-}
+/// A step's exit code that `git bisect run` reads as "skip this commit" (125).
+const SKIP: i32 = Exit::CouldNotRun.code() as i32;
 
 /// `umbra bisect-step`: one commit (HEAD of the source tree): build, install into its own
-/// prefix, test. Exit 0 good, 1 bad, 125 skip (did not build, or could not be tested).
-pub fn step(args: &Args) -> i32 {
-    let (Some(src), Some(work)) = (args.value("src"), args.value("work")) else {
-        eprintln!("error: bisect-step needs --src and --work");
-        return 125;
-    };
-    let (src, work) = (PathBuf::from(src), PathBuf::from(work));
+/// prefix, test. Its outcome: a pass (good), a failure (bad), could not run (125, skip: did
+/// not build, or could not be tested).
+pub fn step(args: &BisectStepArgs) -> Outcome {
+    let (src, work) = (PathBuf::from(&args.src), PathBuf::from(&args.work));
     let sha = git(&src, &["rev-parse", "--short=12", "HEAD"]).unwrap_or_else(|_| "unknown".into());
     let subject = git(&src, &["log", "-1", "--format=%s"]).unwrap_or_default();
     let prefix = work.join("prefixes").join(&sha);
@@ -464,7 +479,7 @@ pub fn step(args: &Args) -> i32 {
             }
             cmd.status().is_ok_and(|s| s.success())
         };
-        match args.value("build-script") {
+        match args.build_script.as_deref() {
             Some(script) => run(Command::new(script).arg(&src).arg(&prefix)),
             None => {
                 let build = work.join("build");
@@ -497,11 +512,12 @@ pub fn step(args: &Args) -> i32 {
     if !built {
         let _ = std::fs::remove_dir_all(&prefix);
         record(0.0, "skip (does not build; see the log)");
-        return 125;
+        return Ok(Exit::CouldNotRun);
     }
     let t = Instant::now();
     let Ok(exe) = crate::harness::own_libc::self_exe() else {
-        return 125;
+        // Not said, as before: a skip.
+        return Err(Error::said(Exit::CouldNotRun));
     };
     let report = work.join("reports").join(&sha);
     let mut cmd = Command::new(exe);
@@ -513,15 +529,8 @@ pub fn step(args: &Args) -> i32 {
         // One judging cache for every step: umbra stays fixed while Mesa changes, so the
         // truth and reference of each point are computed at the first step only.
         .arg("--judge-cache")
-        .arg(work.join("cache").join("judge"));
-    for k in ["filter", "cases", "expectations"] {
-        if let Some(v) = args.value(k) {
-            cmd.arg(format!("--{k}")).arg(v);
-        }
-    }
-    for b in args.values("backend") {
-        cmd.args(["--backend", b]);
-    }
+        .arg(work.join("cache").join("judge"))
+        .args(args.selection.argv());
     let test_log = log.join(format!("{sha}-test.log"));
     if let Ok(f) = std::fs::File::create(&test_log) {
         cmd.stdout(Stdio::from(f));
@@ -532,11 +541,14 @@ pub fn step(args: &Args) -> i32 {
         .ok()
         .and_then(|s| s.code());
     let test_s = t.elapsed().as_secs_f64();
-    let (verdict, exit) = match code {
-        Some(0) => ("good", 0),
-        Some(1) => ("bad", 1),
-        _ => ("skip (could not be tested; see the test log)", 125),
+    let (verdict, exit) = match code.map(Exit::of_code) {
+        Some(Exit::Pass) => ("good", Exit::Pass),
+        Some(Exit::Fail) => ("bad", Exit::Fail),
+        _ => (
+            "skip (could not be tested; see the test log)",
+            Exit::CouldNotRun,
+        ),
     };
     record(test_s, verdict);
-    exit
+    Ok(exit)
 }

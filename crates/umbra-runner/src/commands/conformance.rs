@@ -18,10 +18,11 @@
 //!   `junit.xml`, `report.json`, `report.html` (self-contained), `errors.csv`, `drivers.txt`,
 //!   the pictures of each failure under `failures/` and the gallery's under `pictures/`. An
 //!   interrupted run (SIGINT, SIGTERM: [`crate::harness::interrupt`]) or one that cannot
-//!   write its reports is not published and exits 130 or 125, saying where it left what.
-//! - Exit codes: 0 all as expected, 1 a regression (Fail, Crash, Timeout, UnexpectedPass),
-//!   125 nothing could run (no case, no available backend, bad arguments or expectations), so
-//!   `git bisect run cargo xtask conformance --filter X` works.
+//!   write its reports is not published and exits 130 ([`Exit::Interrupted`]) or 125,
+//!   saying where it left what.
+//! - Exit codes ([`Exit`]): 0 all as expected, 1 a regression (Fail, Crash, Timeout,
+//!   UnexpectedPass), 125 nothing could run (no case, no available backend, bad arguments or
+//!   expectations), so `git bisect run cargo xtask conformance --filter X` works.
 
 use std::collections::{BTreeMap, VecDeque};
 use std::fmt::Write as _;
@@ -30,7 +31,8 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use crate::args::Args;
+use crate::cli::ConformanceArgs;
+use crate::exit::{Error, Exit, Outcome};
 use crate::harness::pool::{Reply, Worker};
 use crate::harness::worker::{Hello, Request, RunReport, RunVerdict};
 use crate::judge::expectations::Expectations;
@@ -85,67 +87,67 @@ struct Settings {
     bless: bool,
 }
 
-/// Runs the command; returns the process exit code.
-pub fn main(args: &Args) -> i32 {
-    run(args).code
+/// Runs the command; returns its outcome.
+pub fn main(args: &ConformanceArgs) -> Outcome {
+    run(args).outcome
 }
 
 /// What a command built on a conformance run adds to its reports (`umbra soak`'s table),
 /// written into the run's directory before it is published.
 pub type Extra<'a> = &'a dyn Fn(&Path, &[RunResult]) -> std::io::Result<()>;
 
-/// What a conformance run ended with: its exit code and every run's result (empty when it
+/// What a conformance run ended with: its outcome and every run's result (empty when it
 /// could not start).
 pub struct Finished {
-    /// 0 as expected, 1 a regression, 125 could not run.
-    pub code: i32,
+    /// As expected, a regression, or why it could not run (or was interrupted).
+    pub outcome: Outcome,
     /// Every run, sorted by name, with its final status.
     pub results: Vec<RunResult>,
 }
 
-impl From<i32> for Finished {
-    fn from(code: i32) -> Finished {
+impl From<Error> for Finished {
+    fn from(e: Error) -> Finished {
         Finished {
-            code,
+            outcome: Err(e),
             results: Vec::new(),
         }
     }
 }
 
 /// Runs the conformance job as `main` does and returns its results too.
-pub fn run(args: &Args) -> Finished {
+pub fn run(args: &ConformanceArgs) -> Finished {
     run_in(args, None, None)
 }
 
 /// [`run`] into `run_dir` when the caller made it (`umbra soak` writes its cases there
 /// first), with `extra` reports. The steps, in order: read the options, plan the runs, settle
 /// the goldens, execute the plan on the workers, gather what they found, write the reports,
-/// print the summary, record blessings, and choose the exit code.
-pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Finished {
+/// print the summary, record blessings, and choose the outcome.
+pub fn run_in(args: &ConformanceArgs, run_dir: Option<RunDir>, extra: Option<Extra>) -> Finished {
     crate::harness::interrupt::install();
     let mut opts = match Options::read(args) {
         Ok(o) => o,
-        Err(code) => return code.into(),
+        Err(e) => return e.into(),
     };
     // A caller with a run directory of its own runs cases it made (soak's generated ones),
     // which the catalogue's expectation lines do not name: none of them is stale there.
     opts.stale_check = run_dir.is_none();
     let planned = match plan_runs(&opts) {
         Ok(p) => p,
-        Err(code) => return code.into(),
+        Err(e) => return e.into(),
     };
     let no_goldens = match settle_goldens(&opts) {
         Ok(n) => n,
-        Err(code) => return code.into(),
+        Err(e) => return e.into(),
     };
     let run_dir = match run_dir.map_or_else(|| RunDir::create(&opts.out), Ok) {
         Ok(r) => r,
         Err(e) => {
-            eprintln!(
-                "error: cannot create a run directory under {}: {e}; give --out a writable directory",
+            return Error::new(format!(
+                "cannot create a run directory under {}: {e}; give --out a writable directory",
                 opts.out.join("runs").display()
-            );
-            return 125.into();
+            ))
+            .into();
         }
     };
     let started = Instant::now();
@@ -158,7 +160,7 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
     } = planned;
     let collected = match execute(plan, results, &settings, opts.jobs) {
         Ok(c) => c,
-        Err(code) => return code.into(),
+        Err(e) => return e.into(),
     };
     let gathered = match gather(collected, &opts, &falls_along, &run_dir) {
         Ok(g) => g,
@@ -171,9 +173,9 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
         Duration::from_micros(CONTEXT_US.load(Ordering::Relaxed)),
     );
     let record = record(&opts, names, falls_along, &gathered, &budget);
-    if let Err(code) = write_reports(&gathered, &settings, &budget, &run_dir, &record, extra) {
+    if let Err(e) = write_reports(&gathered, &settings, &budget, &run_dir, &record, extra) {
         return Finished {
-            code,
+            outcome: Err(e),
             results: gathered.results,
         };
     }
@@ -188,14 +190,14 @@ pub fn run_in(args: &Args, run_dir: Option<RunDir>, extra: Option<Extra>) -> Fin
         record_blessings(&gathered, &settings);
     }
     println!("{}", closing_line("conformance", &gathered.results));
-    let code = exit_code(
+    let outcome = outcome(
         &gathered.refused,
         gathered.unavailable_runs,
         gathered.results.len(),
         regressions,
     );
     Finished {
-        code,
+        outcome,
         results: gathered.results,
     }
 }
@@ -223,57 +225,50 @@ struct Options {
 }
 
 impl Options {
-    fn read(args: &Args) -> Result<Options, i32> {
-        let fail = |e: String| {
-            eprintln!("error: {e}");
-            125
-        };
-        let build = crate::harness::mesa_build::select(args.value("mesa")).map_err(fail)?;
-        let backends = crate::harness::registry::selected(
-            &args.values("backend"),
-            crate::harness::registry::known(),
-        )
-        .map_err(fail)?;
+    fn read(args: &ConformanceArgs) -> Result<Options, Error> {
+        let fail = Error::new;
+        let (selection, execution) = (&args.selection, &args.execution);
+        let build = crate::harness::mesa_build::select(execution.mesa.as_deref()).map_err(fail)?;
+        let named: Vec<&str> = selection.backend.iter().map(String::as_str).collect();
+        let backends =
+            crate::harness::registry::selected(&named, crate::harness::registry::known())
+                .map_err(fail)?;
         let shard = args
-            .value("shard")
+            .shard
+            .as_deref()
             .map(parse_shard)
             .transpose()
-            .map_err(|e| usage(&e))?
+            .map_err(|e| crate::cli::usage_error("conformance", e))?
             .unwrap_or((0, 1));
-        let (jobs, timeout) = limits(args)?;
-        let golden = match args.value("golden") {
-            Some("none") => None,
-            Some(dir) if !Path::new(dir).is_dir() => {
-                return Err(usage(&format!(
-                    "--golden {dir}: no such directory; give the golden directory (golden/), or --golden none to run without golden checks"
-                )));
-            }
-            Some(dir) => Some(PathBuf::from(dir)),
-            None => Some(PathBuf::from("golden")),
-        };
+        let (jobs, timeout) = limits(execution)?;
+        let golden = golden_dir(args.golden.as_deref())?;
         if let Some(warning) = golden
             .as_deref()
             .and_then(crate::judge::golden::check_manifest)
         {
             eprintln!("{}", term(&warning));
         }
-        let expectations_dir = Path::new(args.value("expectations").unwrap_or("expectations"));
+        let expectations_dir =
+            Path::new(selection.expectations.as_deref().unwrap_or("expectations"));
         let expectations = Expectations::load(expectations_dir).map_err(fail)?;
-        let by = match args.value("durations") {
+        let by = match args.durations.as_deref() {
             None => crate::shards::balance::By::Stride,
             Some(_) if shard.1 == 1 => {
-                return Err(usage(
+                return Err(crate::cli::usage_error(
+                    "conformance",
                     "--durations balances shards: give it with --shard I/N (N > 1)",
                 ));
             }
             Some(f) => crate::shards::balance::By::Durations(
-                crate::shards::balance::Durations::read(Path::new(f)).map_err(|e| usage(&e))?,
+                crate::shards::balance::Durations::read(Path::new(f))
+                    .map_err(|e| crate::cli::usage_error("conformance", e))?,
             ),
         };
-        let cases_dir = PathBuf::from(args.value("cases").unwrap_or("cases"));
-        let out = PathBuf::from(args.value("out").unwrap_or("target/umbra"));
-        outside_cases(&out, &cases_dir)
-            .map_err(|e| usage(&format!("--out {}: {e}", out.display())))?;
+        let cases_dir = PathBuf::from(selection.cases.as_deref().unwrap_or("cases"));
+        let out = PathBuf::from(args.output.out.as_deref().unwrap_or("target/umbra"));
+        outside_cases(&out, &cases_dir).map_err(|e| {
+            crate::cli::usage_error("conformance", format!("--out {}: {e}", out.display()))
+        })?;
         let files = match umbra_case::case_files(&cases_dir) {
             Ok(f) if !f.is_empty() => f,
             Ok(_) => {
@@ -310,7 +305,7 @@ impl Options {
         Ok(Options {
             build,
             out,
-            filter: args.value("filter").unwrap_or("*").to_string(),
+            filter: selection.filter.as_deref().unwrap_or("*").to_string(),
             backends,
             shard,
             by,
@@ -320,42 +315,85 @@ impl Options {
             golden,
             expectations,
             files,
-            bless: args.has("bless"),
+            bless: args.bless,
             stale_check: true,
         })
     }
 }
 
+/// `--golden`: the golden directory (`golden` by default), or none (`--golden none`).
+fn golden_dir(flag: Option<&str>) -> Result<Option<PathBuf>, Error> {
+    Ok(match flag {
+        Some("none") => None,
+        Some(dir) if !Path::new(dir).is_dir() => {
+            return Err(crate::cli::usage_error(
+                "conformance",
+                format!(
+                    "--golden {dir}: no such directory; give the golden directory (golden/), or --golden none to run without golden checks"
+                ),
+            ));
+        }
+        Some(dir) => Some(PathBuf::from(dir)),
+        None => Some(PathBuf::from("golden")),
+    })
+}
+
 /// `--jobs`, `--timeout` and the memory budget per worker, checked together (the budget
 /// depends on the job count).
-fn limits(args: &Args) -> Result<(usize, Duration), i32> {
-    let jobs = match args.value("jobs").map(str::parse::<usize>).transpose() {
+fn limits(execution: &crate::cli::Execution) -> Result<(usize, Duration), Error> {
+    let jobs = match execution
+        .jobs
+        .as_deref()
+        .map(str::parse::<usize>)
+        .transpose()
+    {
         Ok(Some(0)) => {
-            return Err(usage(
+            return Err(crate::cli::usage_error(
+                "conformance",
                 "--jobs 0: at least one worker must run; give --jobs 1 or more (default: the core count)",
             ));
         }
         Ok(j) => j.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
-        Err(_) => return Err(usage("--jobs takes a positive number")),
+        Err(_) => {
+            return Err(crate::cli::usage_error(
+                "conformance",
+                "--jobs takes a positive number",
+            ));
+        }
     };
-    let timeout = match args.value("timeout").map(str::parse::<u64>).transpose() {
+    let timeout = match execution
+        .timeout
+        .as_deref()
+        .map(str::parse::<u64>)
+        .transpose()
+    {
         Ok(Some(0)) => {
-            return Err(usage(
+            return Err(crate::cli::usage_error(
+                "conformance",
                 "--timeout 0: no run can finish in no time; give whole seconds, 1 or more (default 300)",
             ));
         }
         Ok(t) => Duration::from_secs(t.unwrap_or(300)),
-        Err(_) => return Err(usage("--timeout takes whole seconds")),
+        Err(_) => {
+            return Err(crate::cli::usage_error(
+                "conformance",
+                "--timeout takes whole seconds",
+            ));
+        }
     };
-    crate::harness::memory_limit::check_jobs(jobs).map_err(|e| usage(&e))?;
-    match crate::harness::memory_limit::select(args.value("max-memory"), jobs) {
-        Ok(b) if b < umbra_case::memory::BASE_BYTES => Err(usage(&format!(
-            "the memory budget per worker, {}, is below one run's base ({}: a worker with its driver, before any case; umbra_case::memory::BASE_BYTES); give --max-memory 1GiB or more, or fewer --jobs",
-            umbra_case::memory::gib(b),
-            umbra_case::memory::gib(umbra_case::memory::BASE_BYTES)
-        ))),
+    crate::harness::memory_limit::check_jobs(jobs)
+        .map_err(|e| crate::cli::usage_error("conformance", e))?;
+    match crate::harness::memory_limit::select(execution.max_memory.as_deref(), jobs) {
+        Ok(b) if b < umbra_case::memory::BASE_BYTES => Err(crate::cli::usage_error(
+            "conformance",
+            format!(
+                "the memory budget per worker, {}, is below one run's base ({}: a worker with its driver, before any case; umbra_case::memory::BASE_BYTES); give --max-memory 1GiB or more, or fewer --jobs",
+                umbra_case::memory::gib(b),
+                umbra_case::memory::gib(umbra_case::memory::BASE_BYTES)
+            ),
+        )),
         Ok(_) => Ok((jobs, timeout)),
-        Err(e) => Err(usage(&e)),
+        Err(e) => Err(crate::cli::usage_error("conformance", e)),
     }
 }
 
@@ -371,7 +409,7 @@ struct Plan {
 
 /// Loads every case file, plans every backend × point the filter selects, checks the
 /// expectations against the plan, and keeps this shard's share.
-fn plan_runs(opts: &Options) -> Result<Plan, i32> {
+fn plan_runs(opts: &Options) -> Result<Plan, Error> {
     let mut results: Vec<RunResult> = Vec::new();
     let mut points: Vec<(PathBuf, Vec<PointPlan>)> = Vec::new();
     let mut falls_along: Vec<FallsAlong> = Vec::new();
@@ -393,7 +431,7 @@ fn plan_runs(opts: &Options) -> Result<Plan, i32> {
         }
     }
     if let Some(e) = duplicate_names(&points) {
-        return Err(usage(&e));
+        return Err(crate::cli::usage_error("conformance", e));
     }
     let mut plan = Vec::new();
     for b in &opts.backends {
@@ -421,8 +459,10 @@ fn plan_runs(opts: &Options) -> Result<Plan, i32> {
     }
     let selected = plan.len();
     if selected == 0 && results.is_empty() {
-        eprintln!("error: --filter {:?} selects no run", opts.filter);
-        return Err(125);
+        return Err(Error::new(format!(
+            "--filter {:?} selects no run",
+            opts.filter
+        )));
     }
     let names: Vec<String> = plan.iter().map(Planned::name).collect();
     let (index, count) = opts.shard;
@@ -480,7 +520,7 @@ fn unloadable(f: &Path, why: &str) -> RunResult {
 }
 
 /// The expectations checked against the planned runs ([`Expectations::validate`]).
-fn validate_expectations(opts: &Options, plan: &[Planned]) -> Result<(), i32> {
+fn validate_expectations(opts: &Options, plan: &[Planned]) -> Result<(), Error> {
     let known = crate::harness::registry::known();
     let mut ids: Vec<&str> = known.iter().map(String::as_str).collect();
     ids.extend(opts.backends.iter().map(String::as_str));
@@ -489,10 +529,7 @@ fn validate_expectations(opts: &Options, plan: &[Planned]) -> Result<(), i32> {
     }
     let runs: Vec<(String, &serde_json::Value)> =
         plan.iter().map(|p| (p.name(), &*p.case)).collect();
-    opts.expectations.validate(&ids, &runs).map_err(|e| {
-        eprintln!("error: {e}");
-        125
-    })
+    opts.expectations.validate(&ids, &runs).map_err(Error::new)
 }
 
 /// Says each expectation line that matches no run of every case point loaded on any of this
@@ -533,14 +570,16 @@ fn warn_stale_expectations(opts: &Options, points: &[(PathBuf, Vec<PointPlan>)])
 /// never seen, without goldens, is judged by the specs and the reference; blessing starts
 /// its goldens. This build's own ids always have goldens: a missing one (an empty or missing
 /// golden directory included) is a change to review, never a check switched off.
-fn settle_goldens(opts: &Options) -> Result<std::collections::BTreeSet<String>, i32> {
+fn settle_goldens(opts: &Options) -> Result<std::collections::BTreeSet<String>, Error> {
     if opts.bless && crate::judge::golden::under_ci() {
-        return Err(usage(
+        return Err(crate::cli::usage_error(
+            "conformance",
             "--bless: CI=true: goldens change only through review (`cargo xtask bless` or `cargo insta review` on a desk), never in CI",
         ));
     }
     if opts.bless && opts.golden.is_none() {
-        return Err(usage(
+        return Err(crate::cli::usage_error(
+            "conformance",
             "--bless with --golden none: there are no goldens to bless",
         ));
     }
@@ -577,14 +616,16 @@ fn settle_goldens(opts: &Options) -> Result<std::collections::BTreeSet<String>, 
 /// judge_cache), the goldens (absolute, since workers may run with another working directory
 /// one day), where pictures go, the expectations.
 fn settings(
-    args: &Args,
+    args: &ConformanceArgs,
     opts: &Options,
     no_goldens: std::collections::BTreeSet<String>,
     run_dir: &RunDir,
 ) -> Settings {
     let judge_cache = crate::judge::judge_cache::prepare(
         &args
-            .value("judge-cache")
+            .execution
+            .judge_cache
+            .as_deref()
             .map_or_else(|| opts.out.join("cache").join("judge"), PathBuf::from),
     );
     Settings {
@@ -598,7 +639,7 @@ fn settings(
         failures: run_dir.dir.join("failures"),
         gallery: run_dir.dir.join("pictures"),
         expectations: opts.expectations.clone(),
-        verbose: args.has("verbose"),
+        verbose: args.output.verbose,
         bless: opts.bless,
     }
 }
@@ -612,7 +653,7 @@ fn execute(
     results: Vec<RunResult>,
     settings: &Settings,
     jobs: usize,
-) -> Result<Collected, i32> {
+) -> Result<Collected, Error> {
     let mut groups: BTreeMap<String, VecDeque<Planned>> = BTreeMap::new();
     for p in plan {
         groups.entry(p.backend.clone()).or_default().push_back(p);
@@ -648,10 +689,8 @@ fn execute(
             });
         }
     });
-    done.into_inner().map_err(|_| {
-        eprintln!("error: a worker thread panicked");
-        125
-    })
+    done.into_inner()
+        .map_err(|_| Error::new("a worker thread panicked"))
 }
 
 /// What the run found, put together: every result sorted by name and diagnosed (the
@@ -688,8 +727,8 @@ fn write_partial(dir: &Path, results: &mut [RunResult]) {
 }
 
 /// Puts the workers' findings together. An interrupted run (130) or one whose pictures could
-/// not be written (125, a full disk) is abandoned here: its report would be incomplete, so
-/// `latest` keeps pointing at the last whole one.
+/// not be written (125, a full disk) is abandoned here, saying so: its report would be
+/// incomplete, so `latest` keeps pointing at the last whole one.
 fn gather(
     collected: Collected,
     opts: &Options,
@@ -717,14 +756,20 @@ fn gather(
             crate::harness::interrupt::name(sig),
             results.len()
         ));
-        return Err(Finished { code: 130, results });
+        return Err(Finished {
+            outcome: Err(Error::said(Exit::Interrupted)),
+            results,
+        });
     }
     if let Some(first) = storage.first() {
         run_dir.abandon(&format!(
             "{} run(s) could not write their pictures ({first})",
             storage.len()
         ));
-        return Err(Finished { code: 125, results });
+        return Err(Finished {
+            outcome: Err(Error::said(Exit::CouldNotRun)),
+            results,
+        });
     }
     driver_rows.sort_by(|a, b| a["backend"].as_str().cmp(&b["backend"].as_str()));
     let mut driver_lines = drivers;
@@ -822,7 +867,8 @@ fn record(
 }
 
 /// Writes the reports and the run's record into the run directory and publishes it
-/// (`latest`); 125 when they cannot be written, with the run directory abandoned.
+/// (`latest`); when they cannot be written, the run directory is abandoned (saying so) and
+/// the error is said (125).
 fn write_reports(
     g: &Gathered,
     settings: &Settings,
@@ -830,7 +876,7 @@ fn write_reports(
     run_dir: &RunDir,
     record: &crate::shards::record::Record,
     extra: Option<Extra>,
-) -> Result<(), i32> {
+) -> Result<(), Error> {
     let header = serde_json::json!({
         "mesa_build": g.build,
         "drivers": g.driver_rows,
@@ -849,7 +895,7 @@ fn write_reports(
     .and_then(|()| run_dir.publish());
     written.map_err(|e| {
         run_dir.abandon(&format!("cannot write the reports: {e}"));
-        125
+        Error::said(Exit::CouldNotRun)
     })
 }
 
@@ -1066,7 +1112,9 @@ fn record_blessings(g: &Gathered, settings: &Settings) {
             .as_deref()
             .is_some_and(|b| !crate::judge::golden::same_release(b, &v));
         if let (true, Some(file)) = (other_release, held.file) {
-            if file.parent() == Some(dir.as_path()) {
+            // The golden directory's own (`BACKEND/STEM`), not another release's.
+            let home = dir.join(crate::judge::golden::folder(&r.backend));
+            if file.parent() == Some(home.as_path()) {
                 confirm
                     .entry(v.clone())
                     .or_default()
@@ -1093,14 +1141,15 @@ fn record_blessings(g: &Gathered, settings: &Settings) {
     }
 }
 
-/// 125 when a backend refused the Mesa build asked for (its runs were not judged) or nothing
-/// could run here; 1 on a regression; 0 otherwise.
-pub(crate) fn exit_code(
+/// The run's outcome: could not run (125) when a backend refused the Mesa build asked for
+/// (its runs were not judged, each said here) or nothing could run here; a failure on a
+/// regression; a pass otherwise.
+pub(crate) fn outcome(
     refused: &[String],
     unavailable_runs: usize,
     runs: usize,
     regressions: usize,
-) -> i32 {
+) -> Outcome {
     if !refused.is_empty() {
         for r in refused {
             eprintln!("error: {r}");
@@ -1109,14 +1158,15 @@ pub(crate) fn exit_code(
             "error: {} backend(s) did not run on the Mesa build asked for; their runs were not judged",
             refused.len()
         );
-        125
+        Err(Error::said(Exit::CouldNotRun))
     } else if regressions > 0 {
-        1
+        Ok(Exit::Fail)
     } else if unavailable_runs == runs && runs > 0 {
-        eprintln!("error: no selected backend is available here, nothing ran");
-        125
+        Err(Error::new(
+            "no selected backend is available here, nothing ran",
+        ))
     } else {
-        0
+        Ok(Exit::Pass)
     }
 }
 
@@ -1171,11 +1221,6 @@ fn duplicate_names(points: &[(PathBuf, Vec<PointPlan>)]) -> Option<String> {
         }
     }
     None
-}
-
-fn usage(msg: &str) -> i32 {
-    eprintln!("error: {msg}\nusage: {}", crate::cli::usage("conformance"));
-    125
 }
 
 fn parse_shard(s: &str) -> Result<(usize, usize), String> {

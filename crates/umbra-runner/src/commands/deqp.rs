@@ -43,6 +43,7 @@ use std::time::Duration;
 
 use umbra_report::Status;
 
+use crate::exit::{Error, Exit, Outcome};
 use crate::harness::pool::Worker;
 use crate::harness::worker::Request;
 use crate::judge::expectations::{Expectations, Expected};
@@ -124,30 +125,22 @@ expectation by cause explains, NotSupported, Crash, Timeout, InternalError). Oth
 flags are accepted and ignored. --list prints NAME, run name and expected status, tab-separated.
 ";
 
-/// Runs `umbra deqp ARGS` (`argv`: the arguments after `deqp`).
-pub fn main(argv: &[String]) -> i32 {
+/// Runs `umbra deqp ARGS` (`argv`: the arguments after `deqp`); returns its outcome.
+pub fn main(argv: &[String]) -> Outcome {
     if argv.iter().any(|a| a == "--help" || a == "-h") {
         print!("{HELP}");
-        return 0;
+        return Ok(Exit::Pass);
     }
-    if let Err(e) = known_flags(argv) {
-        eprintln!("error: umbra deqp: {e}\n{HELP}");
-        return 125;
-    }
+    known_flags(argv).map_err(|e| Error::new(format!("umbra deqp: {e}\n{HELP}")))?;
     let cases = PathBuf::from(values(argv, "cases").first().copied().unwrap_or("cases"));
     if let Some(pictures) = values(argv, "umbra-pictures").first() {
         if let Err(e) = crate::commands::conformance::outside_cases(Path::new(pictures), &cases) {
-            eprintln!("error: umbra deqp: --umbra-pictures={pictures}: {e}");
-            return 125;
+            return Err(Error::new(format!(
+                "umbra deqp: --umbra-pictures={pictures}: {e}"
+            )));
         }
     }
-    let index = match CaseIndex::load(&cases) {
-        Ok(i) => i,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 125;
-        }
-    };
+    let index = CaseIndex::load(&cases).map_err(Error::new)?;
     if argv.iter().any(|a| a == "--list") {
         return list(argv, &index);
     }
@@ -165,23 +158,16 @@ pub fn main(argv: &[String]) -> i32 {
                 .filter(|l| !l.is_empty())
                 .map(str::to_string)
                 .collect(),
-            Err(e) => {
-                eprintln!("error: cannot read {caselist}: {e}");
-                return 125;
-            }
+            Err(e) => return Err(Error::new(format!("cannot read {caselist}: {e}"))),
         },
         (None, Some(cases)) => cases.split(',').map(str::to_string).collect(),
         (None, None) => {
-            eprintln!(
-                "error: umbra deqp: give --deqp-caselist-file=FILE (the tests to run, one name a line), --deqp-case=NAME[,NAME] or --list"
-            );
-            return 125;
+            return Err(Error::new(
+                "umbra deqp: give --deqp-caselist-file=FILE (the tests to run, one name a line), --deqp-case=NAME[,NAME] or --list",
+            ));
         }
     };
-    let expectations = match load_expectations(argv) {
-        Ok(e) => e,
-        Err(code) => return code,
-    };
+    let expectations = load_expectations(argv)?;
     let opts = RunOptions {
         pictures: values(argv, "umbra-pictures").first().map(PathBuf::from),
         log: values(argv, "deqp-log-filename").first().map(PathBuf::from),
@@ -197,17 +183,15 @@ pub fn main(argv: &[String]) -> i32 {
 }
 
 /// umbra's expectations from `--umbra-expectations=DIR` (the suite's spelling) or
-/// `--expectations=DIR`, `expectations` by default; an error is printed and is 125.
-fn load_expectations(argv: &[String]) -> Result<Expectations, i32> {
+/// `--expectations=DIR`, `expectations` by default; expectations that do not load are an
+/// error (exit 125).
+fn load_expectations(argv: &[String]) -> Result<Expectations, Error> {
     let dir = values(argv, "umbra-expectations")
         .into_iter()
         .chain(values(argv, "expectations"))
         .next()
         .unwrap_or("expectations");
-    Expectations::load(Path::new(dir)).map_err(|e| {
-        eprintln!("error: {e}");
-        125
-    })
+    Expectations::load(Path::new(dir)).map_err(Error::new)
 }
 
 /// Every case file's points by case name: the file, and each point's id and case as JSON
@@ -247,8 +231,9 @@ impl CaseIndex {
     }
 }
 
-/// Runs each test in a worker of its backend and prints its status as dEQP does.
-fn run(names: &[String], index: &CaseIndex, opts: &RunOptions) -> i32 {
+/// Runs each test in a worker of its backend and prints its status as dEQP does (a pass:
+/// each test's status is deqp-runner's to read).
+fn run(names: &[String], index: &CaseIndex, opts: &RunOptions) -> Outcome {
     let mut session = Session {
         cache: crate::judge::judge_cache::prepare(&opts.cache),
         timeout: Duration::from_secs(300),
@@ -296,7 +281,7 @@ fn run(names: &[String], index: &CaseIndex, opts: &RunOptions) -> i32 {
     if let Some(log) = &opts.log {
         let _ = std::fs::write(log, logged);
     }
-    0
+    Ok(Exit::Pass)
 }
 
 /// What a run of tests is told: where failing tests' pictures go, the log deqp-runner names,
@@ -421,20 +406,11 @@ fn deqp_status(s: &Status) -> &'static str {
 
 /// `--list`: every test of the backends asked for, its run name and what umbra's
 /// expectations say for it on this machine's driver.
-fn list(argv: &[String], index: &CaseIndex) -> i32 {
+fn list(argv: &[String], index: &CaseIndex) -> Outcome {
     let named: Vec<&str> = values(argv, "backend");
-    let backends =
-        match crate::harness::registry::selected(&named, crate::harness::registry::known()) {
-            Ok(b) => b,
-            Err(e) => {
-                eprintln!("error: {e}");
-                return 125;
-            }
-        };
-    let expectations = match load_expectations(argv) {
-        Ok(e) => e,
-        Err(code) => return code,
-    };
+    let backends = crate::harness::registry::selected(&named, crate::harness::registry::known())
+        .map_err(Error::new)?;
+    let expectations = load_expectations(argv)?;
     for backend in backends.iter().filter(|b| *b != "ref") {
         // The driver's facts (its Mesa version) select the expectations that apply.
         let facts = match Worker::start(
@@ -443,10 +419,7 @@ fn list(argv: &[String], index: &CaseIndex) -> i32 {
             Duration::from_secs(60),
         ) {
             Ok(w) => w.hello.facts(),
-            Err(e) => {
-                eprintln!("error: {backend}: no worker ({e})");
-                return 125;
-            }
+            Err(e) => return Err(Error::new(format!("{backend}: no worker ({e})"))),
         };
         let expectations = expectations.for_driver(&facts);
         for (case, (_, points)) in &index.0 {
@@ -473,7 +446,7 @@ fn list(argv: &[String], index: &CaseIndex) -> i32 {
             }
         }
     }
-    0
+    Ok(Exit::Pass)
 }
 
 #[cfg(test)]

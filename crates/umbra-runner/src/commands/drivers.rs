@@ -28,7 +28,8 @@ use std::process::{Command, Stdio};
 
 use serde_json::Value;
 
-use crate::args::Args;
+use crate::cli::DriversArgs;
+use crate::exit::{Error, Exit, Outcome};
 use umbra_report::escape::{base64, esc};
 
 /// One run's raw verdict.
@@ -251,87 +252,33 @@ fn opt(v: Option<u64>) -> String {
     v.map_or("-".into(), |v| v.to_string())
 }
 
-/// Runs the command; returns the exit code.
-pub fn main(args: &Args) -> i32 {
-    let (Some(base), Some(cand)) = (args.value("baseline"), args.value("candidate")) else {
-        return usage(
-            "give both --baseline and --candidate (a Mesa prefix or build directory, or `system`)",
-        );
-    };
+/// Runs the command; returns its outcome.
+pub fn main(args: &DriversArgs) -> Outcome {
+    let (base, cand) = (args.baseline.as_str(), args.candidate.as_str());
     for (flag, v) in [("--baseline", base), ("--candidate", cand)] {
         if v != "system" {
             if let Err(e) = crate::harness::mesa_build::MesaBuild::open(Path::new(v)) {
-                eprintln!("error: {flag} {v}: {e}");
-                return 125;
+                return Err(Error::new(format!("{flag} {v}: {e}")));
             }
         }
     }
-    let pictures: usize = match args.value("pictures").map(str::parse).transpose() {
+    let pictures: usize = match args.pictures.as_deref().map(str::parse).transpose() {
         Ok(n) => n.unwrap_or(200),
-        Err(_) => return usage("--pictures takes a number"),
+        Err(_) => {
+            return Err(crate::cli::usage_error(
+                "drivers",
+                "--pictures takes a number",
+            ));
+        }
     };
-    let out = PathBuf::from(args.value("out").unwrap_or("target/umbra/drivers"));
+    let out = PathBuf::from(args.out.as_deref().unwrap_or("target/umbra/drivers"));
     let _ = std::fs::remove_dir_all(&out);
     let Ok(exe) = crate::harness::own_libc::self_exe() else {
-        eprintln!("error: cannot find this executable");
-        return 125;
+        return Err(Error::new("cannot find this executable"));
     };
     let mut reports = Vec::new();
     for (side, mesa) in [("baseline", base), ("candidate", cand)] {
-        let dir = out.join(side);
-        let _ = std::fs::create_dir_all(&dir);
-        let mut cmd = Command::new(&exe);
-        cmd.args(["conformance", "--mesa", mesa, "--golden", "none", "--out"])
-            .arg(&dir);
-        for k in ["filter", "cases", "expectations", "jobs", "timeout"] {
-            if let Some(v) = args.value(k) {
-                cmd.arg(format!("--{k}")).arg(v);
-            }
-        }
-        for b in args.values("backend") {
-            cmd.args(["--backend", b]);
-        }
-        let log = dir.join("conformance.log");
-        let Ok(file) = std::fs::File::create(&log) else {
-            eprintln!("error: cannot write {}", log.display());
-            return 125;
-        };
-        cmd.env_remove(crate::harness::mesa_build::ENV)
-            .stdout(Stdio::from(file));
-        println!(
-            "drivers: running the {side} ({mesa}); log in {}",
-            log.display()
-        );
-        let started = std::time::Instant::now();
-        let code = cmd.status().ok().and_then(|s| s.code()).unwrap_or(125);
-        let tail = std::fs::read_to_string(&log).unwrap_or_default();
-        let closing = tail
-            .lines()
-            .rev()
-            .find(|l| l.starts_with("conformance:"))
-            .unwrap_or("no closing line");
-        println!(
-            "drivers: {side} done in {:.0} s (exit {code}): {closing}",
-            started.elapsed().as_secs_f64()
-        );
-        if code == 125 {
-            eprintln!(
-                "error: the {side} run could not run ({mesa}); see {}",
-                log.display()
-            );
-            return 125;
-        }
-        let report = std::fs::read_to_string(dir.join("latest").join("report.json"))
-            .ok()
-            .and_then(|t| serde_json::from_str::<Value>(&t).ok());
-        let Some(report) = report else {
-            eprintln!(
-                "error: the {side} run wrote no report.json under {}",
-                dir.display()
-            );
-            return 125;
-        };
-        reports.push(report);
+        reports.push(run_side(args, &exe, &out, side, mesa)?);
     }
     let mut changes = compare(&reports[0], &reports[1]);
     let label = |r: &Value, mesa: &str| {
@@ -368,8 +315,10 @@ pub fn main(args: &Args) -> i32 {
         }
     }
     if let Err(e) = write_outputs(&out, &changes, &la, &lb, &reports, cand) {
-        eprintln!("error: cannot write under {}: {e}", out.display());
-        return 125;
+        return Err(Error::new(format!(
+            "cannot write under {}: {e}",
+            out.display()
+        )));
     }
     let compared = reports[1]["runs"].as_array().map_or(0, Vec::len);
     let count = |k: &str| changes.iter().filter(|c| c.kind == k).count();
@@ -419,12 +368,72 @@ pub fn main(args: &Args) -> i32 {
         );
     }
     println!("drivers: report in {}", out.join("report.html").display());
-    i32::from(count("regression") > 0)
+    Ok(Exit::pass_if(count("regression") == 0))
 }
 
-fn usage(msg: &str) -> i32 {
-    eprintln!("error: {msg}\nusage: {}", crate::cli::usage("drivers"));
-    125
+/// One side's conformance run (`umbra conformance --mesa MESA`, goldens off) in a process of
+/// its own, its output in `OUT/SIDE/conformance.log`; returns its report.json.
+fn run_side(
+    args: &DriversArgs,
+    exe: &Path,
+    out: &Path,
+    side: &str,
+    mesa: &str,
+) -> Result<Value, Error> {
+    let dir = out.join(side);
+    let _ = std::fs::create_dir_all(&dir);
+    let mut cmd = Command::new(exe);
+    cmd.args(["conformance", "--mesa", mesa, "--golden", "none", "--out"])
+        .arg(&dir)
+        .args(args.selection.argv());
+    for (flag, value) in [("--jobs", &args.jobs), ("--timeout", &args.timeout)] {
+        if let Some(v) = value {
+            cmd.arg(flag).arg(v);
+        }
+    }
+    let log = dir.join("conformance.log");
+    let Ok(file) = std::fs::File::create(&log) else {
+        return Err(Error::new(format!("cannot write {}", log.display())));
+    };
+    cmd.env_remove(crate::harness::mesa_build::ENV)
+        .stdout(Stdio::from(file));
+    println!(
+        "drivers: running the {side} ({mesa}); log in {}",
+        log.display()
+    );
+    let started = std::time::Instant::now();
+    // A child that did not start, or did not exit (a signal), counts as could not run (125).
+    let could_not_run = i32::from(Exit::CouldNotRun.code());
+    let code = cmd
+        .status()
+        .ok()
+        .and_then(|s| s.code())
+        .unwrap_or(could_not_run);
+    let tail = std::fs::read_to_string(&log).unwrap_or_default();
+    let closing = tail
+        .lines()
+        .rev()
+        .find(|l| l.starts_with("conformance:"))
+        .unwrap_or("no closing line");
+    println!(
+        "drivers: {side} done in {:.0} s (exit {code}): {closing}",
+        started.elapsed().as_secs_f64()
+    );
+    if code == could_not_run {
+        return Err(Error::new(format!(
+            "the {side} run could not run ({mesa}); see {}",
+            log.display()
+        )));
+    }
+    std::fs::read_to_string(dir.join("latest").join("report.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<Value>(&t).ok())
+        .ok_or_else(|| {
+            Error::new(format!(
+                "the {side} run wrote no report.json under {}",
+                dir.display()
+            ))
+        })
 }
 
 /// The directory of one change's pictures.

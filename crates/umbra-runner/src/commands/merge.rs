@@ -21,7 +21,8 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-use crate::args::Args;
+use crate::cli::MergeArgs;
+use crate::exit::{Error, Outcome};
 use crate::run_dir::RunDir;
 use crate::shards::record::{DriverRecord, FILE, Record};
 use umbra_report::escape::term;
@@ -49,24 +50,16 @@ impl Shard {
     }
 }
 
-/// Runs the command; returns the process exit code.
-pub fn main(args: &Args) -> i32 {
-    let out = PathBuf::from(args.value("out").unwrap_or("target/umbra-merged"));
-    let shards = match read_all(&args.positional) {
-        Ok(s) => s,
-        Err(e) => return refuse(&e),
-    };
-    if let Err(e) = out_apart(&out, &shards)
+/// Runs the command; returns its outcome.
+pub fn main(args: &MergeArgs) -> Outcome {
+    let out = PathBuf::from(&args.out);
+    let shards = read_all(&args.dirs).map_err(refuse)?;
+    out_apart(&out, &shards)
         .and_then(|()| same_inputs(&shards))
         .and_then(|()| complete_plans(&shards))
         .and_then(|()| disjoint(&shards))
-    {
-        return refuse(&e);
-    }
-    let drivers = match drivers(&shards) {
-        Ok(d) => d,
-        Err(e) => return refuse(&e),
-    };
+        .map_err(refuse)?;
+    let drivers = drivers(&shards).map_err(refuse)?;
     print_balance(&shards);
     let results = merged_results(&shards);
     let budget = TimeBudget::merged(
@@ -75,22 +68,18 @@ pub fn main(args: &Args) -> i32 {
             .map(|s| s.record.budget.clone())
             .collect::<Vec<_>>(),
     );
-    let run_dir = match RunDir::create(&out) {
-        Ok(r) => r,
-        Err(e) => {
-            return refuse(&format!(
-                "cannot create a run directory under {}: {e}; give -o a writable directory",
-                out.join("runs").display()
-            ));
-        }
-    };
+    let run_dir = RunDir::create(&out).map_err(|e| {
+        refuse(format!(
+            "cannot create a run directory under {}: {e}; give -o a writable directory",
+            out.join("runs").display()
+        ))
+    })?;
     if let Err(e) = write(&shards, &results, &drivers, &budget, &run_dir) {
         run_dir.abandon(&format!("cannot write the merged reports: {e}"));
-        eprintln!(
-            "error: cannot write the merged reports into {}: {e}",
+        return Err(Error::new(format!(
+            "cannot write the merged reports into {}: {e}",
             run_dir.dir.display()
-        );
-        return 125;
+        )));
     }
     // The run's wall time is the slowest shard's (shards run side by side).
     let regressions = super::conformance::print_summary(
@@ -107,7 +96,7 @@ pub fn main(args: &Args) -> i32 {
         .collect::<BTreeSet<_>>()
         .into_iter()
         .collect();
-    super::conformance::exit_code(
+    super::conformance::outcome(
         &refused,
         shards.iter().map(|s| s.record.unavailable_runs).sum(),
         results.len(),
@@ -115,16 +104,13 @@ pub fn main(args: &Args) -> i32 {
     )
 }
 
-fn refuse(e: &str) -> i32 {
-    eprintln!("error: {}", term(e));
-    125
+/// A refusal: the error, escaped for the terminal (exit 125).
+fn refuse(e: String) -> Error {
+    Error::new(term(&e))
 }
 
 /// Every DIR's shard; an error names the directory and what it lacks.
 fn read_all(dirs: &[String]) -> Result<Vec<Shard>, String> {
-    if dirs.is_empty() {
-        return Err("give the shards' directories: umbra merge DIR... -o OUT".into());
-    }
     let mut shards = Vec::new();
     for d in dirs {
         let given = PathBuf::from(d);

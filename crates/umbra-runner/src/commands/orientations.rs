@@ -1,4 +1,4 @@
-//! `umbra selftest --orientations`: the face/orientation table.
+//! `umbra selftest orientations` (or `--orientations`): the face/orientation table.
 //!
 //! A cube face (or a 2D map) drawn with a wrong orientation (a wrong up vector turns it, a
 //! wrong handedness or row order mirrors it, swapped axes transpose it: the seven symmetries
@@ -20,6 +20,8 @@ use std::collections::BTreeMap;
 
 use umbra_case::fault::{Fault, Orientation};
 use umbra_case::{CasePoint, ClipDepth, Prepared, Profile};
+
+use crate::exit::{Exit, Outcome};
 
 /// What one mistake did on the catalogue.
 #[derive(Clone, Debug, Default)]
@@ -128,8 +130,8 @@ pub fn render(rows: &[(Fault, Cell)]) -> String {
 }
 
 /// The command: the table over the self-test's points (`--cases`, loaded and checked by
-/// `selftest::main`); exit 1 when a mistake goes unseen.
-pub fn main(points: &[CasePoint]) -> i32 {
+/// `selftest::setup`); it fails when a mistake goes unseen.
+pub fn main(points: &[CasePoint]) -> Outcome {
     let start = std::time::Instant::now();
     let rows = table(points, None);
     print!("{}", render(&rows));
@@ -147,7 +149,7 @@ pub fn main(points: &[CasePoint]) -> i32 {
     for b in &blind {
         println!("  blind: {b}");
     }
-    i32::from(!blind.is_empty())
+    Ok(Exit::pass_if(blind.is_empty()))
 }
 
 #[cfg(test)]

@@ -35,7 +35,8 @@ use serde_json::Value;
 use crate::case_size::Size;
 use umbra_report::check::Check;
 
-use crate::args::Args;
+use crate::cli::ReduceArgs;
+use crate::exit::{Error, Exit, Outcome};
 use crate::harness::pool::{Reply, Worker};
 use crate::harness::worker::{Request, RunVerdict};
 
@@ -180,17 +181,11 @@ impl Judge {
     }
 }
 
-/// Runs the command; returns the exit code (0: reduced, 1: the point does not fail as
-/// required, 125: bad input).
-pub fn main(args: &Args) -> i32 {
-    let (point, backend) = match target(args) {
-        Ok(t) => t,
-        Err(code) => return code,
-    };
-    let mut r = match Reducer::start(args, &point, &backend) {
-        Ok(r) => r,
-        Err(code) => return code,
-    };
+/// Runs the command; returns its outcome (it passes: reduced; it fails: the point does not
+/// fail as required; could not run: bad input).
+pub fn main(args: &ReduceArgs) -> Outcome {
+    let (point, backend) = target(args)?;
+    let mut r = Reducer::start(args, &point, &backend)?;
     r.objects();
     r.tessellation();
     r.sizes();
@@ -198,32 +193,29 @@ pub fn main(args: &Args) -> i32 {
     r.finish(args, &point)
 }
 
-/// The point to reduce and its backend, checked: a usage error (125) names what is missing.
-fn target(args: &Args) -> Result<(umbra_case::CasePoint, String), i32> {
-    let [file] = args.positional.as_slice() else {
-        return Err(usage("give exactly one case file"));
+/// The point to reduce and its backend, checked: a usage error names what is wrong.
+fn target(args: &ReduceArgs) -> Result<(umbra_case::CasePoint, String), Error> {
+    let (file, point_id) = (&args.positional, args.point.as_str());
+    let backend = match args.backend.as_slice() {
+        [one] => one.as_str(),
+        many => {
+            return Err(crate::cli::usage_error(
+                "reduce",
+                format!(
+                    "--backend {}: a reduction keeps one backend's failure; give --backend once (run umbra reduce once per backend)",
+                    many.join(" --backend ")
+                ),
+            ));
+        }
     };
-    let (Some(point_id), Some(backend)) = (args.value("point"), args.value("backend")) else {
-        return Err(usage("give --point ID and --backend ID"));
-    };
-    if let [_, _, ..] = args.values("backend").as_slice() {
-        return Err(usage(&format!(
-            "--backend {}: a reduction keeps one backend's failure; give --backend once (run umbra reduce once per backend)",
-            args.values("backend").join(" --backend ")
-        )));
-    }
-    let fail = |e: String| {
-        eprintln!("error: {e}");
-        125
-    };
-    crate::harness::mesa_build::select(args.value("mesa")).map_err(fail)?;
+    crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
     if !crate::harness::registry::is_known(backend) || backend == "ref" {
-        return Err(fail(format!(
+        return Err(Error::new(format!(
             "--backend {backend:?}: give a backend other than ref; this build has: {}",
             crate::harness::registry::known().join(", ")
         )));
     }
-    let points = umbra_case::load_file(Path::new(file)).map_err(|e| fail(e.to_string()))?;
+    let points = umbra_case::load_file(Path::new(file)).map_err(|e| Error::new(e.to_string()))?;
     // An id, or a glob over the ids (as --help offers) that selects exactly one.
     let exact: Vec<&umbra_case::CasePoint> = points.iter().filter(|p| p.id() == point_id).collect();
     let matching = if exact.is_empty() {
@@ -236,11 +228,11 @@ fn target(args: &Args) -> Result<(umbra_case::CasePoint, String), i32> {
     };
     match matching.as_slice() {
         [p] => Ok(((*p).clone(), backend.to_string())),
-        [] => Err(fail(format!(
+        [] => Err(Error::new(format!(
             "{file} has no point {point_id:?}; its points: {}",
             points.iter().map(|p| p.id()).collect::<Vec<_>>().join(", ")
         ))),
-        many => Err(fail(format!(
+        many => Err(Error::new(format!(
             "--point {point_id:?} matches {} points of {file} ({}); a reduction takes one: give its id, or a glob that selects only it",
             many.len(),
             many.iter().map(|p| p.id()).collect::<Vec<_>>().join(", ")
@@ -266,26 +258,26 @@ struct Reducer {
 impl Reducer {
     /// Step 1: the point without its sweep and twins, which must still fail the asked checks
     /// (or crash) on the backend and pass on the reference.
-    fn start(args: &Args, point: &umbra_case::CasePoint, backend: &str) -> Result<Reducer, i32> {
-        let file = args.positional.first().cloned().unwrap_or_default();
+    fn start(
+        args: &ReduceArgs,
+        point: &umbra_case::CasePoint,
+        backend: &str,
+    ) -> Result<Reducer, Error> {
+        let file = args.positional.clone();
         let point_id = point.id();
         let timeout = Duration::from_secs(
-            args.value("timeout")
+            args.timeout
+                .as_deref()
                 .and_then(|t| t.parse().ok())
                 .unwrap_or(120),
         );
-        let required = match args
-            .values("check")
-            .into_iter()
+        let required = args
+            .check
+            .iter()
+            .map(String::as_str)
             .map(Check::parse)
             .collect::<Result<BTreeSet<Check>, String>>()
-        {
-            Ok(r) => r,
-            Err(e) => {
-                eprintln!("error: --check: {e}");
-                return Err(125);
-            }
-        };
+            .map_err(|e| Error::new(format!("--check: {e}")))?;
         let dir = std::env::temp_dir().join(format!("umbra-reduce-{}", std::process::id()));
         let _ = std::fs::create_dir_all(&dir);
         let mut judge = Judge {
@@ -299,8 +291,7 @@ impl Reducer {
             required,
         };
         let Ok(mut case) = serde_json::to_value(&point.case) else {
-            eprintln!("error: cannot write the point as JSON");
-            return Err(125);
+            return Err(Error::new("cannot write the point as JSON"));
         };
         if let Some(o) = case.as_object_mut() {
             o.remove("sweep");
@@ -309,16 +300,16 @@ impl Reducer {
             e.remove("twins");
             e.remove("error_falls_along");
         }
-        let gone = |code: i32| {
+        let gone = |e: Error| {
             let _ = std::fs::remove_dir_all(&dir);
-            code
+            e
         };
         let want = judge.run_on(false, &case);
         match &want {
             Verdict::Fail(c) if !c.is_empty() && judge.required.is_subset(c) => {}
             Verdict::Fail(c) if !c.is_empty() => {
-                eprintln!(
-                    "error: --check {}: {point_id} on {backend} fails {} only; name checks it fails",
+                return Err(gone(Error::new(format!(
+                    "--check {}: {point_id} on {backend} fails {} only; name checks it fails",
                     judge
                         .required
                         .iter()
@@ -326,15 +317,14 @@ impl Reducer {
                         .collect::<Vec<_>>()
                         .join(" --check "),
                     c.iter().map(Check::name).collect::<Vec<_>>().join("+")
-                );
-                return Err(gone(125));
+                ))));
             }
             Verdict::Crash(_) => {}
             other => {
                 eprintln!(
                     "error: {point_id} on {backend} {other} once its twins and golden are set aside; reduce needs a point whose own frame fails (or that crashes)"
                 );
-                return Err(gone(1));
+                return Err(gone(Error::said(Exit::Fail)));
             }
         }
         let reference = judge.run_on(true, &case);
@@ -342,7 +332,7 @@ impl Reducer {
             eprintln!(
                 "error: {point_id} does not pass on the reference ({reference}): nothing to reduce against"
             );
-            return Err(gone(1));
+            return Err(gone(Error::said(Exit::Fail)));
         }
         let before = Size::of(&case).unwrap_or_default();
         println!(
@@ -354,7 +344,7 @@ impl Reducer {
             judge,
             want,
             removed: Vec::new(),
-            verbose: args.has("verbose"),
+            verbose: args.output.verbose,
             before,
             dir,
             file,
@@ -517,7 +507,7 @@ impl Reducer {
 
     /// Step 5: what equals its default dropped from the text, the case named and described
     /// (how it fails now, what was kept), checked to load, and written.
-    fn finish(mut self, args: &Args, point: &umbra_case::CasePoint) -> i32 {
+    fn finish(mut self, args: &ReduceArgs, point: &umbra_case::CasePoint) -> Outcome {
         let (file, point_id, backend) = (
             self.file.clone(),
             self.point_id.clone(),
@@ -544,8 +534,9 @@ impl Reducer {
             o.retain(|_, v| !v.is_null());
         }
         let out = args
-            .value("o")
-            .or(args.value("out"))
+            .output
+            .out
+            .as_deref()
             .map(PathBuf::from)
             .unwrap_or_else(|| PathBuf::from("target/umbra/reduce").join(format!("{name}.json")));
         if let Some(parent) = out.parent() {
@@ -555,13 +546,12 @@ impl Reducer {
         // The reduced case must load as written.
         let text = case_text(&tidy(case), 0) + "\n";
         if let Err(e) = umbra_case::load_str(&text, &out) {
-            eprintln!("error: the reduced case does not load ({e}); this is a bug in the reducer");
-            return 125;
+            return Err(Error::new(format!(
+                "the reduced case does not load ({e}); this is a bug in the reducer"
+            )));
         }
-        if let Err(e) = std::fs::write(&out, text) {
-            eprintln!("error: cannot write {}: {e}", out.display());
-            return 125;
-        }
+        std::fs::write(&out, text)
+            .map_err(|e| Error::new(format!("cannot write {}: {e}", out.display())))?;
         println!(
             "reduce: {} → {}; it {now}; {} changes kept of {} candidates tried",
             size_line(&self.before),
@@ -574,7 +564,7 @@ impl Reducer {
             out.display(),
             out.display()
         );
-        0
+        Ok(Exit::Pass)
     }
 }
 
@@ -645,11 +635,6 @@ fn case_text(v: &Value, depth: usize) -> String {
         }
         _ => one_line,
     }
-}
-
-fn usage(msg: &str) -> i32 {
-    eprintln!("error: {msg}\nusage: {}", crate::cli::usage("reduce"));
-    125
 }
 
 fn size_line(s: &Size) -> String {

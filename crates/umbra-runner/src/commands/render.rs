@@ -7,31 +7,25 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::args::Args;
+use crate::cli::RenderArgs;
+use crate::exit::{Error, Exit};
 use crate::judge::run::{Outcome, describe, run_point};
 
-/// Runs the command; returns the process exit code.
-pub fn main(args: &Args) -> i32 {
-    let budget = match crate::harness::memory_limit::select(args.value("max-memory"), 1) {
-        Ok(b) => b,
-        Err(e) => return usage_error(&e),
-    };
-    let build = match crate::harness::mesa_build::select(args.value("mesa")) {
-        Ok(b) => b,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 125;
-        }
-    };
-    let [case] = args.positional.as_slice() else {
-        return usage_error("give exactly one case file");
-    };
-    let backend_id = args.value("backend").unwrap_or("ref");
-    let out = PathBuf::from(args.value("out").unwrap_or("target/umbra/render"));
+/// Runs the command; returns its outcome.
+pub fn main(args: &RenderArgs) -> crate::exit::Outcome {
+    let budget = crate::harness::memory_limit::select(args.max_memory.as_deref(), 1)
+        .map_err(|e| crate::cli::usage_error("render", e))?;
+    let build = crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
+    let case = &args.positional;
+    let backend_id = args.backend.last().map_or("ref", String::as_str);
+    let out = PathBuf::from(args.out.as_deref().unwrap_or("target/umbra/render"));
     if !crate::harness::registry::is_known(backend_id) {
-        return usage_error(&format!(
-            "unknown backend {backend_id:?}; this build has: {} (`umbra backends` lists this machine's devices too)",
-            crate::harness::registry::known().join(", ")
+        return Err(crate::cli::usage_error(
+            "render",
+            format!(
+                "unknown backend {backend_id:?}; this build has: {} (`umbra backends` lists this machine's devices too)",
+                crate::harness::registry::known().join(", ")
+            ),
         ));
     }
     if !crate::harness::registry::hostable_here(backend_id) {
@@ -43,55 +37,49 @@ pub fn main(args: &Args) -> i32 {
     let on_build = build.filter(|_| crate::harness::mesa_build::is_mesa_backed(backend_id));
     if let Some(why) = on_build.and_then(|b| b.lacks(backend_id)) {
         println!("skip {backend_id}: {why}");
-        return 0;
+        return Ok(Exit::Pass);
     }
     if let Some(Err(e)) = on_build.map(crate::harness::mesa_build::MesaBuild::enter) {
-        eprintln!("error: {backend_id}: {e}");
-        return 125;
+        return Err(Error::new(format!("{backend_id}: {e}")));
     }
     let mut backend = match crate::harness::registry::create(backend_id) {
         Ok(b) => b,
-        Err(crate::harness::registry::CreateError::Unknown(e)) => return usage_error(&e),
+        Err(crate::harness::registry::CreateError::Unknown(e)) => {
+            return Err(crate::cli::usage_error("render", e));
+        }
         Err(e) if on_build.is_some() => {
-            eprintln!("error: {backend_id}: the driver of the Mesa build did not load: {e}");
-            return 125;
+            return Err(Error::new(format!(
+                "{backend_id}: the driver of the Mesa build did not load: {e}"
+            )));
         }
         Err(e) => {
             println!("skip {backend_id}: {e}");
-            return 0;
+            return Ok(Exit::Pass);
         }
     };
     if let Some(b) = on_build.filter(|b| b.layout != "fake (tests)") {
-        if let Err(e) = crate::harness::mesa_build::check_loaded(
+        crate::harness::mesa_build::check_loaded(
             &b.root,
             &crate::harness::mesa_build::loaded_libs(),
-        ) {
-            eprintln!("error: {backend_id}: {e}");
-            return 125;
-        }
+        )
+        .map_err(|e| Error::new(format!("{backend_id}: {e}")))?;
         println!("{backend_id} on the Mesa build {}", b.describe());
     }
-    let points = match umbra_case::load_file(Path::new(case)) {
-        Ok(p) => p,
-        Err(e) => {
-            // A case that cannot be read or is invalid: nothing could run (125), not a failure.
-            eprintln!("error: {e}");
-            return 125;
-        }
-    };
+    // A case that cannot be read or is invalid: nothing could run, not a failure.
+    let points = umbra_case::load_file(Path::new(case)).map_err(|e| Error::new(e.to_string()))?;
     let selected: Vec<_> = points
         .into_iter()
         .filter(|p| {
-            args.value("point")
+            args.point
+                .as_deref()
                 .is_none_or(|g| crate::glob::matches(g, &p.id()))
         })
         .collect();
     if selected.is_empty() {
-        eprintln!(
-            "error: --point {:?} matches no sweep point of {case}",
-            args.value("point").unwrap_or("")
-        );
-        return 125;
+        return Err(Error::new(format!(
+            "--point {:?} matches no sweep point of {case}",
+            args.point.as_deref().unwrap_or("")
+        )));
     }
     // Refuse what cannot fit before anything renders, then watch what does.
     let mut estimated = 0;
@@ -99,18 +87,19 @@ pub fn main(args: &Args) -> i32 {
         let triangles = umbra_case::tessellate(&p.case.scene).triangles.len();
         let e = umbra_case::memory::estimate(&p.case, triangles);
         if let Some(why) = e.refuse(budget) {
-            eprintln!("error: {case} point {}: {why}", p.id());
-            return 125;
+            return Err(Error::new(format!("{case} point {}: {why}", p.id())));
         }
         estimated = estimated.max(e.total());
     }
-    let explain = match args.value("explain").map(parse_pixel).transpose() {
-        Ok(p) => p,
-        Err(e) => return usage_error(&e),
-    };
+    let explain = args
+        .explain
+        .as_deref()
+        .map(parse_pixel)
+        .transpose()
+        .map_err(|e| crate::cli::usage_error("render", e))?;
     crate::harness::memory_limit::watch_self(budget);
     let many = selected.len() > 1;
-    let mut code = 0;
+    let mut failed = false;
     for point in selected {
         let id = point.id();
         println!("{id} on {backend_id}");
@@ -118,13 +107,13 @@ pub fn main(args: &Args) -> i32 {
             Outcome::Skip(why) => println!("  skip: {why}"),
             Outcome::Error(e) => {
                 println!("  error: {e}");
-                code = 1;
+                failed = true;
             }
             Outcome::Done(j) => {
                 println!("{}", describe(&j));
                 for p in &j.problems {
                     println!("  problem: {p}");
-                    code = 1;
+                    failed = true;
                 }
                 if explain.is_some() || !j.fingerprint.is_empty() {
                     print!("{}", explain_pixels(&j, backend.profile(), explain));
@@ -140,8 +129,9 @@ pub fn main(args: &Args) -> i32 {
                         dir.display()
                     ),
                     Err(e) => {
+                        // A point that ran but whose pictures are lost fails.
                         eprintln!("error: cannot write images to {}: {e}", dir.display());
-                        return 1;
+                        return Err(Error::said(Exit::Fail));
                     }
                 }
             }
@@ -155,7 +145,7 @@ pub fn main(args: &Args) -> i32 {
             umbra_case::memory::gib(budget)
         );
     }
-    code
+    Ok(Exit::pass_if(!failed))
 }
 
 /// How many illegal pixels `render` lists.
@@ -307,9 +297,4 @@ fn parse_pixel(s: &str) -> Result<(u32, u32), String> {
         x.trim().parse().map_err(|_| bad())?,
         y.trim().parse().map_err(|_| bad())?,
     ))
-}
-
-fn usage_error(msg: &str) -> i32 {
-    eprintln!("error: {msg}\nusage: {}", crate::cli::usage("render"));
-    125
 }

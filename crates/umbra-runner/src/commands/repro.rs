@@ -20,17 +20,16 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
-use crate::args::Args;
+use crate::cli::ReproArgs;
+use crate::exit::{Error, Exit, Outcome};
 use crate::harness::registry;
 use crate::repro::issue::{Measured, ProgramRun, Replay};
 
 /// The longest a compiled repro may run.
 const PROGRAM_TIMEOUT: Duration = Duration::from_secs(120);
 
-/// Runs `umbra repro`.
-pub fn main(args: &Args) -> i32 {
-    steps(args).unwrap_or_else(|code| code)
-}
+/// The usage line of `umbra repro`'s own errors.
+const USAGE: &str = "umbra repro BACKEND/CASE@POINT -o DIR";
 
 /// What the bundle is of, and where it goes.
 struct Target {
@@ -41,15 +40,11 @@ struct Target {
     point: String,
 }
 
-/// The steps in order; `Err` carries the exit code of a step that ended the command (its
-/// message printed).
-fn steps(args: &Args) -> Result<i32, i32> {
-    if let Err(e) = crate::harness::mesa_build::select(args.value("mesa")) {
-        eprintln!("error: {e}");
-        return Err(125);
-    }
-    if args.has("emit") {
-        return Ok(emit(args));
+/// Runs `umbra repro`: the steps in order; an `Err` is the step that ended the command.
+pub fn main(args: &ReproArgs) -> Outcome {
+    crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
+    if args.emit {
+        return emit(args);
     }
     let t = target(args)?;
     println!(
@@ -70,27 +65,21 @@ fn steps(args: &Args) -> Result<i32, i32> {
         "umbra {}",
         std::env::args().skip(1).collect::<Vec<_>>().join(" ")
     );
-    let control = args
-        .value("control")
-        .map(String::from)
-        .or_else(|| default_control(&t.backend));
+    let control = args.control.clone().or_else(|| default_control(&t.backend));
     let binary = t.out.join("repro");
     run_programs(&t, &facts, &binary, control.as_deref(), &mut m)?;
-    (m.capture, m.replays) =
-        if umbra_wgpu::Kind::parse(&t.backend) == Some(umbra_wgpu::Kind::Vulkan) {
-            gfxr_capture(&t.out, &t.backend, &reduced)
-        } else {
-            capture(&t.out, &binary, &t.backend, control.as_deref(), &m)
-        };
+    (m.capture, m.replays) = if registry::Descriptor::of(&t.backend).is_some_and(|d| d.vulkan()) {
+        gfxr_capture(&t.out, &t.backend, &reduced)
+    } else {
+        capture(&t.out, &binary, &t.backend, control.as_deref(), &m)
+    };
     m.diagnosis = diagnosis(args, &t.run, &reduced);
     m.mesa_build = crate::harness::mesa_build::selected().map(|b| b.describe());
-    if let Some(commit) = args.value("first-bad") {
-        let log = match args.value("bisect-log") {
+    if let Some(commit) = args.first_bad.as_deref() {
+        let log = match args.bisect_log.as_deref() {
             Some(l) => {
-                let text = std::fs::read_to_string(l).map_err(|e| {
-                    eprintln!("error: --bisect-log {l}: {e}");
-                    125
-                })?;
+                let text = std::fs::read_to_string(l)
+                    .map_err(|e| Error::new(format!("--bisect-log {l}: {e}")))?;
                 save(&t.out.join("bisect.log"), &text)?;
                 Some(text)
             }
@@ -102,37 +91,29 @@ fn steps(args: &Args) -> Result<i32, i32> {
 }
 
 /// The run named on the command line, its case file and an empty bundle directory.
-fn target(args: &Args) -> Result<Target, i32> {
-    let [run] = args.positional.as_slice() else {
-        return Err(usage("give exactly one run, backend/case@point"));
-    };
+fn target(args: &ReproArgs) -> Result<Target, Error> {
+    let run = &args.positional;
     let Some((backend, case_point)) = split_run(run) else {
-        return Err(usage(&format!(
+        return Err(usage(format!(
             "{run:?} is not a run name: give backend/case@point as conformance prints it (e.g. gl33/softpipe/beyond-far@shadow.format=depth24)"
         )));
     };
     if !registry::is_known(&backend) || backend == "ref" {
-        return Err(usage(&format!(
+        return Err(usage(format!(
             "{backend:?} is not a driver backend; this build has: {}",
             registry::known().join(", ")
         )));
     }
-    let out = PathBuf::from(args.value("out").unwrap_or("target/umbra/repro"));
+    let out = PathBuf::from(&args.out);
     if std::fs::read_dir(&out).is_ok_and(|mut d| d.next().is_some()) {
-        eprintln!(
-            "error: {} is not empty: give a new directory for the bundle (a bundle's files must all come from one run)",
+        return Err(Error::new(format!(
+            "{} is not empty: give a new directory for the bundle (a bundle's files must all come from one run)",
             out.display()
-        );
-        return Err(125);
+        )));
     }
-    if let Err(e) = std::fs::create_dir_all(&out) {
-        eprintln!("error: cannot create {}: {e}", out.display());
-        return Err(125);
-    }
-    let (case_file, point) = find_point(args, &case_point).map_err(|e| {
-        eprintln!("error: {e}");
-        125
-    })?;
+    std::fs::create_dir_all(&out)
+        .map_err(|e| Error::new(format!("cannot create {}: {e}", out.display())))?;
+    let (case_file, point) = find_point(args, &case_point).map_err(Error::new)?;
     Ok(Target {
         run: run.clone(),
         backend,
@@ -143,8 +124,9 @@ fn target(args: &Args) -> Result<Target, i32> {
 }
 
 /// `umbra reduce` into `case.json` (its log into `reduce.log`): the reduced file and the
-/// reducer's before → after line. A point that passes is exit 1, "nothing to reproduce".
-fn reduce_step(args: &Args, t: &Target) -> Result<(PathBuf, String), i32> {
+/// reducer's before → after line. A point that passes fails the command, "nothing to
+/// reproduce".
+fn reduce_step(args: &ReproArgs, t: &Target) -> Result<(PathBuf, String), Error> {
     let reduced = t.out.join("case.json");
     let mut reduce: Vec<String> = vec![
         "reduce".into(),
@@ -156,18 +138,16 @@ fn reduce_step(args: &Args, t: &Target) -> Result<(PathBuf, String), i32> {
         "--out".into(),
         reduced.display().to_string(),
     ];
-    for c in args.values("check") {
-        reduce.extend(["--check".into(), c.to_string()]);
+    for c in &args.check {
+        reduce.extend(["--check".into(), c.clone()]);
     }
-    for flag in ["mesa", "timeout"] {
-        if let Some(v) = args.value(flag) {
-            reduce.extend([format!("--{flag}"), v.to_string()]);
+    for (flag, value) in [("mesa", &args.mesa), ("timeout", &args.timeout)] {
+        if let Some(v) = value {
+            reduce.extend([format!("--{flag}"), v.clone()]);
         }
     }
-    let (code, log) = run_self(&reduce).map_err(|e| {
-        eprintln!("error: cannot start the reducer: {e}");
-        125
-    })?;
+    let (code, log) =
+        run_self(&reduce).map_err(|e| Error::new(format!("cannot start the reducer: {e}")))?;
     save(&t.out.join("reduce.log"), &log)?;
     if code != Some(0) {
         let last = log
@@ -181,10 +161,9 @@ fn reduce_step(args: &Args, t: &Target) -> Result<(PathBuf, String), i32> {
                 "error: nothing to reproduce: {last}\n(umbra repro takes a run whose frame or shadow map fails the judge, as `umbra conformance` lists them; the reducer's log is in {})",
                 t.out.join("reduce.log").display()
             );
-            return Err(1);
+            return Err(Error::said(Exit::Fail));
         }
-        eprintln!("error: the reducer could not run: {last}");
-        return Err(125);
+        return Err(Error::new(format!("the reducer could not run: {last}")));
     }
     let summary = log
         .lines()
@@ -198,7 +177,7 @@ fn reduce_step(args: &Args, t: &Target) -> Result<(PathBuf, String), i32> {
 }
 
 /// The driver-side half ([`crate::repro::emit`]) in the backend's own process; its facts.
-fn emit_step(args: &Args, t: &Target, reduced: &Path) -> Result<serde_json::Value, i32> {
+fn emit_step(args: &ReproArgs, t: &Target, reduced: &Path) -> Result<serde_json::Value, Error> {
     let mut emit_args: Vec<String> = vec![
         "repro".into(),
         "--emit".into(),
@@ -208,20 +187,25 @@ fn emit_step(args: &Args, t: &Target, reduced: &Path) -> Result<serde_json::Valu
         "--out".into(),
         t.out.display().to_string(),
     ];
-    if let Some(m) = args.value("mesa") {
-        emit_args.extend(["--mesa".into(), m.to_string()]);
+    if let Some(m) = &args.mesa {
+        emit_args.extend(["--mesa".into(), m.clone()]);
     }
-    let emitted =
-        crate::harness::child::rerun_for(&t.backend, &emit_args, &registry::worker_env(&t.backend));
-    if emitted != 0 {
-        return Err(emitted);
+    // The driver process says its own errors; its exit is the command's.
+    let emitted = crate::harness::child::rerun_for(
+        &t.backend,
+        &emit_args,
+        &registry::worker_env(&t.backend),
+    )?;
+    if emitted != Exit::Pass {
+        return Err(Error::said(emitted));
     }
     let facts: serde_json::Value = std::fs::read_to_string(t.out.join("facts.json"))
         .map_err(|e| e.to_string())
         .and_then(|s| serde_json::from_str(&s).map_err(|e| e.to_string()))
         .map_err(|e| {
-            eprintln!("error: the driver process wrote no readable facts.json: {e}");
-            125
+            Error::new(format!(
+                "the driver process wrote no readable facts.json: {e}"
+            ))
         })?;
     if facts["deterministic"] == false {
         println!(
@@ -239,7 +223,7 @@ fn run_programs(
     binary: &Path,
     control: Option<&str>,
     m: &mut Measured,
-) -> Result<(), i32> {
+) -> Result<(), Error> {
     if facts["repro_c"] != true {
         m.no_program = Some(format!(
             "{} records no GL calls (repro.c is written for the GL backends)",
@@ -247,10 +231,7 @@ fn run_programs(
         ));
         return Ok(());
     }
-    compile(&t.out.join("repro.c"), binary).map_err(|e| {
-        eprintln!("error: {e}");
-        125
-    })?;
+    compile(&t.out.join("repro.c"), binary).map_err(Error::new)?;
     for b in std::iter::once(t.backend.as_str()).chain(control) {
         let r = run_program(binary, b, &t.out);
         save(
@@ -267,9 +248,10 @@ fn run_programs(
     Ok(())
 }
 
-/// Writes issue.md and README.md; the exit code: 0 only when the program fails on the driver
-/// and passes on the control (or none was run), 1 otherwise (Err: 125, a file not written).
-fn finish(out: &Path, facts: &serde_json::Value, m: &mut Measured) -> Result<i32, i32> {
+/// Writes issue.md and README.md; the outcome: it passes only when the program fails on the
+/// driver and passes on the control (or none was run), fails otherwise (could not run: a file
+/// not written).
+fn finish(out: &Path, facts: &serde_json::Value, m: &mut Measured) -> Outcome {
     let reproduces = match (m.runs.first(), m.runs.get(1)) {
         (Some(d), c) => Some(d.code == Some(1) && c.is_none_or(|c| c.code == Some(0))),
         (None, _) => None,
@@ -294,8 +276,8 @@ fn finish(out: &Path, facts: &serde_json::Value, m: &mut Measured) -> Result<i32
         &crate::repro::issue::readme(facts, m, &files),
     )?;
     println!("  wrote {} (its README.md lists the files)", out.display());
-    Ok(match reproduces {
-        Some(true) => 0,
+    match reproduces {
+        Some(true) => Ok(Exit::Pass),
         Some(false) => {
             let codes: Vec<String> = m
                 .runs
@@ -313,32 +295,29 @@ fn finish(out: &Path, facts: &serde_json::Value, m: &mut Measured) -> Result<i32
                 codes.join(", "),
                 out.display()
             );
-            1
+            Err(Error::said(Exit::Fail))
         }
         None => {
             eprintln!(
                 "note: no program was run ({}); the bundle has the case, pictures and issue.md",
                 m.no_program.as_deref().unwrap_or("?")
             );
-            0
+            Ok(Exit::Pass)
         }
-    })
+    }
 }
 
 /// The driver-side step (in the backend's process).
-fn emit(args: &Args) -> i32 {
-    let ([case], Some(backend), Some(out)) = (
-        args.positional.as_slice(),
-        args.value("backend"),
-        args.value("out"),
-    ) else {
-        return usage("--emit takes the reduced case, --backend and --out");
+fn emit(args: &ReproArgs) -> Outcome {
+    let Some(backend) = args.backend.last() else {
+        return Err(usage("--emit takes the reduced case, --backend and --out"));
     };
     if !registry::hostable_here(backend) {
-        eprintln!("error: --emit must run in {backend}'s process (umbra repro starts it)");
-        return 125;
+        return Err(Error::new(format!(
+            "--emit must run in {backend}'s process (umbra repro starts it)"
+        )));
     }
-    crate::repro::emit(Path::new(case), backend, Path::new(out))
+    crate::repro::emit(Path::new(&args.positional), backend, Path::new(&args.out))
 }
 
 /// `gl33/softpipe/case@point` → (`gl33/softpipe`, `case@point`).
@@ -350,11 +329,11 @@ pub fn split_run(run: &str) -> Option<(String, String)> {
 }
 
 /// The case file and point id of `case@point`.
-fn find_point(args: &Args, case_point: &str) -> Result<(PathBuf, String), String> {
-    let files = match args.value("case") {
+fn find_point(args: &ReproArgs, case_point: &str) -> Result<(PathBuf, String), String> {
+    let files = match args.case.as_deref() {
         Some(f) => vec![PathBuf::from(f)],
         None => {
-            let dir = args.value("cases").unwrap_or("cases");
+            let dir = args.cases.as_deref().unwrap_or("cases");
             umbra_case::load::case_files(Path::new(dir))
                 .map_err(|e| format!("cannot list case files under {dir}: {e}"))?
         }
@@ -370,8 +349,9 @@ fn find_point(args: &Args, case_point: &str) -> Result<(PathBuf, String), String
     }
     Err(format!(
         "no case point {case_point:?} in {} ({} files): give it as conformance names it, or --case FILE",
-        args.value("case")
-            .unwrap_or(args.value("cases").unwrap_or("cases")),
+        args.case
+            .as_deref()
+            .unwrap_or(args.cases.as_deref().unwrap_or("cases")),
         files.len()
     ))
 }
@@ -379,7 +359,7 @@ fn find_point(args: &Args, case_point: &str) -> Result<(PathBuf, String), String
 /// The same API on llvmpipe (none when the run is on llvmpipe already).
 fn default_control(backend: &str) -> Option<String> {
     let (api, driver) = backend.split_once('/')?;
-    let gl = umbra_gl::parse_id(backend).is_some() || umbra_gl::parse_device_id(backend).is_some();
+    let gl = registry::Descriptor::of(backend).is_some_and(|d| d.umbra_makes_the_gl_calls());
     (gl && driver != "llvmpipe").then(|| format!("{api}/llvmpipe"))
 }
 
@@ -533,7 +513,7 @@ fn capture(
     control: Option<&str>,
     m: &Measured,
 ) -> (Result<String, String>, Vec<Replay>) {
-    if umbra_gl::parse_id(backend).is_none() && umbra_gl::parse_device_id(backend).is_none() {
+    if !registry::Descriptor::of(backend).is_some_and(|d| d.umbra_makes_the_gl_calls()) {
         return (
             Err(format!(
                 "{backend} runs through wgpu's GL backend, whose calls umbra does not record; `apitrace trace --api egl umbra render case.json --backend {backend}` captures them"
@@ -776,8 +756,8 @@ fn version(package: &str) -> String {
 }
 
 /// umbra's diagnosis of the run, when an expectation names it (its reason).
-fn diagnosis(args: &Args, run: &str, reduced: &Path) -> Option<String> {
-    let dir = args.value("expectations").unwrap_or("expectations");
+fn diagnosis(args: &ReproArgs, run: &str, reduced: &Path) -> Option<String> {
+    let dir = args.expectations.as_deref().unwrap_or("expectations");
     let all = crate::judge::expectations::Expectations::load(Path::new(dir)).ok()?;
     let case: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(reduced).ok()?).ok()?;
@@ -807,15 +787,13 @@ fn list_files(dir: &Path) -> Vec<(String, u64)> {
 }
 
 /// Writes one bundle file, atomically; a file that cannot be written (a full disk) ends the
-/// command with 125 and says which, rather than leave a bundle that silently lacks it.
-fn save(path: &Path, text: &str) -> Result<(), i32> {
-    crate::atomic_file::write(path, text.as_bytes()).map_err(|e| {
-        eprintln!("error: cannot write {}: {e}", path.display());
-        125
-    })
+/// command (could not run) and says which, rather than leave a bundle that silently lacks it.
+fn save(path: &Path, text: &str) -> Result<(), Error> {
+    crate::atomic_file::write(path, text.as_bytes())
+        .map_err(|e| Error::new(format!("cannot write {}: {e}", path.display())))
 }
 
-fn usage(msg: &str) -> i32 {
-    eprintln!("error: {msg}\nusage: umbra repro BACKEND/CASE@POINT -o DIR");
-    125
+/// A command-line mistake: the message, then [`USAGE`] (could not run).
+fn usage(msg: impl std::fmt::Display) -> Error {
+    Error::new(format!("{msg}\nusage: {USAGE}"))
 }

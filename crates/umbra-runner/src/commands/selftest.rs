@@ -20,6 +20,7 @@
 //!   instead, every exercising point of each, and reports the catch rate per fault: how far
 //!   the judge's sensitivity carries beyond the cases it was developed against.
 
+use crate::harness::registry::Descriptor;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -27,7 +28,8 @@ use std::time::Duration;
 
 use umbra_case::fault::{Fault, Param};
 
-use crate::args::Args;
+use crate::cli::{SelftestArgs, SelftestMode};
+use crate::exit::{Error, Exit, Outcome};
 use crate::harness::pool::{Reply, Worker};
 use crate::harness::worker::Request;
 use crate::judge::expectations::Expectations;
@@ -38,43 +40,39 @@ pub const SAMPLE: usize = 6;
 /// How many points must catch each fault × backend pair.
 pub const MIN_POINTS: usize = 3;
 
-/// The GL API of a GL backend id, a Mesa software driver's or an EGL device's.
-fn gl_api(id: &str) -> Option<umbra_gl::Api> {
-    umbra_gl::parse_id(id)
-        .map(|(api, _)| api)
-        .or_else(|| umbra_gl::parse_device_id(id).map(|(api, _)| api))
+/// Whether `fault` means anything on backend `id`: asked of the backend's descriptor (its
+/// family's technique and capabilities), never of the id's spelling.
+pub fn applies(fault: Fault, id: &str) -> bool {
+    Descriptor::of(id).is_some_and(|b| applies_to(fault, &b))
 }
 
-/// Whether `fault` means anything on backend `id`.
-pub fn applies(fault: Fault, id: &str) -> bool {
-    let gl = gl_api(id);
-    let es2 = gl == Some(umbra_gl::Api::Gles2);
-    let wgpu = umbra_wgpu::Kind::parse(id);
-    let wgpu_gl = wgpu == Some(umbra_wgpu::Kind::Gl);
-    if gl.is_none() && wgpu.is_none() {
+/// [`applies`], for a backend already described.
+pub fn applies_to(fault: Fault, b: &Descriptor) -> bool {
+    if !b.renders_on_a_driver() {
         return false;
     }
     match fault {
-        Fault::GlDepthRange => wgpu.is_some(),
-        Fault::WrongComponent | Fault::WrongTextureUnit => gl.is_some(),
+        // GL's [-1, 1] depth mapping is wrong only where clip depth is [0, 1].
+        Fault::GlDepthRange => b.zero_to_one_depth(),
+        Fault::WrongComponent | Fault::WrongTextureUnit => b.binds_gl_texture_units(),
         // The GLES 2 path has no float depth, and is the only one that clamps in the shader.
-        Fault::ClampFloat => !es2,
-        Fault::NoClamp => es2,
+        Fault::ClampFloat => !b.gles2_technique(),
+        Fault::NoClamp => b.gles2_technique(),
         // GLES 2 has no mipmapped compare (it skips every mipmapped case).
-        Fault::MipBaseOnly | Fault::MipLevelCoarse => !es2,
+        Fault::MipBaseOnly | Fault::MipLevelCoarse => !b.gles2_technique(),
         // A manual LINEAR filter; wgpu's GL backend has no manual compare.
         Fault::BilinearCoarse
         | Fault::Scaled {
             param: Param::FilterWeights,
             ..
-        } => !wgpu_gl,
+        } => b.manual_compare(),
         _ => true,
     }
 }
 
 /// Whether case `c` exercises `fault` on backend `id` at all: only such points are run for it.
 pub fn exercises(fault: Fault, c: &umbra_case::Case, id: &str) -> bool {
-    let es2 = gl_api(id) == Some(umbra_gl::Api::Gles2);
+    let es2 = Descriptor::of(id).is_some_and(|b| b.gles2_technique());
     use umbra_case::format::{Compare, DepthFormat, Filter, Light, Outside, ShadingModel};
     let s = &c.shadow;
     match fault {
@@ -227,68 +225,51 @@ impl Setup {
     }
 }
 
-/// Checks the command line and loads what every mode needs; an error is printed and is its
-/// exit code (125).
-pub(crate) fn setup(args: &Args) -> Result<Setup, i32> {
-    if let Err(e) = crate::harness::mesa_build::select(args.value("mesa")) {
-        eprintln!("error: {e}");
-        return Err(125);
-    }
+/// Checks the command line and loads what every mode needs; an error is what the command
+/// ends with (could not run).
+pub(crate) fn setup(args: &SelftestArgs) -> Result<Setup, Error> {
+    crate::harness::mesa_build::select(args.execution.mesa.as_deref()).map_err(Error::new)?;
     // `--seed S --count N`: the faults on generated cases, every exercising point run, and
     // the catch rate reported (how the judge's sensitivity holds off the catalogue).
-    let generated = match soak_cases(args) {
-        Ok(g) => g,
-        Err(e) => {
-            eprintln!("error: {e}\nusage: {}", crate::cli::usage("selftest"));
-            return Err(125);
-        }
-    };
+    let generated = soak_cases(args).map_err(|e| crate::cli::usage_error("selftest", e))?;
     let cases = match &generated {
         Some(dir) => dir.clone(),
-        None => PathBuf::from(args.value("cases").unwrap_or("cases")),
+        None => PathBuf::from(args.cases.as_deref().unwrap_or("cases")),
     };
     let timeout = Duration::from_secs(
-        args.value("timeout")
+        args.execution
+            .timeout
+            .as_deref()
             .and_then(|t| t.parse().ok())
             .unwrap_or(120),
     );
     let jobs = args
-        .value("jobs")
+        .execution
+        .jobs
+        .as_deref()
         .and_then(|j| j.parse().ok())
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
         .max(1);
-    if let Err(e) = crate::harness::memory_limit::select(args.value("max-memory"), jobs) {
-        eprintln!("error: {e}\nusage: {}", crate::cli::usage("selftest"));
-        return Err(125);
-    }
-    let expectations = match Expectations::load(Path::new(
-        args.value("expectations").unwrap_or("expectations"),
-    )) {
-        Ok(e) => e,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return Err(125);
-        }
-    };
+    crate::harness::memory_limit::select(args.execution.max_memory.as_deref(), jobs)
+        .map_err(|e| crate::cli::usage_error("selftest", e))?;
+    let expectations = Expectations::load(Path::new(
+        args.expectations.as_deref().unwrap_or("expectations"),
+    ))
+    .map_err(Error::new)?;
     let default = crate::harness::registry::known()
         .into_iter()
         .filter(|b| b != "ref")
         .collect();
-    let backends = match crate::harness::registry::selected(&args.values("backend"), default) {
-        Ok(b) => b,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return Err(125);
-        }
-    };
+    let named: Vec<&str> = args.backend.iter().map(String::as_str).collect();
+    let backends = crate::harness::registry::selected(&named, default).map_err(Error::new)?;
     let mut faults: Vec<Fault> = Vec::new();
-    for name in args.values("fault") {
+    for name in &args.fault {
         match Fault::parse(name) {
             Some(f) => faults.push(f),
             None => {
                 let all: Vec<String> = Fault::ALL.iter().map(|f| f.name()).collect();
-                eprintln!(
-                    "error: --fault {name:?} is not a fault; the faults are {}, and any \
+                return Err(Error::new(format!(
+                    "--fault {name:?} is not a fault; the faults are {}, and any \
                      face<0-5>-<orientation> or map-<orientation> (orientations: {}), and \
                      PARAM@E (a parameter off by a relative error E, or E texels for a shift; \
                      parameters: {})",
@@ -297,8 +278,7 @@ pub(crate) fn setup(args: &Args) -> Result<Setup, i32> {
                         .map(|o| o.name())
                         .join(", "),
                     Param::ALL.map(|p| p.name()).join(", ")
-                );
-                return Err(125);
+                )));
             }
         }
     }
@@ -307,47 +287,43 @@ pub(crate) fn setup(args: &Args) -> Result<Setup, i32> {
     }
     let mut points = Vec::new();
     for f in umbra_case::case_files(&cases).unwrap_or_default() {
-        match umbra_case::load_file(&f) {
-            Ok(p) => points.extend(p.into_iter().enumerate().map(|(i, p)| (f.clone(), i, p))),
-            Err(e) => {
-                eprintln!("error: {e}");
-                return Err(125);
-            }
-        }
+        let p = umbra_case::load_file(&f).map_err(|e| Error::new(e.to_string()))?;
+        points.extend(p.into_iter().enumerate().map(|(i, p)| (f.clone(), i, p)));
     }
     if points.is_empty() {
-        eprintln!("error: no case under {}", cases.display());
-        return Err(125);
+        return Err(Error::new(format!("no case under {}", cases.display())));
     }
     // The judging basis of each point does not depend on the fault: the self-test shares
     // conformance's content-addressed cache (judge_cache), and so reads what a conformance run
     // of this build computed.
-    // (--orientations judges nothing and touches no cache.)
-    let cache = if args.has("orientations") {
+    // (The orientations mode judges nothing and touches no cache.)
+    let cache = if args.mode() == SelftestMode::Orientations {
         PathBuf::new()
     } else {
         crate::judge::judge_cache::prepare(std::path::Path::new(
-            args.value("judge-cache")
+            args.execution
+                .judge_cache
+                .as_deref()
                 .unwrap_or(crate::judge::judge_cache::DEFAULT_ROOT),
         ))
     };
     Ok(Setup {
         points,
-        chosen: !args.values("backend").is_empty(),
+        chosen: !args.backend.is_empty(),
         backends,
         faults,
         expectations,
         cache,
         timeout,
-        verbose: args.has("verbose"),
+        verbose: args.output.verbose,
         generated,
         jobs,
     })
 }
 
-/// The self-test proper: every fault hunted on every backend it applies to; exit 1 when one
-/// goes unseen.
-pub(crate) fn hunt_all(setup: &Setup) -> i32 {
+/// The self-test proper: every fault hunted on every backend it applies to; it fails when
+/// one goes unseen.
+pub(crate) fn hunt_all(setup: &Setup) -> Outcome {
     let pairs: Vec<(String, Fault)> = setup
         .backends
         .iter()
@@ -386,8 +362,8 @@ pub(crate) fn hunt_all(setup: &Setup) -> i32 {
 }
 
 /// With `--seed` and `--count`, the directory the generated cases were written to.
-fn soak_cases(args: &Args) -> Result<Option<PathBuf>, String> {
-    let (seed, count) = match (args.value("seed"), args.value("count")) {
+fn soak_cases(args: &SelftestArgs) -> Result<Option<PathBuf>, String> {
+    let (seed, count) = match (args.seed.as_deref(), args.count.as_deref()) {
         (None, None) => return Ok(None),
         (s, c) => (s.unwrap_or("1"), c.unwrap_or("20")),
     };
@@ -399,8 +375,13 @@ fn soak_cases(args: &Args) -> Result<Option<PathBuf>, String> {
         .ok()
         .filter(|n| *n > 0)
         .ok_or_else(|| format!("--count takes a positive number, got {count:?}"))?;
-    let dir =
-        PathBuf::from(args.value("out").unwrap_or(super::soak::DEFAULT_OUT)).join("selftest-cases");
+    let dir = PathBuf::from(
+        args.output
+            .out
+            .as_deref()
+            .unwrap_or(super::soak::DEFAULT_OUT),
+    )
+    .join("selftest-cases");
     super::soak::write_cases(&dir, seed, count).map_err(|e| {
         format!(
             "cannot write the generated cases under {}: {e}",
@@ -417,8 +398,9 @@ fn soak_cases(args: &Args) -> Result<Option<PathBuf>, String> {
 /// The catch rate per fault on generated cases: of the points that exercise it on each
 /// backend, how many catch it. Generated scenes are not built to see a subtle fault (the
 /// catalogue's magnified and exact-tie cases are), so a low rate is information, not a
-/// failure; a fault no generated point catches anywhere is listed.
-fn rates(results: &[(String, Fault, Hunt)]) -> i32 {
+/// failure; a fault no generated point catches anywhere is listed. Nothing run, or a Mesa
+/// build refused, is could not run (the lines above say so).
+fn rates(results: &[(String, Fault, Hunt)]) -> Outcome {
     println!(
         "\ncatch rate on generated cases, per fault: points that caught it / points run (all backends)"
     );
@@ -454,9 +436,9 @@ fn rates(results: &[(String, Fault, Hunt)]) -> i32 {
         100.0 * caught_all as f64 / tried_all.max(1) as f64
     );
     if tried_all == 0 || results.iter().any(|r| r.2.refused) {
-        125
+        Err(Error::said(Exit::CouldNotRun))
     } else {
-        0
+        Ok(Exit::Pass)
     }
 }
 
@@ -533,8 +515,9 @@ impl Hunt {
     }
 }
 
-/// The per-fault table and the closing line; the exit code.
-fn summary(results: &[(String, Fault, Hunt)]) -> i32 {
+/// The per-fault table and the closing line; the outcome (nothing run, or a Mesa build
+/// refused, is could not run: the lines above say so).
+fn summary(results: &[(String, Fault, Hunt)]) -> Outcome {
     println!(
         "\nper fault: subtlety, backends caught / applicable, fewest catching points on a backend"
     );
@@ -594,11 +577,9 @@ fn summary(results: &[(String, Fault, Hunt)]) -> i32 {
         missed.len() + short.len()
     );
     if results.is_empty() || results.iter().any(|r| r.2.refused) {
-        125
-    } else if missed.is_empty() && short.is_empty() {
-        0
+        Err(Error::said(Exit::CouldNotRun))
     } else {
-        1
+        Ok(Exit::pass_if(missed.is_empty() && short.is_empty()))
     }
 }
 

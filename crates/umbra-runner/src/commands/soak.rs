@@ -11,40 +11,50 @@
 //! conformance run puts them ([`crate::run_dir`]: `OUT/latest` shows the run once complete),
 //! and `soak.csv` beside them holds the table.
 //!
-//! The exit code is the conformance run's: 0 when every run is as expected, 1 on any
+//! The outcome is the conformance run's: exit 0 when every run is as expected, 1 on any
 //! failure, 125 when nothing could run.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::args::Args;
+use crate::cli::{ConformanceArgs, Output, Selection, SoakArgs};
+use crate::exit::{Error, Exit, Outcome};
 use umbra_report::{RunResult, Status};
 
 /// The default output directory.
 pub const DEFAULT_OUT: &str = "target/umbra/soak";
 
-/// Runs the command; returns the exit code.
-pub fn main(args: &Args) -> i32 {
-    let seed = match args.value("seed").map(str::parse::<u64>).transpose() {
+/// Runs the command; returns its outcome.
+pub fn main(args: &SoakArgs) -> Outcome {
+    let seed = match args.seed.as_deref().map(str::parse::<u64>).transpose() {
         Ok(s) => s.unwrap_or(1),
-        Err(_) => return usage("--seed takes a whole number"),
+        Err(_) => {
+            return Err(crate::cli::usage_error(
+                "soak",
+                "--seed takes a whole number",
+            ));
+        }
     };
-    let count = match args.value("count").map(str::parse::<usize>).transpose() {
-        Ok(Some(0)) | Err(_) => return usage("--count takes a positive number of cases"),
+    let count = match args.count.as_deref().map(str::parse::<usize>).transpose() {
+        Ok(Some(0)) | Err(_) => {
+            return Err(crate::cli::usage_error(
+                "soak",
+                "--count takes a positive number of cases",
+            ));
+        }
         Ok(c) => c.unwrap_or(100),
     };
-    let out = PathBuf::from(args.value("out").unwrap_or(DEFAULT_OUT));
+    let out = PathBuf::from(args.output.out.as_deref().unwrap_or(DEFAULT_OUT));
     // The cases live in the run's own directory: two soaks into one --out never share them,
     // and the report's reproduce commands keep pointing at them.
     let run_dir = match crate::run_dir::RunDir::create(&out) {
         Ok(r) => r,
         Err(e) => {
-            eprintln!(
-                "error: cannot create a run directory under {}: {e}; give --out a writable directory",
+            return Err(Error::new(format!(
+                "cannot create a run directory under {}: {e}; give --out a writable directory",
                 out.join("runs").display()
-            );
-            return 125;
+            )));
         }
     };
     let dir = run_dir.dir.join("cases");
@@ -53,52 +63,46 @@ pub fn main(args: &Args) -> i32 {
             "cannot write the generated cases under {}: {e}",
             dir.display()
         ));
-        return 125;
+        return Err(Error::said(Exit::CouldNotRun));
     }
     let run_path = run_dir.dir.clone();
     println!(
         "soak: {count} cases of seed {seed} under {} (umbra_case::generate)",
         dir.display()
     );
-    let mut run_args = Args::default();
-    run_args.set("cases", dir.display().to_string());
-    run_args.set("golden", "none".into());
-    run_args.set("out", out.display().to_string());
-    for flag in [
-        "jobs",
-        "timeout",
-        "expectations",
-        "mesa",
-        "max-memory",
-        "judge-cache",
-        "filter",
-    ] {
-        if let Some(v) = args.value(flag) {
-            run_args.set(flag, v.to_string());
-        }
-    }
-    for b in args.values("backend") {
-        run_args.set("backend", b.to_string());
-    }
-    if args.has("verbose") {
-        run_args.set("verbose", String::new());
-    }
+    let run_args = ConformanceArgs {
+        selection: Selection {
+            cases: Some(dir.display().to_string()),
+            filter: args.filter.clone(),
+            backend: args.backend.clone(),
+            expectations: args.expectations.clone(),
+        },
+        execution: args.execution.clone(),
+        golden: Some("none".into()),
+        output: Output {
+            out: Some(out.display().to_string()),
+            verbose: args.output.verbose,
+        },
+        ..Default::default()
+    };
     let started = std::time::Instant::now();
     let soak_csv = |dir: &Path, results: &[RunResult]| {
         std::fs::write(dir.join("soak.csv"), Table::of(results).csv())
     };
     let finished = super::conformance::run_in(&run_args, Some(run_dir), Some(&soak_csv));
+    // An error is said here, where the conformance run ends, before the soak's table.
+    let outcome = finished.outcome.map_err(|e| Error::said(e.report()));
     if finished.results.is_empty() {
         // Nothing ran (a usage error, said above): the run's directory holds only the cases.
         let _ = std::fs::remove_dir_all(&run_path);
-        return finished.code;
+        return outcome;
     }
     let table = Table::of(&finished.results);
     print!(
         "{}",
         table.text(seed, count, started.elapsed().as_secs_f64())
     );
-    finished.code
+    outcome
 }
 
 /// Writes the `count` cases of `seed` as `DIR/soak-SEED-K.json`, removing any other case
@@ -116,11 +120,6 @@ pub fn write_cases(dir: &Path, seed: u64, count: usize) -> std::io::Result<()> {
         std::fs::write(dir.join(format!("{}.json", case.name)), text + "\n")?;
     }
     Ok(())
-}
-
-fn usage(msg: &str) -> i32 {
-    eprintln!("error: {msg}\nusage: {}", crate::cli::usage("soak"));
-    125
 }
 
 /// The soak's counts per backend, and its failures by class.

@@ -21,7 +21,8 @@ use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
 
-use crate::args::Args;
+use crate::cli::SweepArgs;
+use crate::exit::{Error, Exit, Outcome};
 use crate::harness::measure::Measured;
 use crate::harness::pool::{Reply, Worker};
 use crate::harness::worker::{Request, RunVerdict};
@@ -245,54 +246,36 @@ fn write_case(
     Ok((file, plan))
 }
 
-/// Runs the command; returns the process exit code.
-pub fn main(args: &Args) -> i32 {
-    if let Err(e) = crate::harness::mesa_build::select(args.value("mesa")) {
-        eprintln!("error: {e}");
-        return 125;
-    }
-    if let Err(e) = crate::harness::memory_limit::select(args.value("max-memory"), 1) {
-        eprintln!("error: {e}\nusage: {}", crate::cli::usage("sweep"));
-        return 125;
-    }
-    let scene = PathBuf::from(args.value("scene").unwrap_or(DEFAULT_SCENE.0));
-    let repeat = match args.value("repeat").map(str::parse::<u32>).transpose() {
+/// Runs the command; returns its outcome.
+pub fn main(args: &SweepArgs) -> Outcome {
+    crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
+    crate::harness::memory_limit::select(args.max_memory.as_deref(), 1)
+        .map_err(|e| crate::cli::usage_error("sweep", e))?;
+    let scene = PathBuf::from(args.scene.as_deref().unwrap_or(DEFAULT_SCENE.0));
+    let repeat = match args.repeat.as_deref().map(str::parse::<u32>).transpose() {
         Ok(r) => r.unwrap_or(5).max(1),
         Err(_) => {
-            eprintln!(
-                "error: --repeat takes a positive number\nusage: {}",
-                crate::cli::usage("sweep")
-            );
-            return 125;
+            return Err(crate::cli::usage_error(
+                "sweep",
+                "--repeat takes a positive number",
+            ));
         }
     };
-    let timeout = match args.value("timeout").map(str::parse::<u64>).transpose() {
+    let timeout = match args.timeout.as_deref().map(str::parse::<u64>).transpose() {
         Ok(t) => Duration::from_secs(t.unwrap_or(600)),
         Err(_) => {
-            eprintln!(
-                "error: --timeout takes whole seconds\nusage: {}",
-                crate::cli::usage("sweep")
-            );
-            return 125;
+            return Err(crate::cli::usage_error(
+                "sweep",
+                "--timeout takes whole seconds",
+            ));
         }
     };
-    let out = PathBuf::from(args.value("out").unwrap_or("target/umbra/sweep"));
+    let out = PathBuf::from(args.out.as_deref().unwrap_or("target/umbra/sweep"));
     let default = DEFAULT_BACKENDS.iter().map(|s| s.to_string()).collect();
-    let backends = match crate::harness::registry::selected(&args.values("backend"), default) {
-        Ok(b) => b,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 125;
-        }
-    };
-    let points = match umbra_case::load_file(&scene) {
-        Ok(p) => p,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 125;
-        }
-    };
-    let wanted = match (args.value("point"), args.value("scene")) {
+    let named: Vec<&str> = args.backend.iter().map(String::as_str).collect();
+    let backends = crate::harness::registry::selected(&named, default).map_err(Error::new)?;
+    let points = umbra_case::load_file(&scene).map_err(|e| Error::new(e.to_string()))?;
+    let wanted = match (args.point.as_deref(), args.scene.as_deref()) {
         (Some(id), _) => Some(id),
         (None, None) => Some(DEFAULT_SCENE.1),
         (None, Some(_)) => None,
@@ -302,48 +285,98 @@ pub fn main(args: &Args) -> i32 {
         Some(id) => match points.iter().find(|p| p.id() == id) {
             Some(p) => p.clone(),
             None => {
-                eprintln!(
-                    "error: {} has no point {id:?}; its points: {}",
+                return Err(Error::new(format!(
+                    "{} has no point {id:?}; its points: {}",
                     scene.display(),
                     points.iter().map(|p| p.id()).collect::<Vec<_>>().join(", ")
-                );
-                return 125;
+                )));
             }
         },
     };
     let techniques = matrix(&point.case);
-    let (file, plan) = match write_case(&point, &techniques, &out) {
-        Ok(x) => x,
-        Err(e) => {
-            eprintln!("error: cannot generate the sweep case: {e}");
-            return 125;
-        }
-    };
+    let (file, plan) = write_case(&point, &techniques, &out)
+        .map_err(|e| Error::new(format!("cannot generate the sweep case: {e}")))?;
     let started = Instant::now();
     let total = plan.iter().flatten().count() * backends.len();
     let mut rows: Vec<Row> = Vec::new();
     let mut done = 0;
     // The truth of each technique point is cached per build of umbra, as conformance's is.
     let judge_cache = crate::judge::judge_cache::prepare(Path::new(
-        args.value("judge-cache")
+        args.judge_cache
+            .as_deref()
             .unwrap_or(crate::judge::judge_cache::DEFAULT_ROOT),
     ));
+    let sweep = Sweep {
+        file: &file,
+        plan: &plan,
+        judge_cache: &judge_cache,
+        repeat,
+        timeout,
+        total,
+    };
     for backend in &backends {
+        sweep.on(backend, &mut rows, &mut done)?;
+    }
+    let wall = started.elapsed();
+    let command = format!(
+        "umbra {}",
+        std::env::args().skip(1).collect::<Vec<_>>().join(" ")
+    );
+    write_outputs(&out, &rows, &point.id(), &command, wall).map_err(|e| {
+        Error::new(format!(
+            "cannot write the sweep's outputs under {}: {e}",
+            out.display()
+        ))
+    })?;
+    let errors = rows
+        .iter()
+        .filter(|r| r.result.is_err() && !r.skipped)
+        .count();
+    let skipped = rows.iter().filter(|r| r.skipped).count();
+    println!(
+        "\nsweep of {} on {} backends: {} points measured, {skipped} skipped, {errors} errors in {:.1} s; outputs in {}",
+        point.id(),
+        backends.len(),
+        rows.len() - errors - skipped,
+        wall.as_secs_f64(),
+        out.display()
+    );
+    Ok(Exit::pass_if(errors == 0))
+}
+
+/// What every backend of one sweep runs: the generated case file and its plan (a technique
+/// per index of the file's expansion), and how.
+struct Sweep<'a> {
+    file: &'a Path,
+    plan: &'a [Option<Technique>],
+    judge_cache: &'a Path,
+    repeat: u32,
+    timeout: Duration,
+    /// Planned points over every backend (for the progress count).
+    total: usize,
+}
+
+impl Sweep<'_> {
+    /// Every planned point on `backend`, in one worker (a fresh one after a crash or a
+    /// timeout): a row each onto `rows`, counted in `done`. A worker that refuses the Mesa
+    /// build ends the sweep (could not run).
+    fn on(&self, backend: &str, rows: &mut Vec<Row>, done: &mut usize) -> Result<(), Error> {
+        let (timeout, total) = (self.timeout, self.total);
         let mut env = crate::harness::registry::worker_env(backend);
         env.push((
             crate::judge::judge_cache::ENV.into(),
-            judge_cache.to_string_lossy().into_owned(),
+            self.judge_cache.to_string_lossy().into_owned(),
         ));
         let start = || Worker::start(backend, &env, timeout);
         let mut worker = start();
-        for (index, t) in plan.iter().enumerate() {
+        for (index, t) in self.plan.iter().enumerate() {
             let Some(t) = t else { continue };
-            done += 1;
+            *done += 1;
             let w = match &mut worker {
                 Ok(w) => w,
                 Err(e) => {
                     rows.push(Row {
-                        backend: backend.clone(),
+                        backend: backend.to_string(),
                         technique: t.clone(),
                         result: Err(format!("cannot start the worker: {e}")),
                         skipped: false,
@@ -352,12 +385,11 @@ pub fn main(args: &Args) -> i32 {
                 }
             };
             if let Some(why) = w.hello.refused() {
-                eprintln!("error: {why}");
-                return 125;
+                return Err(Error::new(why));
             }
             if let Some(why) = w.hello.unavailable() {
                 rows.push(Row {
-                    backend: backend.clone(),
+                    backend: backend.to_string(),
                     technique: t.clone(),
                     result: Err(why.to_string()),
                     skipped: true,
@@ -365,11 +397,11 @@ pub fn main(args: &Args) -> i32 {
                 continue;
             }
             let req = Request {
-                file: file.clone(),
+                file: self.file.to_path_buf(),
                 index,
                 failures: None,
                 golden: None,
-                repeat: Some(repeat),
+                repeat: Some(self.repeat),
                 no_twins: false,
                 gallery: None,
                 deviation: None,
@@ -399,41 +431,16 @@ pub fn main(args: &Args) -> i32 {
                 Err(e) if skipped => format!("skip: {e}"),
                 Err(e) => format!("ERROR: {e}"),
             };
-            println!("[{done}/{total}] {backend} {}: {line}", t.label());
+            println!("[{}/{total}] {backend} {}: {line}", *done, t.label());
             rows.push(Row {
-                backend: backend.clone(),
+                backend: backend.to_string(),
                 technique: t.clone(),
                 result,
                 skipped,
             });
         }
+        Ok(())
     }
-    let wall = started.elapsed();
-    let command = format!(
-        "umbra {}",
-        std::env::args().skip(1).collect::<Vec<_>>().join(" ")
-    );
-    if let Err(e) = write_outputs(&out, &rows, &point.id(), &command, wall) {
-        eprintln!(
-            "error: cannot write the sweep's outputs under {}: {e}",
-            out.display()
-        );
-        return 125;
-    }
-    let errors = rows
-        .iter()
-        .filter(|r| r.result.is_err() && !r.skipped)
-        .count();
-    let skipped = rows.iter().filter(|r| r.skipped).count();
-    println!(
-        "\nsweep of {} on {} backends: {} points measured, {skipped} skipped, {errors} errors in {:.1} s; outputs in {}",
-        point.id(),
-        backends.len(),
-        rows.len() - errors - skipped,
-        wall.as_secs_f64(),
-        out.display()
-    );
-    i32::from(errors > 0)
 }
 
 /// Measures point `index` of case `file` on each backend, one backend after the other, each

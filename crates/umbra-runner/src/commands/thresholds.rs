@@ -1,5 +1,5 @@
-//! `umbra selftest --thresholds`: the smallest error of each continuous parameter that the
-//! catalogue catches, per backend family.
+//! `umbra selftest thresholds` (or `--thresholds`): the smallest error of each continuous
+//! parameter that the catalogue catches, per backend family.
 //!
 //! The self-test's parameter faults are large (units × 0.1, slope × 0.8): catching them says
 //! nothing about a driver that is off by 5 %. Here each parameter a driver (or a program) can
@@ -23,6 +23,8 @@ use std::sync::Mutex;
 
 use umbra_case::CasePoint;
 use umbra_case::fault::{Fault, Param};
+
+use crate::exit::{Exit, Outcome};
 
 use super::selftest::{Faulted, How, Seen, aimed_at, applies, exercises, sample_order};
 
@@ -134,7 +136,7 @@ fn applied_as_asked(backend: &str, fault: Fault, case: &umbra_case::Case) -> boo
     let Some(e) = fault.error_of(Param::OffsetUnits) else {
         return true;
     };
-    if umbra_wgpu::Kind::parse(backend).is_none() {
+    if !crate::harness::registry::Descriptor::of(backend).is_some_and(|d| d.integer_depth_bias()) {
         return true;
     }
     let u = f64::from(case.shadow.bias.polygon_offset[1]);
@@ -142,9 +144,9 @@ fn applied_as_asked(backend: &str, fault: Fault, case: &umbra_case::Case) -> boo
     (asked.round() - asked).abs() <= 0.1 * (u * f64::from(e)).abs()
 }
 
-/// The command: the sweep on each family's backend (or `chosen`), the table, exit 0 (the
+/// The command: the sweep on each family's backend (or `chosen`), the table; it passes (the
 /// thresholds are measurements; the self-test proper holds the gross faults).
-pub(crate) fn main(points: &[Point], chosen: Option<&[String]>, how: &How, jobs: usize) -> i32 {
+pub(crate) fn main(points: &[Point], chosen: Option<&[String]>, how: &How, jobs: usize) -> Outcome {
     let columns: Vec<(String, String)> = match chosen {
         Some(b) => b.iter().map(|b| (b.clone(), b.clone())).collect(),
         None => FAMILIES
@@ -187,7 +189,7 @@ pub(crate) fn main(points: &[Point], chosen: Option<&[String]>, how: &How, jobs:
         results.len(),
         start.elapsed().as_secs_f64()
     );
-    0
+    Ok(Exit::Pass)
 }
 
 /// One step's text: "5 %" or "0.05 tx".

@@ -5,26 +5,27 @@
 
 use std::process::Command;
 
-/// Runs this executable with `args` and the environment `env`; returns its exit code (125 if
-/// it could not start or died from a signal).
-pub fn rerun(args: &[String], env: &[(String, String)]) -> i32 {
+use crate::exit::{Error, Exit, Outcome};
+
+/// Runs this executable with `args` and the environment `env`; returns the child's exit
+/// ([`Exit::of_code`]: its own errors are on stderr already), or an error when it could not
+/// start or died from a signal.
+pub fn rerun(args: &[String], env: &[(String, String)]) -> Outcome {
     rerun_without(args, env, &[])
 }
 
 /// [`rerun`] for backend `id`: without the variables its processes must not inherit
 /// ([`crate::harness::registry::env_removed`]).
-pub fn rerun_for(id: &str, args: &[String], env: &[(String, String)]) -> i32 {
+pub fn rerun_for(id: &str, args: &[String], env: &[(String, String)]) -> Outcome {
     rerun_without(args, env, crate::harness::registry::env_removed(id))
 }
 
-fn rerun_without(args: &[String], env: &[(String, String)], removed: &[&str]) -> i32 {
-    let exe = match crate::harness::own_libc::self_exe() {
-        Ok(e) => e,
-        Err(e) => {
-            eprintln!("error: cannot find this executable to start a driver process: {e}");
-            return 125;
-        }
-    };
+fn rerun_without(args: &[String], env: &[(String, String)], removed: &[&str]) -> Outcome {
+    let exe = crate::harness::own_libc::self_exe().map_err(|e| {
+        Error::new(format!(
+            "cannot find this executable to start a driver process: {e}"
+        ))
+    })?;
     let mut cmd = Command::new(exe);
     cmd.args(args);
     crate::harness::pool::without_inherited_insta(&mut cmd);
@@ -34,14 +35,11 @@ fn rerun_without(args: &[String], env: &[(String, String)], removed: &[&str]) ->
     for (k, v) in env {
         cmd.env(k, v);
     }
-    match cmd.status() {
-        Ok(s) => s.code().unwrap_or_else(|| {
-            eprintln!("error: the driver process died: {s}");
-            125
-        }),
-        Err(e) => {
-            eprintln!("error: cannot start a driver process: {e}");
-            125
-        }
+    let status = cmd
+        .status()
+        .map_err(|e| Error::new(format!("cannot start a driver process: {e}")))?;
+    match status.code() {
+        Some(code) => Ok(Exit::of_code(code)),
+        None => Err(Error::new(format!("the driver process died: {status}"))),
     }
 }

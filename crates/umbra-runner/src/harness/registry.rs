@@ -20,6 +20,135 @@ use std::io::Read as _;
 
 use umbra_case::Backend;
 
+/// What a backend id means, answered here once so that no command parses ids or names the
+/// GL and wgpu crates to learn it: which family draws it (and so which technique the judge
+/// sees: its depth range, its compare, its filters), whether it is a machine's device or one
+/// of Mesa's software drivers. A new wgpu kind or GL API is taught here, and the self-test's
+/// faults, the repro's capture and `umbra backends` follow.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Descriptor {
+    /// The id as given (`gl33/llvmpipe`, `wgpu-vk/radv`, `ref`).
+    pub id: String,
+    /// Who draws it.
+    pub family: Family,
+    /// A device of this machine (`gl33/radeonsi`), not one of this build's Mesa software ids.
+    pub device: bool,
+}
+
+/// Who draws a backend's pictures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Family {
+    /// umbra's CPU reference.
+    Reference,
+    /// umbra-gl on EGL, with this API.
+    Gl(umbra_gl::Api),
+    /// umbra-wgpu, on this kind of wgpu backend.
+    Wgpu(umbra_wgpu::Kind),
+    /// A test double (`UMBRA_FAKE_BACKENDS=1`).
+    Fake,
+}
+
+impl Descriptor {
+    /// The descriptor of `id`, or `None` for an id no family knows.
+    pub fn of(id: &str) -> Option<Descriptor> {
+        let family = if id == "ref" {
+            Family::Reference
+        } else if let Some(kind) = umbra_wgpu::Kind::parse(id) {
+            umbra_wgpu::Target::parse(id)?;
+            Family::Wgpu(kind)
+        } else if let Some((api, _)) = umbra_gl::parse_id(id) {
+            Family::Gl(api)
+        } else if let Some((api, _)) = umbra_gl::parse_device_id(id) {
+            Family::Gl(api)
+        } else if crate::harness::fake::enabled() && crate::harness::fake::Fake::new(id).is_some() {
+            Family::Fake
+        } else {
+            return None;
+        };
+        Some(Descriptor {
+            id: id.to_string(),
+            family,
+            device: is_device_id(id),
+        })
+    }
+
+    /// The GL API, for a GL backend.
+    pub fn gl_api(&self) -> Option<umbra_gl::Api> {
+        match self.family {
+            Family::Gl(api) => Some(api),
+            _ => None,
+        }
+    }
+
+    /// The wgpu kind, for a wgpu backend.
+    pub fn wgpu_kind(&self) -> Option<umbra_wgpu::Kind> {
+        match self.family {
+            Family::Wgpu(kind) => Some(kind),
+            _ => None,
+        }
+    }
+
+    /// A driver's backend (GL or wgpu), whose shaders a fault can be injected into.
+    pub fn renders_on_a_driver(&self) -> bool {
+        matches!(self.family, Family::Gl(_) | Family::Wgpu(_))
+    }
+
+    /// Draws through GL calls umbra makes itself (umbra-gl), which a repro can capture and
+    /// replay as a C program.
+    pub fn umbra_makes_the_gl_calls(&self) -> bool {
+        matches!(self.family, Family::Gl(_))
+    }
+
+    /// Samples the map through GL texture units and picks a texture component (GL's binding
+    /// model; wgpu binds by group).
+    pub fn binds_gl_texture_units(&self) -> bool {
+        self.umbra_makes_the_gl_calls()
+    }
+
+    /// Runs on Vulkan (wgpu's Vulkan backend).
+    pub fn vulkan(&self) -> bool {
+        self.family == Family::Wgpu(umbra_wgpu::Kind::Vulkan)
+    }
+
+    /// The technique GLES 2 forces: no float depth, no mipmapped compare, every compare
+    /// done by hand in the shader (which clamps the reference itself).
+    pub fn gles2_technique(&self) -> bool {
+        self.gl_api() == Some(umbra_gl::Api::Gles2)
+    }
+
+    /// Depth in [0, 1] clip space (wgpu, both kinds), where GL's [-1, 1] mapping is a fault.
+    pub fn zero_to_one_depth(&self) -> bool {
+        matches!(self.family, Family::Wgpu(_))
+    }
+
+    /// Takes the depth bias's constant as a whole number of units (wgpu's `DepthBiasState`),
+    /// so a fractional offset is rounded.
+    pub fn integer_depth_bias(&self) -> bool {
+        matches!(self.family, Family::Wgpu(_))
+    }
+
+    /// Can compare in the shader, with its own LINEAR filter (every GL API; wgpu's GL backend
+    /// has no manual compare).
+    pub fn manual_compare(&self) -> bool {
+        self.umbra_makes_the_gl_calls() || self.vulkan()
+    }
+
+    /// How the id is reached, in words (`umbra backends`).
+    pub fn how_reached(&self) -> &'static str {
+        match self.family {
+            Family::Wgpu(umbra_wgpu::Kind::Vulkan) => "wgpu on Vulkan, the adapter of this name",
+            Family::Wgpu(umbra_wgpu::Kind::Gl) => "wgpu's GL backend on EGL",
+            Family::Gl(_) if self.device => {
+                "EGL device platform (EGL_EXT_platform_device), the device of this name"
+            }
+            _ => match std::env::var(umbra_gl::platform::ENV).ok().as_deref() {
+                Some(p) if p.starts_with("device") => "EGL device (UMBRA_EGL_PLATFORM)",
+                _ => "EGL surfaceless (or the first EGL device where surfaceless is not offered)",
+            },
+        }
+    }
+}
+
 /// Whether `id` names a backend of this build (fake ones only where enabled), or has the
 /// form of a device's id ([`is_device_id`]; whether the device exists is the worker's to
 /// find, and a missing one is a skip that lists what the machine has).

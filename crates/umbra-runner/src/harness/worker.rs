@@ -15,7 +15,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-use crate::args::Args;
+use crate::exit::Exit;
 use crate::judge::run::{Outcome, describe, run_point, run_point_as};
 use umbra_report::Metrics;
 
@@ -181,13 +181,11 @@ pub struct RunReport {
     pub retired: Option<String>,
 }
 
-/// Runs the worker loop; returns the exit code.
-pub fn main(args: &Args) -> i32 {
+/// Runs the worker loop; returns its outcome (it passes when the backend could not come up
+/// too: the hello says so, and the parent reads it).
+/// `id`: the backend it hosts (`umbra worker --backend ID`).
+pub fn main(id: &str) -> crate::exit::Outcome {
     crate::harness::orphan::watch();
-    let Some(id) = args.value("backend") else {
-        eprintln!("error: umbra worker needs --backend ID");
-        return 125;
-    };
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     let created = std::time::Instant::now();
@@ -205,17 +203,17 @@ pub fn main(args: &Args) -> i32 {
     let build = match build {
         Some(Err(e)) => {
             say(&mut out, Hello::Refused(format!("--mesa: {e}")));
-            return 0;
+            return Ok(Exit::Pass);
         }
         Some(Ok(b)) => {
             if let Some(why) = b.lacks(id) {
                 say(&mut out, Hello::Unavailable(why.to_string()));
-                return 0;
+                return Ok(Exit::Pass);
             }
             // A build with its own C library: this process continues on it (re-executed).
             if let Err(e) = b.enter() {
                 say(&mut out, Hello::Refused(format!("{id}: {e}")));
-                return 0;
+                return Ok(Exit::Pass);
             }
             Some(b)
         }
@@ -230,7 +228,7 @@ pub fn main(args: &Args) -> i32 {
                 if build.layout != "fake (tests)" {
                     if let Err(e) = crate::harness::mesa_build::check_loaded(&build.root, &libs) {
                         say(&mut out, Hello::Refused(format!("{id}: {e}")));
-                        return 0;
+                        return Ok(Exit::Pass);
                     }
                 }
             }
@@ -257,7 +255,7 @@ pub fn main(args: &Args) -> i32 {
                 None => Hello::Unavailable(e.to_string()),
             };
             say(&mut out, v);
-            return 0;
+            return Ok(Exit::Pass);
         }
     };
     for line in std::io::stdin().lock().lines() {
@@ -287,7 +285,7 @@ pub fn main(args: &Args) -> i32 {
             break;
         }
     }
-    0
+    Ok(Exit::Pass)
 }
 
 fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
@@ -371,54 +369,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             ..Default::default()
         },
         Outcome::Done(j) => {
-            let e = &j.error;
-            let t = &j.frame.timings;
-            let metrics = Metrics {
-                judged: e.all.judged,
-                false_shadow: e.all.false_shadow,
-                false_light: e.all.false_light,
-                interior_judged: e.away_from_edges.judged,
-                interior_false_shadow: e.away_from_edges.false_shadow,
-                interior_false_light: e.away_from_edges.false_light,
-                edge_px: e.edge_pixels,
-                silhouette: e.silhouette,
-                faces_away: e.faces_away,
-                outside: e.outside,
-                agreement: j.agreement.as_ref().map(|a| {
-                    if a.compared == 0 {
-                        1.0
-                    } else {
-                        1.0 - a.differ as f64 / a.compared as f64
-                    }
-                }),
-                illegal: j.agreement.as_ref().map(|a| a.illegal),
-                reference: j.agreement.clone(),
-                profile: backend.profile().name(),
-                judged_as: backend.profile().effective_for(j.prepared.case()).name(),
-                visibility_storage: j.frame.visibility_storage.name().into(),
-                ssim: j.ssim,
-                ssim_golden: None,
-                golden_change: None,
-                shadow_ms: t.shadow_pass.as_secs_f64() * 1e3,
-                lit_ms: t.lit_pass.as_secs_f64() * 1e3,
-                total_ms: t.total.as_secs_f64() * 1e3,
-                clock: if t.clock == Some(umbra_case::Clock::Gpu) {
-                    "gpu".into()
-                } else {
-                    "cpu-wall".into()
-                },
-                twins: j.twins.clone(),
-                judge_ms: j.judge_time.as_secs_f64() * 1e3,
-                twins_ms: j.twins_time.as_secs_f64() * 1e3,
-                golden_ms: 0.0,
-                color_hash: umbra_report::names::fnv64(j.frame.color.iter().copied()),
-                visibility_hash: umbra_report::names::fnv64(
-                    j.frame
-                        .visibility
-                        .iter()
-                        .flat_map(|v| v.to_bits().to_le_bytes()),
-                ),
-            };
+            let metrics = metrics_of(backend, &j);
             let mut problems = j.problems.clone();
             let mut failed = j.failed.clone();
             let mut metrics = metrics;
@@ -426,69 +377,27 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             let mut identical_to_golden = false;
             let mut held = None;
             let golden = req.golden.as_ref().map(|dir| {
-                let info = backend.info();
-                let driver = crate::judge::expectations::reported_version(
-                    [info.version.as_str(), info.renderer.as_str()]
-                        .into_iter()
-                        .chain(info.extensions.iter().map(String::as_str)),
-                );
-                let checked = crate::judge::golden::check(
+                let (word, checked_held, identical) = golden_of(
+                    backend,
                     dir,
-                    &crate::judge::golden::Subject {
-                        backend: &backend.id().0,
-                        name: &name,
-                        driver: driver.as_deref(),
-                    },
-                    &j.frame,
-                    &j.legal,
-                    &j.pixels,
-                    problems.is_empty(),
-                );
-                metrics.ssim_golden = checked.ssim;
-                metrics.golden_change = checked.change.clone();
-                identical_to_golden = checked.identical;
-                let foreign = !checked.held.strict;
-                held = Some(checked.held);
-                if checked.golden == crate::judge::golden::Golden::Changed {
-                    problems.push(checked.message);
-                    failed.push(umbra_report::FailedCheck {
-                        check: umbra_report::check::Check::Golden,
-                        count: 1,
-                    });
-                }
-                checked.golden.word(foreign).to_string()
-            });
-            let mut storage = None;
-            if let Some(dir) = &req.gallery {
-                let golden = held.as_ref().map(|h| {
-                    let stem = crate::judge::golden::stem(&name);
-                    (
-                        h.file
-                            .clone()
-                            .unwrap_or_else(|| h.write_dir.join(format!("{stem}.snap.png"))),
-                        h.write_dir.join(format!("{stem}.snap.new.png")),
-                    )
-                });
-                let at = dir.join(umbra_report::names::file_name(&name));
-                if let Err(e) = crate::judge::pictures::write_gallery(
-                    &at,
+                    &name,
                     &j,
-                    golden.as_ref().map(|(a, b)| (a.as_path(), b.as_path())),
-                    identical_to_golden,
-                ) {
-                    storage = Some(format!("cannot write pictures under {}: {e}", at.display()));
-                }
-            }
+                    &mut problems,
+                    &mut failed,
+                    &mut metrics,
+                );
+                identical_to_golden = identical;
+                held = Some(checked_held);
+                word
+            });
+            let mut storage = gallery_of(req, &name, &j, held.as_ref(), identical_to_golden);
             // Goldens and pictures: the PNG share of the time budget.
             metrics.golden_ms = golden_start.elapsed().as_secs_f64() * 1e3;
             let failing = !problems.is_empty();
-            if failing {
-                if let Some(dir) = &req.failures {
-                    let at = dir.join(umbra_report::names::file_name(&name));
-                    if let Err(e) = crate::judge::pictures::write_images(&at, &j) {
-                        storage =
-                            Some(format!("cannot write pictures under {}: {e}", at.display()));
-                    }
+            if let Some(dir) = req.failures.as_ref().filter(|_| failing) {
+                let at = dir.join(umbra_report::names::file_name(&name));
+                if let Err(e) = crate::judge::pictures::write_images(&at, &j) {
+                    storage = Some(format!("cannot write pictures under {}: {e}", at.display()));
                 }
             }
             // Judged again under the deviation the run's expectation names: what still fails
@@ -522,4 +431,136 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             }
         }
     }
+}
+
+/// Writes the run's gallery pictures (`req.gallery`, beside its golden and any pending one);
+/// what could not be written.
+fn gallery_of(
+    req: &Request,
+    name: &str,
+    j: &crate::judge::run::Judged,
+    held: Option<&crate::judge::golden::Held>,
+    identical_to_golden: bool,
+) -> Option<String> {
+    let mut storage = None;
+    if let Some(dir) = &req.gallery {
+        let golden = held.map(|h| {
+            let stem = crate::judge::golden::stem(name);
+            (
+                h.file
+                    .clone()
+                    .unwrap_or_else(|| h.write_dir.join(format!("{stem}.snap.png"))),
+                h.write_dir.join(format!("{stem}.snap.new.png")),
+            )
+        });
+        let at = dir.join(umbra_report::names::file_name(name));
+        if let Err(e) = crate::judge::pictures::write_gallery(
+            &at,
+            j,
+            golden.as_ref().map(|(a, b)| (a.as_path(), b.as_path())),
+            identical_to_golden,
+        ) {
+            storage = Some(format!("cannot write pictures under {}: {e}", at.display()));
+        }
+    }
+    storage
+}
+
+/// The figures of a judged run (report.json's `metrics`), before its golden check.
+fn metrics_of(backend: &dyn umbra_case::Backend, j: &crate::judge::run::Judged) -> Metrics {
+    let e = &j.error;
+    let t = &j.frame.timings;
+    Metrics {
+        judged: e.all.judged,
+        false_shadow: e.all.false_shadow,
+        false_light: e.all.false_light,
+        interior_judged: e.away_from_edges.judged,
+        interior_false_shadow: e.away_from_edges.false_shadow,
+        interior_false_light: e.away_from_edges.false_light,
+        edge_px: e.edge_pixels,
+        silhouette: e.silhouette,
+        faces_away: e.faces_away,
+        outside: e.outside,
+        agreement: j.agreement.as_ref().map(|a| {
+            if a.compared == 0 {
+                1.0
+            } else {
+                1.0 - a.differ as f64 / a.compared as f64
+            }
+        }),
+        illegal: j.agreement.as_ref().map(|a| a.illegal),
+        reference: j.agreement.clone(),
+        profile: backend.profile().name(),
+        judged_as: backend.profile().effective_for(j.prepared.case()).name(),
+        visibility_storage: j.frame.visibility_storage.name().into(),
+        ssim: j.ssim,
+        ssim_golden: None,
+        golden_change: None,
+        shadow_ms: t.shadow_pass.as_secs_f64() * 1e3,
+        lit_ms: t.lit_pass.as_secs_f64() * 1e3,
+        total_ms: t.total.as_secs_f64() * 1e3,
+        clock: if t.clock == Some(umbra_case::Clock::Gpu) {
+            "gpu".into()
+        } else {
+            "cpu-wall".into()
+        },
+        twins: j.twins.clone(),
+        judge_ms: j.judge_time.as_secs_f64() * 1e3,
+        twins_ms: j.twins_time.as_secs_f64() * 1e3,
+        golden_ms: 0.0,
+        color_hash: umbra_report::names::fnv64(j.frame.color.iter().copied()),
+        visibility_hash: umbra_report::names::fnv64(
+            j.frame
+                .visibility
+                .iter()
+                .flat_map(|v| v.to_bits().to_le_bytes()),
+        ),
+    }
+}
+
+/// Checks the run's colour against its golden in `dir` ([`crate::judge::golden::check`]): its
+/// word for the report, the golden that held and whether the frame is that golden pixel for
+/// pixel; a change to review adds its problem and a failed `golden` check.
+fn golden_of(
+    backend: &dyn umbra_case::Backend,
+    dir: &std::path::Path,
+    name: &str,
+    j: &crate::judge::run::Judged,
+    problems: &mut Vec<String>,
+    failed: &mut Vec<umbra_report::FailedCheck>,
+    metrics: &mut Metrics,
+) -> (String, crate::judge::golden::Held, bool) {
+    let info = backend.info();
+    let driver = crate::judge::expectations::reported_version(
+        [info.version.as_str(), info.renderer.as_str()]
+            .into_iter()
+            .chain(info.extensions.iter().map(String::as_str)),
+    );
+    let checked = crate::judge::golden::check(
+        dir,
+        &crate::judge::golden::Subject {
+            backend: &backend.id().0,
+            name,
+            driver: driver.as_deref(),
+        },
+        &j.frame,
+        &j.legal,
+        &j.pixels,
+        problems.is_empty(),
+    );
+    metrics.ssim_golden = checked.ssim;
+    metrics.golden_change = checked.change.clone();
+    let foreign = !checked.held.strict;
+    if checked.golden == crate::judge::golden::Golden::Changed {
+        problems.push(checked.message);
+        failed.push(umbra_report::FailedCheck {
+            check: umbra_report::check::Check::Golden,
+            count: 1,
+        });
+    }
+    (
+        checked.golden.word(foreign).to_string(),
+        checked.held,
+        checked.identical,
+    )
 }

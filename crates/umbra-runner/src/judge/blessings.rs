@@ -1,5 +1,6 @@
-//! The golden store's records (`golden/`, see [`crate::judge::golden`] for the check): each
-//! run's golden file name ([`stem`]), the manifest of the Mesa releases goldens were blessed
+//! The golden store's records (`golden/`, see [`crate::judge::golden`] for the check): one
+//! folder per backend ([`folder`]: `golden/gl33_llvmpipe/`), each run's golden file name in it
+//! ([`stem`]), the manifest of the Mesa releases goldens were blessed
 //! on (`blessed-on.json`, checksummed), each release's own pictures (`mesa-RELEASE/`), the
 //! confirmations a whole bless leaves (`BACKEND@RELEASE`), and from them which golden holds
 //! for a run on a driver and how strictly ([`held`]).
@@ -33,6 +34,21 @@ pub fn stem(name: &str) -> String {
         })
         .collect();
     format!("{plain}-{:08x}", umbra_report::names::fnv1a(name))
+}
+
+/// The folder of backend `id`'s goldens, in the golden directory and in each release's
+/// (`gl33/llvmpipe` → `gl33_llvmpipe`): one per backend, so a backend's goldens are reviewed,
+/// blessed and deleted together, and a directory listing stays short.
+pub fn folder(id: &str) -> String {
+    id.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 /// The release a driver version belongs to for goldens: its numeric parts (`26.2.6-1` →
@@ -79,18 +95,20 @@ pub struct Held {
     pub strict: bool,
 }
 
-/// Which golden holds for `run` in `dir`: this release's own (`mesa-RELEASE/STEM`), else the
-/// golden directory's; strict on the release it was blessed on or confirmed on.
+/// Which golden holds for `run` in `dir`: this release's own (`mesa-RELEASE/BACKEND/STEM`),
+/// else the golden directory's (`BACKEND/STEM`); strict on the release it was blessed on or
+/// confirmed on.
 pub fn held(dir: &Path, run: &Subject) -> Held {
     let stem = stem(run.name);
+    let folder = folder(run.backend);
     let file_in = |d: &Path| {
-        let f = d.join(format!("{stem}.snap.png"));
+        let f = d.join(&folder).join(format!("{stem}.snap.png"));
         f.is_file().then_some(f)
     };
     let Some(driver) = run.driver else {
         return Held {
             file: file_in(dir),
-            write_dir: dir.to_path_buf(),
+            write_dir: dir.join(&folder),
             blessed_on: None,
             strict: true,
         };
@@ -99,7 +117,7 @@ pub fn held(dir: &Path, run: &Subject) -> Held {
     if let Some(f) = file_in(&own) {
         return Held {
             file: Some(f),
-            write_dir: own,
+            write_dir: own.join(&folder),
             blessed_on: Some(release(driver)),
             strict: true,
         };
@@ -112,9 +130,9 @@ pub fn held(dir: &Path, run: &Subject) -> Held {
     // A golden of another release is never overwritten from this one: this release's
     // differing picture goes beside it. A run with no golden anywhere starts one here.
     let write_dir = if base.is_some() && !same {
-        own
+        own.join(&folder)
     } else {
-        dir.to_path_buf()
+        dir.join(&folder)
     };
     let strict = same
         || base
@@ -297,8 +315,8 @@ pub fn record_confirmed(
 }
 
 /// Whether backend `id` has goldens in `dir`: the manifest names it (blessing records every
-/// backend it wrote for), or a golden of one of its runs is there (the ids are told apart by
-/// the name each snapshot records, not by the file stem, whose punctuation is flattened).
+/// backend it wrote for), or a golden of one of its runs is there (its folder's snapshots are told apart by
+/// the name each records, not by the folder's name, whose punctuation is flattened).
 /// A device's backend without goldens (a device umbra has never seen) is judged by the specs
 /// and the reference alone; `cargo xtask bless --backend ID` starts its goldens. This build's
 /// own ids are never asked: a golden of theirs that is missing is a change to review (on the
@@ -311,16 +329,13 @@ pub fn has_goldens(dir: &Path, id: &str) -> bool {
     {
         return true;
     }
-    let prefix = format!("{}_", stem(id).rsplit_once('-').map_or("", |(p, _)| p));
     let marker = format!("colour of {id}/");
-    std::fs::read_dir(dir)
+    std::fs::read_dir(dir.join(folder(id)))
         .into_iter()
         .flatten()
         .flatten()
         .any(|e| {
-            let name = e.file_name().to_string_lossy().into_owned();
-            name.starts_with(&prefix)
-                && name.ends_with(".snap")
+            e.file_name().to_string_lossy().ends_with(".snap")
                 && std::fs::read_to_string(e.path()).is_ok_and(|t| t.contains(&marker))
         })
 }

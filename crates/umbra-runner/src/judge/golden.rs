@@ -1,5 +1,6 @@
 //! Golden images through insta: `golden/` is insta's snapshot directory, one binary PNG
-//! snapshot per case point and backend (`golden/<stem>.snap` + `.snap.png`, see [`stem`]).
+//! snapshot per case point and backend, in one folder per backend
+//! (`golden/<backend>/<stem>.snap` + `.snap.png`, see [`folder`] and [`stem`]).
 //!
 //! A result within tolerance of its golden passes without insta (which would compare the
 //! golden's own bytes with themselves; its clean-up of the snapshot's pending files is done by
@@ -52,7 +53,7 @@ use std::path::Path;
 use umbra_case::Frame;
 
 pub use crate::judge::blessings::{
-    Held, MANIFEST, Subject, blessed_on, check_manifest, confirmed, has_goldens, held,
+    Held, MANIFEST, Subject, blessed_on, check_manifest, confirmed, folder, has_goldens, held,
     record_blessed, record_confirmed, release, release_dir, same_release, stem,
 };
 
@@ -177,62 +178,21 @@ pub fn check(
     judged: &[umbra_compare::reference::PixelJudgement],
     judge_passed: bool,
 ) -> Checked {
-    let stem = stem(run.name);
     let held = held(dir, run);
-    let existing = held.file.as_ref().and_then(|f| std::fs::read(f).ok());
-    let decoding = existing.as_deref().map(image::load_from_memory);
-    // A golden that is there but cannot be decoded (a damaged file, a merge conflict's
-    // markers, a Git LFS pointer) is said as such: never "differs", never a new picture that a
-    // release other than the golden's would report as legal.
-    // Blessing replaces it (as if there were none): what its message says to do.
-    let blessing = std::env::var("INSTA_UPDATE").is_ok_and(|v| v == "always");
-    if let (Some(Err(e)), Some(file), false) = (&decoding, &held.file, blessing) {
-        return Checked {
-            golden: Golden::Changed,
-            message: format!(
-                "the golden {} cannot be decoded as a PNG ({e}): a damaged file; restore it (`git checkout -- {}`), or bless again after review",
-                file.display(),
-                file.display()
-            ),
-            ssim: None,
-            identical: false,
-            held,
-            change: None,
-        };
-    }
-    let decoded = decoding.and_then(Result::ok).map(|i| i.to_rgba8());
-    let same_size = decoded
-        .as_ref()
-        .is_some_and(|img| img.dimensions() == (frame.width, frame.height));
-    let identical = same_size
-        && decoded
-            .as_ref()
-            .is_some_and(|img| *img.as_raw() == frame.color);
-    let ssim = decoded.as_ref().and_then(|img| {
-        // A frame identical to its golden (the usual regression run) is at SSIM 1 by
-        // definition; the windowed computation is most of a golden check's time.
-        if identical {
-            return Some(1.0);
+    let seen = match Seen::read(&held, frame, legal) {
+        Ok(seen) => seen,
+        Err(message) => {
+            return Checked {
+                golden: Golden::Changed,
+                message,
+                ssim: None,
+                identical: false,
+                held,
+                change: None,
+            };
         }
-        let golden = Frame {
-            width: img.width(),
-            height: img.height(),
-            color: img.as_raw().clone(),
-            ..frame.clone()
-        };
-        umbra_compare::ssim(&golden, frame)
-    });
-    let within = same_size
-        && decoded.as_ref().is_some_and(|img| {
-            img.as_raw()
-                .chunks_exact(4)
-                .zip(frame.color.chunks_exact(4))
-                .enumerate()
-                .all(|(i, (g, f))| {
-                    legal.get(i).copied().unwrap_or(false)
-                        || g.iter().zip(f).all(|(a, b)| a.abs_diff(*b) <= 1)
-                })
-        });
+    };
+    let stem = stem(run.name);
     let ci = under_ci();
     let snap_of = |d: &Path| d.join(format!("{stem}.snap"));
     let read_dir = held
@@ -240,7 +200,7 @@ pub fn check(
         .as_ref()
         .and_then(|f| f.parent())
         .map_or_else(|| held.write_dir.clone(), Path::to_path_buf);
-    if within && snap_of(&read_dir).is_file() {
+    if seen.within && snap_of(&read_dir).is_file() {
         // insta would be handed the golden's own bytes and find them equal: a pass that
         // writes nothing, at the price of reading the snapshot again and listing the whole
         // golden directory (its clean-up of this snapshot's pending files, done here by name;
@@ -253,153 +213,284 @@ pub fn check(
         return Checked {
             golden: Golden::Unchanged,
             message: String::new(),
-            ssim,
-            identical,
+            ssim: seen.ssim,
+            identical: seen.identical,
             held,
             change: None,
         };
     }
-    // Outside the tolerance, or no golden. On a release the golden was not blessed on, a
-    // picture whose every differing pixel the judge holds legal is the driver's choice inside
-    // the spec: reported with both versions, never failed.
-    let area = u64::from(frame.width) * u64::from(frame.height);
-    let (pixels, max_step, illegal, unjudged) = match (&decoded, same_size) {
-        (Some(img), true) => difference(img, frame, judged),
-        // A new picture: the judge speaks for every pixel it compared.
-        (None, _) => (area, 255, u64::from(!judge_passed), 0),
-        (Some(_), false) => (area, 255, 0, area),
-    };
-    // Off the golden's release, the judge decides every pixel it compared: a change there is
-    // legal (reported) or illegal (failed by its own checks); only a change where it did not
-    // look (the background, a resized frame) is the golden's to fail.
-    let judged_change = !held.strict && unjudged == 0;
-    let legal_change = judged_change && illegal == 0;
-    let change = umbra_report::GoldenChange {
-        blessed_on: held.blessed_on.clone(),
-        driver: run.driver.map(str::to_string),
-        pixels,
-        max_step,
-        new: decoded.is_none(),
-        illegal,
-        unjudged,
-        strict: held.strict,
-        legal: legal_change,
-    };
-    let reported = if legal_change {
-        Golden::ChangedLegal
+    let change = seen.change(&held, run, frame, judged, judge_passed);
+    let (golden, message) = if ci {
+        seen.refused_under_ci(&held, run, &change)
     } else {
-        Golden::ChangedJudged
-    };
-    let versions = match (&held.blessed_on, run.driver) {
-        (Some(b), Some(h)) if !held.strict => format!(
-            "; this golden was blessed on Mesa {b} and this driver is Mesa {h}: the difference may be the driver's change between them (compare the two with `cargo xtask drivers`, and bless on this version only after review)"
-        ),
-        _ => String::new(),
-    };
-    let what = if existing.is_some() {
-        "differs from its golden"
-    } else {
-        "has no golden yet"
-    };
-    if ci {
-        let (golden, message) = if judged_change {
-            (reported, change.describe())
-        } else {
-            (
-                Golden::Changed,
-                format!(
-                    "the colour image {what}{}; CI=true: nothing written; run `cargo xtask bless` or `cargo insta review` locally and commit the result{versions}",
-                    if change.new {
-                        String::new()
-                    } else {
-                        format!(" ({})", change.pixels_phrase())
-                    }
-                ),
-            )
-        };
-        return Checked {
-            golden,
-            message,
-            ssim,
-            identical,
-            held,
-            change: Some(change),
-        };
-    }
-    let bytes = match (&existing, within) {
-        (Some(b), true) => b.clone(),
-        _ => png(frame),
-    };
-    let outcome = snapshot(&held.write_dir, &stem, run.name, bytes);
-    // What insta should have left: the written golden, or the pending snapshot a review
-    // reads. Where it is not there (a read-only golden directory, a full disk), the run says
-    // the golden could not be written, never that a snapshot it cannot find is pending.
-    let left = match (&outcome, within) {
-        (Ok(()), true) => None,
-        (Ok(()), false) => Some(held.write_dir.join(format!("{stem}.snap"))),
-        (Err(()), _) => Some(held.write_dir.join(format!("{stem}.snap.new"))),
-    };
-    let unwritten = left.filter(|f| !f.is_file()).map(|file| {
-        format!(
-            "its golden could not be written: {} ({}); make the golden directory writable and run again",
-            file.display(),
-            unwritable(&held.write_dir)
-        )
-    });
-    let for_release = held.write_dir != dir;
-    let (golden, message) = match (outcome, within) {
-        // A change the judge decides (on a release other than the golden's) stays what the
-        // judge says it is; anything else fails, saying the write failed.
-        (Err(()), _) if judged_change && unwritten.is_some() => (
-            reported,
-            format!("{}; {}", change.describe(), unwritten.unwrap_or_default()),
-        ),
-        _ if unwritten.is_some() => (
-            Golden::Changed,
-            format!(
-                "the colour image {what}, and {}{versions}",
-                unwritten.unwrap_or_default()
-            ),
-        ),
-        (Ok(()), true) => (Golden::Unchanged, String::new()),
-        (Ok(()), false) if for_release => (
-            Golden::WrittenForRelease,
-            format!(
-                "golden {stem} written for Mesa {} in {}",
-                held.write_dir.file_name().map_or_else(String::new, |n| n
-                    .to_string_lossy()
-                    .trim_start_matches("mesa-")
-                    .to_string()),
-                held.write_dir.display()
-            ),
-        ),
-        (Ok(()), false) => (Golden::Written, format!("golden {stem} written")),
-        (Err(()), _) if judged_change => (
-            reported,
-            format!(
-                "{}; pending as this release's golden: {}/{stem}.snap.new (`cargo insta review` or `cargo xtask bless`)",
-                change.describe(),
-                held.write_dir.display()
-            ),
-        ),
-        (Err(()), _) => {
-            let how = format!(
-                "review it with `cargo insta review` (pending {}/{stem}.snap.new) or accept all with `cargo xtask bless`",
-                held.write_dir.display()
-            );
-            (
-                Golden::Changed,
-                format!("the colour image {what}; {how}{versions}"),
-            )
-        }
+        let home = dir.join(folder(run.backend));
+        seen.handed_to_insta(&held, run, &home, frame, &change)
     };
     Checked {
         golden,
         message,
-        ssim,
-        identical,
+        ssim: seen.ssim,
+        identical: seen.identical,
         held,
         change: Some(change),
+    }
+}
+
+/// What a golden check saw: the golden's bytes and picture, and how the frame compares.
+struct Seen {
+    /// The golden file's bytes, where there is one.
+    existing: Option<Vec<u8>>,
+    /// The golden's picture.
+    decoded: Option<image::RgbaImage>,
+    /// The golden and the frame are the same size.
+    same_size: bool,
+    /// Pixel for pixel the golden.
+    identical: bool,
+    /// SSIM against the golden.
+    ssim: Option<f64>,
+    /// Within the tolerance: one step per channel, or a pixel the judge holds legal.
+    within: bool,
+}
+
+impl Seen {
+    /// Reads the golden that held and compares `frame` with it; `Err` with the message for a
+    /// golden that is there but cannot be decoded (a damaged file, a merge conflict's markers,
+    /// a Git LFS pointer): never "differs", never a new picture that a release other than the
+    /// golden's would report as legal. Blessing replaces it (as if there were none): what its
+    /// message says to do.
+    fn read(held: &Held, frame: &Frame, legal: &[bool]) -> Result<Seen, String> {
+        let existing = held.file.as_ref().and_then(|f| std::fs::read(f).ok());
+        let decoding = existing.as_deref().map(image::load_from_memory);
+        let blessing = std::env::var("INSTA_UPDATE").is_ok_and(|v| v == "always");
+        if let (Some(Err(e)), Some(file), false) = (&decoding, &held.file, blessing) {
+            return Err(format!(
+                "the golden {} cannot be decoded as a PNG ({e}): a damaged file; restore it (`git checkout -- {}`), or bless again after review",
+                file.display(),
+                file.display()
+            ));
+        }
+        let decoded = decoding.and_then(Result::ok).map(|i| i.to_rgba8());
+        let same_size = decoded
+            .as_ref()
+            .is_some_and(|img| img.dimensions() == (frame.width, frame.height));
+        let identical = same_size
+            && decoded
+                .as_ref()
+                .is_some_and(|img| *img.as_raw() == frame.color);
+        let ssim = decoded.as_ref().and_then(|img| {
+            // A frame identical to its golden (the usual regression run) is at SSIM 1 by
+            // definition; the windowed computation is most of a golden check's time.
+            if identical {
+                return Some(1.0);
+            }
+            let golden = Frame {
+                width: img.width(),
+                height: img.height(),
+                color: img.as_raw().clone(),
+                ..frame.clone()
+            };
+            umbra_compare::ssim(&golden, frame)
+        });
+        let within = same_size
+            && decoded.as_ref().is_some_and(|img| {
+                img.as_raw()
+                    .chunks_exact(4)
+                    .zip(frame.color.chunks_exact(4))
+                    .enumerate()
+                    .all(|(i, (g, f))| {
+                        legal.get(i).copied().unwrap_or(false)
+                            || g.iter().zip(f).all(|(a, b)| a.abs_diff(*b) <= 1)
+                    })
+            });
+        Ok(Seen {
+            existing,
+            decoded,
+            same_size,
+            identical,
+            ssim,
+            within,
+        })
+    }
+
+    /// Outside the tolerance, or no golden: how the picture changed. On a release the golden
+    /// was not blessed on, the judge decides every pixel it compared: a change there is legal
+    /// (reported, never failed: the driver's choice inside the spec) or illegal (failed by
+    /// its own checks); only a change where it did not look (the background, a resized
+    /// frame) is the golden's to fail.
+    fn change(
+        &self,
+        held: &Held,
+        run: &Subject,
+        frame: &Frame,
+        judged: &[umbra_compare::reference::PixelJudgement],
+        judge_passed: bool,
+    ) -> umbra_report::GoldenChange {
+        let area = u64::from(frame.width) * u64::from(frame.height);
+        let (pixels, max_step, illegal, unjudged) = match (&self.decoded, self.same_size) {
+            (Some(img), true) => difference(img, frame, judged),
+            // A new picture: the judge speaks for every pixel it compared.
+            (None, _) => (area, 255, u64::from(!judge_passed), 0),
+            (Some(_), false) => (area, 255, 0, area),
+        };
+        let judged_change = !held.strict && unjudged == 0;
+        umbra_report::GoldenChange {
+            blessed_on: held.blessed_on.clone(),
+            driver: run.driver.map(str::to_string),
+            pixels,
+            max_step,
+            new: self.decoded.is_none(),
+            illegal,
+            unjudged,
+            strict: held.strict,
+            legal: judged_change && illegal == 0,
+        }
+    }
+
+    /// Whether the judge decides this change (off the golden's release, every changed pixel
+    /// one it compared).
+    fn judged(change: &umbra_report::GoldenChange) -> bool {
+        !change.strict && change.unjudged == 0
+    }
+
+    /// What a change the judge decides is reported as.
+    fn reported(change: &umbra_report::GoldenChange) -> Golden {
+        if change.legal {
+            Golden::ChangedLegal
+        } else {
+            Golden::ChangedJudged
+        }
+    }
+
+    /// "differs from its golden" or "has no golden yet".
+    fn what(&self) -> &'static str {
+        if self.existing.is_some() {
+            "differs from its golden"
+        } else {
+            "has no golden yet"
+        }
+    }
+
+    /// The versions a change is between, where the golden's is not this driver's.
+    fn versions(held: &Held, run: &Subject) -> String {
+        match (&held.blessed_on, run.driver) {
+            (Some(b), Some(h)) if !held.strict => format!(
+                "; this golden was blessed on Mesa {b} and this driver is Mesa {h}: the difference may be the driver's change between them (compare the two with `cargo xtask drivers`, and bless on this version only after review)"
+            ),
+            _ => String::new(),
+        }
+    }
+
+    /// Under CI nothing is written: a change the judge decides is what it says; any other
+    /// fails and says how to review it locally.
+    fn refused_under_ci(
+        &self,
+        held: &Held,
+        run: &Subject,
+        change: &umbra_report::GoldenChange,
+    ) -> (Golden, String) {
+        if Seen::judged(change) {
+            return (Seen::reported(change), change.describe());
+        }
+        (
+            Golden::Changed,
+            format!(
+                "the colour image {}{}; CI=true: nothing written; run `cargo xtask bless` or `cargo insta review` locally and commit the result{}",
+                self.what(),
+                if change.new {
+                    String::new()
+                } else {
+                    format!(" ({})", change.pixels_phrase())
+                },
+                Seen::versions(held, run)
+            ),
+        )
+    }
+
+    /// Outside CI the new picture goes to insta (`home`: the backend's folder in the golden
+    /// directory, where a golden of this release is written): written when blessing,
+    /// pending for review otherwise; what happened, and the words for it.
+    fn handed_to_insta(
+        &self,
+        held: &Held,
+        run: &Subject,
+        home: &Path,
+        frame: &Frame,
+        change: &umbra_report::GoldenChange,
+    ) -> (Golden, String) {
+        let stem = stem(run.name);
+        let bytes = match (&self.existing, self.within) {
+            (Some(b), true) => b.clone(),
+            _ => png(frame),
+        };
+        let outcome = snapshot(&held.write_dir, &stem, run.name, bytes);
+        // What insta should have left: the written golden, or the pending snapshot a review
+        // reads. Where it is not there (a read-only golden directory, a full disk), the run
+        // says the golden could not be written, never that a snapshot it cannot find is
+        // pending.
+        let left = match (&outcome, self.within) {
+            (Ok(()), true) => None,
+            (Ok(()), false) => Some(held.write_dir.join(format!("{stem}.snap"))),
+            (Err(()), _) => Some(held.write_dir.join(format!("{stem}.snap.new"))),
+        };
+        let unwritten = left.filter(|f| !f.is_file()).map(|file| {
+            format!(
+                "its golden could not be written: {} ({}); make the golden directory writable and run again",
+                file.display(),
+                unwritable(&held.write_dir)
+            )
+        });
+        let (what, versions) = (self.what(), Seen::versions(held, run));
+        let judged_change = Seen::judged(change);
+        match (outcome, self.within) {
+            // A change the judge decides (on a release other than the golden's) stays what the
+            // judge says it is; anything else fails, saying the write failed.
+            (Err(()), _) if judged_change && unwritten.is_some() => (
+                Seen::reported(change),
+                format!("{}; {}", change.describe(), unwritten.unwrap_or_default()),
+            ),
+            _ if unwritten.is_some() => (
+                Golden::Changed,
+                format!(
+                    "the colour image {what}, and {}{versions}",
+                    unwritten.unwrap_or_default()
+                ),
+            ),
+            (Ok(()), true) => (Golden::Unchanged, String::new()),
+            (Ok(()), false) if held.write_dir != home => (
+                Golden::WrittenForRelease,
+                format!(
+                    "golden {stem} written for Mesa {} in {}",
+                    // The release's directory: `mesa-RELEASE/BACKEND`.
+                    held.write_dir
+                        .parent()
+                        .and_then(Path::file_name)
+                        .map_or_else(String::new, |n| n
+                            .to_string_lossy()
+                            .trim_start_matches("mesa-")
+                            .to_string()),
+                    held.write_dir.display()
+                ),
+            ),
+            (Ok(()), false) => (Golden::Written, format!("golden {stem} written")),
+            (Err(()), _) if judged_change => (
+                Seen::reported(change),
+                format!(
+                    "{}; pending as this release's golden: {}/{stem}.snap.new (`cargo insta review` or `cargo xtask bless`)",
+                    change.describe(),
+                    held.write_dir.display()
+                ),
+            ),
+            (Err(()), _) => {
+                let how = format!(
+                    "review it with `cargo insta review` (pending {}/{stem}.snap.new) or accept all with `cargo xtask bless`",
+                    held.write_dir.display()
+                );
+                (
+                    Golden::Changed,
+                    format!("the colour image {what}; {how}{versions}"),
+                )
+            }
+        }
     }
 }
 
@@ -509,15 +600,16 @@ mod release_tests {
         let dir =
             std::env::temp_dir().join(format!("umbra-golden-release-{tag}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).expect("dir");
+        let backend = dir.join(folder("gl33/llvmpipe"));
+        std::fs::create_dir_all(&backend).expect("dir");
         let stem = stem("gl33/llvmpipe/x");
         std::fs::write(
-            dir.join(format!("{stem}.snap")),
+            backend.join(format!("{stem}.snap")),
             "---\nsource: umbra\n---\n",
         )
         .expect("snap");
         std::fs::write(
-            dir.join(format!("{stem}.snap.png")),
+            backend.join(format!("{stem}.snap.png")),
             png(&frame([10, 10, 10, 255])),
         )
         .expect("png");
@@ -586,7 +678,7 @@ mod release_tests {
         let new = frame([30, 10, 10, 255]);
         let legal = judged(PixelJudgement::LegalDifference);
         // This release's own golden: read from mesa-26.2.6/, strict, and the base untouched.
-        let own = release_dir(&dir, "26.2.6-1");
+        let own = release_dir(&dir, "26.2.6-1").join(folder("gl33/llvmpipe"));
         std::fs::create_dir_all(&own).expect("release dir");
         std::fs::write(own.join(format!("{stem}.snap")), "---\n---\n").expect("snap");
         std::fs::write(own.join(format!("{stem}.snap.png")), png(&new)).expect("png");
@@ -604,10 +696,13 @@ mod release_tests {
         // Another release without a golden of its own: lenient, and never writes the base.
         let lenient = held(&dir, &run("26.1.6"));
         assert!(!lenient.strict);
-        assert_eq!(lenient.write_dir, release_dir(&dir, "26.1.6"));
+        assert_eq!(
+            lenient.write_dir,
+            release_dir(&dir, "26.1.6").join("gl33_llvmpipe")
+        );
         // A bless on 26.1.6 that compared the golden and found it unchanged confirms it
         // there: strict from then on, until the golden changes.
-        let base = dir.join(format!("{stem}.snap.png"));
+        let base = dir.join("gl33_llvmpipe").join(format!("{stem}.snap.png"));
         record_confirmed(&dir, "26.1.6", &[(stem.clone(), base.clone())]).expect("confirm");
         let text = std::fs::read_to_string(release_dir(&dir, "26.1.6").join("confirmed.txt"))
             .expect("confirmed.txt");

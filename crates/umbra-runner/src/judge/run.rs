@@ -83,21 +83,10 @@ pub fn run_point_as(
     // which a twin that sets the offset would no longer move anything.
     let as_written = point.clone();
     let prepared = Prepared::new(point);
-    let frame = match backend.render(&prepared) {
+    let frame = match rendered(backend, &prepared) {
         Ok(f) => f,
-        // A backend that finds out only while rendering that it cannot run the case says so
-        // the same way: a skip with its reason, never a failure.
-        Err(umbra_case::BackendError::Unsupported(why)) => return Outcome::Skip(why),
-        Err(e) => return Outcome::Error(e.to_string()),
+        Err(o) => return o,
     };
-    if (frame.width, frame.height) != (prepared.camera.size[0], prepared.camera.size[1])
-        || frame.visibility.len() != (frame.width * frame.height) as usize
-    {
-        return Outcome::Error(format!(
-            "the backend returned a {}x{} frame for a {:?} camera",
-            frame.width, frame.height, prepared.camera.size
-        ));
-    }
     let start = Instant::now();
     // The truth, and the reference's judged render for this backend's profile (which also
     // judges the twins, so even the reference needs it): computed once per point and profile
@@ -156,51 +145,109 @@ pub fn run_point_as(
             .collect(),
     };
     let twins_time = twins_start.elapsed();
-    for t in &twins {
-        if !t.ok {
-            failed.push(FailedCheck {
-                check: Check::Twin(t.name.clone()),
-                count: t.pair.illegal.max(1),
-            });
-            problems.push(format!(
-                "twin {} ({}): {} px differ, {} illegal ({}; {}); interior error {} vs the twin's {}",
-                t.name,
-                t.agree,
-                t.pair.differ,
-                t.pair.illegal,
-                t.pair.illegal_summary(),
-                t.pair.legal_summary(),
-                t.interior_error,
-                t.twin_interior_error.map(|e| e.to_string()).unwrap_or("-".into())
-            ));
-        }
-    }
+    twins_failed(&twins, &mut failed, &mut problems);
     let reference = (!is_ref).then_some(judged.frame);
     if let Some(a) = agreement.as_ref().filter(|_| !is_ref) {
         if (a.illegal > 0 || a.illegal_map > 0) && prepared.case().expect.backends_agree {
-            for (check, count) in [
-                (Check::Value, a.illegal_value),
-                (Check::Nan, a.illegal_nan),
-                (Check::Coverage, a.illegal_coverage),
-                (Check::Colour, a.illegal_colour),
-                (Check::Map, a.illegal_map),
-            ] {
-                if count > 0 {
-                    failed.push(FailedCheck { check, count });
-                }
-            }
-            problems.push(format!(
-                "{} px and {} map texels break what the specs allow ({}) of {} px and {} texels compared; {}",
-                a.illegal,
-                a.illegal_map,
-                a.illegal_summary(),
-                a.compared,
-                a.map_checked,
-                a.legal_summary()
-            ));
+            illegal_failed(a, &mut failed, &mut problems);
         }
     }
     let judge_time = start.elapsed().saturating_sub(twins_time);
+    interior_failed(&prepared, &error, &mut failed, &mut problems);
+    Outcome::Done(Box::new(Judged {
+        prepared,
+        frame,
+        truth,
+        error,
+        agreement,
+        pixels,
+        ssim,
+        reference,
+        legal,
+        failed,
+        judge_time,
+        twins_time,
+        twins,
+        problems,
+        fingerprint,
+    }))
+}
+
+/// The backend's frame of `prepared`, or the outcome that ends the run: a skip (a backend
+/// that finds out only while rendering that it cannot run the case says so the same way,
+/// never a failure), an error, or a frame of the wrong size.
+fn rendered(backend: &mut dyn Backend, prepared: &Prepared) -> Result<Frame, Outcome> {
+    let frame = match backend.render(prepared) {
+        Ok(f) => f,
+        Err(umbra_case::BackendError::Unsupported(why)) => return Err(Outcome::Skip(why)),
+        Err(e) => return Err(Outcome::Error(e.to_string())),
+    };
+    if (frame.width, frame.height) != (prepared.camera.size[0], prepared.camera.size[1])
+        || frame.visibility.len() != (frame.width * frame.height) as usize
+    {
+        return Err(Outcome::Error(format!(
+            "the backend returned a {}x{} frame for a {:?} camera",
+            frame.width, frame.height, prepared.camera.size
+        )));
+    }
+    Ok(frame)
+}
+
+/// Each twin that disagreed: a failed `twin:NAME` check and its line.
+fn twins_failed(twins: &[TwinMetric], failed: &mut Vec<FailedCheck>, problems: &mut Vec<String>) {
+    for t in twins.iter().filter(|t| !t.ok) {
+        failed.push(FailedCheck {
+            check: Check::Twin(t.name.clone()),
+            count: t.pair.illegal.max(1),
+        });
+        problems.push(format!(
+            "twin {} ({}): {} px differ, {} illegal ({}; {}); interior error {} vs the twin's {}",
+            t.name,
+            t.agree,
+            t.pair.differ,
+            t.pair.illegal,
+            t.pair.illegal_summary(),
+            t.pair.legal_summary(),
+            t.interior_error,
+            t.twin_interior_error
+                .map(|e| e.to_string())
+                .unwrap_or("-".into())
+        ));
+    }
+}
+
+/// A frame or map outside what the specs allow: each check it broke, and its line.
+fn illegal_failed(a: &RefAgreement, failed: &mut Vec<FailedCheck>, problems: &mut Vec<String>) {
+    for (check, count) in [
+        (Check::Value, a.illegal_value),
+        (Check::Nan, a.illegal_nan),
+        (Check::Coverage, a.illegal_coverage),
+        (Check::Colour, a.illegal_colour),
+        (Check::Map, a.illegal_map),
+    ] {
+        if count > 0 {
+            failed.push(FailedCheck { check, count });
+        }
+    }
+    problems.push(format!(
+        "{} px and {} map texels break what the specs allow ({}) of {} px and {} texels compared; {}",
+        a.illegal,
+        a.illegal_map,
+        a.illegal_summary(),
+        a.compared,
+        a.map_checked,
+        a.legal_summary()
+    ));
+}
+
+/// The case's `expect.interior_error` against the error away from shadow edges: the
+/// `interior` check and its line where it does not hold.
+fn interior_failed(
+    prepared: &Prepared,
+    error: &TruthError,
+    failed: &mut Vec<FailedCheck>,
+    problems: &mut Vec<String>,
+) {
     let a = error.away_from_edges;
     let (shadow_bad, light_bad) = match prepared.case().expect.interior_error {
         InteriorError::Reported => (false, false),
@@ -221,23 +268,6 @@ pub fn run_point_as(
             a.judged
         ));
     }
-    Outcome::Done(Box::new(Judged {
-        prepared,
-        frame,
-        truth,
-        error,
-        agreement,
-        pixels,
-        ssim,
-        reference,
-        legal,
-        failed,
-        judge_time,
-        twins_time,
-        twins,
-        problems,
-        fingerprint,
-    }))
 }
 
 /// Renders every twin of the run on the same backend and compares it with `frame` (`legal`

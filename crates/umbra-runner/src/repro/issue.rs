@@ -133,7 +133,20 @@ fn violated(facts: &Value) -> String {
 /// `issue.md`.
 pub fn issue_md(facts: &Value, m: &Measured) -> String {
     let mut o = String::new();
-    let backend = s(facts, "backend");
+    issue_description(&mut o, facts, m);
+    issue_system(&mut o, facts, m);
+    issue_regression(&mut o, facts, m);
+    issue_steps(&mut o, facts, m);
+    issue_probes(&mut o, facts, m);
+    issue_screenshots(&mut o, facts);
+    issue_capture(&mut o, m);
+    issue_for_umbra_users(&mut o, facts, m);
+    o
+}
+
+/// `issue.md`'s title and `### Description`: what was violated, the diagnosis, and how umbra
+/// found and reduced it.
+fn issue_description(o: &mut String, facts: &Value, m: &Measured) {
     let renderer = s(facts, "renderer");
     let _ = writeln!(
         o,
@@ -170,6 +183,12 @@ pub fn issue_md(facts: &Value, m: &Measured) -> String {
         facts["map"][1],
         m.reduced
     );
+}
+
+/// `issue.md`'s `### System information`: the driver's strings, the Mesa build, the platform.
+fn issue_system(o: &mut String, facts: &Value, m: &Measured) {
+    let backend = s(facts, "backend");
+    let renderer = s(facts, "renderer");
     let _ = writeln!(o, "### System information\n");
     let _ = writeln!(o, "- GL_VENDOR: `{}`", s(facts, "vendor"));
     let _ = writeln!(o, "- GL_RENDERER: `{renderer}`");
@@ -195,6 +214,11 @@ pub fn issue_md(facts: &Value, m: &Measured) -> String {
         o,
         "- Platform: {platform}, no window system; umbra backend `{backend}`\n"
     );
+}
+
+/// `issue.md`'s `### Regression`: the first bad commit, or how to bisect.
+fn issue_regression(o: &mut String, facts: &Value, m: &Measured) {
+    let backend = s(facts, "backend");
     let _ = writeln!(o, "### Regression\n");
     match &m.bisect {
         Some((commit, log)) => {
@@ -228,6 +252,12 @@ pub fn issue_md(facts: &Value, m: &Measured) -> String {
             );
         }
     }
+}
+
+/// `issue.md`'s `### Steps to reproduce`: the program's commands and exits, or why there is
+/// no program.
+fn issue_steps(o: &mut String, facts: &Value, m: &Measured) {
+    let backend = s(facts, "backend");
     let _ = writeln!(o, "### Steps to reproduce\n");
     if m.runs.is_empty() {
         let _ = writeln!(
@@ -257,6 +287,12 @@ pub fn issue_md(facts: &Value, m: &Measured) -> String {
             }
         );
     }
+}
+
+/// `issue.md`'s `### Probes`: the probes as umbra read them, and the program's output on
+/// each driver.
+fn issue_probes(o: &mut String, facts: &Value, m: &Measured) {
+    let backend = s(facts, "backend");
     let _ = writeln!(o, "### Probes\n");
     let _ = writeln!(
         o,
@@ -280,6 +316,11 @@ pub fn issue_md(facts: &Value, m: &Measured) -> String {
             tail(&r.output, 14)
         );
     }
+}
+
+/// `issue.md`'s `### Screenshots`: the crop's table and where the full-size pictures are.
+fn issue_screenshots(o: &mut String, facts: &Value) {
+    let renderer = s(facts, "renderer");
     let _ = writeln!(o, "### Screenshots\n");
     let c = &facts["crop"];
     let _ = writeln!(
@@ -301,6 +342,10 @@ pub fn issue_md(facts: &Value, m: &Measured) -> String {
         o,
         "Full-size pictures (colour, visibility, reference, truth, error map, shadow map) are in `full/`.\n"
     );
+}
+
+/// `issue.md`'s `### API capture`: how it was made and its replays, or why there is none.
+fn issue_capture(o: &mut String, m: &Measured) {
     let _ = writeln!(o, "### API capture\n");
     match &m.capture {
         Ok(how) => {
@@ -314,13 +359,18 @@ pub fn issue_md(facts: &Value, m: &Measured) -> String {
             let _ = writeln!(o, "None: {why}.\n");
         }
     }
+}
+
+/// `issue.md`'s last section, `### For umbra users`: the reduced case and the command that
+/// made the bundle.
+fn issue_for_umbra_users(o: &mut String, facts: &Value, m: &Measured) {
+    let backend = s(facts, "backend");
     let _ = writeln!(o, "### For umbra users\n");
     let _ = writeln!(
         o,
         "`case.json` is the reduced case: `umbra render case.json --backend {backend}` shows the failure with umbra's pictures and `--explain X,Y` prints the judge's derivation at a pixel. This bundle was made by `{}`.",
         m.command
     );
-    o
 }
 
 /// How to bisect a Mesa tree with the program alone (a meson build directory `build`

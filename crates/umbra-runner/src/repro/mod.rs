@@ -24,54 +24,48 @@ use std::path::Path;
 use serde_json::json;
 use umbra_case::{BackendError, Prepared};
 
+use crate::exit::{Error, Exit, Outcome};
+
 /// The spec text each probe kind is held to (the judge's derivation lives in cases/README.md
-/// and NUMERICS.md; these are the clauses a driver developer looks up).
+/// and docs/platform.md; these are the clauses a driver developer looks up).
 pub const VALUE_CLAUSE: &str = "GL 4.6 §8.23.1 depth texture comparison with the freedoms of §8.14 (texel selection, LINEAR weights), §14.5 (rasterization's sub-pixel precision) and §14.6.5 (depth offset); Vulkan 1.3 \"Depth Compare Operation\"";
 /// The clause of the map's texels.
 pub const MAP_CLAUSE: &str = "GL 4.6 §14.6.5 depth offset (o = m·factor + r·units added to each fragment's depth, then clamped to [0, 1] per fragment), §13.8 clipping and the viewport transform, §2.3.5.2 fixed-point depth conversion";
 
 /// Writes the driver-side half of the bundle for the reduced `case_file` on `backend` into
-/// `out`. Returns the exit code: 0 written, 1 nothing to reproduce, 125 could not run.
-pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> i32 {
+/// `out`. Returns its outcome: [`Exit::Pass`] written, [`Exit::Fail`] nothing to reproduce
+/// (said on stderr), an error when it could not run.
+pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> Outcome {
     if umbra_case::fault::Fault::active() == Some(umbra_case::fault::Fault::NoYFlip) {
-        eprintln!(
-            "error: the no-y-flip self-test fault acts on umbra's readback, not on its GL calls: a standalone program cannot carry it"
-        );
-        return 125;
+        return Err(Error::new(
+            "the no-y-flip self-test fault acts on umbra's readback, not on its GL calls: a standalone program cannot carry it",
+        ));
     }
     // A build with its own C library: this process continues on it (re-executed).
     if let Some(Err(e)) = crate::harness::mesa_build::selected()
         .filter(|_| crate::harness::mesa_build::is_mesa_backed(backend_id))
         .map(crate::harness::mesa_build::MesaBuild::enter)
     {
-        eprintln!("error: {backend_id}: {e}");
-        return 125;
+        return Err(Error::new(format!("{backend_id}: {e}")));
     }
-    let mut backend = match crate::harness::registry::create(backend_id) {
-        Ok(b) => b,
-        Err(e) => {
-            eprintln!("error: {backend_id}: {e}");
-            return 125;
-        }
-    };
-    let point = match umbra_case::load_file(case_file).map(|mut p| p.remove(0)) {
-        Ok(p) => p,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 125;
-        }
-    };
+    let mut backend = crate::harness::registry::create(backend_id)
+        .map_err(|e| Error::new(format!("{backend_id}: {e}")))?;
+    let point = umbra_case::load_file(case_file)
+        .map(|mut p| p.remove(0))
+        .map_err(|e| Error::new(e.to_string()))?;
     let profile = backend.profile();
     let info = backend.info();
     let judged = match crate::judge::run::run_point(backend.as_mut(), point.clone(), false) {
         crate::judge::run::Outcome::Done(j) => j,
         crate::judge::run::Outcome::Skip(why) => {
-            eprintln!("error: {backend_id} skips the reduced case: {why}");
-            return 125;
+            return Err(Error::new(format!(
+                "{backend_id} skips the reduced case: {why}"
+            )));
         }
         crate::judge::run::Outcome::Error(e) => {
-            eprintln!("error: {backend_id} fails to render the reduced case: {e}");
-            return 125;
+            return Err(Error::new(format!(
+                "{backend_id} fails to render the reduced case: {e}"
+            )));
         }
     };
     let prepared = Prepared::new(point.clone());
@@ -83,10 +77,7 @@ pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> i32 {
             println!("  no repro.c: {why}");
             (None, None)
         }
-        Err(e) => {
-            eprintln!("error: the recorded render failed: {e}");
-            return 125;
-        }
+        Err(e) => return Err(Error::new(format!("the recorded render failed: {e}"))),
     };
     // The recorded frame is the one probed; it must be the judged one, or the driver is not
     // deterministic on this case and the probes would test another frame than umbra judged.
@@ -107,12 +98,10 @@ pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> i32 {
             "error: the reduced case passes the value, coverage, colour and map checks on {backend_id} (it fails {}): a standalone program has nothing to probe",
             crate::judge::expectations::signature(&judged.failed)
         );
-        return 1;
+        return Err(Error::said(Exit::Fail));
     }
-    if let Err(e) = std::fs::create_dir_all(out) {
-        eprintln!("error: cannot create {}: {e}", out.display());
-        return 125;
-    }
+    std::fs::create_dir_all(out)
+        .map_err(|e| Error::new(format!("cannot create {}: {e}", out.display())))?;
     let profile_name = basis.profile.name();
     let mut wrote_c = false;
     if let Some(program) = program {
@@ -126,22 +115,20 @@ pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> i32 {
             &header,
             &probes.c_source(&profile_name, VALUE_CLAUSE, MAP_CLAUSE),
         );
-        if let Err(e) = std::fs::write(out.join("repro.c"), source) {
-            eprintln!("error: cannot write {}: {e}", out.join("repro.c").display());
-            return 125;
-        }
+        std::fs::write(out.join("repro.c"), source).map_err(|e| {
+            Error::new(format!(
+                "cannot write {}: {e}",
+                out.join("repro.c").display()
+            ))
+        })?;
         wrote_c = true;
     }
-    let crop = match pictures::write(out, &judged, &pixels, &probes) {
-        Ok(c) => c,
-        Err(e) => {
-            eprintln!(
-                "error: cannot write the pictures into {}: {e}",
-                out.display()
-            );
-            return 125;
-        }
-    };
+    let crop = pictures::write(out, &judged, &pixels, &probes).map_err(|e| {
+        Error::new(format!(
+            "cannot write the pictures into {}: {e}",
+            out.display()
+        ))
+    })?;
     let size = crate::case_size::Size::of(&serde_json::to_value(&point.case).unwrap_or_default())
         .unwrap_or_default();
     let facts = json!({
@@ -167,14 +154,12 @@ pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> i32 {
         "repro_c": wrote_c,
         "probe_lines": probes_text(&probes),
     });
-    if let Err(e) = std::fs::write(
+    std::fs::write(
         out.join("facts.json"),
         serde_json::to_string_pretty(&facts).unwrap_or_default(),
-    ) {
-        eprintln!("error: cannot write facts.json: {e}");
-        return 125;
-    }
-    0
+    )
+    .map_err(|e| Error::new(format!("cannot write facts.json: {e}")))?;
+    Ok(Exit::Pass)
 }
 
 /// The probes as umbra saw them on the driver's run, one line each (issue.md's table).

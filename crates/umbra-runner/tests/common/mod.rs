@@ -32,16 +32,22 @@ pub fn text(o: &Output) -> String {
     )
 }
 
-/// The repository's golden of one `ref` run (`ref/acne-cull-front`), copied into `dir`, so
+/// The repository's golden of one `ref` run (`ref/acne-cull-front`), copied into `dir`'s
+/// folder of `ref` (`DIR/ref/`, as [`umbra_runner::judge::golden::folder`] names it), so
 /// that `ref` is a backend with goldens there and a run without its own golden is a missing
 /// golden (a change to review), not a backend judged without goldens. The copied files' stem.
 pub fn seed_goldens(dir: &std::path::Path) -> &'static str {
     const STEM: &str = "ref_acne-cull-front-52c5bb2b";
-    let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../golden");
+    let folder = umbra_runner::judge::golden::folder("ref");
+    let repo = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../golden")
+        .join(&folder);
+    let seeded = dir.join(&folder);
+    std::fs::create_dir_all(&seeded).expect("the golden folder of ref");
     for ext in [".snap", ".snap.png"] {
         std::fs::copy(
             repo.join(format!("{STEM}{ext}")),
-            dir.join(format!("{STEM}{ext}")),
+            seeded.join(format!("{STEM}{ext}")),
         )
         .expect("the repository's golden of ref/acne-cull-front");
     }

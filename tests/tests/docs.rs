@@ -1,0 +1,259 @@
+//! The documentation holds together (issue 37): the README stays a first screen (at most
+//! [`README_LINES`] lines) that points into the book under `docs/`; every relative link in the
+//! README, the book and the folders' READMEs reaches a file, and every `#anchor` a heading
+//! (GitHub's and mdBook's slugs: lower case, spaces to `-`, punctuation dropped); every page
+//! of the book is in its table of contents (`docs/SUMMARY.md`, mdBook's format); and every
+//! cite of the catalogue in the sources (`docs/catalogue.md §N`) names a numbered entry there.
+//! No tool is needed: a forge renders these pages as they are, and CI pays for no book build.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// The README's budget: what umbra is, the two commands, the status, where to read on.
+const README_LINES: usize = 200;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn markdown_under(dir: &Path, out: &mut Vec<PathBuf>) {
+    for e in std::fs::read_dir(dir).expect("docs/").flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            markdown_under(&p, out);
+        } else if p.extension().is_some_and(|x| x == "md") {
+            out.push(p);
+        }
+    }
+}
+
+/// The pages checked: the README, the book, and the READMEs of the folders users open.
+fn pages() -> Vec<PathBuf> {
+    let root = root();
+    let mut out = vec![
+        root.join("README.md"),
+        root.join("cases/README.md"),
+        root.join("golden/README.md"),
+    ];
+    markdown_under(&root.join("docs"), &mut out);
+    out.sort();
+    out
+}
+
+/// The text outside fenced code blocks, line by line (1-based numbers).
+fn prose(text: &str) -> Vec<(usize, String)> {
+    let mut fenced = false;
+    let mut out = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+            continue;
+        }
+        if !fenced {
+            out.push((n + 1, line.to_string()));
+        }
+    }
+    out
+}
+
+/// A heading's anchor as GitHub and mdBook make it.
+fn slug(heading: &str) -> String {
+    let mut text = String::new();
+    // A link in a heading counts by its words.
+    let mut rest = heading.replace('`', "");
+    while let (Some(a), Some(b)) = (rest.find("]("), rest.find(')')) {
+        if b < a {
+            break;
+        }
+        rest = format!("{}{}", &rest[..a], &rest[b + 1..]).replacen('[', "", 1);
+    }
+    for c in rest.trim().to_lowercase().chars() {
+        if c.is_alphanumeric() || c == '-' || c == '_' {
+            text.push(c);
+        } else if c == ' ' {
+            text.push('-');
+        }
+    }
+    text
+}
+
+/// Every anchor a page's headings make (a repeated heading gets `-1`, `-2`, …).
+fn anchors(page: &Path) -> BTreeSet<String> {
+    let text = std::fs::read_to_string(page).unwrap_or_default();
+    let mut seen: BTreeMap<String, usize> = BTreeMap::new();
+    let mut out = BTreeSet::new();
+    for (_, line) in prose(&text) {
+        let hashes = line.chars().take_while(|c| *c == '#').count();
+        if !(1..=6).contains(&hashes) || !line[hashes..].starts_with(' ') {
+            continue;
+        }
+        let s = slug(line[hashes..].trim().trim_end_matches('#'));
+        let n = seen.entry(s.clone()).or_insert(0);
+        out.insert(if *n == 0 {
+            s.clone()
+        } else {
+            format!("{s}-{n}")
+        });
+        *n += 1;
+    }
+    out
+}
+
+/// The relative link targets on a line (`[text](target)`), inline code left out.
+fn links(line: &str) -> Vec<String> {
+    let mut code = false;
+    let plain: String = line
+        .chars()
+        .filter(|c| {
+            if *c == '`' {
+                code = !code;
+            }
+            !code && *c != '`'
+        })
+        .collect();
+    plain
+        .match_indices("](")
+        .filter_map(|(i, _)| {
+            let rest = &plain[i + 2..];
+            let end = rest.find(')')?;
+            Some(
+                rest[..end]
+                    .split_whitespace()
+                    .next()
+                    .unwrap_or("")
+                    .to_string(),
+            )
+        })
+        .filter(|t| !t.is_empty() && !t.contains("://") && !t.starts_with("mailto:"))
+        .collect()
+}
+
+#[test]
+fn every_relative_link_and_anchor_resolves() {
+    let pages = pages();
+    assert!(pages.len() > 10, "the book was not found: {pages:?}");
+    let mut broken = Vec::new();
+    let mut checked = 0;
+    for page in &pages {
+        let text = std::fs::read_to_string(page).expect("page");
+        for (n, line) in prose(&text) {
+            for target in links(&line) {
+                checked += 1;
+                let (file, anchor) = target.split_once('#').unwrap_or((&target, ""));
+                let to = if file.is_empty() {
+                    page.clone()
+                } else {
+                    page.parent().expect("a folder").join(file)
+                };
+                if !to.exists() {
+                    broken.push(format!("{}:{n}: {target}: no such file", page.display()));
+                } else if !anchor.is_empty() && !anchors(&to).contains(anchor) {
+                    broken.push(format!("{}:{n}: {target}: no such heading", page.display()));
+                }
+            }
+        }
+    }
+    assert!(checked > 100, "only {checked} links found");
+    assert!(broken.is_empty(), "broken links:\n{}", broken.join("\n"));
+}
+
+#[test]
+fn the_readme_is_a_first_screen_and_the_book_is_whole() {
+    let root = root();
+    let readme = std::fs::read_to_string(root.join("README.md")).expect("README");
+    let lines = readme.lines().count();
+    assert!(
+        lines <= README_LINES,
+        "README.md is {lines} lines; move detail into the book under docs/ (at most {README_LINES})"
+    );
+    assert!(readme.contains("cargo xtask conformance") && readme.contains("cargo xtask test"));
+    let summary = std::fs::read_to_string(root.join("docs/SUMMARY.md")).expect("SUMMARY.md");
+    let listed: BTreeSet<String> = links(&summary.replace('\n', " ")).into_iter().collect();
+    let mut pages = Vec::new();
+    markdown_under(&root.join("docs"), &mut pages);
+    for p in pages {
+        let rel = p
+            .strip_prefix(root.join("docs"))
+            .expect("under docs")
+            .display()
+            .to_string();
+        if rel == "SUMMARY.md" {
+            continue;
+        }
+        assert!(
+            listed.contains(&rel),
+            "docs/{rel} is not in docs/SUMMARY.md"
+        );
+    }
+}
+
+#[test]
+fn every_cite_of_the_catalogue_names_an_entry() {
+    let root = root();
+    let entries: BTreeSet<String> = std::fs::read_to_string(root.join("docs/catalogue.md"))
+        .expect("catalogue")
+        .lines()
+        .filter_map(|l| l.strip_prefix("### "))
+        .filter_map(|l| l.split_once(". ").map(|(n, _)| n.to_string()))
+        .collect();
+    assert!(entries.len() >= 17, "{entries:?}");
+    let mut files = Vec::new();
+    fn walk(d: &Path, out: &mut Vec<PathBuf>) {
+        for e in std::fs::read_dir(d).into_iter().flatten().flatten() {
+            let p = e.path();
+            let name = e.file_name().to_string_lossy().into_owned();
+            if p.is_dir() && name != "target" && !name.starts_with('.') {
+                walk(&p, out);
+            } else if [".rs", ".json", ".md", ".txt"]
+                .iter()
+                .any(|x| name.ends_with(x))
+            {
+                out.push(p);
+            }
+        }
+    }
+    for d in ["crates", "cases", "tests", "xtask", "expectations"] {
+        walk(&root.join(d), &mut files);
+    }
+    let mut unknown = Vec::new();
+    let mut cites = 0;
+    // This file names what it forbids.
+    files.retain(|f| !f.ends_with("tests/docs.rs"));
+    for f in files {
+        let text = std::fs::read_to_string(&f).unwrap_or_default();
+        for (i, _) in text.match_indices("docs/catalogue.md §") {
+            let n: String = text[i + "docs/catalogue.md §".len()..]
+                .chars()
+                .take_while(char::is_ascii_digit)
+                .collect();
+            cites += 1;
+            if !entries.contains(&n) {
+                unknown.push(format!("{}: §{n}", f.display()));
+            }
+        }
+        assert!(
+            !text.contains("EDGE_CASES") && !text.contains("../shared/"),
+            "{} cites a document outside the repository; cite docs/ instead",
+            f.display()
+        );
+    }
+    assert!(cites > 20, "only {cites} cites found");
+    assert!(
+        unknown.is_empty(),
+        "cites of no catalogue entry: {unknown:?}"
+    );
+}
+
+#[test]
+fn the_checker_reads_links_and_headings_as_a_forge_does() {
+    assert_eq!(
+        links("see [a](b.md#c-d), `[not](x.md)` and [web](https://x.org) [top](#e)"),
+        ["b.md#c-d", "#e"]
+    );
+    assert_eq!(
+        slug("3. \"AMD needs a colour attachment\""),
+        "3-amd-needs-a-colour-attachment"
+    );
+    assert_eq!(slug("`--shard` and [merge](ci.md)"), "--shard-and-merge");
+    assert_eq!(slug("Sharded in CI: `--shard`"), "sharded-in-ci---shard");
+}
