@@ -108,85 +108,12 @@ pub fn render(
         geo,
         judged.map(|j| j.0),
     );
-    let mut nearest = vec![
-        Nearest {
-            depth: 1.0,
-            tri: NONE,
-        };
-        (w * h) as usize
-    ];
-    for_each_band(
-        &mut nearest,
-        w as usize,
-        1,
-        &tris,
-        false,
-        |rows, band, touching| {
-            let mut depths = Vec::new();
-            for (index, t) in touching {
-                t.scan_spans(rows.clone(), |span| {
-                    let start = (span.y - rows.start) as usize * w as usize + span.x as usize;
-                    let pixels = &mut band[start..start + span.len];
-                    span.depths(t, &mut depths);
-                    for (px, z) in pixels.iter_mut().zip(&depths) {
-                        let z = z.clamp(0.0, 1.0);
-                        let nearer = z < px.depth;
-                        *px = Nearest {
-                            depth: if nearer { z } else { px.depth },
-                            tri: if nearer { index as u32 } else { px.tri },
-                        };
-                    }
-                });
-            }
-        },
-    );
+    let nearest = nearest_surfaces(&tris, w, h);
     let surface_free = judged.map(|(_, profile)| surface_freedom(&tris, &nearest, w, geo, profile));
     let case = run.case();
     let eye = run.camera.eye;
     // The judged lookup at a surface point: its value and what it allows.
-    let judge = |pt: &Point, free: u8| -> (f32, PixelLegal) {
-        let (tri, t) = (&tris[pt.tri as usize], pt.source as usize);
-        let (p, n) = (pt.p, pt.n);
-        // Vertex snapping (4 sub-pixel bits) moves the triangle under the pixel centre by up
-        // to its reach along x and y: the interpolated position (and normal) are those of a
-        // point up to that far away on the surface.
-        let (x, y) = (f64::from(pt.x) + 0.5, f64::from(pt.y) + 0.5);
-        let (px_, nx) = interpolate(geo, t, tri.source_weights_at(x + 1.0, y));
-        let (py_, ny) = interpolate(geo, t, tri.source_weights_at(x, y + 1.0));
-        let snap = tri.reach() as f32;
-        let moves = [(px_ - p) * snap, (py_ - p) * snap];
-        let normal_moves = ((nx - n).length() + (ny - n).length()) * snap;
-        let (vis, l): (f32, Legal) = if lookup.mipmapped() {
-            lookup.judged_mip(p, n, moves, &neighbours(tri, geo, pt.x, pt.y))
-        } else {
-            lookup.judged(p, n, moves)
-        };
-        let (albedo, to_light, to_eye) = (pt.albedo, pt.to_light, pt.to_eye);
-        let c0 = shade_linear(&case.shading, albedo, n, to_light, to_eye, 0.0);
-        let c1 = shade_linear(&case.shading, albedo, n, to_light, to_eye, 1.0);
-        let d = position_freedom(p, lookup.reach) + moves[0].length() + moves[1].length();
-        let moved = normal_moves
-            + d / (eye - p).length().max(1e-6)
-            + match run.light.kind {
-                umbra_case::LightKind::Directional { .. } => 0.0,
-                umbra_case::LightKind::Spot { position }
-                | umbra_case::LightKind::Point { position } => {
-                    d / (position - p).length().max(1e-6)
-                }
-            };
-        let ctol = shade_tolerance(&case.shading, albedo, n, to_light, to_eye, moved);
-        (
-            vis,
-            PixelLegal {
-                lo: l.lo,
-                hi: l.hi,
-                flags: l.flags | free,
-                c0: c0.to_array(),
-                c1: c1.to_array(),
-                ctol,
-            },
-        )
-    };
+    let judge = |pt: &Point, free: u8| judged_point(run, &tris, lookup, pt, free);
     // Shade row by row straight into the outputs, a run of pixels that show the same
     // triangle at a time, in stages (surface points, lookups, colours): each pixel is
     // computed on its own with the same arithmetic, so the result does not depend on the
@@ -302,6 +229,95 @@ pub fn render(
         legal,
         trace: trace.into_inner().unwrap_or_default(),
     }
+}
+
+/// Which triangle is nearest the camera at each pixel, and its depth (the lit pass's depth
+/// test, LESS, depth clamped to [0, 1]).
+fn nearest_surfaces(tris: &[Tri], w: u32, h: u32) -> Vec<Nearest> {
+    let mut nearest = vec![
+        Nearest {
+            depth: 1.0,
+            tri: NONE,
+        };
+        (w * h) as usize
+    ];
+    for_each_band(
+        &mut nearest,
+        w as usize,
+        1,
+        tris,
+        false,
+        |rows, band, touching| {
+            let mut depths = Vec::new();
+            for (index, t) in touching {
+                t.scan_spans(rows.clone(), |span| {
+                    let start = (span.y - rows.start) as usize * w as usize + span.x as usize;
+                    let pixels = &mut band[start..start + span.len];
+                    span.depths(t, &mut depths);
+                    for (px, z) in pixels.iter_mut().zip(&depths) {
+                        let z = z.clamp(0.0, 1.0);
+                        let nearer = z < px.depth;
+                        *px = Nearest {
+                            depth: if nearer { z } else { px.depth },
+                            tri: if nearer { index as u32 } else { px.tri },
+                        };
+                    }
+                });
+            }
+        },
+    );
+    nearest
+}
+
+/// The judged lookup at surface point `pt` (its pixel's surface freedoms `free`): the value
+/// the reference computes and everything the specs allow there, colour included.
+fn judged_point(
+    run: &Prepared,
+    tris: &[Tri],
+    lookup: &Lookup,
+    pt: &Point,
+    free: u8,
+) -> (f32, PixelLegal) {
+    let (geo, case, eye) = (&run.geometry, run.case(), run.camera.eye);
+    let (tri, t) = (&tris[pt.tri as usize], pt.source as usize);
+    let (p, n) = (pt.p, pt.n);
+    // Vertex snapping (4 sub-pixel bits) moves the triangle under the pixel centre by up
+    // to its reach along x and y: the interpolated position (and normal) are those of a
+    // point up to that far away on the surface.
+    let (x, y) = (f64::from(pt.x) + 0.5, f64::from(pt.y) + 0.5);
+    let (px_, nx) = interpolate(geo, t, tri.source_weights_at(x + 1.0, y));
+    let (py_, ny) = interpolate(geo, t, tri.source_weights_at(x, y + 1.0));
+    let snap = tri.reach() as f32;
+    let moves = [(px_ - p) * snap, (py_ - p) * snap];
+    let normal_moves = ((nx - n).length() + (ny - n).length()) * snap;
+    let (vis, l): (f32, Legal) = if lookup.mipmapped() {
+        lookup.judged_mip(p, n, moves, &neighbours(tri, geo, pt.x, pt.y))
+    } else {
+        lookup.judged(p, n, moves)
+    };
+    let (albedo, to_light, to_eye) = (pt.albedo, pt.to_light, pt.to_eye);
+    let c0 = shade_linear(&case.shading, albedo, n, to_light, to_eye, 0.0);
+    let c1 = shade_linear(&case.shading, albedo, n, to_light, to_eye, 1.0);
+    let d = position_freedom(p, lookup.reach) + moves[0].length() + moves[1].length();
+    let moved = normal_moves
+        + d / (eye - p).length().max(1e-6)
+        + match run.light.kind {
+            umbra_case::LightKind::Directional { .. } => 0.0,
+            umbra_case::LightKind::Spot { position }
+            | umbra_case::LightKind::Point { position } => d / (position - p).length().max(1e-6),
+        };
+    let ctol = shade_tolerance(&case.shading, albedo, n, to_light, to_eye, moved);
+    (
+        vis,
+        PixelLegal {
+            lo: l.lo,
+            hi: l.hi,
+            flags: l.flags | free,
+            c0: c0.to_array(),
+            c1: c1.to_array(),
+            ctol,
+        },
+    )
 }
 
 /// The points (and normals) of `tri`'s surface at the centres of pixel (x, y) and its eight neighbours,

@@ -224,50 +224,9 @@ pub fn render_face(
         cull: shadow.cull,
     };
     let tris = setup_all(&raster, light, geo, judged.map(|j| j.0));
-    let format = shadow.format;
-    let [factor, units] = shadow.bias.polygon_offset;
-    let clamp = shadow.bias.polygon_offset_clamp;
-    let sign = conv.toward_far();
     // The GLES 2 path stores the offset depth itself (packed to about 32 bits), not a code.
     let packed = judged.is_some_and(|j| j.1.packed_depth);
-    let mut values = vec![format.store(conv.clear_depth()); (w * h) as usize];
-    // The format's store and the depth test, chosen once for the pass (each a few branch-free
-    // operations, so that the per-span loop below vectorises).
-    let max = format.fixed_bits().map(|n| f64::from((1u32 << n) - 1));
-    let forward = conv.toward_far() > 0.0;
-    for_each_band(
-        &mut values,
-        w as usize,
-        1,
-        &tris,
-        false,
-        |rows, band, touching| {
-            let mut depths = Vec::new();
-            for (_, t) in touching {
-                let offset = if factor != 0.0 || units != 0.0 {
-                    polygon_offset(t, format, factor, units, clamp)
-                } else {
-                    0.0
-                };
-                let offset = f64::from(sign) * offset;
-                t.scan_spans(rows.clone(), |span| {
-                    let start = (span.y - rows.start) as usize * w as usize + span.x as usize;
-                    let texels = &mut band[start..start + span.len];
-                    span.depths(t, &mut depths);
-                    match (packed, max) {
-                        (true, _) => depth_test_run(texels, &depths, offset, forward, |z| z),
-                        (false, Some(max)) => {
-                            let inv = 1.0 / max;
-                            depth_test_run(texels, &depths, offset, forward, |z| {
-                                store_fixed(z, max, inv)
-                            })
-                        }
-                        (false, None) => depth_test_run(texels, &depths, offset, forward, |z| z),
-                    }
-                });
-            }
-        },
-    );
+    let values = stored_values(conv, shadow, &tris, packed);
     let Some((_, profile)) = judged else {
         return DepthLayer {
             values,
@@ -377,6 +336,55 @@ pub fn render_face(
         hi,
         maybe,
     }
+}
+
+/// The shadow pass's stored values: every triangle of `tris` through the polygon offset, the
+/// clamp, the format's store (`packed`: GLES 2's offset depth itself) and the depth test.
+fn stored_values(conv: Convention, shadow: &Shadow, tris: &[Tri], packed: bool) -> Vec<f32> {
+    let format = shadow.format;
+    let [w, h] = shadow.size;
+    let [factor, units] = shadow.bias.polygon_offset;
+    let clamp = shadow.bias.polygon_offset_clamp;
+    let sign = conv.toward_far();
+    let mut values = vec![format.store(conv.clear_depth()); (w * h) as usize];
+    // The format's store and the depth test, chosen once for the pass (each a few branch-free
+    // operations, so that the per-span loop below vectorises).
+    let max = format.fixed_bits().map(|n| f64::from((1u32 << n) - 1));
+    let forward = conv.toward_far() > 0.0;
+    for_each_band(
+        &mut values,
+        w as usize,
+        1,
+        tris,
+        false,
+        |rows, band, touching| {
+            let mut depths = Vec::new();
+            for (_, t) in touching {
+                let offset = if factor != 0.0 || units != 0.0 {
+                    polygon_offset(t, format, factor, units, clamp)
+                } else {
+                    0.0
+                };
+                let offset = f64::from(sign) * offset;
+                t.scan_spans(rows.clone(), |span| {
+                    let start = (span.y - rows.start) as usize * w as usize + span.x as usize;
+                    let texels = &mut band[start..start + span.len];
+                    span.depths(t, &mut depths);
+                    match (packed, max) {
+                        (true, _) => depth_test_run(texels, &depths, offset, forward, |z| z),
+                        (false, Some(max)) => {
+                            let inv = 1.0 / max;
+                            depth_test_run(texels, &depths, offset, forward, |z| {
+                                store_fixed(z, max, inv)
+                            })
+                        }
+                        (false, None) => depth_test_run(texels, &depths, offset, forward, |z| z),
+                    }
+                });
+            }
+        },
+    );
+    values
 }
 
 /// One span's fragments through the offset, the clamp to the depth range, the format's

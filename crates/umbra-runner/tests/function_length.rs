@@ -129,14 +129,18 @@ fn functions(file: &Path, src: &str) -> Vec<Function> {
             .collect();
         // From the `fn`, the first `{` opens the body, unless a `;` comes first (a
         // declaration in a trait).
+        // A `;` inside the signature's brackets (`[[T; 3]]`) is not the end of a declaration.
         let mut depth = 0usize;
+        let mut brackets = 0usize;
         let mut opened = false;
         let mut end = None;
         'scan: for (m, l) in lines.iter().enumerate().skip(n) {
             let text = if m == n { &l[at..] } else { l };
             for ch in text.chars() {
                 match ch {
-                    ';' if !opened => break 'scan,
+                    '(' | '[' if !opened => brackets += 1,
+                    ')' | ']' if !opened => brackets = brackets.saturating_sub(1),
+                    ';' if !opened && brackets == 0 => break 'scan,
                     '{' => {
                         opened = true;
                         depth += 1;
@@ -255,10 +259,10 @@ fn no_function_is_longer_than_the_limit() {
 
 #[test]
 fn the_counter_sees_through_literals_and_comments() {
-    let src = "fn a() {\n    let s = \"}}{\";\n    let c = '}';\n    // }\n    /* } */\n    let r = r#\"}\"#;\n    let l: &'static str = s;\n}\nfn b();\nfn c() { }\n";
+    let src = "fn z(x: [[u8; 3]; 2]) {\n    x;\n}\nfn a() {\n    let s = \"}}{\";\n    let c = '}';\n    // }\n    /* } */\n    let r = r#\"}\"#;\n    let l: &'static str = s;\n}\nfn b();\nfn c() { }\n";
     let f = functions(Path::new("x.rs"), src);
     let got: Vec<(&str, usize)> = f.iter().map(|f| (f.name.as_str(), f.lines)).collect();
-    assert_eq!(got, [("a", 8), ("c", 1)]);
+    assert_eq!(got, [("z", 3), ("a", 8), ("c", 1)]);
     // A function over the limit is found.
     let long = format!("fn long() {{\n{}}}\n", "    x();\n".repeat(LIMIT));
     let f = functions(Path::new("x.rs"), &long);
