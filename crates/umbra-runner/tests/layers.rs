@@ -334,3 +334,32 @@ fn only_the_registry_and_its_neighbours_name_the_backend_crates() {
         "{naming:?}"
     );
 }
+
+/// One scheduler (`harness::scheduler`): no command starts or feeds a worker itself, so
+/// restarts, timeouts, reruns and flakes are handled in one place.
+#[test]
+fn only_the_scheduler_starts_workers() {
+    let src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut stack = vec![src.clone()];
+    let mut starting = Vec::new();
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).expect("read src").flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+                continue;
+            }
+            let text = std::fs::read_to_string(&p).unwrap_or_default();
+            let code = text.split("#[cfg(test)]").next().unwrap_or("");
+            if code.contains("Worker::start") || code.contains("pool::Worker") {
+                starting.push(p.strip_prefix(&src).unwrap_or(&p).display().to_string());
+            }
+        }
+    }
+    starting.sort();
+    assert_eq!(
+        starting,
+        ["harness/pool.rs", "harness/scheduler.rs"],
+        "start workers through harness::scheduler::Session"
+    );
+}

@@ -28,29 +28,23 @@ use std::collections::{BTreeMap, VecDeque};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::cli::ConformanceArgs;
 use crate::exit::{Error, Exit, Outcome};
-use crate::harness::pool::{Reply, Worker};
-use crate::harness::worker::{Hello, Request, RunReport, RunVerdict};
+use crate::harness::scheduler::{Attempt, Session};
+use crate::harness::worker::{Hello, Request};
 use crate::judge::expectations::Expectations;
 use crate::judge::falls_along::FallsAlong;
 use crate::run_dir::RunDir;
 use umbra_report::escape::{shell_word, term};
-use umbra_report::{Metrics, RunResult, Status, TimeBudget};
+use umbra_report::{RunResult, Status, TimeBudget};
 
 /// A point's swept values, `(path, value)` in axis order.
 type SweepValues = Vec<(String, serde_json::Value)>;
 
 /// A loaded point: its id, its swept values and its case as JSON.
 type PointPlan = (String, SweepValues, std::sync::Arc<serde_json::Value>);
-
-/// Worker start-up (spawn to hello) and, within it, context or device creation, summed over
-/// every worker of the run, in µs: part of the harness overhead the summary reports.
-static WORKER_START_US: AtomicU64 = AtomicU64::new(0);
-static CONTEXT_US: AtomicU64 = AtomicU64::new(0);
 
 /// One planned run.
 #[derive(Clone, Debug)]
@@ -169,8 +163,8 @@ pub fn run_in(args: &ConformanceArgs, run_dir: Option<RunDir>, extra: Option<Ext
     let budget = TimeBudget::of(
         &gathered.results,
         started.elapsed(),
-        Duration::from_micros(WORKER_START_US.load(Ordering::Relaxed)),
-        Duration::from_micros(CONTEXT_US.load(Ordering::Relaxed)),
+        crate::harness::scheduler::start_up_time().0,
+        crate::harness::scheduler::start_up_time().1,
     );
     let record = record(&opts, names, falls_along, &gathered, &budget);
     if let Err(e) = write_reports(&gathered, &settings, &budget, &run_dir, &record, extra) {
@@ -664,30 +658,14 @@ fn execute(
         let offset = k * runs.len() / n;
         runs.rotate_left(offset);
     }
-    let queues = Mutex::new(Queues {
-        remaining: groups,
-        busy: BTreeMap::new(),
-    });
     let done = Mutex::new(Collected {
         results,
         progress: crate::harness::progress::Progress::new(total),
         total,
         ..Default::default()
     });
-    std::thread::scope(|s| {
-        for _ in 0..jobs {
-            s.spawn(|| {
-                // Pick a backend in a function of its own, so the lock is released before its
-                // runs start (a `while let` on the lock would hold it throughout).
-                let next = || queues.lock().ok().and_then(|mut q| q.pick());
-                while let Some((backend, first)) = next() {
-                    run_group(&backend, &queues, first, settings, &done, total);
-                    if let Ok(mut q) = queues.lock() {
-                        q.release(&backend);
-                    }
-                }
-            });
-        }
+    crate::harness::scheduler::run_queues(groups, jobs, |backend, first, next| {
+        run_group(backend, next, first, settings, &done, total)
     });
     done.into_inner()
         .map_err(|_| Error::new("a worker thread panicked"))
@@ -1261,96 +1239,24 @@ struct Collected {
 
 type Done = Mutex<Collected>;
 
-/// The runs not started yet, per backend, and how many job threads work on each backend.
-///
-/// Each job thread works on one backend at a time, in a worker of its own, taking that
-/// backend's runs one by one. A thread that runs out picks the backend with the most runs
-/// left that nobody works on; when every backend with runs left is taken, it joins the one
-/// with the most (a second worker of the same driver). So a slow driver's runs (softpipe's
-/// GLES 2 path is half the catalogue's worker time) are shared at the end instead of keeping
-/// one core busy long after the others are idle: the wall time comes within about one run of
-/// the worker time over `--jobs`.
-struct Queues {
-    remaining: BTreeMap<String, VecDeque<Planned>>,
-    busy: BTreeMap<String, usize>,
-}
-
-impl Queues {
-    /// A backend to work on, and whether this is its first worker (which reports its driver).
-    fn pick(&mut self) -> Option<(String, bool)> {
-        // Interrupted: no new run starts; those in flight finish.
-        if crate::harness::interrupt::requested().is_some() {
-            return None;
-        }
-        let left = |b: &String| self.remaining.get(b).map_or(0, VecDeque::len);
-        let busy = |b: &String| self.busy.get(b).copied().unwrap_or(0);
-        let free = self
-            .remaining
-            .keys()
-            .filter(|b| left(b) > 0 && busy(b) == 0)
-            .max_by_key(|b| left(b));
-        // Joining a backend is worth a worker only if it has more runs left than workers on it.
-        let backend = match free {
-            Some(b) => b.clone(),
-            None => self
-                .remaining
-                .keys()
-                .filter(|b| left(b) > busy(b))
-                .max_by_key(|b| left(b))?
-                .clone(),
-        };
-        let first = !self.busy.contains_key(&backend);
-        *self.busy.entry(backend.clone()).or_default() += 1;
-        Some((backend, first))
-    }
-
-    /// The next run of `backend`, if any is left.
-    fn next_run(&mut self, backend: &str) -> Option<Planned> {
-        if crate::harness::interrupt::requested().is_some() {
-            return None;
-        }
-        self.remaining.get_mut(backend)?.pop_front()
-    }
-
-    fn release(&mut self, backend: &str) {
-        if let Some(n) = self.busy.get_mut(backend) {
-            *n = n.saturating_sub(1);
-        }
-    }
-}
-
-/// Runs `backend`'s runs from `queues`, one by one, in a worker of this thread's own; `first`:
-/// this is the backend's first worker, whose hello goes into drivers.txt and the report.
+/// Runs `backend`'s runs as `next` hands them out, one by one, in a session of this thread's
+/// own; `first`: this is the backend's first worker, whose hello goes into drivers.txt and
+/// the report.
 fn run_group(
     backend: &str,
-    queues: &Mutex<Queues>,
+    next: &dyn Fn() -> Option<Planned>,
     first: bool,
     settings: &Settings,
     done: &Done,
     total: usize,
 ) {
     let env = group_env(backend, settings);
-    let start_worker = || {
-        let t = Instant::now();
-        let w = Worker::start(backend, &env, settings.timeout);
-        WORKER_START_US.fetch_add(t.elapsed().as_micros() as u64, Ordering::Relaxed);
-        if let Some(ms) = w
-            .as_ref()
-            .ok()
-            .and_then(|w| w.hello.ready().map(|r| r.create_ms))
-        {
-            CONTEXT_US.fetch_add((ms * 1e3) as u64, Ordering::Relaxed);
-        }
-        w
-    };
-    let mut worker = start_worker();
+    let mut session = Session::start(backend, &env, settings.timeout);
     // A worker that cannot even be started (our own binary missing or replaced mid-run) is
     // the harness's failure, not the backend's: its runs crash rather than skip, so that it
     // can never read as a clean run.
-    let (hello, start_error) = match &worker {
-        Ok(w) => (w.hello.clone(), None),
-        Err(e) => (Hello::Unavailable(e.clone()), Some(e.clone())),
-    };
+    let hello = session.hello().clone();
+    let start_error = session.start_error().map(str::to_string);
     // Only the lines that can name this backend's runs, so drivers.txt counts its own.
     let own = settings.expectations.for_backend(backend);
     let facts = hello.facts();
@@ -1373,10 +1279,9 @@ fn run_group(
             d.refused.push(format!("{backend}: {why}"));
         }
     }
-    let next = || queues.lock().ok().and_then(|mut q| q.next_run(backend));
     while let Some(p) = next() {
         let t0 = Instant::now();
-        let outcome = group.attempt_point(&p, &mut worker, &start_worker);
+        let outcome = group.attempt_point(&p, &mut session);
         let (result, storage) = group.result_of(&p, outcome, t0);
         if let Ok(mut d) = done.lock() {
             d.finished += 1;
@@ -1509,12 +1414,7 @@ impl Group<'_> {
     /// Runs point `p` on the group's worker (started again if it died), once more if it
     /// failed (a different answer is a flake); a group that cannot run crashes or skips each
     /// point with the reason.
-    fn attempt_point(
-        &self,
-        p: &Planned,
-        worker: &mut Result<Worker, String>,
-        start_worker: &dyn Fn() -> Result<Worker, String>,
-    ) -> Attempt {
+    fn attempt_point(&self, p: &Planned, session: &mut Session) -> Attempt {
         let settings = self.settings;
         match (&self.start_error, &self.unavailable) {
             _ if self.refused.is_some() => Attempt::bare(
@@ -1544,24 +1444,7 @@ impl Group<'_> {
                     deviation: Some(self.expectations.deviations(&p.name(), &p.case).names())
                         .filter(|n| !n.is_empty()),
                 };
-                let first = attempt(worker, start_worker, &req, settings.timeout);
-                if !first.status.is_failure() {
-                    return first;
-                }
-                let second = attempt(worker, start_worker, &req, settings.timeout);
-                if second.status != Status::Pass {
-                    return first;
-                }
-                Attempt {
-                    status: Status::Flake,
-                    reason: format!(
-                        "failed first ({}: {}), passed on rerun",
-                        first.status, first.reason
-                    ),
-                    // The evidence is the failed attempt's.
-                    stderr: first.stderr,
-                    ..second
-                }
+                session.attempt_or_rerun(&req)
             }
         }
     }
@@ -1583,6 +1466,7 @@ impl Group<'_> {
             under_deviation,
             storage,
             stderr,
+            measured: _,
         } = outcome;
         let unchecked: &[umbra_report::check::Check] =
             if settings.golden.is_none() || settings.no_goldens.contains(&p.backend) {
@@ -1660,117 +1544,7 @@ fn reproduce_command(p: &Planned) -> String {
     )
 }
 
-/// What one attempt at a run gave.
-pub(crate) struct Attempt {
-    pub(crate) status: Status,
-    pub(crate) reason: String,
-    metrics: Option<Metrics>,
-    details: String,
-    pub(crate) failed: Vec<umbra_report::FailedCheck>,
-    golden: Option<String>,
-    fingerprint: Option<umbra_compare::consensus::Fingerprint>,
-    pub(crate) under_deviation: Option<Vec<umbra_report::FailedCheck>>,
-    storage: Option<String>,
-    /// What the worker wrote on stderr during the attempt ([`Worker::stderr`]).
-    pub(crate) stderr: String,
-}
-
 /// Whether a run's status is a plain pass (its stderr is not kept).
 fn result_passes(status: &Status) -> bool {
     matches!(status, Status::Pass)
-}
-
-impl Attempt {
-    fn bare(status: Status, reason: String) -> Attempt {
-        Attempt {
-            status,
-            reason,
-            metrics: None,
-            details: String::new(),
-            failed: Vec::new(),
-            golden: None,
-            fingerprint: None,
-            under_deviation: None,
-            storage: None,
-            stderr: String::new(),
-        }
-    }
-}
-
-/// One attempt at a run, restarting the worker first if the last one died.
-pub(crate) fn attempt(
-    worker: &mut Result<Worker, String>,
-    start: &dyn Fn() -> Result<Worker, String>,
-    req: &Request,
-    limit: Duration,
-) -> Attempt {
-    if worker.is_err() {
-        *worker = start();
-    }
-    let w = match worker {
-        Ok(w) => w,
-        Err(e) => return Attempt::bare(Status::Crash, format!("no worker: {e}")),
-    };
-    let reply = w.run(req, limit);
-    let stderr = w.stderr();
-    let mut a = match reply {
-        Reply::Report(r) => from_report(*r),
-        Reply::Crashed(how) => {
-            *worker = Err(how.clone());
-            Attempt::bare(
-                Status::Crash,
-                format!("the worker died: {how}{}", last_words(&stderr)),
-            )
-        }
-        Reply::TimedOut => {
-            *worker = Err("timed out".into());
-            Attempt::bare(
-                Status::Timeout,
-                format!(
-                    "no answer within {} s; the worker was killed{}",
-                    limit.as_secs(),
-                    last_words(&stderr)
-                ),
-            )
-        }
-    };
-    a.stderr = stderr;
-    a
-}
-
-/// The last stderr line of a worker that died, for its run's one-line reason (the whole tail
-/// is the run's `stderr`).
-fn last_words(stderr: &str) -> String {
-    match stderr.lines().rev().find(|l| !l.trim().is_empty()) {
-        Some(l) => format!("; its last stderr line: {}", l.trim()),
-        None => String::new(),
-    }
-}
-
-fn from_report(r: RunReport) -> Attempt {
-    let status = match r.outcome {
-        RunVerdict::Pass => Status::Pass,
-        RunVerdict::Skip => Status::Skip(r.reason.clone()),
-        RunVerdict::Fail => Status::Fail,
-    };
-    let mut reason = r.reason;
-    if status == Status::Fail && !r.failed.is_empty() {
-        let _ = write!(
-            reason,
-            " [failed: {}]",
-            crate::judge::expectations::signature(&r.failed)
-        );
-    }
-    Attempt {
-        status,
-        reason,
-        metrics: r.metrics,
-        details: r.details,
-        failed: r.failed,
-        golden: r.golden,
-        fingerprint: r.fingerprint,
-        under_deviation: r.under_deviation,
-        storage: r.storage,
-        stderr: String::new(),
-    }
 }

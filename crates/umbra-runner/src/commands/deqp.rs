@@ -44,7 +44,7 @@ use std::time::Duration;
 use umbra_report::Status;
 
 use crate::exit::{Error, Exit, Outcome};
-use crate::harness::pool::Worker;
+use crate::harness::scheduler;
 use crate::harness::worker::Request;
 use crate::judge::expectations::{Expectations, Expected};
 
@@ -234,7 +234,7 @@ impl CaseIndex {
 /// Runs each test in a worker of its backend and prints its status as dEQP does (a pass:
 /// each test's status is deqp-runner's to read).
 fn run(names: &[String], index: &CaseIndex, opts: &RunOptions) -> Outcome {
-    let mut session = Session {
+    let mut session = Runs {
         cache: crate::judge::judge_cache::prepare(&opts.cache),
         timeout: Duration::from_secs(300),
         workers: BTreeMap::new(),
@@ -293,16 +293,16 @@ struct RunOptions {
     expectations: Expectations,
 }
 
-/// The workers of a run (one per backend, started again after a crash) and each backend's
-/// driver facts (which select the expectations that apply).
-struct Session {
+/// The sessions of a run (one per backend, its worker started again after a crash) and each
+/// backend's driver facts (which select the expectations that apply).
+struct Runs {
     cache: PathBuf,
     timeout: Duration,
-    workers: BTreeMap<String, Result<Worker, String>>,
+    workers: BTreeMap<String, scheduler::Session>,
     facts: BTreeMap<String, crate::judge::expectations::DriverFacts>,
 }
 
-impl Session {
+impl Runs {
     /// Runs one test in its backend's worker and says its dEQP status and detail. A failure
     /// that an expectation by cause explains (`@when`, a modelled deviation, judged again
     /// under it) is `QualityWarning`, which deqp-runner counts as a success (Warn) and keeps
@@ -332,26 +332,25 @@ impl Session {
             );
         }
         let timeout = self.timeout;
-        let start = || Worker::start(backend, &env, timeout);
-        let worker = self
+        let session = self
             .workers
             .entry(backend.to_string())
-            .or_insert_with(&start);
+            .or_insert_with(|| scheduler::Session::start(backend, &env, timeout));
         // A backend that cannot run here says why in its hello: not supported (a missing
         // driver, a device the machine lacks) or refused (a Mesa build without its driver),
-        // never a crash of a worker that exited as it should.
-        if let Ok(w) = worker.as_ref() {
-            if let Some(why) = w.hello.unavailable() {
+        // never a crash of a worker that exited as it should. A worker that could not be
+        // started at all is tried again by the run (its failure is a crash).
+        if session.start_error().is_none() {
+            let hello = session.hello();
+            if let Some(why) = hello.unavailable() {
                 return ("NotSupported", format!("{backend} is unavailable: {why}"));
             }
-            if let Some(why) = w.hello.refused() {
+            if let Some(why) = hello.refused() {
                 return ("InternalError", why.to_string());
             }
-        }
-        if let Ok(w) = worker.as_ref() {
             self.facts
                 .entry(backend.to_string())
-                .or_insert_with(|| w.hello.facts());
+                .or_insert_with(|| hello.facts());
         }
         let expectations = self
             .facts
@@ -369,7 +368,7 @@ impl Session {
             gallery: None,
             deviation: Some(expectations.deviations(&run, json).names()).filter(|n| !n.is_empty()),
         };
-        let a = crate::commands::conformance::attempt(worker, &start, &req, timeout);
+        let a = session.attempt(&req);
         let raw = deqp_status(&a.status);
         let (status, why) = expectations.apply(
             &run,
@@ -413,13 +412,14 @@ fn list(argv: &[String], index: &CaseIndex) -> Outcome {
     let expectations = load_expectations(argv)?;
     for backend in backends.iter().filter(|b| *b != "ref") {
         // The driver's facts (its Mesa version) select the expectations that apply.
-        let facts = match Worker::start(
+        let session = scheduler::Session::start(
             backend,
             &crate::harness::registry::worker_env(backend),
             Duration::from_secs(60),
-        ) {
-            Ok(w) => w.hello.facts(),
-            Err(e) => return Err(Error::new(format!("{backend}: no worker ({e})"))),
+        );
+        let facts = match session.start_error() {
+            None => session.hello().facts(),
+            Some(e) => return Err(Error::new(format!("{backend}: no worker ({e})"))),
         };
         let expectations = expectations.for_driver(&facts);
         for (case, (_, points)) in &index.0 {

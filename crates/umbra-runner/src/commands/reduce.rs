@@ -37,7 +37,8 @@ use umbra_report::check::Check;
 
 use crate::cli::ReduceArgs;
 use crate::exit::{Error, Exit, Outcome};
-use crate::harness::pool::{Reply, Worker};
+use crate::harness::pool::Reply;
+use crate::harness::scheduler::Session;
 use crate::harness::worker::{Request, RunVerdict};
 
 /// How a run ended, in the terms "fails the same way" compares.
@@ -71,8 +72,8 @@ impl std::fmt::Display for Verdict {
 /// Runs candidates on the backend and on the reference.
 struct Judge {
     backend: String,
-    worker: Option<Worker>,
-    reference: Option<Worker>,
+    worker: Option<Session>,
+    reference: Option<Session>,
     timeout: Duration,
     dir: PathBuf,
     tried: usize,
@@ -106,15 +107,14 @@ impl Judge {
         };
         if slot.is_none() {
             let env = crate::harness::registry::worker_env(&id);
-            match Worker::start(&id, &env, self.timeout) {
-                Ok(w) => {
-                    if let Some(u) = w.hello.unavailable().or(w.hello.refused()) {
-                        return Verdict::Other(format!("{id} cannot run: {u}"));
-                    }
-                    *slot = Some(w);
-                }
-                Err(e) => return Verdict::Other(format!("no worker for {id}: {e}")),
+            let session = Session::start(&id, &env, self.timeout);
+            if let Some(e) = session.start_error() {
+                return Verdict::Other(format!("no worker for {id}: {e}"));
             }
+            if let Some(u) = session.hello().unavailable().or(session.hello().refused()) {
+                return Verdict::Other(format!("{id} cannot run: {u}"));
+            }
+            *slot = Some(session);
         }
         let Some(w) = slot.as_mut() else {
             return Verdict::Other("no worker".into());
@@ -129,8 +129,10 @@ impl Judge {
             gallery: None,
             deviation: None,
         };
-        let v = match w.run(&req, self.timeout) {
-            Reply::Report(r) => match r.outcome {
+        // A worker that crashed or timed out is started again by the session, for the next
+        // candidate.
+        let v = match w.reply(&req).map(|(reply, _)| reply) {
+            Ok(Reply::Report(r)) => match r.outcome {
                 RunVerdict::Pass => Verdict::Pass,
                 RunVerdict::Fail if r.failed.is_empty() => {
                     Verdict::Other(format!("error: {}", r.reason))
@@ -144,14 +146,9 @@ impl Judge {
                 ),
                 RunVerdict::Skip => Verdict::Other(format!("{}: {}", r.outcome, r.reason)),
             },
-            Reply::Crashed(how) => {
-                *slot = None;
-                Verdict::Crash(how)
-            }
-            Reply::TimedOut => {
-                *slot = None;
-                Verdict::Crash("timeout".into())
-            }
+            Ok(Reply::Crashed(how)) => Verdict::Crash(how),
+            Ok(Reply::TimedOut) => Verdict::Crash("timeout".into()),
+            Err(e) => Verdict::Other(format!("no worker for {id}: {e}")),
         };
         let _ = std::fs::remove_file(&file);
         v

@@ -30,7 +30,8 @@ use umbra_case::fault::{Fault, Param};
 
 use crate::cli::{SelftestArgs, SelftestMode};
 use crate::exit::{Error, Exit, Outcome};
-use crate::harness::pool::{Reply, Worker};
+use crate::harness::pool::Reply;
+use crate::harness::scheduler::Session;
 use crate::harness::worker::Request;
 use crate::judge::expectations::Expectations;
 
@@ -598,10 +599,8 @@ pub(crate) struct How<'a> {
 /// A worker running `backend` with one fault on, and the expectations of its driver.
 pub(crate) struct Faulted {
     backend: String,
-    env: Vec<(String, String)>,
-    worker: Worker,
+    session: Session,
     expectations: Expectations,
-    timeout: Duration,
     verbose: bool,
     fault: Fault,
 }
@@ -614,6 +613,8 @@ pub(crate) enum Seen {
     Passed,
     /// The run crashed or timed out (a catch) and the worker could not be restarted: stop.
     CaughtThenGone(String),
+    /// No worker could be started for the point (it did not run): stop.
+    Gone(String),
 }
 
 impl Faulted {
@@ -629,21 +630,21 @@ impl Faulted {
                 how.cache.to_string_lossy().into_owned(),
             ),
         ]);
-        let worker = Worker::start(backend, &env, how.timeout)
-            .map_err(|e| (format!("no worker: {e}"), false))?;
-        if let Some(u) = worker.hello.unavailable() {
+        let session = Session::start(backend, &env, how.timeout);
+        if let Some(e) = session.start_error() {
+            return Err((format!("no worker: {e}"), false));
+        }
+        if let Some(u) = session.hello().unavailable() {
             return Err((format!("backend unavailable: {u}"), false));
         }
-        if let Some(why) = worker.hello.refused() {
+        if let Some(why) = session.hello().refused() {
             return Err((format!("refused the Mesa build: {why}"), true));
         }
-        let expectations = how.expectations.for_driver(&worker.hello.facts());
+        let expectations = how.expectations.for_driver(&session.hello().facts());
         Ok(Faulted {
             backend: backend.to_string(),
-            env,
-            worker,
+            session,
             expectations,
-            timeout: how.timeout,
             verbose: how.verbose,
             fault,
         })
@@ -664,15 +665,17 @@ impl Faulted {
             deviation: Some(self.expectations.deviations(&name, &case).names())
                 .filter(|n| !n.is_empty()),
         };
-        let restart =
-            |f: &mut Faulted, how: String| match Worker::start(&f.backend, &f.env, f.timeout) {
-                Ok(w) => {
-                    f.worker = w;
-                    Seen::Caught(how)
-                }
-                Err(_) => Seen::CaughtThenGone(how),
-            };
-        match self.worker.run(&req, self.timeout) {
+        // A crash or a timeout is a catch; the session starts a fresh worker for the next
+        // point, and a worker that does not come up ends the hunt.
+        let restart = |f: &mut Faulted, how: String| match f.session.restart() {
+            Ok(()) => Seen::Caught(how),
+            Err(_) => Seen::CaughtThenGone(how),
+        };
+        let reply = match self.session.reply(&req) {
+            Ok((reply, _)) => reply,
+            Err(e) => return Seen::Gone(e),
+        };
+        match reply {
             Reply::Report(r) if r.outcome == crate::harness::worker::RunVerdict::Fail => {
                 let (status, _) = self.expectations.apply(
                     &name,
@@ -752,6 +755,11 @@ fn hunt(
             Seen::CaughtThenGone(how) => {
                 h.caught.push((point.id(), how));
                 h.note = Some("the worker could not be restarted after a crash".into());
+                break;
+            }
+            Seen::Gone(why) => {
+                h.tried -= 1;
+                h.note = Some(format!("no worker could be started: {why}"));
                 break;
             }
         }

@@ -24,7 +24,8 @@ use serde_json::{Value, json};
 use crate::cli::SweepArgs;
 use crate::exit::{Error, Exit, Outcome};
 use crate::harness::measure::Measured;
-use crate::harness::pool::{Reply, Worker};
+use crate::harness::pool::Reply;
+use crate::harness::scheduler::Session;
 use crate::harness::worker::{Request, RunVerdict};
 use umbra_report::escape::esc;
 
@@ -367,27 +368,24 @@ impl Sweep<'_> {
             crate::judge::judge_cache::ENV.into(),
             self.judge_cache.to_string_lossy().into_owned(),
         ));
-        let start = || Worker::start(backend, &env, timeout);
-        let mut worker = start();
+        // One session: a worker that crashed or timed out is started again for the next point.
+        let mut session = Session::start(backend, &env, timeout);
         for (index, t) in self.plan.iter().enumerate() {
             let Some(t) = t else { continue };
             *done += 1;
-            let w = match &mut worker {
-                Ok(w) => w,
-                Err(e) => {
-                    rows.push(Row {
-                        backend: backend.to_string(),
-                        technique: t.clone(),
-                        result: Err(format!("cannot start the worker: {e}")),
-                        skipped: false,
-                    });
-                    continue;
-                }
-            };
-            if let Some(why) = w.hello.refused() {
+            if let Err(e) = session.restart() {
+                rows.push(Row {
+                    backend: backend.to_string(),
+                    technique: t.clone(),
+                    result: Err(format!("cannot start the worker: {e}")),
+                    skipped: false,
+                });
+                continue;
+            }
+            if let Some(why) = session.hello().refused() {
                 return Err(Error::new(why));
             }
-            if let Some(why) = w.hello.unavailable() {
+            if let Some(why) = session.hello().unavailable() {
                 rows.push(Row {
                     backend: backend.to_string(),
                     technique: t.clone(),
@@ -406,20 +404,17 @@ impl Sweep<'_> {
                 gallery: None,
                 deviation: None,
             };
-            let (result, skipped) = match w.run(&req, timeout) {
-                Reply::Report(r) => match (r.outcome, r.measured) {
+            let (result, skipped) = match session.reply(&req) {
+                Ok((Reply::Report(r), _)) => match (r.outcome, r.measured) {
                     (RunVerdict::Pass, Some(m)) => (Ok(m), false),
                     (RunVerdict::Skip, _) => (Err(r.reason), true),
                     _ => (Err(r.reason), false),
                 },
-                Reply::Crashed(why) => {
-                    worker = start();
-                    (Err(format!("the worker crashed: {why}")), false)
-                }
-                Reply::TimedOut => {
-                    worker = start();
+                Ok((Reply::Crashed(why), _)) => (Err(format!("the worker crashed: {why}")), false),
+                Ok((Reply::TimedOut, _)) => {
                     (Err(format!("no answer in {} s", timeout.as_secs())), false)
                 }
+                Err(e) => (Err(format!("cannot start the worker: {e}")), false),
             };
             let line = match &result {
                 Ok(m) => format!(
@@ -459,11 +454,15 @@ pub fn measure_backends(
         .map(|b| {
             let mut env = crate::harness::registry::worker_env(b);
             env.extend(extra_env.iter().cloned());
-            let result = Worker::start_exe(exe, b, &env, timeout).and_then(|mut w| {
-                if let Some(why) = w.hello.unavailable() {
+            let mut session = Session::start_exe(exe, b, &env, timeout);
+            let result = (|| {
+                if let Some(e) = session.start_error() {
+                    return Err(e.to_string());
+                }
+                if let Some(why) = session.hello().unavailable() {
                     return Err(format!("unavailable: {why}"));
                 }
-                if let Some(why) = w.hello.refused() {
+                if let Some(why) = session.hello().refused() {
                     return Err(format!("refused the Mesa build: {why}"));
                 }
                 let req = Request {
@@ -476,12 +475,12 @@ pub fn measure_backends(
                     gallery: None,
                     deviation: None,
                 };
-                match w.run(&req, timeout) {
+                match session.reply(&req)?.0 {
                     Reply::Report(r) => r.measured.ok_or(r.reason),
                     Reply::Crashed(why) => Err(format!("the worker crashed: {why}")),
                     Reply::TimedOut => Err("timed out".into()),
                 }
-            });
+            })();
             (b.clone(), result)
         })
         .collect()

@@ -116,6 +116,8 @@ fn sweep(backend: &str, param: Param, sign: f64, points: &[Point], how: &How) ->
                     break;
                 }
                 Seen::Passed => {}
+                // No worker: this magnitude was not measured, nor can a smaller one be.
+                Seen::Gone(_) => break,
             }
         }
         match hit {

@@ -1,7 +1,8 @@
 //! Orchestration: backends by id ([`registry`], with the test doubles in [`fake`]), the Mesa
 //! build a worker runs on ([`mesa_build`], and its own C library where it carries one:
 //! [`own_libc`]), one process per backend ([`worker`], [`child`]), which dies with its parent
-//! ([`orphan`]), kept in a [`pool`] under a memory limit ([`memory_limit`]), sweep timings ([`measure`]) and the
+//! ([`orphan`]), kept in a [`pool`] under a memory limit ([`memory_limit`]) and fed by the one
+//! [`scheduler`] every command uses (sessions that restart a dead worker, reruns, queues), sweep timings ([`measure`]) and the
 //! terminal's progress line ([`progress`]). Uses the judge; knows no command.
 
 pub mod child;
@@ -15,5 +16,6 @@ pub mod own_libc;
 pub mod pool;
 pub mod progress;
 pub mod registry;
+pub mod scheduler;
 pub mod stderr_log;
 pub mod worker;

@@ -1,0 +1,429 @@
+//! The one scheduler every command runs its requests through: requests in, results out.
+//!
+//! - [`Session`]: one backend's worker across many requests. It starts the worker (timing
+//!   the start-up), keeps the first worker's hello (what the driver is, or why it cannot
+//!   run), and restarts a worker that died or timed out before the next request, so a crash
+//!   or a hang costs one run. [`Session::attempt`] turns a reply into an [`Attempt`] (a
+//!   report's status, a crash with the worker's last stderr line, a timeout), and
+//!   [`Session::attempt_or_rerun`] adds the rerun policy: a run that fails is run once more,
+//!   and a pass then makes it a flake, with the failed attempt's evidence kept. Commands
+//!   that read replies their own way (a sweep's timings, the self-test's catches, a
+//!   reduction's verdicts) ask [`Session::reply`], which restarts the same way.
+//! - [`run_queues`]: a plan's requests grouped by backend, `jobs` threads each working on
+//!   one backend at a time in a session of its own, a thread that runs out joining the
+//!   backend with the most runs left, no new run after an interrupt.
+//!
+//! The conformance run, deqp, the self-test, the sweep and reduce all use it; what a command
+//! does with a result (expectations, catches, timings) stays the command's.
+
+use std::collections::{BTreeMap, VecDeque};
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+use umbra_report::{Metrics, Status};
+
+use crate::harness::pool::{Reply, Worker};
+use crate::harness::worker::{Hello, Request, RunReport, RunVerdict};
+
+/// Worker start-up (spawn to hello), summed over every session of this process, in µs.
+static WORKER_START_US: AtomicU64 = AtomicU64::new(0);
+/// Within it, context or device creation (the hello's `create_ms`), in µs.
+static CONTEXT_US: AtomicU64 = AtomicU64::new(0);
+
+/// The time every session's workers spent starting, and within it creating their contexts
+/// or devices: part of the harness overhead a conformance run reports.
+pub fn start_up_time() -> (Duration, Duration) {
+    (
+        Duration::from_micros(WORKER_START_US.load(Ordering::Relaxed)),
+        Duration::from_micros(CONTEXT_US.load(Ordering::Relaxed)),
+    )
+}
+
+/// One attempt at a run, as the worker's reply (or its death) left it.
+#[derive(Debug)]
+pub struct Attempt {
+    /// Pass, Fail, Skip (with the reason), Crash or Timeout; Flake after a rerun.
+    pub status: Status,
+    /// Why, in one line; a failure ends with its signature (`[failed: value=12]`).
+    pub reason: String,
+    /// The run's figures, where it was judged.
+    pub metrics: Option<Metrics>,
+    /// The judge's details (`--verbose`).
+    pub details: String,
+    /// The checks it failed.
+    pub failed: Vec<umbra_report::FailedCheck>,
+    /// What happened to its golden.
+    pub golden: Option<String>,
+    /// Which pixels and texels failed, for the consensus across drivers.
+    pub fingerprint: Option<umbra_compare::consensus::Fingerprint>,
+    /// The checks still failed when judged under the deviation its expectation names.
+    pub under_deviation: Option<Vec<umbra_report::FailedCheck>>,
+    /// Pictures that could not be written.
+    pub storage: Option<String>,
+    /// A sweep's timings.
+    pub measured: Option<crate::harness::measure::Measured>,
+    /// What the worker wrote on stderr during the attempt ([`Worker::stderr`]).
+    pub stderr: String,
+}
+
+impl Attempt {
+    /// An attempt that never reached a worker, or whose worker died: a status and a reason.
+    pub fn bare(status: Status, reason: String) -> Attempt {
+        Attempt {
+            status,
+            reason,
+            metrics: None,
+            details: String::new(),
+            failed: Vec::new(),
+            golden: None,
+            fingerprint: None,
+            under_deviation: None,
+            storage: None,
+            measured: None,
+            stderr: String::new(),
+        }
+    }
+
+    fn of_report(r: RunReport) -> Attempt {
+        let status = match r.outcome {
+            RunVerdict::Pass => Status::Pass,
+            RunVerdict::Skip => Status::Skip(r.reason.clone()),
+            RunVerdict::Fail => Status::Fail,
+        };
+        let mut reason = r.reason;
+        if status == Status::Fail && !r.failed.is_empty() {
+            let _ = write!(
+                reason,
+                " [failed: {}]",
+                crate::judge::expectations::signature(&r.failed)
+            );
+        }
+        Attempt {
+            status,
+            reason,
+            metrics: r.metrics,
+            details: r.details,
+            failed: r.failed,
+            golden: r.golden,
+            fingerprint: r.fingerprint,
+            under_deviation: r.under_deviation,
+            storage: r.storage,
+            measured: r.measured,
+            stderr: String::new(),
+        }
+    }
+}
+
+/// The last stderr line of a worker that died, for its run's one-line reason (the whole tail
+/// is the run's `stderr`).
+fn last_words(stderr: &str) -> String {
+    match stderr.lines().rev().find(|l| !l.trim().is_empty()) {
+        Some(l) => format!("; its last stderr line: {}", l.trim()),
+        None => String::new(),
+    }
+}
+
+/// One backend's worker across requests, restarted after a crash or a timeout.
+pub struct Session {
+    backend: String,
+    env: Vec<(String, String)>,
+    /// The per-request time limit (and the limit on a worker's start-up).
+    limit: Duration,
+    /// The `umbra` executable, where it is not this process's (benchmarks).
+    exe: Option<PathBuf>,
+    worker: Result<Worker, String>,
+    /// The first worker's hello (Unavailable with the reason when it could not start).
+    hello: Hello,
+    /// Why the first worker could not be started at all.
+    start_error: Option<String>,
+}
+
+impl Session {
+    /// Starts `backend`'s worker with `env`; `limit` bounds its start-up and each request.
+    pub fn start(backend: &str, env: &[(String, String)], limit: Duration) -> Session {
+        Session::start_with(None, backend, env, limit)
+    }
+
+    /// [`Session::start`] with the `umbra` executable given (benchmarks, whose own
+    /// executable is not `umbra`).
+    pub fn start_exe(
+        exe: &std::path::Path,
+        backend: &str,
+        env: &[(String, String)],
+        limit: Duration,
+    ) -> Session {
+        Session::start_with(Some(exe.to_path_buf()), backend, env, limit)
+    }
+
+    fn start_with(
+        exe: Option<PathBuf>,
+        backend: &str,
+        env: &[(String, String)],
+        limit: Duration,
+    ) -> Session {
+        let mut s = Session {
+            backend: backend.to_string(),
+            env: env.to_vec(),
+            limit,
+            exe,
+            worker: Err("not started".into()),
+            hello: Hello::Unavailable("it has not said hello yet".into()),
+            start_error: None,
+        };
+        s.worker = s.spawn();
+        match &s.worker {
+            Ok(w) => s.hello = w.hello.clone(),
+            Err(e) => {
+                s.hello = Hello::Unavailable(e.clone());
+                s.start_error = Some(e.clone());
+            }
+        }
+        s
+    }
+
+    /// A fresh worker, its start-up timed.
+    fn spawn(&self) -> Result<Worker, String> {
+        let t = Instant::now();
+        let w = match &self.exe {
+            Some(exe) => Worker::start_exe(exe, &self.backend, &self.env, self.limit),
+            None => Worker::start(&self.backend, &self.env, self.limit),
+        };
+        WORKER_START_US.fetch_add(t.elapsed().as_micros() as u64, Ordering::Relaxed);
+        if let Some(ms) = w
+            .as_ref()
+            .ok()
+            .and_then(|w| w.hello.ready().map(|r| r.create_ms))
+        {
+            CONTEXT_US.fetch_add((ms * 1e3) as u64, Ordering::Relaxed);
+        }
+        w
+    }
+
+    /// The backend's id.
+    pub fn backend(&self) -> &str {
+        &self.backend
+    }
+
+    /// What the first worker said: its driver, or why the backend cannot run here.
+    pub fn hello(&self) -> &Hello {
+        &self.hello
+    }
+
+    /// Why the first worker could not be started at all (this executable missing or
+    /// replaced: the harness's failure, not the backend's).
+    pub fn start_error(&self) -> Option<&str> {
+        self.start_error.as_deref()
+    }
+
+    /// Starts a fresh worker now if the last one died; `Err` when it does not come up. Where
+    /// the first worker never started, the first that does gives the session its hello.
+    pub fn restart(&mut self) -> Result<(), String> {
+        if self.worker.is_err() {
+            self.worker = self.spawn();
+            if let (Ok(w), Some(_)) = (&self.worker, &self.start_error) {
+                self.hello = w.hello.clone();
+                self.start_error = None;
+            }
+        }
+        self.worker.as_ref().map(|_| ()).map_err(String::clone)
+    }
+
+    /// Sends `req` (restarting a dead worker first) and returns the reply; a worker that
+    /// crashed or timed out is restarted before the next request. `Err`: no worker could be
+    /// started for it.
+    pub fn reply(&mut self, req: &Request) -> Result<(Reply, String), String> {
+        self.restart()?;
+        let w = self.worker.as_mut().map_err(|e| e.clone())?;
+        let reply = w.run(req, self.limit);
+        let stderr = w.stderr();
+        match &reply {
+            Reply::Crashed(how) => self.worker = Err(how.clone()),
+            Reply::TimedOut => self.worker = Err("timed out".into()),
+            Reply::Report(_) => {}
+        }
+        Ok((reply, stderr))
+    }
+
+    /// One attempt at `req`: the report, or a crash (with the worker's last stderr line) or a
+    /// timeout, each costing this run only.
+    pub fn attempt(&mut self, req: &Request) -> Attempt {
+        let (reply, stderr) = match self.reply(req) {
+            Ok(r) => r,
+            Err(e) => return Attempt::bare(Status::Crash, format!("no worker: {e}")),
+        };
+        let mut a = match reply {
+            Reply::Report(r) => Attempt::of_report(*r),
+            Reply::Crashed(how) => Attempt::bare(
+                Status::Crash,
+                format!("the worker died: {how}{}", last_words(&stderr)),
+            ),
+            Reply::TimedOut => Attempt::bare(
+                Status::Timeout,
+                format!(
+                    "no answer within {} s; the worker was killed{}",
+                    self.limit.as_secs(),
+                    last_words(&stderr)
+                ),
+            ),
+        };
+        a.stderr = stderr;
+        a
+    }
+
+    /// [`Session::attempt`], and once more if it failed: a pass then makes it a flake (the
+    /// reason says how it failed first, and the evidence is the failed attempt's); a second
+    /// failure keeps the first attempt.
+    pub fn attempt_or_rerun(&mut self, req: &Request) -> Attempt {
+        let first = self.attempt(req);
+        if !first.status.is_failure() {
+            return first;
+        }
+        let second = self.attempt(req);
+        if second.status != Status::Pass {
+            return first;
+        }
+        Attempt {
+            status: Status::Flake,
+            reason: format!(
+                "failed first ({}: {}), passed on rerun",
+                first.status, first.reason
+            ),
+            stderr: first.stderr,
+            ..second
+        }
+    }
+}
+
+/// The runs not started yet, per backend, and how many threads work on each backend.
+///
+/// A thread that runs out picks the backend with the most runs left that nobody works on;
+/// when every backend with runs left is taken, it joins the one with the most (a second
+/// worker of the same driver). So a slow driver's runs (softpipe's GLES 2 path is half the
+/// catalogue's worker time) are shared at the end instead of keeping one core busy long
+/// after the others are idle: the wall time comes within about one run of the worker time
+/// over the job count.
+struct Queues<T> {
+    remaining: BTreeMap<String, VecDeque<T>>,
+    busy: BTreeMap<String, usize>,
+}
+
+impl<T> Queues<T> {
+    /// A backend to work on, and whether this is its first thread.
+    fn pick(&mut self) -> Option<(String, bool)> {
+        // Interrupted: no new run starts; those in flight finish.
+        if crate::harness::interrupt::requested().is_some() {
+            return None;
+        }
+        let left = |b: &String| self.remaining.get(b).map_or(0, VecDeque::len);
+        let busy = |b: &String| self.busy.get(b).copied().unwrap_or(0);
+        let free = self
+            .remaining
+            .keys()
+            .filter(|b| left(b) > 0 && busy(b) == 0)
+            .max_by_key(|b| left(b));
+        // Joining a backend is worth a worker only if it has more runs left than workers on it.
+        let backend = match free {
+            Some(b) => b.clone(),
+            None => self
+                .remaining
+                .keys()
+                .filter(|b| left(b) > busy(b))
+                .max_by_key(|b| left(b))?
+                .clone(),
+        };
+        let first = !self.busy.contains_key(&backend);
+        *self.busy.entry(backend.clone()).or_default() += 1;
+        Some((backend, first))
+    }
+
+    /// The next run of `backend`, if any is left (none after an interrupt).
+    fn next_run(&mut self, backend: &str) -> Option<T> {
+        if crate::harness::interrupt::requested().is_some() {
+            return None;
+        }
+        self.remaining.get_mut(backend)?.pop_front()
+    }
+
+    fn release(&mut self, backend: &str) {
+        if let Some(n) = self.busy.get_mut(backend) {
+            *n = n.saturating_sub(1);
+        }
+    }
+}
+
+/// Runs `groups` (each backend's runs, in order) on `jobs` threads: each thread takes a
+/// backend ([`Queues`]) and calls `work(backend, first, next)`, where `first` says it is the
+/// backend's first thread and `next` hands out the backend's runs one by one until none is
+/// left (or an interrupt was asked for). `work` opens its own [`Session`].
+pub fn run_queues<T: Send>(
+    groups: BTreeMap<String, VecDeque<T>>,
+    jobs: usize,
+    work: impl Fn(&str, bool, &dyn Fn() -> Option<T>) + Sync,
+) {
+    let queues = Mutex::new(Queues {
+        remaining: groups,
+        busy: BTreeMap::new(),
+    });
+    std::thread::scope(|s| {
+        for _ in 0..jobs {
+            s.spawn(|| {
+                // Pick a backend in a function of its own, so the lock is released before its
+                // runs start (a `while let` on the lock would hold it throughout).
+                let pick = || queues.lock().ok().and_then(|mut q| q.pick());
+                while let Some((backend, first)) = pick() {
+                    let next = || queues.lock().ok().and_then(|mut q| q.next_run(&backend));
+                    work(&backend, first, &next);
+                    if let Ok(mut q) = queues.lock() {
+                        q.release(&backend);
+                    }
+                }
+            });
+        }
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_thread_that_runs_out_joins_the_backend_with_the_most_left() {
+        let mut groups = BTreeMap::new();
+        groups.insert("a".to_string(), VecDeque::from([1, 2, 3, 4]));
+        groups.insert("b".to_string(), VecDeque::from([5]));
+        let mut q = Queues {
+            remaining: groups,
+            busy: BTreeMap::new(),
+        };
+        assert_eq!(q.pick(), Some(("a".into(), true)));
+        assert_eq!(q.pick(), Some(("b".into(), true)));
+        assert_eq!(q.next_run("b"), Some(5));
+        q.release("b");
+        // b is empty: the third thread joins a, which has more runs left than threads.
+        assert_eq!(q.pick(), Some(("a".into(), false)));
+        assert_eq!(q.next_run("a"), Some(1));
+    }
+
+    #[test]
+    fn every_run_is_handed_out_once() {
+        let mut groups = BTreeMap::new();
+        for b in ["x", "y", "z"] {
+            groups.insert(b.to_string(), (0..50).map(|i| (b, i)).collect());
+        }
+        let seen = Mutex::new(Vec::new());
+        run_queues(groups, 4, |backend, _, next| {
+            while let Some((b, i)) = next() {
+                assert_eq!(b, backend);
+                seen.lock().expect("lock").push((b, i));
+            }
+        });
+        let mut seen = seen.into_inner().expect("lock");
+        seen.sort();
+        assert_eq!(seen.len(), 150);
+        seen.dedup();
+        assert_eq!(seen.len(), 150);
+    }
+}
