@@ -16,15 +16,26 @@ fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-fn markdown_under(dir: &Path, out: &mut Vec<PathBuf>) {
-    for e in std::fs::read_dir(dir).expect("docs/").flatten() {
-        let p = e.path();
-        if p.is_dir() {
-            markdown_under(&p, out);
-        } else if p.extension().is_some_and(|x| x == "md") {
-            out.push(p);
+/// Every file under `dir` whose name ends with one of `ends` (build output and hidden
+/// folders left out), sorted.
+fn files_under(dir: &Path, ends: &[&str]) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).into_iter().flatten().flatten() {
+            let p = e.path();
+            let name = e.file_name().to_string_lossy().into_owned();
+            if p.is_dir() {
+                if name != "target" && !name.starts_with('.') {
+                    stack.push(p);
+                }
+            } else if ends.iter().any(|x| name.ends_with(x)) {
+                out.push(p);
+            }
         }
     }
+    out.sort();
+    out
 }
 
 /// The pages checked: the README, the book, and the READMEs of the folders users open.
@@ -35,8 +46,7 @@ fn pages() -> Vec<PathBuf> {
         root.join("cases/README.md"),
         root.join("golden/README.md"),
     ];
-    markdown_under(&root.join("docs"), &mut out);
-    out.sort();
+    out.extend(files_under(&root.join("docs"), &[".md"]));
     out
 }
 
@@ -169,9 +179,7 @@ fn the_readme_is_a_first_screen_and_the_book_is_whole() {
     assert!(readme.contains("cargo xtask conformance") && readme.contains("cargo xtask test"));
     let summary = std::fs::read_to_string(root.join("docs/SUMMARY.md")).expect("SUMMARY.md");
     let listed: BTreeSet<String> = links(&summary.replace('\n', " ")).into_iter().collect();
-    let mut pages = Vec::new();
-    markdown_under(&root.join("docs"), &mut pages);
-    for p in pages {
+    for p in files_under(&root.join("docs"), &[".md"]) {
         let rel = p
             .strip_prefix(root.join("docs"))
             .expect("under docs")
@@ -197,24 +205,10 @@ fn every_cite_of_the_catalogue_names_an_entry() {
         .filter_map(|l| l.split_once(". ").map(|(n, _)| n.to_string()))
         .collect();
     assert!(entries.len() >= 17, "{entries:?}");
-    let mut files = Vec::new();
-    fn walk(d: &Path, out: &mut Vec<PathBuf>) {
-        for e in std::fs::read_dir(d).into_iter().flatten().flatten() {
-            let p = e.path();
-            let name = e.file_name().to_string_lossy().into_owned();
-            if p.is_dir() && name != "target" && !name.starts_with('.') {
-                walk(&p, out);
-            } else if [".rs", ".json", ".md", ".txt"]
-                .iter()
-                .any(|x| name.ends_with(x))
-            {
-                out.push(p);
-            }
-        }
-    }
-    for d in ["crates", "cases", "tests", "xtask", "expectations"] {
-        walk(&root.join(d), &mut files);
-    }
+    let mut files: Vec<PathBuf> = ["crates", "cases", "tests", "xtask", "expectations"]
+        .iter()
+        .flat_map(|d| files_under(&root.join(d), &[".rs", ".json", ".md", ".txt"]))
+        .collect();
     let mut unknown = Vec::new();
     let mut cites = 0;
     // This file names what it forbids.

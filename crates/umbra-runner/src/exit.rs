@@ -81,11 +81,6 @@ impl Error {
         self.exit
     }
 
-    /// The message (empty when already said).
-    pub fn message(&self) -> &str {
-        &self.message
-    }
-
     /// Prints `error: MESSAGE` on stderr (nothing when already said) and returns the exit.
     pub fn report(&self) -> Exit {
         if !self.message.is_empty() {

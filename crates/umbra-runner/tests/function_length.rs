@@ -185,33 +185,19 @@ fn find_fn(line: &str) -> Option<usize> {
     None
 }
 
-fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return;
-    };
-    for e in entries.flatten() {
-        let p = e.path();
-        let name = e.file_name().to_string_lossy().into_owned();
-        if p.is_dir() {
-            if name != "target" && !name.starts_with('.') {
-                rust_files(&p, out);
-            }
-        } else if name.ends_with(".rs") {
-            out.push(p);
-        }
-    }
-}
-
 fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 fn all_functions() -> Vec<Function> {
     let root = workspace();
-    let mut files = Vec::new();
-    for top in ["crates", "xtask", "tests", "golden"] {
-        rust_files(&root.join(top), &mut files);
-    }
+    let mut files: Vec<PathBuf> = ["crates", "xtask", "tests", "golden"]
+        .iter()
+        .flat_map(|top| {
+            umbra_runner::judge::basis_key::files_under(&root.join(top)).expect("read sources")
+        })
+        .filter(|p| p.extension().is_some_and(|x| x == "rs"))
+        .collect();
     files.sort();
     assert!(
         files.len() > 50,

@@ -13,81 +13,89 @@ use std::path::{Path, PathBuf};
 /// Module path (`harness::worker`) → the modules it names through `crate::`.
 fn imports(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
     let mut out = BTreeMap::new();
-    let mut stack = vec![src.to_path_buf()];
-    while let Some(dir) = stack.pop() {
-        for e in std::fs::read_dir(&dir).expect("read src") {
-            let p = e.expect("entry").path();
-            if p.is_dir() {
-                stack.push(p);
-                continue;
-            }
-            let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
-            if !name.ends_with(".rs") || ["lib.rs", "main.rs"].contains(&name) {
-                continue;
-            }
-            // `repro/mod.rs` is module `repro`: its code counts like any other's.
-            let file = if name == "mod.rs" {
-                p.parent().expect("a directory").to_path_buf()
-            } else {
-                p.with_extension("")
-            };
-            let module = file
-                .strip_prefix(src)
-                .expect("under src")
-                .to_string_lossy()
-                .replace('/', "::");
-            let text = std::fs::read_to_string(&p).expect("read module");
-            // A module's tests may reach anything: only its code counts.
-            let text = text.split("#[cfg(test)]").next().unwrap_or("");
-            // `super::x` in `a::b` is `crate::a::x` (the parent of a top-level module is the
-            // crate itself).
-            let parent = module.rsplit_once("::").map_or("", |(p, _)| p);
-            let mut named = BTreeSet::new();
-            for line in text.lines() {
-                let code = line.split("//").next().unwrap_or("");
-                let mut found: Vec<String> = code
-                    .match_indices("crate::")
-                    .map(|(i, _)| code[i + 7..].to_string())
+    for (p, text) in sources(src) {
+        let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        if ["lib.rs", "main.rs"].contains(&name) {
+            continue;
+        }
+        // `repro/mod.rs` is module `repro`: its code counts like any other's.
+        let file = if name == "mod.rs" {
+            p.parent().expect("a directory").to_path_buf()
+        } else {
+            p.with_extension("")
+        };
+        let module = file
+            .strip_prefix(src)
+            .expect("under src")
+            .to_string_lossy()
+            .replace('/', "::");
+        // `super::x` in `a::b` is `crate::a::x` (the parent of a top-level module is the
+        // crate itself).
+        let parent = module.rsplit_once("::").map_or("", |(p, _)| p);
+        let mut named = BTreeSet::new();
+        for code in text.lines() {
+            let mut found: Vec<String> = code
+                .match_indices("crate::")
+                .map(|(i, _)| code[i + 7..].to_string())
+                .collect();
+            found.extend(code.match_indices("super::").map(|(i, _)| {
+                let rest = &code[i + 7..];
+                if parent.is_empty() {
+                    rest.to_string()
+                } else {
+                    format!("{parent}::{rest}")
+                }
+            }));
+            for found in &found {
+                let path: Vec<&str> = found
+                    .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == ':'))
+                    .next()
+                    .unwrap_or("")
+                    .split("::")
                     .collect();
-                found.extend(code.match_indices("super::").map(|(i, _)| {
-                    let rest = &code[i + 7..];
-                    if parent.is_empty() {
-                        rest.to_string()
-                    } else {
-                        format!("{parent}::{rest}")
+                let target = match path.as_slice() {
+                    [
+                        layer @ ("judge" | "harness" | "commands" | "shards" | "repro"),
+                        m,
+                        ..,
+                    ] if !m.is_empty() && *m != "*" => {
+                        format!("{layer}::{m}")
                     }
-                }));
-                for found in &found {
-                    let path: Vec<&str> = found
-                        .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == ':'))
-                        .next()
-                        .unwrap_or("")
-                        .split("::")
-                        .collect();
-                    let target = match path.as_slice() {
-                        [
-                            layer @ ("judge" | "harness" | "commands" | "shards" | "repro"),
-                            m,
-                            ..,
-                        ] if !m.is_empty() && *m != "*" => {
-                            format!("{layer}::{m}")
-                        }
-                        [m, ..] => (*m).to_string(),
-                        [] => continue,
-                    };
-                    // `super::*` in a test module, an `{` group: not a module.
-                    if target.is_empty() || target.contains('{') {
-                        continue;
-                    }
-                    if target != module && !target.is_empty() {
-                        named.insert(target);
-                    }
+                    [m, ..] => (*m).to_string(),
+                    [] => continue,
+                };
+                // `super::*` in a test module, an `{` group: not a module.
+                if target.is_empty() || target.contains('{') {
+                    continue;
+                }
+                if target != module && !target.is_empty() {
+                    named.insert(target);
                 }
             }
-            out.insert(module, named);
         }
+        out.insert(module, named);
     }
     out
+}
+
+/// Every `.rs` file under `src`, with its code: the text before its tests (a module's tests
+/// may reach anything), `//` comments removed.
+fn sources(src: &Path) -> Vec<(PathBuf, String)> {
+    umbra_runner::judge::basis_key::files_under(src)
+        .expect("read src")
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|x| x == "rs"))
+        .map(|p| {
+            let text = std::fs::read_to_string(&p).expect("read module");
+            let code = text.split("#[cfg(test)]").next().unwrap_or("");
+            let code = code
+                .lines()
+                .map(|l| l.split("//").next().unwrap_or(""))
+                .collect::<Vec<_>>()
+                .join("\n");
+            (p, code)
+        })
+        .collect()
 }
 
 /// Every module's layer; one this does not know fails the test (give it one here).
@@ -141,11 +149,12 @@ fn circle_in(graph: &BTreeMap<String, BTreeSet<String>>) -> Option<Vec<String>> 
         .find_map(|m| visit(m, graph, &mut Vec::new(), &mut done))
 }
 
-/// Prints the runner's import graph (`cargo test -p umbra-runner --test layers -- --nocapture
-/// the_import_graph`): each module with its layer and what it imports, the arrows that point
+/// Prints the runner's import graph (`cargo test -p umbra-runner --test layers -- --ignored
+/// --nocapture the_import_graph`): each module with its layer and what it imports, the arrows that point
 /// up a layer, the circles, and the largest files. `UMBRA_LAYERS_SRC=DIR` prints another
 /// tree's (an older checkout's `crates/umbra-runner/src`), for a before-and-after.
 #[test]
+#[ignore = "a report, not a check: run it with --ignored --nocapture"]
 fn the_import_graph() {
     let src = std::env::var_os("UMBRA_LAYERS_SRC")
         .map(PathBuf::from)
@@ -180,20 +189,15 @@ fn the_import_graph() {
             None => println!("no circle in {}", tree.display()),
         }
     }
-    let mut sizes: Vec<(usize, String)> = Vec::new();
-    let mut stack = vec![src.clone()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).into_iter().flatten().flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                stack.push(p);
-            } else if p.extension().is_some_and(|x| x == "rs") {
-                let n = std::fs::read_to_string(&p).map_or(0, |t| t.lines().count());
-                let shown = p.strip_prefix(&src).unwrap_or(&p).display().to_string();
-                sizes.push((n, shown));
-            }
-        }
-    }
+    let mut sizes: Vec<(usize, String)> = umbra_runner::judge::basis_key::files_under(&src)
+        .expect("read src")
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|x| x == "rs"))
+        .map(|p| {
+            let n = std::fs::read_to_string(&p).map_or(0, |t| t.lines().count());
+            (n, p.strip_prefix(&src).unwrap_or(&p).display().to_string())
+        })
+        .collect();
     sizes.sort_by(|a, b| b.cmp(a));
     println!(
         "largest files ({} lines in {} files):",
@@ -300,27 +304,11 @@ fn only_the_registry_and_its_neighbours_name_the_backend_crates() {
         ),
     ];
     let src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut stack = vec![src.clone()];
-    let mut naming = Vec::new();
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).expect("read src").flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                stack.push(p);
-                continue;
-            }
-            let text = std::fs::read_to_string(&p).unwrap_or_default();
-            let code: String = text
-                .lines()
-                .map(|l| l.split("//").next().unwrap_or(""))
-                .collect::<Vec<_>>()
-                .join("\n");
-            if code.contains("umbra_gl::") || code.contains("umbra_wgpu::") {
-                let rel = p.strip_prefix(&src).unwrap_or(&p).display().to_string();
-                naming.push(rel);
-            }
-        }
-    }
+    let naming: Vec<String> = sources(&src)
+        .into_iter()
+        .filter(|(_, code)| code.contains("umbra_gl::") || code.contains("umbra_wgpu::"))
+        .map(|(p, _)| p.strip_prefix(&src).unwrap_or(&p).display().to_string())
+        .collect();
     let stray: Vec<&String> = naming
         .iter()
         .filter(|f| !ALLOWED.iter().any(|(a, _)| a == f))
@@ -340,22 +328,11 @@ fn only_the_registry_and_its_neighbours_name_the_backend_crates() {
 #[test]
 fn only_the_scheduler_starts_workers() {
     let src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut stack = vec![src.clone()];
-    let mut starting = Vec::new();
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).expect("read src").flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                stack.push(p);
-                continue;
-            }
-            let text = std::fs::read_to_string(&p).unwrap_or_default();
-            let code = text.split("#[cfg(test)]").next().unwrap_or("");
-            if code.contains("Worker::start") || code.contains("pool::Worker") {
-                starting.push(p.strip_prefix(&src).unwrap_or(&p).display().to_string());
-            }
-        }
-    }
+    let mut starting: Vec<String> = sources(&src)
+        .into_iter()
+        .filter(|(_, code)| code.contains("Worker::start") || code.contains("pool::Worker"))
+        .map(|(p, _)| p.strip_prefix(&src).unwrap_or(&p).display().to_string())
+        .collect();
     starting.sort();
     assert_eq!(
         starting,

@@ -7,7 +7,7 @@
 //!   fractions do, so N CI jobs split a run deterministically.
 //! - Execution: `--jobs` threads (default: the core count), each driving one worker process
 //!   at a time and taking runs one by one; a thread whose backend has no runs left moves to
-//!   the backend with the most left, sharing it once all are taken ([`Queues`]). A
+//!   the backend with the most left, sharing it once all are taken ([`crate::harness::scheduler::run_queues`]). A
 //!   worker that dies costs its run (Crash), one that exceeds `--timeout` seconds costs its run
 //!   (Timeout); a fresh worker takes the rest. Every failure is rerun once; a changed result
 //!   is a Flake.
@@ -32,7 +32,7 @@ use std::time::{Duration, Instant};
 
 use crate::cli::ConformanceArgs;
 use crate::exit::{Error, Exit, Outcome};
-use crate::harness::scheduler::{Attempt, Session};
+use crate::harness::scheduler::{Attempt, NotReady, Session};
 use crate::harness::worker::{Hello, Request};
 use crate::judge::expectations::Expectations;
 use crate::judge::falls_along::FallsAlong;
@@ -160,12 +160,8 @@ pub fn run_in(args: &ConformanceArgs, run_dir: Option<RunDir>, extra: Option<Ext
         Ok(g) => g,
         Err(f) => return f,
     };
-    let budget = TimeBudget::of(
-        &gathered.results,
-        started.elapsed(),
-        crate::harness::scheduler::start_up_time().0,
-        crate::harness::scheduler::start_up_time().1,
-    );
+    let start_up = crate::harness::scheduler::start_up_time();
+    let budget = TimeBudget::of(&gathered.results, started.elapsed(), start_up.0, start_up.1);
     let record = record(&opts, names, falls_along, &gathered, &budget);
     if let Err(e) = write_reports(&gathered, &settings, &budget, &run_dir, &record, extra) {
         return Finished {
@@ -641,7 +637,7 @@ fn settings(
 /// Runs the plan: its runs grouped by backend, each backend's rotated by its share (so
 /// concurrent workers rarely reach a point whose judging basis is not cached yet at the same
 /// moment; the second would wait for the first, see judge_cache), `jobs` threads each working
-/// on one backend at a time ([`Queues`], [`run_group`]).
+/// on one backend at a time ([`crate::harness::scheduler::run_queues`], [`run_group`]).
 fn execute(
     plan: Vec<Planned>,
     results: Vec<RunResult>,
@@ -1089,15 +1085,13 @@ fn record_blessings(g: &Gathered, settings: &Settings) {
             .blessed_on
             .as_deref()
             .is_some_and(|b| !crate::judge::golden::same_release(b, &v));
+        // A golden of another release is the golden directory's own (one in this release's
+        // folder was blessed on this release: `held` says so).
         if let (true, Some(file)) = (other_release, held.file) {
-            // The golden directory's own (`BACKEND/STEM`), not another release's.
-            let home = dir.join(crate::judge::golden::folder(&r.backend));
-            if file.parent() == Some(home.as_path()) {
-                confirm
-                    .entry(v.clone())
-                    .or_default()
-                    .push((crate::judge::golden::stem(&r.name), file));
-            }
+            confirm
+                .entry(v.clone())
+                .or_default()
+                .push((crate::judge::golden::stem(&r.name), file));
         }
     }
     for (v, goldens) in &confirm {
@@ -1256,15 +1250,12 @@ fn run_group(
     // the harness's failure, not the backend's: its runs crash rather than skip, so that it
     // can never read as a clean run.
     let hello = session.hello().clone();
-    let start_error = session.start_error().map(str::to_string);
     // Only the lines that can name this backend's runs, so drivers.txt counts its own.
     let own = settings.expectations.for_backend(backend);
     let facts = hello.facts();
     let group = Group {
         backend,
-        refused: hello.refused().map(str::to_string),
-        unavailable: hello.unavailable().map(str::to_string),
-        start_error,
+        not_ready: session.ready().err(),
         // Expectations for this backend's driver (`@applies`), and those a release before it
         // closed (their deviations were fixed: a failure they match may be one come back).
         expectations: own.for_driver(&facts),
@@ -1275,7 +1266,7 @@ fn run_group(
         let (line, row) = describe_driver(&group, &hello);
         d.drivers.push((backend.to_string(), line));
         d.driver_rows.push(row);
-        if let Some(why) = &group.refused {
+        if let Some(why) = group.refused() {
             d.refused.push(format!("{backend}: {why}"));
         }
     }
@@ -1300,7 +1291,7 @@ fn run_group(
             if settings.verbose && !r.details.is_empty() {
                 println!("{}", r.details);
             }
-            if group.unavailable.is_some() && group.start_error.is_none() {
+            if matches!(group.not_ready, Some(NotReady::Unavailable(_))) {
                 d.unavailable_runs += 1;
             }
             d.storage.extend(storage);
@@ -1330,9 +1321,8 @@ fn group_env(backend: &str, settings: &Settings) -> Vec<(String, String)> {
 /// Mesa build, unavailable, its worker would not start) and the expectations for its driver.
 struct Group<'a> {
     backend: &'a str,
-    refused: Option<String>,
-    unavailable: Option<String>,
-    start_error: Option<String>,
+    /// Why its runs cannot run, where they cannot ([`Session::ready`]).
+    not_ready: Option<NotReady>,
     expectations: Expectations,
     /// Expectations whose range an earlier release closed ([`Expectations::closed_for`]).
     closed: Expectations,
@@ -1403,7 +1393,7 @@ fn describe_driver(g: &Group, hello: &Hello) -> (String, serde_json::Value) {
         "mesa": facts.mesa,
         "build": build,
         "unavailable": hello.unavailable(),
-        "refused": g.refused,
+        "refused": g.refused(),
         "expectations": files,
         "closed_expectations": closed,
     });
@@ -1411,25 +1401,32 @@ fn describe_driver(g: &Group, hello: &Hello) -> (String, serde_json::Value) {
 }
 
 impl Group<'_> {
+    /// Why its worker refused the Mesa build, where it did.
+    fn refused(&self) -> Option<&str> {
+        match &self.not_ready {
+            Some(NotReady::Refused(why)) => Some(why),
+            _ => None,
+        }
+    }
+
     /// Runs point `p` on the group's worker (started again if it died), once more if it
     /// failed (a different answer is a flake); a group that cannot run crashes or skips each
     /// point with the reason.
     fn attempt_point(&self, p: &Planned, session: &mut Session) -> Attempt {
         let settings = self.settings;
-        match (&self.start_error, &self.unavailable) {
-            _ if self.refused.is_some() => Attempt::bare(
+        match &self.not_ready {
+            Some(NotReady::Refused(why)) => Attempt::bare(
                 Status::Crash,
-                format!(
-                    "not run: the worker refused the Mesa build: {}",
-                    self.refused.as_deref().unwrap_or("")
-                ),
+                format!("not run: the worker refused the Mesa build: {why}"),
             ),
-            (Some(e), _) => Attempt::bare(
+            Some(NotReady::NoWorker(e)) => Attempt::bare(
                 Status::Crash,
                 format!("the harness could not start its worker process: {e}"),
             ),
-            (None, Some(why)) => Attempt::bare(Status::Skip(why.clone()), why.clone()),
-            (None, None) => {
+            Some(NotReady::Unavailable(why)) => {
+                Attempt::bare(Status::Skip(why.clone()), why.clone())
+            }
+            None => {
                 let req = Request {
                     file: p.file.clone(),
                     index: p.index,
@@ -1466,7 +1463,6 @@ impl Group<'_> {
             under_deviation,
             storage,
             stderr,
-            measured: _,
         } = outcome;
         let unchecked: &[umbra_report::check::Check] =
             if settings.golden.is_none() || settings.no_goldens.contains(&p.backend) {

@@ -340,17 +340,18 @@ impl Runs {
         // driver, a device the machine lacks) or refused (a Mesa build without its driver),
         // never a crash of a worker that exited as it should. A worker that could not be
         // started at all is tried again by the run (its failure is a crash).
-        if session.start_error().is_none() {
-            let hello = session.hello();
-            if let Some(why) = hello.unavailable() {
+        match session.ready() {
+            Err(scheduler::NotReady::Unavailable(why)) => {
                 return ("NotSupported", format!("{backend} is unavailable: {why}"));
             }
-            if let Some(why) = hello.refused() {
-                return ("InternalError", why.to_string());
+            Err(scheduler::NotReady::Refused(why)) => return ("InternalError", why),
+            Err(scheduler::NotReady::NoWorker(_)) => {}
+            Ok(()) => {
+                let hello = session.hello();
+                self.facts
+                    .entry(backend.to_string())
+                    .or_insert_with(|| hello.facts());
             }
-            self.facts
-                .entry(backend.to_string())
-                .or_insert_with(|| hello.facts());
         }
         let expectations = self
             .facts
@@ -417,9 +418,11 @@ fn list(argv: &[String], index: &CaseIndex) -> Outcome {
             &crate::harness::registry::worker_env(backend),
             Duration::from_secs(60),
         );
-        let facts = match session.start_error() {
-            None => session.hello().facts(),
-            Some(e) => return Err(Error::new(format!("{backend}: no worker ({e})"))),
+        let facts = match session.ready() {
+            Err(scheduler::NotReady::NoWorker(e)) => {
+                return Err(Error::new(format!("{backend}: no worker ({e})")));
+            }
+            _ => session.hello().facts(),
         };
         let expectations = expectations.for_driver(&facts);
         for (case, (_, points)) in &index.0 {

@@ -38,7 +38,7 @@ use umbra_report::check::Check;
 use crate::cli::ReduceArgs;
 use crate::exit::{Error, Exit, Outcome};
 use crate::harness::pool::Reply;
-use crate::harness::scheduler::Session;
+use crate::harness::scheduler::{NotReady, Session};
 use crate::harness::worker::{Request, RunVerdict};
 
 /// How a run ended, in the terms "fails the same way" compares.
@@ -108,13 +108,15 @@ impl Judge {
         if slot.is_none() {
             let env = crate::harness::registry::worker_env(&id);
             let session = Session::start(&id, &env, self.timeout);
-            if let Some(e) = session.start_error() {
-                return Verdict::Other(format!("no worker for {id}: {e}"));
+            match session.ready() {
+                Ok(()) => *slot = Some(session),
+                Err(NotReady::NoWorker(e)) => {
+                    return Verdict::Other(format!("no worker for {id}: {e}"));
+                }
+                Err(NotReady::Unavailable(u) | NotReady::Refused(u)) => {
+                    return Verdict::Other(format!("{id} cannot run: {u}"));
+                }
             }
-            if let Some(u) = session.hello().unavailable().or(session.hello().refused()) {
-                return Verdict::Other(format!("{id} cannot run: {u}"));
-            }
-            *slot = Some(session);
         }
         let Some(w) = slot.as_mut() else {
             return Verdict::Other("no worker".into());

@@ -23,7 +23,6 @@
 use crate::harness::registry::Descriptor;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 use std::time::Duration;
 
 use umbra_case::fault::{Fault, Param};
@@ -31,7 +30,7 @@ use umbra_case::fault::{Fault, Param};
 use crate::cli::{SelftestArgs, SelftestMode};
 use crate::exit::{Error, Exit, Outcome};
 use crate::harness::pool::Reply;
-use crate::harness::scheduler::Session;
+use crate::harness::scheduler::{NotReady, Session};
 use crate::harness::worker::Request;
 use crate::judge::expectations::Expectations;
 
@@ -48,7 +47,7 @@ pub fn applies(fault: Fault, id: &str) -> bool {
 }
 
 /// [`applies`], for a backend already described.
-pub fn applies_to(fault: Fault, b: &Descriptor) -> bool {
+fn applies_to(fault: Fault, b: &Descriptor) -> bool {
     if !b.renders_on_a_driver() {
         return false;
     }
@@ -71,9 +70,9 @@ pub fn applies_to(fault: Fault, b: &Descriptor) -> bool {
     }
 }
 
-/// Whether case `c` exercises `fault` on backend `id` at all: only such points are run for it.
-pub fn exercises(fault: Fault, c: &umbra_case::Case, id: &str) -> bool {
-    let es2 = Descriptor::of(id).is_some_and(|b| b.gles2_technique());
+/// Whether case `c` exercises `fault` on a backend with (`es2`) or without GLES 2's technique
+/// ([`Descriptor::gles2_technique`]) at all: only such points are run for it.
+pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
     use umbra_case::format::{Compare, DepthFormat, Filter, Light, Outside, ShadingModel};
     let s = &c.shadow;
     match fault {
@@ -338,23 +337,12 @@ pub(crate) fn hunt_all(setup: &Setup) -> Outcome {
         })
         .collect();
     let (points, how, jobs) = (&setup.points, setup.how(), setup.jobs);
-    let queue = Mutex::new(pairs.clone());
-    let results = Mutex::new(Vec::new());
-    std::thread::scope(|s| {
-        for _ in 0..jobs {
-            s.spawn(|| {
-                let next = || queue.lock().ok().and_then(|mut q| q.pop());
-                while let Some((backend, fault)) = next() {
-                    let h = hunt(&backend, fault, points, &how);
-                    println!("{}", line(fault, &backend, &h));
-                    if let Ok(mut r) = results.lock() {
-                        r.push((backend, fault, h));
-                    }
-                }
-            });
-        }
+    let results = crate::harness::scheduler::run_pool(pairs, jobs, |(backend, fault)| {
+        let h = hunt(&backend, fault, points, &how);
+        println!("{}", line(fault, &backend, &h));
+        (backend, fault, h)
     });
-    let mut results = results.into_inner().unwrap_or_default();
+    let mut results = results;
     results.sort_by(|a, b| (a.1.name(), &a.0).cmp(&(b.1.name(), &b.0)));
     if setup.generated.is_some() {
         return rates(&results);
@@ -611,10 +599,8 @@ pub(crate) enum Seen {
     Caught(String),
     /// It passed (or failed only as expected).
     Passed,
-    /// The run crashed or timed out (a catch) and the worker could not be restarted: stop.
-    CaughtThenGone(String),
-    /// No worker could be started for the point (it did not run): stop.
-    Gone(String),
+    /// No worker could be started for the point (after a crash: it did not run): stop.
+    Gone,
 }
 
 impl Faulted {
@@ -631,14 +617,15 @@ impl Faulted {
             ),
         ]);
         let session = Session::start(backend, &env, how.timeout);
-        if let Some(e) = session.start_error() {
-            return Err((format!("no worker: {e}"), false));
-        }
-        if let Some(u) = session.hello().unavailable() {
-            return Err((format!("backend unavailable: {u}"), false));
-        }
-        if let Some(why) = session.hello().refused() {
-            return Err((format!("refused the Mesa build: {why}"), true));
+        match session.ready() {
+            Ok(()) => {}
+            Err(NotReady::NoWorker(e)) => return Err((format!("no worker: {e}"), false)),
+            Err(NotReady::Unavailable(u)) => {
+                return Err((format!("backend unavailable: {u}"), false));
+            }
+            Err(NotReady::Refused(why)) => {
+                return Err((format!("refused the Mesa build: {why}"), true));
+            }
         }
         let expectations = how.expectations.for_driver(&session.hello().facts());
         Ok(Faulted {
@@ -666,14 +653,10 @@ impl Faulted {
                 .filter(|n| !n.is_empty()),
         };
         // A crash or a timeout is a catch; the session starts a fresh worker for the next
-        // point, and a worker that does not come up ends the hunt.
-        let restart = |f: &mut Faulted, how: String| match f.session.restart() {
-            Ok(()) => Seen::Caught(how),
-            Err(_) => Seen::CaughtThenGone(how),
-        };
+        // point, and one that does not come up ends the hunt.
         let reply = match self.session.reply(&req) {
             Ok((reply, _)) => reply,
-            Err(e) => return Seen::Gone(e),
+            Err(_) => return Seen::Gone,
         };
         match reply {
             Reply::Report(r) if r.outcome == crate::harness::worker::RunVerdict::Fail => {
@@ -708,8 +691,8 @@ impl Faulted {
                 }
                 Seen::Passed
             }
-            Reply::Crashed(how) => restart(self, format!("crash ({how})")),
-            Reply::TimedOut => restart(self, "timeout".into()),
+            Reply::Crashed(how) => Seen::Caught(format!("crash ({how})")),
+            Reply::TimedOut => Seen::Caught("timeout".into()),
         }
     }
 }
@@ -730,9 +713,10 @@ fn hunt(
             return h;
         }
     };
+    let es2 = Descriptor::of(backend).is_some_and(|b| b.gles2_technique());
     let candidates: Vec<&(PathBuf, usize, umbra_case::CasePoint)> = points
         .iter()
-        .filter(|(_, _, p)| exercises(fault, &p.case, backend))
+        .filter(|(_, _, p)| exercises(fault, &p.case, es2))
         .collect();
     h.exercising = candidates.len();
     if candidates.is_empty() {
@@ -752,14 +736,9 @@ fn hunt(
         match faulted.run(file, *index, point) {
             Seen::Caught(checks) => h.caught.push((point.id(), checks)),
             Seen::Passed => {}
-            Seen::CaughtThenGone(how) => {
-                h.caught.push((point.id(), how));
-                h.note = Some("the worker could not be restarted after a crash".into());
-                break;
-            }
-            Seen::Gone(why) => {
+            Seen::Gone => {
                 h.tried -= 1;
-                h.note = Some(format!("no worker could be started: {why}"));
+                h.note = Some("the worker could not be restarted after a crash".into());
                 break;
             }
         }
@@ -885,8 +864,9 @@ mod tests {
                 continue;
             }
             assert!(
-                aimed.iter().any(|p| exercises(f, &p.case, "gl33/llvmpipe")
-                    || exercises(f, &p.case, "gles2/llvmpipe")),
+                aimed
+                    .iter()
+                    .any(|p| exercises(f, &p.case, false) || exercises(f, &p.case, true)),
                 "{}: no aimed point exercises it",
                 f.name()
             );

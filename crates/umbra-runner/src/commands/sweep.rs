@@ -25,7 +25,7 @@ use crate::cli::SweepArgs;
 use crate::exit::{Error, Exit, Outcome};
 use crate::harness::measure::Measured;
 use crate::harness::pool::Reply;
-use crate::harness::scheduler::Session;
+use crate::harness::scheduler::{NotReady, Session};
 use crate::harness::worker::{Request, RunVerdict};
 use umbra_report::escape::esc;
 
@@ -370,27 +370,25 @@ impl Sweep<'_> {
         ));
         // One session: a worker that crashed or timed out is started again for the next point.
         let mut session = Session::start(backend, &env, timeout);
+        let not_ready = match session.ready() {
+            Err(NotReady::Refused(why)) => return Err(Error::new(why)),
+            r => r.err(),
+        };
         for (index, t) in self.plan.iter().enumerate() {
             let Some(t) = t else { continue };
             *done += 1;
-            if let Err(e) = session.restart() {
+            if let Some(nr) = &not_ready {
+                let (result, skipped) = match nr {
+                    NotReady::Unavailable(why) => (Err(why.clone()), true),
+                    NotReady::NoWorker(e) | NotReady::Refused(e) => {
+                        (Err(format!("cannot start the worker: {e}")), false)
+                    }
+                };
                 rows.push(Row {
                     backend: backend.to_string(),
                     technique: t.clone(),
-                    result: Err(format!("cannot start the worker: {e}")),
-                    skipped: false,
-                });
-                continue;
-            }
-            if let Some(why) = session.hello().refused() {
-                return Err(Error::new(why));
-            }
-            if let Some(why) = session.hello().unavailable() {
-                rows.push(Row {
-                    backend: backend.to_string(),
-                    technique: t.clone(),
-                    result: Err(why.to_string()),
-                    skipped: true,
+                    result,
+                    skipped,
                 });
                 continue;
             }
@@ -456,14 +454,13 @@ pub fn measure_backends(
             env.extend(extra_env.iter().cloned());
             let mut session = Session::start_exe(exe, b, &env, timeout);
             let result = (|| {
-                if let Some(e) = session.start_error() {
-                    return Err(e.to_string());
-                }
-                if let Some(why) = session.hello().unavailable() {
-                    return Err(format!("unavailable: {why}"));
-                }
-                if let Some(why) = session.hello().refused() {
-                    return Err(format!("refused the Mesa build: {why}"));
+                match session.ready() {
+                    Ok(()) => {}
+                    Err(NotReady::NoWorker(e)) => return Err(e),
+                    Err(NotReady::Unavailable(why)) => return Err(format!("unavailable: {why}")),
+                    Err(NotReady::Refused(why)) => {
+                        return Err(format!("refused the Mesa build: {why}"));
+                    }
                 }
                 let req = Request {
                     file: file.to_path_buf(),

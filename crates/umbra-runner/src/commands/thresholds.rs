@@ -19,7 +19,6 @@
 //! an integer depth-bias constant (wgpu-vk/lavapipe). `--backend` picks others.
 
 use std::path::PathBuf;
-use std::sync::Mutex;
 
 use umbra_case::CasePoint;
 use umbra_case::fault::{Fault, Param};
@@ -64,9 +63,11 @@ type Point = (PathBuf, usize, CasePoint);
 fn sweep(backend: &str, param: Param, sign: f64, points: &[Point], how: &How) -> Threshold {
     let mut t = Threshold::default();
     let probe = Fault::scaled(param, sign * LADDER[0]);
+    let es2 =
+        crate::harness::registry::Descriptor::of(backend).is_some_and(|b| b.gles2_technique());
     let candidates: Vec<&Point> = points
         .iter()
-        .filter(|(_, _, p)| exercises(probe, &p.case, backend))
+        .filter(|(_, _, p)| exercises(probe, &p.case, es2))
         .collect();
     t.exercising = candidates.len();
     if candidates.is_empty() {
@@ -111,13 +112,13 @@ fn sweep(backend: &str, param: Param, sign: f64, points: &[Point], how: &How) ->
                 continue;
             }
             match faulted.run(file, *index, point) {
-                Seen::Caught(checks) | Seen::CaughtThenGone(checks) => {
+                Seen::Caught(checks) => {
                     hit = Some((i, point.id(), checks));
                     break;
                 }
                 Seen::Passed => {}
                 // No worker: this magnitude was not measured, nor can a smaller one be.
-                Seen::Gone(_) => break,
+                Seen::Gone => break,
             }
         }
         match hit {
@@ -168,23 +169,11 @@ pub(crate) fn main(points: &[Point], chosen: Option<&[String]>, how: &How, jobs:
         }
     }
     let start = std::time::Instant::now();
-    let queue = Mutex::new(tasks);
-    let results = Mutex::new(Vec::new());
-    std::thread::scope(|s| {
-        for _ in 0..jobs {
-            s.spawn(|| {
-                let next = || queue.lock().ok().and_then(|mut q| q.pop());
-                while let Some((backend, param, sign)) = next() {
-                    let t = sweep(&backend, param, sign, points, how);
-                    println!("{}", line(&backend, param, sign, &t));
-                    if let Ok(mut r) = results.lock() {
-                        r.push((backend, param, sign, t));
-                    }
-                }
-            });
-        }
+    let results = crate::harness::scheduler::run_pool(tasks, jobs, |(backend, param, sign)| {
+        let t = sweep(&backend, param, sign, points, how);
+        println!("{}", line(&backend, param, sign, &t));
+        (backend, param, sign, t)
     });
-    let results = results.into_inner().unwrap_or_default();
     print!("{}", table(&columns, &results));
     println!(
         "thresholds: {} sweeps in {:.0} s",

@@ -27,8 +27,6 @@ use umbra_case::Backend;
 /// faults, the repro's capture and `umbra backends` follow.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Descriptor {
-    /// The id as given (`gl33/llvmpipe`, `wgpu-vk/radv`, `ref`).
-    pub id: String,
     /// Who draws it.
     pub family: Family,
     /// A device of this machine (`gl33/radeonsi`), not one of this build's Mesa software ids.
@@ -53,9 +51,8 @@ impl Descriptor {
     pub fn of(id: &str) -> Option<Descriptor> {
         let family = if id == "ref" {
             Family::Reference
-        } else if let Some(kind) = umbra_wgpu::Kind::parse(id) {
-            umbra_wgpu::Target::parse(id)?;
-            Family::Wgpu(kind)
+        } else if let Some(target) = umbra_wgpu::Target::parse(id) {
+            Family::Wgpu(target.kind)
         } else if let Some((api, _)) = umbra_gl::parse_id(id) {
             Family::Gl(api)
         } else if let Some((api, _)) = umbra_gl::parse_device_id(id) {
@@ -66,24 +63,15 @@ impl Descriptor {
             return None;
         };
         Some(Descriptor {
-            id: id.to_string(),
             family,
             device: is_device_id(id),
         })
     }
 
     /// The GL API, for a GL backend.
-    pub fn gl_api(&self) -> Option<umbra_gl::Api> {
+    fn gl_api(&self) -> Option<umbra_gl::Api> {
         match self.family {
             Family::Gl(api) => Some(api),
-            _ => None,
-        }
-    }
-
-    /// The wgpu kind, for a wgpu backend.
-    pub fn wgpu_kind(&self) -> Option<umbra_wgpu::Kind> {
-        match self.family {
-            Family::Wgpu(kind) => Some(kind),
             _ => None,
         }
     }

@@ -9,6 +9,8 @@
 //!   and a pass then makes it a flake, with the failed attempt's evidence kept. Commands
 //!   that read replies their own way (a sweep's timings, the self-test's catches, a
 //!   reduction's verdicts) ask [`Session::reply`], which restarts the same way.
+//! - [`run_pool`]: independent tasks (the self-test's fault × backend pairs) on `jobs`
+//!   threads, each task opening its own sessions.
 //! - [`run_queues`]: a plan's requests grouped by backend, `jobs` threads each working on
 //!   one backend at a time in a session of its own, a thread that runs out joining the
 //!   backend with the most runs left, no new run after an interrupt.
@@ -63,8 +65,6 @@ pub struct Attempt {
     pub under_deviation: Option<Vec<umbra_report::FailedCheck>>,
     /// Pictures that could not be written.
     pub storage: Option<String>,
-    /// A sweep's timings.
-    pub measured: Option<crate::harness::measure::Measured>,
     /// What the worker wrote on stderr during the attempt ([`Worker::stderr`]).
     pub stderr: String,
 }
@@ -82,7 +82,6 @@ impl Attempt {
             fingerprint: None,
             under_deviation: None,
             storage: None,
-            measured: None,
             stderr: String::new(),
         }
     }
@@ -111,7 +110,6 @@ impl Attempt {
             fingerprint: r.fingerprint,
             under_deviation: r.under_deviation,
             storage: r.storage,
-            measured: r.measured,
             stderr: String::new(),
         }
     }
@@ -124,6 +122,17 @@ fn last_words(stderr: &str) -> String {
         Some(l) => format!("; its last stderr line: {}", l.trim()),
         None => String::new(),
     }
+}
+
+/// Why a session's backend cannot take requests ([`Session::ready`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum NotReady {
+    /// No worker process could be started (the harness's failure).
+    NoWorker(String),
+    /// The backend cannot run here (a missing driver or device): its runs are skips.
+    Unavailable(String),
+    /// Its worker refused the Mesa build asked for (`--mesa`).
+    Refused(String),
 }
 
 /// One backend's worker across requests, restarted after a crash or a timeout.
@@ -202,20 +211,25 @@ impl Session {
         w
     }
 
-    /// The backend's id.
-    pub fn backend(&self) -> &str {
-        &self.backend
-    }
-
     /// What the first worker said: its driver, or why the backend cannot run here.
     pub fn hello(&self) -> &Hello {
         &self.hello
     }
 
-    /// Why the first worker could not be started at all (this executable missing or
-    /// replaced: the harness's failure, not the backend's).
-    pub fn start_error(&self) -> Option<&str> {
-        self.start_error.as_deref()
+    /// Whether the backend can take requests, and if not, why: no worker could be started,
+    /// the backend is unavailable here, or its worker refused the Mesa build. The one place
+    /// these three are told apart, in this order.
+    pub fn ready(&self) -> Result<(), NotReady> {
+        if let Some(e) = &self.start_error {
+            return Err(NotReady::NoWorker(e.clone()));
+        }
+        if let Some(why) = self.hello.unavailable() {
+            return Err(NotReady::Unavailable(why.to_string()));
+        }
+        match self.hello.refused() {
+            Some(why) => Err(NotReady::Refused(why.to_string())),
+            None => Ok(()),
+        }
     }
 
     /// Starts a fresh worker now if the last one died; `Err` when it does not come up. Where
@@ -385,6 +399,32 @@ pub fn run_queues<T: Send>(
     });
 }
 
+/// Runs `work` on each of `items` on `jobs` threads, taking them from the end (the
+/// self-test's fault × backend pairs, its thresholds' sweeps: each opens its own sessions);
+/// the results in the order they finished.
+pub fn run_pool<T: Send, R: Send>(
+    items: Vec<T>,
+    jobs: usize,
+    work: impl Fn(T) -> R + Sync,
+) -> Vec<R> {
+    let queue = Mutex::new(items);
+    let results = Mutex::new(Vec::new());
+    std::thread::scope(|s| {
+        for _ in 0..jobs {
+            s.spawn(|| {
+                let next = || queue.lock().ok().and_then(|mut q| q.pop());
+                while let Some(item) = next() {
+                    let r = work(item);
+                    if let Ok(mut rs) = results.lock() {
+                        rs.push(r);
+                    }
+                }
+            });
+        }
+    });
+    results.into_inner().unwrap_or_default()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -425,5 +465,12 @@ mod tests {
         assert_eq!(seen.len(), 150);
         seen.dedup();
         assert_eq!(seen.len(), 150);
+    }
+
+    #[test]
+    fn a_pool_runs_every_item_once() {
+        let mut out = run_pool((0..40).collect(), 3, |i: u32| i * 2);
+        out.sort();
+        assert_eq!(out, (0..40).map(|i| i * 2).collect::<Vec<_>>());
     }
 }

@@ -369,10 +369,9 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             ..Default::default()
         },
         Outcome::Done(j) => {
-            let metrics = metrics_of(backend, &j);
+            let mut metrics = metrics_of(backend, &j);
             let mut problems = j.problems.clone();
             let mut failed = j.failed.clone();
-            let mut metrics = metrics;
             let golden_start = std::time::Instant::now();
             let mut identical_to_golden = false;
             let mut held = None;

@@ -22,25 +22,14 @@ pub fn stem(name: &str) -> String {
     // At most STEM_PLAIN characters of the name (the hash is of the whole name, so stems
     // stay distinct): `STEM.snap.new.png` then fits in a file name (255 bytes) whatever the
     // length of the case's name and its sweep values.
-    let plain: String = name
-        .chars()
-        .take(STEM_PLAIN)
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
+    let plain = flat(&name.chars().take(STEM_PLAIN).collect::<String>());
     format!("{plain}-{:08x}", umbra_report::names::fnv1a(name))
 }
 
-/// The folder of backend `id`'s goldens, in the golden directory and in each release's
-/// (`gl33/llvmpipe` → `gl33_llvmpipe`): one per backend, so a backend's goldens are reviewed,
-/// blessed and deleted together, and a directory listing stays short.
-pub fn folder(id: &str) -> String {
-    id.chars()
+/// `s` with every character other than ASCII letters, digits and `-` made `_`: a file name
+/// part on every file system, with no `.` for insta to read as an extension.
+fn flat(s: &str) -> String {
+    s.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '-' {
                 c
@@ -49,6 +38,13 @@ pub fn folder(id: &str) -> String {
             }
         })
         .collect()
+}
+
+/// The folder of backend `id`'s goldens, in the golden directory and in each release's
+/// (`gl33/llvmpipe` → `gl33_llvmpipe`): one per backend, so a backend's goldens are reviewed,
+/// blessed and deleted together, and a directory listing stays short.
+pub fn folder(id: &str) -> String {
+    flat(id)
 }
 
 /// The release a driver version belongs to for goldens: its numeric parts (`26.2.6-1` →
@@ -86,6 +82,9 @@ pub struct Held {
     /// golden directory, or the release directory when the golden was blessed on another
     /// release (which never overwrites the other release's golden).
     pub write_dir: std::path::PathBuf,
+    /// The release whose own folder `write_dir` is (`mesa-RELEASE/BACKEND`), where it is one:
+    /// a golden written there is this release's, beside the other release's.
+    pub release: Option<String>,
     /// The Mesa version the golden was blessed on, where known.
     pub blessed_on: Option<String>,
     /// Whether this driver's release is one the golden was blessed or confirmed on
@@ -109,6 +108,7 @@ pub fn held(dir: &Path, run: &Subject) -> Held {
         return Held {
             file: file_in(dir),
             write_dir: dir.join(&folder),
+            release: None,
             blessed_on: None,
             strict: true,
         };
@@ -118,6 +118,7 @@ pub fn held(dir: &Path, run: &Subject) -> Held {
         return Held {
             file: Some(f),
             write_dir: own.join(&folder),
+            release: Some(release(driver)),
             blessed_on: Some(release(driver)),
             strict: true,
         };
@@ -129,10 +130,10 @@ pub fn held(dir: &Path, run: &Subject) -> Held {
         .is_none_or(|b| same_release(b, driver));
     // A golden of another release is never overwritten from this one: this release's
     // differing picture goes beside it. A run with no golden anywhere starts one here.
-    let write_dir = if base.is_some() && !same {
-        own.join(&folder)
+    let (write_dir, release) = if base.is_some() && !same {
+        (own.join(&folder), Some(release(driver)))
     } else {
-        dir.join(&folder)
+        (dir.join(&folder), None)
     };
     let strict = same
         || base
@@ -141,6 +142,7 @@ pub fn held(dir: &Path, run: &Subject) -> Held {
     Held {
         file: base,
         write_dir,
+        release,
         blessed_on,
         strict,
     }

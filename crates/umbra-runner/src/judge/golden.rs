@@ -223,8 +223,7 @@ pub fn check(
     let (golden, message) = if ci {
         seen.refused_under_ci(&held, run, &change)
     } else {
-        let home = dir.join(folder(run.backend));
-        seen.handed_to_insta(&held, run, &home, frame, &change)
+        seen.handed_to_insta(&held, run, frame, &change)
     };
     Checked {
         golden,
@@ -332,8 +331,7 @@ impl Seen {
             (None, _) => (area, 255, u64::from(!judge_passed), 0),
             (Some(_), false) => (area, 255, 0, area),
         };
-        let judged_change = !held.strict && unjudged == 0;
-        umbra_report::GoldenChange {
+        let mut change = umbra_report::GoldenChange {
             blessed_on: held.blessed_on.clone(),
             driver: run.driver.map(str::to_string),
             pixels,
@@ -342,8 +340,10 @@ impl Seen {
             illegal,
             unjudged,
             strict: held.strict,
-            legal: judged_change && illegal == 0,
-        }
+            legal: false,
+        };
+        change.legal = Seen::judged(&change) && illegal == 0;
+        change
     }
 
     /// Whether the judge decides this change (off the golden's release, every changed pixel
@@ -406,14 +406,13 @@ impl Seen {
         )
     }
 
-    /// Outside CI the new picture goes to insta (`home`: the backend's folder in the golden
-    /// directory, where a golden of this release is written): written when blessing,
+    /// Outside CI the new picture goes to insta (into `held.write_dir`: the backend's folder,
+    /// or this release's own where the golden is another release's): written when blessing,
     /// pending for review otherwise; what happened, and the words for it.
     fn handed_to_insta(
         &self,
         held: &Held,
         run: &Subject,
-        home: &Path,
         frame: &Frame,
         change: &umbra_report::GoldenChange,
     ) -> (Golden, String) {
@@ -456,18 +455,11 @@ impl Seen {
                 ),
             ),
             (Ok(()), true) => (Golden::Unchanged, String::new()),
-            (Ok(()), false) if held.write_dir != home => (
+            (Ok(()), false) if held.release.is_some() => (
                 Golden::WrittenForRelease,
                 format!(
                     "golden {stem} written for Mesa {} in {}",
-                    // The release's directory: `mesa-RELEASE/BACKEND`.
-                    held.write_dir
-                        .parent()
-                        .and_then(Path::file_name)
-                        .map_or_else(String::new, |n| n
-                            .to_string_lossy()
-                            .trim_start_matches("mesa-")
-                            .to_string()),
+                    held.release.as_deref().unwrap_or_default(),
                     held.write_dir.display()
                 ),
             ),
