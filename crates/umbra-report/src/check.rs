@@ -32,12 +32,15 @@ pub enum Check {
     Memory,
     /// The backend failed to render (an API error, an unsupported state).
     Render,
+    /// The backend's behaviour card (what its driver chose inside the specs' freedom)
+    /// differs from the one kept for its driver release.
+    Card,
     /// A metamorphic twin (`twin:NAME`) disagrees with its case beyond what is legal.
     Twin(String),
 }
 
 /// Every check but the twins' (one per twin, `twin:NAME`).
-pub const FIXED: [Check; 10] = [
+pub const FIXED: [Check; 11] = [
     Check::Value,
     Check::Nan,
     Check::Coverage,
@@ -48,6 +51,7 @@ pub const FIXED: [Check; 10] = [
     Check::FallsAlong,
     Check::Memory,
     Check::Render,
+    Check::Card,
 ];
 
 impl Check {
@@ -71,6 +75,7 @@ impl Check {
             Check::FallsAlong => "falls-along",
             Check::Memory => "memory",
             Check::Render => "render",
+            Check::Card => "card",
             Check::Twin(_) => "twin",
         }
     }
@@ -94,6 +99,9 @@ impl Check {
             }
             Check::Memory => "the run fits the worker's memory budget",
             Check::Render => "the backend renders the run without an API error",
+            Check::Card => {
+                "the driver's choices inside the specs' freedom (its behaviour card: polygon-offset unit and slope, depth rounding, LINEAR weights, reference clamp) are the ones kept for its release"
+            }
             Check::Twin(_) => {
                 "a metamorphic twin renders what its case renders, within what the specs allow"
             }
@@ -120,6 +128,9 @@ impl Check {
             Check::FallsAlong => "the case's own expectation (expect.error_falls_along)",
             Check::Memory => "umbra's memory budget (--max-memory)",
             Check::Render => "the API's error reporting (glGetError, KHR_debug, wgpu's validation)",
+            Check::Card => {
+                "review: a driver's card changes only through `cargo xtask bless`; each entry cites the clause whose freedom it measures"
+            }
             Check::Twin(_) => {
                 "the invariance the twin states (umbra_case::twin), within the spec's freedoms"
             }

@@ -83,6 +83,11 @@ pub enum Command {
         about = "Turn a failing run (backend/case@point, as conformance names it) into a bug report a driver developer can use without umbra: a reduced case, a standalone C program (repro.c) with the judge's intervals as probes, an API capture, issue.md and pictures"
     )]
     Repro(ReproArgs),
+    /// `umbra card`.
+    #[command(
+        about = "Measure each backend's behaviour card: what its driver chose wherever the specs leave a choice (polygon-offset unit and slope term, depth rounding, LINEAR-compare weights, the reference clamp), each with the spec's range, the probe and how sure it is; --diff OLD NEW names what changed between two stored cards (exit 0 measured, 125 could not run)"
+    )]
+    Card(CardArgs),
     /// `umbra backends`.
     #[command(
         about = "List what this machine can run: every backend id with its driver's strings and how it is reached, every EGL device with the contexts it makes, every wgpu adapter (--json for scripts)"
@@ -177,7 +182,7 @@ pub mod help {
     /// `--no-check-ends`.
     pub const NO_CHECK_ENDS: &str = "do not test --good and --bad before bisecting";
     /// `--check`.
-    pub const CHECK: &str = "keep failing this check while reducing (value, nan, coverage, colour, map, interior, golden, falls-along, memory, render and twin:NAME; repeatable) [default: a subset of the failed checks]";
+    pub const CHECK: &str = "keep failing this check while reducing (value, nan, coverage, colour, map, interior, golden, falls-along, memory, render, card (a backend's behaviour card, which no case point fails) and twin:NAME; repeatable) [default: a subset of the failed checks]";
     /// `--src`.
     pub const SRC: &str = "Mesa source tree at the commit to test";
     /// `--explain`.
@@ -188,11 +193,19 @@ pub mod help {
     /// `--thresholds`.
     pub const THRESHOLDS: &str = "selftest: instead of the faults, sweep the magnitude of each continuous mistake (polygon offset, shader biases, normal offset, lookup and shadow-pass shifts, filter weights) per backend family and report the smallest error the catalogue catches, and which point catches it";
     /// `umbra selftest MODE`.
-    pub const MODE: &str = "faults: inject each known fault into each backend and check that the judge catches it; thresholds: instead of the faults, sweep the magnitude of each continuous mistake (polygon offset, shader biases, normal offset, lookup and shadow-pass shifts, filter weights) per backend family and report the smallest error the catalogue catches, and which point catches it; orientations: instead of the faults on the backends, the face/orientation table: every cube face and the 2D map drawn with each of the seven wrong orientations by the reference, and the catalogue points that catch each";
+    pub const MODE: &str = "faults: inject each known fault into each backend and check that the judge catches it; thresholds: instead of the faults, sweep the magnitude of each continuous mistake (polygon offset, shader biases, normal offset, lookup and shadow-pass shifts, filter weights) per backend family and report the smallest error the catalogue catches, and which point catches it; orientations: instead of the faults on the backends, the face/orientation table: every cube face and the 2D map drawn with each of the seven wrong orientations by the reference, and the catalogue points that catch each; cards: each behaviour-card entry against a fault that moves the choice it measures (the card must name it)";
     /// `--orientations`.
     pub const ORIENTATIONS: &str = "selftest: instead of the faults on the backends, the face/orientation table: every cube face and the 2D map drawn with each of the seven wrong orientations by the reference, and the catalogue points that catch each";
     /// `--json`.
     pub const JSON: &str = "print JSON for scripts instead of text";
+    /// `--diff` (card).
+    pub const CARD_DIFF: &str = "compare two stored cards (card-RELEASE.json files, e.g. golden/gl33_zink/card-mesa-22.3.6.json and …-26.2.6.json) and name every entry that changed, old and new value and the spec, instead of measuring";
+    /// `--card` (bisect).
+    pub const BISECT_CARD: &str = "bisect a behaviour: a commit is good when every selected backend's card entry KEY has VALUE (e.g. 'offset-unit.depth16.z0.25=4 codes', as `umbra card` or `cargo xtask drivers` names it), instead of when the chosen cases pass";
+    /// `--keep` (card).
+    pub const CARD_KEEP: &str = "keep each measured card as its backend's baseline for this driver release in golden directory DIR (DIR/<backend>/card-<release>.json), as `cargo xtask bless` does; refused under CI=true";
+    /// `--timeout` (card).
+    pub const CARD_TIMEOUT: &str = "time limit of one backend's probes, in seconds [default: 300]";
     /// `--ids`.
     pub const IDS: &str = "backends: print only this machine's device ids, one JSON object per line (what --backend hw and all expand to)";
     /// `--case`.
@@ -483,6 +496,9 @@ pub struct BisectArgs {
     /// `--repro`.
     #[arg(long, value_name = "DIR", help = help::REPRO)]
     pub repro: Option<String>,
+    /// `--card KEY=VALUE`: bisect a behaviour-card entry instead of case verdicts.
+    #[arg(long, value_name = "KEY=VALUE", help = help::BISECT_CARD)]
+    pub card: Option<String>,
 }
 
 /// `umbra reduce`.
@@ -569,6 +585,29 @@ pub struct BackendsArgs {
     pub mesa: Option<String>,
 }
 
+/// `umbra card`.
+#[derive(Args, Debug, Clone, Default)]
+pub struct CardArgs {
+    /// `--backend`: which backends to measure (default: this build's ids).
+    #[arg(long, value_name = "ID", help = help::BACKEND)]
+    pub backend: Vec<String>,
+    /// `--json`.
+    #[arg(long, help = help::JSON)]
+    pub json: bool,
+    /// `--diff OLD NEW`: compare two stored cards instead of measuring.
+    #[arg(long, num_args = 2, value_names = ["OLD", "NEW"], help = help::CARD_DIFF)]
+    pub diff: Vec<String>,
+    /// `--mesa`: the Mesa to run on.
+    #[arg(long, value_name = "PREFIX|BUILD_DIR|system", help = help::MESA)]
+    pub mesa: Option<String>,
+    /// `--timeout`: the time limit of one backend's probes, in seconds.
+    #[arg(long, value_name = "SECONDS", help = help::CARD_TIMEOUT)]
+    pub timeout: Option<u64>,
+    /// `--keep DIR`: keep each card as the reviewed baseline in golden directory DIR.
+    #[arg(long, value_name = "DIR", help = help::CARD_KEEP)]
+    pub keep: Option<String>,
+}
+
 /// `umbra worker`.
 #[derive(Args, Debug, Clone, Default)]
 pub struct WorkerArgs {
@@ -592,6 +631,9 @@ pub struct BisectStepArgs {
     /// `--build-script`.
     #[arg(long, value_name = "PATH", help = help::BUILD_SCRIPT)]
     pub build_script: Option<String>,
+    /// `--card KEY=VALUE`.
+    #[arg(long, value_name = "KEY=VALUE", help = help::BISECT_CARD)]
+    pub card: Option<String>,
 }
 
 /// `umbra completions`.
@@ -632,6 +674,8 @@ pub enum SelftestMode {
     Thresholds,
     /// The face/orientation table, drawn by the reference.
     Orientations,
+    /// Each behaviour-card entry against a fault that moves its choice.
+    Cards,
 }
 
 impl SelftestArgs {

@@ -6,8 +6,8 @@ use std::process::ExitCode;
 
 use umbra_runner::cli::{self, Command};
 use umbra_runner::commands::{
-    backends, bisect, conformance, deqp, drivers, merge, reduce, render, repro, selftest_modes,
-    soak, sweep,
+    backends, bisect, card, conformance, deqp, drivers, merge, reduce, render, repro,
+    selftest_modes, soak, sweep,
 };
 use umbra_runner::exit::{self, Error, Exit};
 use umbra_runner::harness;
@@ -48,6 +48,7 @@ fn main() -> ExitCode {
         Command::Bisect(a) => bisect::main(a),
         Command::Reduce(a) => reduce::main(a),
         Command::Repro(a) => repro::main(a),
+        Command::Card(a) => card::main(a),
         Command::Backends(a) => backends::main(a),
         Command::Worker(a) => harness::worker::main(&a.backend),
         Command::BisectStep(a) => bisect::step(a),

@@ -11,7 +11,13 @@
 //!   `--mesa` then loads (and checks it loaded). A commit that does not build is 125
 //!   (`git bisect skip`).
 //! - **Test**: `umbra conformance --mesa PREFIX` on the chosen cases and backends (`--filter`,
-//!   `--backend`), goldens off: 0 good, 1 bad, 125 when nothing could be judged.
+//!   `--backend`), goldens off: 0 good, 1 bad, 125 when nothing could be judged. With
+//!   `--card KEY=VALUE` the test is a behaviour instead: good when every selected backend's
+//!   card entry KEY has VALUE ([`crate::judge::card`]), so a bisection can target what a
+//!   driver chose (its polygon-offset unit, its depth rounding), not a picture.
+//! - **Cards at every step**: each commit's behaviour cards are kept
+//!   (`WORK/reports/<commit>/cards.json`), and the end names the card entries that changed at
+//!   the first bad commit before its failing runs.
 //! - **Ends first**: the good and the bad commit are built and tested before git bisects
 //!   (`--no-check-ends` skips it): cases that already fail on the good commit, or pass on the
 //!   bad one, would make git name a meaningless commit, so that is an error (125).
@@ -96,6 +102,12 @@ fn absolute(p: &str) -> PathBuf {
 /// and the ends' revisions, configure once, check the ends, bisect, and say what was found.
 pub fn main(args: &BisectArgs) -> Outcome {
     let (good, bad) = (args.good.as_str(), args.bad.as_str());
+    if args.card.as_deref().is_some_and(|c| !c.contains('=')) {
+        return Err(crate::cli::usage_error(
+            "bisect",
+            "--card takes KEY=VALUE, an entry of `umbra card` and the value a good commit has (e.g. 'offset-unit.depth16.z0.25=4 codes')",
+        ));
+    }
     let src = absolute(&args.mesa_src);
     check_tree(&src, good, bad)?;
     let work = absolute(args.work.as_deref().unwrap_or("target/umbra/bisect"));
@@ -249,6 +261,9 @@ fn step_argv(args: &BisectArgs, src: &Path, work: &Path, script: Option<&Path>) 
         step.extend(["--build-script".into(), s.display().to_string()]);
     }
     step.extend(selection.argv());
+    if let Some(c) = &args.card {
+        step.extend(["--card".into(), c.clone()]);
+    }
     step
 }
 
@@ -305,6 +320,7 @@ fn say_first_bad(
     let subject = git(src, &["log", "-1", "--format=%h %s", sha]).unwrap_or_default();
     println!("bisect: first bad commit: {sha}\nbisect:   {subject}");
     let short = git(src, &["rev-parse", "--short=12", sha]).unwrap_or(sha.to_string());
+    say_card_changes(src, work, &short, &args.good);
     let report = work
         .join("reports")
         .join(&short)
@@ -348,6 +364,34 @@ fn say_first_bad(
             dir,
         ),
         None => Ok(Exit::Pass),
+    }
+}
+
+/// The behaviour-card entries that changed at the first bad commit `short`, first: against
+/// its parent's cards where that commit was tested, else the good end's.
+fn say_card_changes(src: &Path, work: &Path, short: &str, good: &str) {
+    let cards_of = |rev: &str| -> Option<(String, Vec<crate::judge::card::Card>)> {
+        let s = git(src, &["rev-parse", "--short=12", rev]).ok()?;
+        let text =
+            std::fs::read_to_string(work.join("reports").join(&s).join("cards.json")).ok()?;
+        Some((s, serde_json::from_str(&text).ok()?))
+    };
+    let Some((_, bad)) = cards_of(short) else {
+        println!("bisect: no behaviour cards of the first bad commit to compare");
+        return;
+    };
+    let parent = format!("{short}^");
+    let Some((before, old)) = cards_of(&parent).or_else(|| cards_of(good)) else {
+        println!("bisect: no behaviour cards of a good commit to compare with");
+        return;
+    };
+    let lines = crate::commands::card::changes_between(&old, &bad);
+    println!(
+        "bisect: behaviour-card changes from {before} to {short}: {}",
+        if lines.is_empty() { "none" } else { "" }
+    );
+    for l in lines {
+        println!("  {l}");
     }
 }
 
@@ -520,26 +564,20 @@ pub fn step(args: &BisectStepArgs) -> Outcome {
         return Err(Error::said(Exit::CouldNotRun));
     };
     let report = work.join("reports").join(&sha);
-    let mut cmd = Command::new(exe);
-    cmd.arg("conformance")
-        .arg("--mesa")
-        .arg(&prefix)
-        .args(["--golden", "none", "--out"])
-        .arg(&report)
-        // One judging cache for every step: umbra stays fixed while Mesa changes, so the
-        // truth and reference of each point are computed at the first step only.
-        .arg("--judge-cache")
-        .arg(work.join("cache").join("judge"))
-        .args(args.selection.argv());
-    let test_log = log.join(format!("{sha}-test.log"));
-    if let Ok(f) = std::fs::File::create(&test_log) {
-        cmd.stdout(Stdio::from(f));
+    // Every step's cards, so the end can name what changed at the first bad commit.
+    let cards =
+        crate::commands::card::measure_in_child(&exe, prefix.as_os_str(), &args.selection.backend);
+    if let Ok(c) = &cards {
+        let _ = std::fs::create_dir_all(&report);
+        let _ = std::fs::write(
+            report.join("cards.json"),
+            serde_json::to_string_pretty(c).unwrap_or_default(),
+        );
     }
-    let code = cmd
-        .env_remove(crate::harness::mesa_build::ENV)
-        .status()
-        .ok()
-        .and_then(|s| s.code());
+    let code = match &args.card {
+        Some(target) => card_verdict(target, cards, &log.join(format!("{sha}-test.log"))),
+        None => test_cases(&exe, &prefix, &report, &work, &log, &sha, &args.selection),
+    };
     let test_s = t.elapsed().as_secs_f64();
     let (verdict, exit) = match code.map(Exit::of_code) {
         Some(Exit::Pass) => ("good", Exit::Pass),
@@ -551,4 +589,128 @@ pub fn step(args: &BisectStepArgs) -> Outcome {
     };
     record(test_s, verdict);
     Ok(exit)
+}
+
+/// A step's test of the chosen cases: `umbra conformance --mesa PREFIX`, goldens off; its
+/// exit code.
+fn test_cases(
+    exe: &Path,
+    prefix: &Path,
+    report: &Path,
+    work: &Path,
+    log: &Path,
+    sha: &str,
+    selection: &Selection,
+) -> Option<i32> {
+    let mut cmd = Command::new(exe);
+    cmd.arg("conformance")
+        .arg("--mesa")
+        .arg(prefix)
+        .args(["--golden", "none", "--out"])
+        .arg(report)
+        // One judging cache for every step: umbra stays fixed while Mesa changes, so the
+        // truth and reference of each point are computed at the first step only.
+        .arg("--judge-cache")
+        .arg(work.join("cache").join("judge"))
+        .args(selection.argv());
+    let test_log = log.join(format!("{sha}-test.log"));
+    if let Ok(f) = std::fs::File::create(&test_log) {
+        cmd.stdout(Stdio::from(f));
+    }
+    cmd.env_remove(crate::harness::mesa_build::ENV)
+        .status()
+        .ok()
+        .and_then(|s| s.code())
+}
+
+/// `--card KEY=VALUE`: good (0) when every measured backend's entry KEY has VALUE, bad (1)
+/// when one's differs, could not run (125) without cards or without the entry; the verdict
+/// per backend goes to `test_log`.
+fn card_verdict(
+    target: &str,
+    cards: Result<Vec<crate::judge::card::Card>, String>,
+    test_log: &Path,
+) -> Option<i32> {
+    let (key, want) = target.split_once('=')?;
+    let mut lines = Vec::new();
+    let mut code = i32::from(Exit::Pass.code());
+    match cards {
+        Err(e) => {
+            lines.push(format!("no cards: {e}"));
+            code = i32::from(Exit::CouldNotRun.code());
+        }
+        Ok(cards) => {
+            for c in &cards {
+                match c.entries.iter().find(|e| e.key == key) {
+                    Some(e) if e.value == want => {
+                        lines.push(format!("{}: {key} = {}", c.backend, e.value))
+                    }
+                    Some(e) => {
+                        lines.push(format!("{}: {key} = {} (not {want})", c.backend, e.value));
+                        code = code.max(i32::from(Exit::Fail.code()));
+                    }
+                    None => {
+                        lines.push(format!("{}: no entry {key}", c.backend));
+                        code = i32::from(Exit::CouldNotRun.code());
+                    }
+                }
+            }
+        }
+    }
+    let _ = std::fs::write(test_log, lines.join("\n") + "\n");
+    Some(code)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::judge::card::{Card, Entry, Sure};
+
+    fn card(backend: &str, value: &str) -> Card {
+        Card {
+            backend: backend.into(),
+            driver: "d".into(),
+            release: "mesa-26.2.6".into(),
+            entries: vec![Entry::new(
+                "offset-unit.depth16.z0.25",
+                "r",
+                value.into(),
+                None,
+                "s",
+                Some(true),
+                "p",
+                Sure::Exact,
+            )],
+            renders: 0,
+            seconds: 0.0,
+        }
+    }
+
+    /// `--card KEY=VALUE`: good where every backend's entry has the value, bad where one's
+    /// differs, a skip where there are no cards or no such entry.
+    #[test]
+    fn a_card_step_is_good_bad_or_skipped_by_the_entry() {
+        let log = std::env::temp_dir().join(format!("umbra-card-step-{}.log", std::process::id()));
+        let target = "offset-unit.depth16.z0.25=4 codes";
+        let v = |cards| card_verdict(target, cards, &log);
+        assert_eq!(v(Ok(vec![card("gl33/zink", "4 codes")])), Some(0));
+        assert_eq!(
+            v(Ok(vec![
+                card("gl33/zink", "4 codes"),
+                card("gles3/zink", "2 codes")
+            ])),
+            Some(1)
+        );
+        assert!(std::fs::read_to_string(&log).is_ok_and(|t| t.contains("2 codes (not 4 codes)")));
+        assert_eq!(v(Err("no driver".into())), Some(125));
+        assert_eq!(
+            card_verdict(
+                "no-such-entry=x",
+                Ok(vec![card("gl33/zink", "4 codes")]),
+                &log
+            ),
+            Some(125)
+        );
+        let _ = std::fs::remove_file(&log);
+    }
 }

@@ -79,6 +79,9 @@ struct Settings {
     verbose: bool,
     /// `--bless`: workers may write goldens.
     bless: bool,
+    /// Check each backend's behaviour card against the one kept beside its goldens: a whole
+    /// run (no `--filter`, no `--shard`) with goldens.
+    cards: Option<PathBuf>,
 }
 
 /// Runs the command; returns its outcome.
@@ -631,6 +634,10 @@ fn settings(
         expectations: opts.expectations.clone(),
         verbose: args.output.verbose,
         bless: opts.bless,
+        cards: opts
+            .golden
+            .clone()
+            .filter(|_| opts.filter == "*" && opts.shard.1 == 1),
     }
 }
 
@@ -648,7 +655,12 @@ fn execute(
     for p in plan {
         groups.entry(p.backend.clone()).or_default().push_back(p);
     }
-    let total = groups.values().map(VecDeque::len).sum::<usize>();
+    let cards = if settings.cards.is_some() {
+        groups.len()
+    } else {
+        0
+    };
+    let total = groups.values().map(VecDeque::len).sum::<usize>() + cards;
     let n = groups.len().max(1);
     for (k, runs) in groups.values_mut().enumerate() {
         let offset = k * runs.len() / n;
@@ -1270,33 +1282,55 @@ fn run_group(
             d.refused.push(format!("{backend}: {why}"));
         }
     }
+    if let Some(dir) = settings.cards.as_deref().filter(|_| first) {
+        let mut row =
+            crate::commands::card::conformance_row(backend, &mut session, dir, settings.bless);
+        if let Some(a) = group.not_run() {
+            (row.status, row.reason) = (a.status, a.reason);
+        }
+        let unavailable = matches!(group.not_ready, Some(NotReady::Unavailable(_)));
+        finished(done, row, None, total, settings.verbose, unavailable);
+    }
     while let Some(p) = next() {
         let t0 = Instant::now();
         let outcome = group.attempt_point(&p, &mut session);
         let (result, storage) = group.result_of(&p, outcome, t0);
-        if let Ok(mut d) = done.lock() {
-            d.finished += 1;
-            let r = &result;
-            let mut line = format!(
-                "[{}/{total}] {} {} ({:.0} ms)",
-                d.finished,
-                r.status,
-                r.name,
-                r.time_s * 1e3
-            );
-            if !matches!(r.status, Status::Pass) && !r.reason.is_empty() {
-                let _ = write!(line, ": {}", first_line(&r.reason));
-            }
-            d.progress.finished(r.status.name(), &line);
-            if settings.verbose && !r.details.is_empty() {
-                println!("{}", r.details);
-            }
-            if matches!(group.not_ready, Some(NotReady::Unavailable(_))) {
-                d.unavailable_runs += 1;
-            }
-            d.storage.extend(storage);
-            d.results.push(result);
+        let unavailable = matches!(group.not_ready, Some(NotReady::Unavailable(_)));
+        finished(done, result, storage, total, settings.verbose, unavailable);
+    }
+}
+
+/// Records a finished run and prints its progress line.
+fn finished(
+    done: &Done,
+    result: RunResult,
+    storage: Option<String>,
+    total: usize,
+    verbose: bool,
+    unavailable: bool,
+) {
+    if let Ok(mut d) = done.lock() {
+        d.finished += 1;
+        let r = &result;
+        let mut line = format!(
+            "[{}/{total}] {} {} ({:.0} ms)",
+            d.finished,
+            r.status,
+            r.name,
+            r.time_s * 1e3
+        );
+        if !matches!(r.status, Status::Pass) && !r.reason.is_empty() {
+            let _ = write!(line, ": {}", first_line(&r.reason));
         }
+        d.progress.finished(r.status.name(), &line);
+        if verbose && !r.details.is_empty() {
+            println!("{}", r.details);
+        }
+        if unavailable {
+            d.unavailable_runs += 1;
+        }
+        d.storage.extend(storage);
+        d.results.push(result);
     }
 }
 
@@ -1409,23 +1443,29 @@ impl Group<'_> {
         }
     }
 
+    /// What a run of a group that cannot run is: a crash (the worker refused the Mesa build,
+    /// or could not be started) or a skip (the backend is unavailable here), with the reason.
+    fn not_run(&self) -> Option<Attempt> {
+        Some(match self.not_ready.as_ref()? {
+            NotReady::Refused(why) => Attempt::bare(
+                Status::Crash,
+                format!("not run: the worker refused the Mesa build: {why}"),
+            ),
+            NotReady::NoWorker(e) => Attempt::bare(
+                Status::Crash,
+                format!("the harness could not start its worker process: {e}"),
+            ),
+            NotReady::Unavailable(why) => Attempt::bare(Status::Skip(why.clone()), why.clone()),
+        })
+    }
+
     /// Runs point `p` on the group's worker (started again if it died), once more if it
     /// failed (a different answer is a flake); a group that cannot run crashes or skips each
     /// point with the reason.
     fn attempt_point(&self, p: &Planned, session: &mut Session) -> Attempt {
         let settings = self.settings;
-        match &self.not_ready {
-            Some(NotReady::Refused(why)) => Attempt::bare(
-                Status::Crash,
-                format!("not run: the worker refused the Mesa build: {why}"),
-            ),
-            Some(NotReady::NoWorker(e)) => Attempt::bare(
-                Status::Crash,
-                format!("the harness could not start its worker process: {e}"),
-            ),
-            Some(NotReady::Unavailable(why)) => {
-                Attempt::bare(Status::Skip(why.clone()), why.clone())
-            }
+        match self.not_run() {
+            Some(a) => a,
             None => {
                 let req = Request {
                     file: p.file.clone(),
@@ -1440,6 +1480,7 @@ impl Group<'_> {
                     gallery: Some(settings.gallery.clone()),
                     deviation: Some(self.expectations.deviations(&p.name(), &p.case).names())
                         .filter(|n| !n.is_empty()),
+                    card: false,
                 };
                 session.attempt_or_rerun(&req)
             }

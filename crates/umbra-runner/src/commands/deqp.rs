@@ -368,6 +368,7 @@ impl Runs {
             no_twins: false,
             gallery: None,
             deviation: Some(expectations.deviations(&run, json).names()).filter(|n| !n.is_empty()),
+            card: false,
         };
         let a = session.attempt(&req);
         let raw = deqp_status(&a.status);

@@ -14,6 +14,11 @@
 //! - `numbers`: same frame bytes aside, the error or the judge's counts changed (this
 //!   cannot happen without a picture change unless the judge itself changed).
 //!
+//! First, before any run, both sides' behaviour cards ([`crate::judge::card`]) are measured
+//! and every entry that changed is named (`gl33/zink: polygon-offset unit r, D16: 4 codes → 2
+//! codes`), in the terminal, `card-changes.txt`, each side's `cards.json` and at the top of
+//! report.html: a change of what a driver chose inside the specs, which no verdict shows.
+//!
 //! The verdicts are *raw* (before expectations): an expected failure on one version is still
 //! a failure, so a driver fix of a known bug shows as a fix. Outputs in `--out` (default
 //! `target/umbra/drivers/`): `report.html` (baseline | candidate | reference | difference for
@@ -276,6 +281,9 @@ pub fn main(args: &DriversArgs) -> Outcome {
     let Ok(exe) = crate::harness::own_libc::self_exe() else {
         return Err(Error::new("cannot find this executable"));
     };
+    // The cards first: what each driver chose inside the specs, side by side, so that a
+    // change of behaviour is named before any picture.
+    let card_changes = side_cards(args, &exe, &out, base, cand);
     let mut reports = Vec::new();
     for (side, mesa) in [("baseline", base), ("candidate", cand)] {
         reports.push(run_side(args, &exe, &out, side, mesa)?);
@@ -314,7 +322,7 @@ pub fn main(args: &DriversArgs) -> Outcome {
             };
         }
     }
-    if let Err(e) = write_outputs(&out, &changes, &la, &lb, &reports, cand) {
+    if let Err(e) = write_outputs(&out, &changes, (&la, &lb), &card_changes, &reports, cand) {
         return Err(Error::new(format!(
             "cannot write under {}: {e}",
             out.display()
@@ -323,6 +331,18 @@ pub fn main(args: &DriversArgs) -> Outcome {
     let compared = reports[1]["runs"].as_array().map_or(0, Vec::len);
     let count = |k: &str| changes.iter().filter(|c| c.kind == k).count();
     println!("\ndrivers: baseline {la} vs candidate {lb}");
+    match &card_changes {
+        Ok(lines) => {
+            println!(
+                "drivers: behaviour cards: {} entries changed (card-changes.txt)",
+                lines.len()
+            );
+            for l in lines {
+                println!("  card             {l}");
+            }
+        }
+        Err(e) => println!("drivers: behaviour cards not compared: {e}"),
+    }
     println!(
         "drivers: {compared} runs compared: {} regressions, {} fixes, {} changed failures, {} support changes, {} changed pictures, {} changed numbers",
         count("regression"),
@@ -369,6 +389,37 @@ pub fn main(args: &DriversArgs) -> Outcome {
     }
     println!("drivers: report in {}", out.join("report.html").display());
     Ok(Exit::pass_if(count("regression") == 0))
+}
+
+/// Both sides' behaviour cards (`OUT/SIDE/cards.json`) and what changed between them
+/// (`OUT/card-changes.txt`, one `backend: entry: old → new` line each).
+fn side_cards(
+    args: &DriversArgs,
+    exe: &Path,
+    out: &Path,
+    base: &str,
+    cand: &str,
+) -> Result<Vec<String>, String> {
+    let mut sides = Vec::new();
+    for (side, mesa) in [("baseline", base), ("candidate", cand)] {
+        println!("drivers: measuring the {side}'s behaviour cards ({mesa})");
+        let cards = crate::commands::card::measure_in_child(
+            exe,
+            std::ffi::OsStr::new(mesa),
+            &args.selection.backend,
+        )
+        .map_err(|e| format!("the {side}'s: {e}"))?;
+        let dir = out.join(side);
+        let _ = std::fs::create_dir_all(&dir);
+        let _ = std::fs::write(
+            dir.join("cards.json"),
+            serde_json::to_string_pretty(&cards).unwrap_or_default(),
+        );
+        sides.push(cards);
+    }
+    let lines = crate::commands::card::changes_between(&sides[0], &sides[1]);
+    let _ = std::fs::write(out.join("card-changes.txt"), lines.join("\n") + "\n");
+    Ok(lines)
 }
 
 /// One side's conformance run (`umbra conformance --mesa MESA`, goldens off) in a process of
@@ -530,14 +581,8 @@ fn img(path: &Path, caption: &str) -> String {
     }
 }
 
-fn write_outputs(
-    out: &Path,
-    changes: &[Change],
-    la: &str,
-    lb: &str,
-    reports: &[Value],
-    candidate: &str,
-) -> std::io::Result<()> {
+/// changes.csv, regressions.csv and fixes.csv.
+fn write_tables(out: &Path, changes: &[Change]) -> std::io::Result<()> {
     std::fs::create_dir_all(out)?;
     let q = |s: &str| {
         if s.contains([',', '"', '\n']) {
@@ -578,7 +623,20 @@ fn write_outputs(
     }
     std::fs::write(out.join("changes.csv"), csv)?;
     std::fs::write(out.join("regressions.csv"), regressions)?;
-    std::fs::write(out.join("fixes.csv"), fixes)?;
+    std::fs::write(out.join("fixes.csv"), fixes)
+}
+
+/// The tables ([`write_tables`]) and report.html: the card changes first, then the drivers,
+/// the changed runs and their pictures.
+fn write_outputs(
+    out: &Path,
+    changes: &[Change],
+    (la, lb): (&str, &str),
+    cards: &Result<Vec<String>, String>,
+    reports: &[Value],
+    candidate: &str,
+) -> std::io::Result<()> {
+    write_tables(out, changes)?;
     let mut h = String::new();
     let _ = write!(
         h,
@@ -594,6 +652,18 @@ fn write_outputs(
         esc(la),
         esc(lb)
     );
+    match cards {
+        Ok(lines) => {
+            let _ = write!(h, "<h2>{} behaviour-card changes</h2><ul>", lines.len());
+            for l in lines {
+                let _ = write!(h, "<li>{}</li>", esc(l));
+            }
+            h.push_str("</ul>");
+        }
+        Err(e) => {
+            let _ = write!(h, "<h2>Behaviour cards not compared</h2><p>{}</p>", esc(e));
+        }
+    }
     for (side, r) in ["baseline", "candidate"].iter().zip(reports) {
         let _ = write!(
             h,

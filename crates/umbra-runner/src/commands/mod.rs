@@ -3,6 +3,8 @@
 
 pub mod backends;
 pub mod bisect;
+pub mod card;
+pub mod card_selftest;
 pub mod conformance;
 pub mod deqp;
 pub mod drivers;

@@ -130,6 +130,7 @@ impl Judge {
             no_twins: true,
             gallery: None,
             deviation: None,
+            card: false,
         };
         // A worker that crashed or timed out is started again by the session, for the next
         // candidate.

@@ -651,6 +651,7 @@ impl Faulted {
             gallery: None,
             deviation: Some(self.expectations.deviations(&name, &case).names())
                 .filter(|n| !n.is_empty()),
+            card: false,
         };
         // A crash or a timeout is a catch; the session starts a fresh worker for the next
         // point, and one that does not come up ends the hunt.

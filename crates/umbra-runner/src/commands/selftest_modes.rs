@@ -22,5 +22,6 @@ pub fn main(args: &SelftestArgs) -> Outcome {
             super::thresholds::main(&setup.points, chosen, &setup.how(), setup.jobs)
         }
         SelftestMode::Faults => super::selftest::hunt_all(&setup),
+        SelftestMode::Cards => super::card_selftest::main(&setup.backends, setup.how().timeout),
     }
 }

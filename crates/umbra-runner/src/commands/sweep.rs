@@ -401,6 +401,7 @@ impl Sweep<'_> {
                 no_twins: false,
                 gallery: None,
                 deviation: None,
+                card: false,
             };
             let (result, skipped) = match session.reply(&req) {
                 Ok((Reply::Report(r), _)) => match (r.outcome, r.measured) {
@@ -471,6 +472,7 @@ pub fn measure_backends(
                     no_twins: false,
                     gallery: None,
                     deviation: None,
+                    card: false,
                 };
                 match session.reply(&req)?.0 {
                     Reply::Report(r) => r.measured.ok_or(r.reason),

@@ -118,6 +118,27 @@ pub struct Request {
     /// ([`RunReport::under_deviation`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub deviation: Option<String>,
+    /// Measure the backend's behaviour card instead (`file` and `index` unused): the probes
+    /// of [`crate::judge::card_probes`], answered in [`RunReport::card`].
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub card: bool,
+}
+
+impl Request {
+    /// A request for the backend's behaviour card.
+    pub fn card() -> Request {
+        Request {
+            file: PathBuf::new(),
+            index: 0,
+            failures: None,
+            golden: None,
+            repeat: None,
+            no_twins: true,
+            gallery: None,
+            deviation: None,
+            card: true,
+        }
+    }
 }
 
 /// A run's raw verdict, before expectations (the parent's business).
@@ -179,6 +200,9 @@ pub struct RunReport {
     /// parent starts a fresh one for the next run.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub retired: Option<String>,
+    /// The behaviour card, for a card request.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub card: Option<crate::judge::card::Card>,
 }
 
 /// Runs the worker loop; returns its outcome (it passes when the backend could not come up
@@ -289,6 +313,9 @@ pub fn main(id: &str) -> crate::exit::Outcome {
 }
 
 fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
+    if req.card {
+        return card_of(backend);
+    }
     let points = match umbra_case::load_file(&req.file) {
         Ok(p) => p,
         Err(e) => {
@@ -427,6 +454,7 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                 failed,
                 fingerprint: (!j.fingerprint.is_empty()).then(|| j.fingerprint.clone()),
                 retired: None,
+                card: None,
             }
         }
     }
@@ -434,6 +462,30 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
 
 /// Writes the run's gallery pictures (`req.gallery`, beside its golden and any pending one);
 /// what could not be written.
+/// The backend's behaviour card, measured now.
+fn card_of(backend: &mut dyn umbra_case::Backend) -> RunReport {
+    let t0 = std::time::Instant::now();
+    let info = backend.info();
+    let facts = crate::judge::expectations::DriverFacts::from_driver(
+        &info.version,
+        &info.renderer,
+        &info.extensions,
+    );
+    let (entries, renders) = crate::judge::card_probes::measure(backend);
+    RunReport {
+        outcome: RunVerdict::Pass,
+        card: Some(crate::judge::card::Card {
+            backend: backend.id().0,
+            driver: format!("{} | {}", info.renderer, info.version),
+            release: crate::judge::card::release_of(&backend.id().0, &facts, &info.version),
+            entries,
+            renders,
+            seconds: t0.elapsed().as_secs_f64(),
+        }),
+        ..Default::default()
+    }
+}
+
 fn gallery_of(
     req: &Request,
     name: &str,

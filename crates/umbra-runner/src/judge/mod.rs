@@ -2,11 +2,14 @@
 //! ([`judge_cache`], keyed by [`basis_key`]), its golden ([`golden`], the store's records in [`blessings`]), its pictures ([`pictures`]), what a raw outcome
 //! becomes under the checked-in expectations ([`expectations`]), and how a failing run
 //! compares with the other drivers' runs of its point ([`consensus`]), and the check
-//! across one backend's runs of a sweep ([`falls_along`]). Depends on nothing else in the
+//! across one backend's runs of a sweep ([`falls_along`]); and the backend's behaviour card
+//! ([`card`], measured by [`card_probes`]). Depends on nothing else in the
 //! runner but the glob matcher.
 
 pub mod basis_key;
 pub mod blessings;
+pub mod card;
+pub mod card_probes;
 pub mod consensus;
 pub mod expectations;
 pub mod falls_along;

@@ -1,0 +1,278 @@
+//! `umbra card --backend ID [--json]`: each backend's behaviour card ([`crate::judge::card`]),
+//! measured in its own worker process as a run would be; `--diff OLD NEW` names what changed
+//! between two stored cards (two releases of one backend, or two backends).
+
+use std::time::Duration;
+
+use crate::cli::CardArgs;
+use crate::exit::{Error, Exit, Outcome};
+use crate::harness::scheduler::Session;
+use crate::harness::worker::Request;
+use crate::judge::card::Card;
+
+/// The default time limit of one backend's probes: softpipe's take about a minute.
+const DEFAULT_TIMEOUT_S: u64 = 300;
+
+/// Runs `umbra card`; returns its outcome.
+pub fn main(args: &CardArgs) -> Outcome {
+    if let [old, new] = &args.diff[..] {
+        return diff(old, new, args.json);
+    }
+    if args.keep.is_some() && crate::judge::golden::under_ci() {
+        return Err(crate::cli::usage_error(
+            "card",
+            "--keep writes baselines, which CI never does (CI=true): keep cards locally and commit them after review",
+        ));
+    }
+    crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
+    let named: Vec<&str> = args.backend.iter().map(String::as_str).collect();
+    let ids = crate::harness::registry::selected(&named, crate::harness::registry::known())
+        .map_err(|e| crate::cli::usage_error("card", &e))?;
+    let limit = Duration::from_secs(args.timeout.unwrap_or(DEFAULT_TIMEOUT_S).max(1));
+    let mut cards = Vec::new();
+    let mut could_not = Vec::new();
+    for id in &ids {
+        let env = crate::harness::registry::worker_env(id);
+        let mut session = Session::start(id, &env, limit);
+        match of_session(&mut session) {
+            Ok(c) => {
+                if !args.json {
+                    print!("{}", c.table());
+                }
+                if let Some(dir) = &args.keep {
+                    let f = crate::judge::card::file(std::path::Path::new(dir), id, &c.release);
+                    std::fs::create_dir_all(f.parent().unwrap_or(std::path::Path::new(dir)))
+                        .and_then(|()| std::fs::write(&f, c.stored()))
+                        .map_err(|e| Error::new(format!("cannot keep {}: {e}", f.display())))?;
+                    eprintln!("kept {}", f.display());
+                }
+                cards.push(c);
+            }
+            Err(e) => {
+                eprintln!("{id}: no card: {e}");
+                could_not.push(id.clone());
+            }
+        }
+    }
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&cards).unwrap_or_default()
+        );
+    }
+    if cards.is_empty() && !could_not.is_empty() {
+        return Err(Error::new(format!(
+            "no backend could be measured ({})",
+            could_not.join(", ")
+        )));
+    }
+    Ok(Exit::Pass)
+}
+
+/// The card of `session`'s backend, measured by its worker; `Err`: why there is none (the
+/// backend is unavailable here, or its worker died or timed out).
+pub fn of_session(session: &mut Session) -> Result<Card, String> {
+    if let Err(why) = session.ready() {
+        return Err(format!("{why:?}"));
+    }
+    match session.reply(&Request::card())? {
+        (crate::harness::pool::Reply::Report(r), _) => r
+            .card
+            .ok_or_else(|| format!("the worker answered without a card: {}", r.reason)),
+        (crate::harness::pool::Reply::Crashed(how), stderr) => Err(format!(
+            "the worker died measuring it: {how}; stderr: {}",
+            stderr.lines().last().unwrap_or("")
+        )),
+        (crate::harness::pool::Reply::TimedOut, _) => {
+            Err("the probes did not finish within the time limit".into())
+        }
+    }
+}
+
+/// `--diff OLD NEW`.
+fn diff(old: &str, new: &str, json: bool) -> Outcome {
+    let read = |f: &str| Card::read(std::path::Path::new(f)).map_err(Error::new);
+    let (o, n) = (read(old)?, read(new)?);
+    let changes = n.changes_since(&o);
+    if json {
+        let rows: Vec<serde_json::Value> = changes
+            .iter()
+            .map(|c| {
+                serde_json::json!({
+                    "key": c.key, "what": c.what,
+                    "old": c.old.as_ref().map(|e| &e.value),
+                    "new": c.new.as_ref().map(|e| &e.value),
+                    "old_inside_spec": c.old.as_ref().and_then(|e| e.inside),
+                    "new_inside_spec": c.new.as_ref().and_then(|e| e.inside),
+                    "line": c.line(),
+                })
+            })
+            .collect();
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&rows).unwrap_or_default()
+        );
+    } else {
+        println!(
+            "{} ({}) → {} ({}): {} changed",
+            o.backend,
+            o.release,
+            n.backend,
+            n.release,
+            changes.len()
+        );
+        for c in &changes {
+            println!("  {}", c.line());
+        }
+    }
+    Ok(Exit::Pass)
+}
+
+/// Conformance's `card` row for `backend` (`BACKEND/card`): its live card against the one
+/// kept in golden directory `dir` for its release ([`crate::judge::card::check`]). A change
+/// fails check `card`, naming each entry; a release with no card kept yet is a skip that
+/// names what differs from the nearest kept release's. `bless` keeps the live card (never
+/// under `CI=true`: conformance refuses `--bless` there).
+pub fn conformance_row(
+    backend: &str,
+    session: &mut Session,
+    dir: &std::path::Path,
+    bless: bool,
+) -> umbra_report::RunResult {
+    use crate::judge::card::Verdict;
+    use umbra_report::{FailedCheck, Status, check::Check};
+    let t0 = std::time::Instant::now();
+    let mut row = umbra_report::RunResult {
+        name: format!("{backend}/card"),
+        backend: backend.to_string(),
+        case: "card".into(),
+        file: String::new(),
+        values: Vec::new(),
+        status: Status::Pass,
+        reason: String::new(),
+        metrics: None,
+        failed: Vec::new(),
+        golden: None,
+        time_s: 0.0,
+        reproduce: format!("cargo run --bin umbra -- card --backend {backend}"),
+        diagnosis: None,
+        stderr: String::new(),
+        fingerprint: None,
+        details: String::new(),
+    };
+    let live = match of_session(session) {
+        Ok(c) => c,
+        Err(e) => {
+            row.status = Status::Crash;
+            row.reason = format!("the behaviour card could not be measured: {e}");
+            return row;
+        }
+    };
+    row.details = live.table();
+    let kept = crate::judge::card::file(dir, backend, &live.release);
+    let keep = |why: String| -> (Status, String) {
+        let written = std::fs::create_dir_all(kept.parent().unwrap_or(dir))
+            .and_then(|()| std::fs::write(&kept, live.stored()));
+        match written {
+            Ok(()) => (
+                Status::Pass,
+                format!("card kept: {} ({why})", kept.display()),
+            ),
+            Err(e) => (
+                Status::Fail,
+                format!("cannot keep the card in {}: {e}", kept.display()),
+            ),
+        }
+    };
+    let lines = |ch: &[crate::judge::card::Change]| {
+        ch.iter()
+            .map(crate::judge::card::Change::line)
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    let (status, reason) = match crate::judge::card::check(dir, &live) {
+        Verdict::Unchanged => (Status::Pass, String::new()),
+        Verdict::Changed(ch) if bless => keep(format!("changed: {}", lines(&ch))),
+        Verdict::Changed(ch) => {
+            row.failed = vec![FailedCheck {
+                check: Check::Card,
+                count: ch.len() as u64,
+            }];
+            (
+                Status::Fail,
+                format!(
+                    "card changed against {} ({}): {}; review and `cargo xtask bless` to keep it",
+                    kept.display(),
+                    live.release,
+                    lines(&ch)
+                ),
+            )
+        }
+        Verdict::New(_) if bless => keep("new".into()),
+        Verdict::New(None) => (
+            Status::Skip(format!("no card kept for {backend} on {}", live.release)),
+            format!(
+                "no card kept for {backend} on {}: `cargo xtask bless` keeps the live one",
+                live.release
+            ),
+        ),
+        Verdict::New(Some((other, ch))) => {
+            let what = if ch.is_empty() {
+                format!("the same as {other}'s")
+            } else {
+                format!("against {other}'s: {}", lines(&ch))
+            };
+            (
+                Status::Skip(format!("no card kept for {backend} on {}", live.release)),
+                format!(
+                    "no card kept for {} yet; {what} (`cargo xtask bless` keeps it)",
+                    live.release
+                ),
+            )
+        }
+        Verdict::Unreadable(e) => (Status::Fail, e),
+    };
+    row.status = status;
+    row.reason = reason;
+    row.time_s = t0.elapsed().as_secs_f64();
+    row
+}
+
+/// Measures the cards of `backends` (none: this build's ids) on Mesa `mesa` (`system`, a
+/// prefix or build) in a child `umbra card --json`, as `drivers` and `bisect` do for each
+/// side or commit; `Err`: why there are none.
+pub fn measure_in_child(
+    exe: &std::path::Path,
+    mesa: &std::ffi::OsStr,
+    backends: &[String],
+) -> Result<Vec<Card>, String> {
+    let mut cmd = std::process::Command::new(exe);
+    cmd.args(["card", "--json", "--mesa"]).arg(mesa);
+    for b in backends {
+        cmd.args(["--backend", b]);
+    }
+    let out = cmd
+        .env_remove(crate::harness::mesa_build::ENV)
+        .stderr(std::process::Stdio::piped())
+        .output()
+        .map_err(|e| format!("cannot run umbra card: {e}"))?;
+    serde_json::from_slice(&out.stdout).map_err(|e| {
+        format!(
+            "umbra card gave no cards ({e}); it said: {}",
+            String::from_utf8_lossy(&out.stderr).trim()
+        )
+    })
+}
+
+/// Every entry that changed from `old` to `new`, per backend both measured, as
+/// `backend: change` lines in `new`'s order.
+pub fn changes_between(old: &[Card], new: &[Card]) -> Vec<String> {
+    new.iter()
+        .filter_map(|n| Some((n, old.iter().find(|o| o.backend == n.backend)?)))
+        .flat_map(|(n, o)| {
+            n.changes_since(o)
+                .into_iter()
+                .map(move |c| format!("{}: {}", n.backend, c.line()))
+        })
+        .collect()
+}

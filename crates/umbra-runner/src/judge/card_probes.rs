@@ -1,0 +1,727 @@
+//! The probes behind a behaviour card ([`crate::judge::card`]): short renders, through the
+//! backend's ordinary `render`, of scenes built so that one choice the specs leave to the
+//! driver decides what the frame shows, and the arithmetic that reads the choice back.
+//!
+//! Every probe looks at one floor plane from straight above (a directional light at height
+//! H = 4 over an orthographic ±2 m box of 32×32 texels, near 0, far F, so the floor's window
+//! depth is H/F exactly in real arithmetic) and asks one question of its visibility:
+//!
+//! - **Thresholds.** Most probes move the stored depth towards the light by an amount `o` (a
+//!   negative polygon offset, or the rounding of a depth that lies between two codes) and
+//!   look for the least constant shader bias `b` at which the floor reads lit: the reference
+//!   z − b meets the stored z − o where b = o. A bisection over `b` (each step one render)
+//!   brackets the crossing of the floor's lit fraction through ½; the bracket is the
+//!   measurement's resolution. So `o` is measured through the whole pipeline, as a program
+//!   sees it, on every backend alike (GLES 2's packed depth and manual compare included),
+//!   with no read-back of the depth texture (which GLES cannot do).
+//! - **Levels.** The LINEAR probe counts the distinct visibility values across a shadow edge
+//!   seen magnified (≈ 355 camera pixels per texel): bilinear weights of b bits give 2ᵇ − 1
+//!   values strictly between 0 and 1.
+//! - **One look.** The reference-clamp probe puts the floor beyond the light's far plane and
+//!   reads whether the compare clamped its reference (lit) or not (shadowed).
+//!
+//! - **Edge.** The sub-pixel probe moves an occluder's edge across a texel centre and
+//!   bisects the offset at which the centre's coverage flips: 2⁻⁽ᵇ⁺¹⁾ px for vertices snapped
+//!   to b bits, about 0 for none.
+//!
+//! Probes are small (32×32, the LINEAR one 512×32) so that a card costs a few seconds on a
+//! software rasterizer: about 200 renders in all.
+
+use std::path::Path;
+
+use serde_json::{Value, json};
+use umbra_case::format::DepthFormat;
+use umbra_case::{Backend, Frame, Needs, Prepared, Support};
+
+use crate::judge::card::{Entry, Sure};
+
+/// The light's height over the floor.
+const H: f64 = 4.0;
+/// Bisection steps per threshold: the bracket ends at 2⁻¹³ of the searched range.
+const STEPS: u32 = 13;
+/// Polygon-offset units of the offset-unit probe (negative: towards the light).
+const UNITS: f64 = 64.0;
+/// Polygon-offset factor of the slope probes (negative: towards the light).
+const FACTOR: f64 = 16.0;
+/// The slope probes' tilt: the floor's gradient in world height per world metre.
+const TILT: f64 = 0.363_970_234_266_202_4; // tan 20°
+
+/// A probe scene: the floor (flat, or tilted with gradient `tilt` along `diag`onal or x),
+/// the light's far plane `far`, the depth format, polygon offset and constant bias.
+#[derive(Clone, Copy)]
+struct Scene {
+    format: DepthFormat,
+    far: f64,
+    tilt: f64,
+    diagonal: bool,
+    offset: [f64; 2],
+    bias: f64,
+    linear_edge: bool,
+    /// An occluder over x < the centre of texel column 16 + this many texels (the
+    /// sub-pixel probe), seen on the floor beneath that column.
+    edge: Option<f64>,
+}
+
+impl Scene {
+    fn flat(format: DepthFormat, z0: f64) -> Scene {
+        Scene {
+            format,
+            far: H / z0,
+            tilt: 0.0,
+            diagonal: false,
+            offset: [0.0, 0.0],
+            bias: 0.0,
+            linear_edge: false,
+            edge: None,
+        }
+    }
+
+    /// The case, as JSON.
+    fn case(&self) -> Value {
+        let normal = if self.tilt == 0.0 {
+            [0.0, 1.0, 0.0]
+        } else if self.diagonal {
+            let g = self.tilt / std::f64::consts::SQRT_2;
+            [-g, 1.0, -g]
+        } else {
+            [-self.tilt, 1.0, 0.0]
+        };
+        let mut objects = vec![json!({ "plane": {
+            "point": [0, 0, 0], "normal": normal, "half_extent": 4 } })];
+        let (camera, filter) = if let Some(d) = self.edge {
+            // Texel column 16's centre is x = 0.0625 m (window x 16.5); the occluder, 1 m up,
+            // ends d texels (of 0.125 m) right of it; the camera, below it, sees the floor
+            // inside that column only.
+            let e = 0.0625 + d * 0.125;
+            objects.push(json!({ "plane": {
+                "point": [e - 2.0, 1, 0], "normal": [0, 1, 0], "half_extent": 2 } }));
+            (
+                json!({ "eye": [0.0625, 0.4, 0.3], "target": [0.0625, 0, 0], "up": [0, 1, 0],
+                        "fov_y_deg": 6, "near": 0.05, "far": 10, "size": [32, 32] }),
+                "nearest",
+            )
+        } else if self.linear_edge {
+            // An occluder over x < 0, one metre up: its edge on the map's texel boundary
+            // u = ½; the camera, below it, looks at the floor across the edge from the side.
+            objects.push(json!({ "plane": {
+                "point": [-2, 1, 0], "normal": [0, 1, 0], "half_extent": 2 } }));
+            (
+                json!({ "eye": [0.04, 0.4, 0.5], "target": [0.04, 0, 0], "up": [0, 1, 0],
+                        "fov_y_deg": 1.0, "near": 0.05, "far": 10, "size": [512, 32] }),
+                "linear",
+            )
+        } else {
+            (
+                json!({ "eye": [0, 2.5, 0], "target": [0, 0, 0], "up": [0, 0, -1],
+                        "fov_y_deg": 40, "near": 0.1, "far": 10, "size": [32, 32] }),
+                "nearest",
+            )
+        };
+        json!({
+            "name": "card-probe",
+            "about": "a behaviour-card probe (umbra_runner::judge::card_probes)",
+            "scene": { "objects": objects },
+            "camera": camera,
+            "light": { "directional": { "position": [0, H, 0], "target": [0, 0, 0],
+                "up": [0, 0, -1],
+                "ortho": { "left": -2, "right": 2, "bottom": -2, "top": 2,
+                           "near": 0, "far": self.far } } },
+            "shadow": { "size": [32, 32], "format": self.format.name(), "filter": filter,
+                "bias": { "constant": self.bias, "polygon_offset": self.offset } },
+        })
+    }
+}
+
+/// Renders probe scenes on one backend.
+pub struct Prober<'a> {
+    backend: &'a mut dyn Backend,
+    /// Renders made so far.
+    pub renders: u32,
+}
+
+/// Why a probe could not measure: the backend cannot run the scene, or a render failed.
+type Probe<T> = Result<T, String>;
+
+impl<'a> Prober<'a> {
+    /// A prober over `backend`.
+    pub fn new(backend: &'a mut dyn Backend) -> Prober<'a> {
+        Prober {
+            backend,
+            renders: 0,
+        }
+    }
+
+    fn render(&mut self, s: &Scene) -> Probe<Frame> {
+        let text = s.case().to_string();
+        let point = umbra_case::load_str(&text, Path::new("<card probe>"))
+            .map_err(|e| format!("the probe scene is not a valid case: {e}"))?
+            .remove(0);
+        if let Support::Unsupported(why) = self.backend.supports(&Needs::of(&point.case)) {
+            return Err(format!("not supported here: {why}"));
+        }
+        self.renders += 1;
+        let run = Prepared::new(point);
+        let frame = self.backend.render(&run).map_err(|e| e.to_string());
+        if frame.is_err() {
+            let _ = self.backend.restore();
+        }
+        frame
+    }
+
+    /// The floor's lit fraction: the mean visibility over covered pixels.
+    fn lit(&mut self, s: &Scene) -> Probe<f64> {
+        let f = self.render(s)?;
+        let (sum, n) = (0..f.visibility.len())
+            .filter(|&i| f.covered(i) && f.visibility[i].is_finite())
+            .fold((0.0, 0usize), |(s, n), i| {
+                (s + f64::from(f.visibility[i]), n + 1)
+            });
+        if n == 0 {
+            return Err("the probe's floor covered no pixel".into());
+        }
+        Ok(sum / n as f64)
+    }
+
+    /// The constant bias at which `s`'s floor turns from shadowed to lit, searched in
+    /// `[lo, hi]`: the bracket's middle and half-width.
+    fn threshold(&mut self, s: Scene, lo: f64, hi: f64) -> Probe<(f64, f64)> {
+        self.crossing(&|b| Scene { bias: b, ..s }, lo, hi, STEPS)
+    }
+
+    /// The `x` in `[lo, hi]` at which the floor of scene `make(x)` turns from shadowed to lit,
+    /// bisected over `steps` renders: the bracket's middle and half-width.
+    fn crossing(
+        &mut self,
+        make: &dyn Fn(f64) -> Scene,
+        lo: f64,
+        hi: f64,
+        steps: u32,
+    ) -> Probe<(f64, f64)> {
+        let (l, h) = (self.lit(&make(lo))?, self.lit(&make(hi))?);
+        if !(l < 0.5 && h >= 0.5) {
+            return Err(format!(
+                "no crossing in the probe's range: lit fraction {l:.3} at {lo:.3e}, {h:.3} at {hi:.3e}"
+            ));
+        }
+        let (mut a, mut b) = (lo, hi);
+        for _ in 0..steps {
+            let m = 0.5 * (a + b);
+            if self.lit(&make(m))? < 0.5 {
+                a = m
+            } else {
+                b = m
+            }
+        }
+        Ok((0.5 * (a + b), 0.5 * (b - a)))
+    }
+}
+
+/// The card's entries, measured on `backend` (whose frames the probes render).
+pub fn measure(backend: &mut dyn Backend) -> (Vec<Entry>, u32) {
+    let mut p = Prober::new(backend);
+    let mut entries = Vec::new();
+    for format in [
+        DepthFormat::Depth16,
+        DepthFormat::Depth24,
+        DepthFormat::Depth32f,
+    ] {
+        entries.extend(offset_unit(&mut p, format));
+    }
+    entries.extend(slope_term(&mut p));
+    for format in [DepthFormat::Depth16, DepthFormat::Depth24] {
+        entries.push(rounding(&mut p, format));
+    }
+    entries.push(linear(&mut p));
+    entries.push(subpixel(&mut p));
+    for format in [
+        DepthFormat::Depth16,
+        DepthFormat::Depth24,
+        DepthFormat::Depth32f,
+    ] {
+        entries.push(reference_clamp(&mut p, format));
+    }
+    (entries, p.renders)
+}
+
+/// Short names of the formats, for entry titles.
+fn short(f: DepthFormat) -> &'static str {
+    match f {
+        DepthFormat::Depth16 => "D16",
+        DepthFormat::Depth24 => "D24",
+        DepthFormat::Depth32f => "D32F",
+        DepthFormat::Unsized => "unsized",
+    }
+}
+
+/// The format's unit of r at depth `z`: one code (fixed point) or 2^(⌊log₂ z⌋ − 23) (float).
+fn unit_of(f: DepthFormat, z: f64) -> f64 {
+    match f.fixed_bits() {
+        Some(n) => 1.0 / f64::from((1u32 << n) - 1),
+        None => 2f64.powi(umbra_case::math::log2(z).floor() as i32 - 23),
+    }
+}
+
+/// Polygon-offset unit r of `format` at window depths ¼ and ¾, and whether it differs.
+fn offset_unit(p: &mut Prober, format: DepthFormat) -> Vec<Entry> {
+    let mut out = Vec::new();
+    let mut seen = Vec::new();
+    for z0 in [0.25, 0.75] {
+        let unit = unit_of(format, z0);
+        let (lo, hi) = format.offset_unit_range(z0 as f32);
+        let scene = Scene {
+            offset: [0.0, -UNITS],
+            ..Scene::flat(format, z0)
+        };
+        let key = format!("offset-unit.{}.z{z0}", format.name());
+        let what = format!("polygon-offset unit r, {}, z ≈ {z0}", short(format));
+        let unit_name = if format.is_fixed() {
+            "codes"
+        } else {
+            "× 2^(⌊log₂ z⌋ − 23)"
+        };
+        let spec = if format.is_fixed() {
+            format!(
+                "{:.3} to {:.3} codes: 2⁻ⁿ ≤ r ≤ 2·2⁻ⁿ (Vulkan \"Depth Bias\"; umbra holds GL to it)",
+                lo / unit,
+                hi / unit
+            )
+        } else {
+            "1: r = 2^(e − 23), e the exponent of the primitive's largest |z| (GL 4.6 §14.6.5, Vulkan \"Depth Bias\")".to_string()
+        };
+        let probe = format!(
+            "flat floor at z = {z0}, polygon offset units −{UNITS}: the least constant bias that reads it lit, ÷ {UNITS}"
+        );
+        let measured = p.threshold(scene, 0.0, UNITS * 8.0 * hi);
+        let entry = match measured {
+            Ok((b, half)) => {
+                let x = b / UNITS / unit;
+                let sure = Sure::Within(half / UNITS / unit + 1.0 / UNITS);
+                seen.push(x);
+                let value = whole_or_decimal(x, 0.1, unit_name);
+                let inside = x >= lo / unit - 0.02 && x <= hi / unit + 0.02;
+                Entry::new(
+                    &key,
+                    &what,
+                    value,
+                    Some(x),
+                    &spec,
+                    Some(inside),
+                    &probe,
+                    sure,
+                )
+            }
+            Err(why) => Entry::unmeasured(&key, &what, &spec, &probe, why),
+        };
+        out.push(entry);
+    }
+    if let [a, b] = seen[..] {
+        let key = format!("offset-unit.{}.depends-on-depth", format.name());
+        let what = format!(
+            "polygon-offset unit r, {}: changes with depth",
+            short(format)
+        );
+        let same = (a - b).abs() <= 0.1 * a.abs().max(b.abs());
+        let value = if same { "no" } else { "yes" }.to_string();
+        let spec = if format.is_fixed() {
+            "no: constant over the range (GL 4.6 §14.6.5)"
+        } else {
+            "no, in units of 2^(e − 23) (r itself follows z's exponent)"
+        };
+        out.push(Entry::new(
+            &key,
+            &what,
+            value,
+            None,
+            spec,
+            Some(same),
+            "the two offset-unit probes, z ≈ 0.25 and 0.75",
+            Sure::Exact,
+        ));
+    }
+    out
+}
+
+/// `x` as a whole number of `unit` when within `tol` of one, else to two decimals.
+fn whole_or_decimal(x: f64, tol: f64, unit: &str) -> String {
+    let k = x.round();
+    if (x - k).abs() < tol && k > 0.0 {
+        let unit = if k == 1.0 {
+            unit.trim_end_matches('s')
+        } else {
+            unit
+        };
+        format!("{k:.0} {unit}")
+    } else {
+        format!("{x:.2} {unit}")
+    }
+}
+
+/// The slope term m: its magnitude along an axis (where every form agrees), and max or exact
+/// over a diagonal gradient.
+fn slope_term(p: &mut Prober) -> Vec<Entry> {
+    let format = DepthFormat::Depth24;
+    let z0 = 0.25;
+    let tilted = |diagonal| Scene {
+        tilt: TILT,
+        diagonal,
+        offset: [-FACTOR, 0.0],
+        ..Scene::flat(format, z0)
+    };
+    // Window depth per texel along the tilt: TILT m of height per m, 4/32 m per texel, 1/F
+    // of depth per m of height.
+    let s = TILT * (4.0 / 32.0) / (H / z0);
+    let probe = format!(
+        "a floor tilted 20° (D24, z ≈ 0.25, polygon offset factor −{FACTOR}) along x, and along the diagonal: the least biases that read it lit"
+    );
+    let (axis_key, axis_what) = (
+        "slope-term.axis",
+        "polygon-offset slope m along an axis, ÷ |∂z/∂x|",
+    );
+    let axis_spec = "1: along an axis max(|∂z/∂x|, |∂z/∂y|) and √(∂z/∂x² + ∂z/∂y²) agree (GL 4.6 §14.6.5, Vulkan \"Depth Bias\"), up to vertex snapping";
+    let (diag_key, diag_what) = (
+        "slope-term.diagonal",
+        "polygon-offset slope m over a diagonal gradient, ÷ m along an axis",
+    );
+    let diag_spec = "0.707 (max(|∂z/∂x|, |∂z/∂y|)) to 1 (√(∂z/∂x² + ∂z/∂y²)): GL 4.6 §14.6.5, Vulkan \"Depth Bias\"";
+    let both = p
+        .threshold(tilted(false), 0.0, 4.0 * FACTOR * s)
+        .and_then(|ax| Ok((ax, p.threshold(tilted(true), 0.0, 4.0 * FACTOR * s)?)));
+    let ((ax, hx), (dg, hd)) = match both {
+        Ok(b) => b,
+        Err(why) => {
+            return vec![
+                Entry::unmeasured(axis_key, axis_what, axis_spec, &probe, why.clone()),
+                Entry::unmeasured(diag_key, diag_what, diag_spec, &probe, why),
+            ];
+        }
+    };
+    // The stored depth is the texel centre's, the reference the pixel's: half a texel of
+    // slope each way, which the median crossing averages out to well under 1 %.
+    let axis = ax / (FACTOR * s);
+    let axis_err = hx / (FACTOR * s) + 0.01;
+    let axis_entry = Entry::new(
+        axis_key,
+        axis_what,
+        classify(axis, &[(1.0, "1 × |∂z/∂x|")], 0.03, "× |∂z/∂x|"),
+        Some(axis),
+        axis_spec,
+        Some((axis - 1.0).abs() <= 0.03 + axis_err),
+        &probe,
+        Sure::Within(axis_err),
+    );
+    let r = dg / ax;
+    let err = r * (hx / ax + hd / dg) + 0.01;
+    let diag_entry = Entry::new(
+        diag_key,
+        diag_what,
+        classify(
+            r,
+            &[
+                (std::f64::consts::FRAC_1_SQRT_2, "max(|∂z/∂x|, |∂z/∂y|)"),
+                (1.0, "√(∂z/∂x² + ∂z/∂y²), exact"),
+                (std::f64::consts::SQRT_2, "|∂z/∂x| + |∂z/∂y|"),
+            ],
+            0.03,
+            "(ratio)",
+        ),
+        Some(r),
+        diag_spec,
+        Some((std::f64::consts::FRAC_1_SQRT_2 - err..=1.0 + err).contains(&r)),
+        &probe,
+        Sure::Within(err),
+    );
+    vec![axis_entry, diag_entry]
+}
+
+/// The name of the known value `x` is within `tol` of, else `x` to two decimals and `unit`.
+fn classify(x: f64, known: &[(f64, &str)], tol: f64, unit: &str) -> String {
+    known
+        .iter()
+        .find(|(v, _)| (x - v).abs() < tol)
+        .map_or_else(|| format!("{x:.2} {unit}"), |(_, n)| (*n).to_string())
+}
+
+/// How a fixed-point format rounds a depth that lies between two codes.
+fn rounding(p: &mut Prober, format: DepthFormat) -> Entry {
+    let n = format.fixed_bits().unwrap_or(24);
+    let m = f64::from((1u32 << n) - 1);
+    // D16 mid-range; D24 near 0, where f32 has 64 values per code (near ½ it has one).
+    let base = if n == 16 { 0.3 } else { 0.02 };
+    let code = (base * m).floor();
+    let key = format!("depth-rounding.{}", format.name());
+    let what = format!("depth rounding, {}", short(format));
+    let spec = "to either neighbouring code; to nearest preferred (Vulkan \"Conversion from Floating-Point to Normalized Fixed-Point\", GL 4.6 §2.3.5.2)";
+    let probe = format!(
+        "flat floors at codes {code:.0} + ¼ and + ¾, no offset: the sign of the least bias that reads each lit"
+    );
+    let mut signs = Vec::new();
+    let mut closest = f64::INFINITY;
+    for frac in [0.25, 0.75] {
+        let scene = Scene::flat(format, (code + frac) / m);
+        match p.threshold(scene, -2.0 / m, 2.0 / m) {
+            Ok((b, _)) => {
+                closest = closest.min((b * m).abs());
+                signs.push(b > 0.0);
+            }
+            Err(why) => return Entry::unmeasured(&key, what.as_str(), spec, &probe, why),
+        }
+    }
+    if closest < 0.1 {
+        return Entry::unmeasured(
+            &key,
+            &what,
+            spec,
+            &probe,
+            format!(
+                "not observable here: a threshold within {closest:.2} code of the floor's own depth (the stored value is not this format's code as a program sees it, or f32 arithmetic rounds at this format's step)"
+            ),
+        );
+    }
+    let value = match signs[..] {
+        [true, false] => "to nearest",
+        [true, true] => "truncated (towards 0)",
+        [false, false] => "up (away from 0)",
+        _ => "inconsistent (¼ rounds up, ¾ down)",
+    };
+    Entry::new(
+        &key,
+        &what,
+        value.to_string(),
+        None,
+        spec,
+        Some(value != "inconsistent (¼ rounds up, ¾ down)"),
+        &probe,
+        Sure::Margin(closest),
+    )
+}
+
+/// LINEAR with compare: how the 2×2 compare results are combined, and the weights' bits.
+fn linear(p: &mut Prober) -> Entry {
+    let key = "linear-compare";
+    let what = "LINEAR with compare: what is filtered, weight bits";
+    let spec = "GL: any weighting of the 2×2 compare results (GL 3.3 §3.8.16); Vulkan: bilinear weights of ≥ 4 bits (subTexelPrecisionBits)";
+    let probe = "a shadow edge on a texel boundary (D24) seen magnified, ≈ 355 px per texel: the distinct values between 0 and 1";
+    let scene = Scene {
+        linear_edge: true,
+        bias: 0.01,
+        ..Scene::flat(DepthFormat::Depth24, 0.25)
+    };
+    let frame = match p.render(&scene) {
+        Ok(f) => f,
+        Err(why) => return Entry::unmeasured(key, what, spec, probe, why),
+    };
+    let tol = f64::from(frame.visibility_storage.tolerance());
+    let mut levels: Vec<f64> = (0..frame.visibility.len())
+        .filter(|&i| frame.covered(i))
+        .map(|i| f64::from(frame.visibility[i]))
+        .filter(|v| *v > tol && *v < 1.0 - tol)
+        .collect();
+    levels.sort_by(f64::total_cmp);
+    levels.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
+    let n = levels.len();
+    let vulkan = p.backend.profile().spec == umbra_case::Spec::Vulkan;
+    let float = frame.visibility_storage == umbra_case::VisibilityStorage::Float32;
+    // The weights' bits: the fewest k for which every value is a multiple of 2⁻ᵏ. Only a
+    // float visibility target shows them; an 8-bit one holds j/255 whatever the weights.
+    // Through an 8-bit target only weights of up to 6 bits stand apart from j/255.
+    // A float target holds them exactly (a thousandth of a step of slack).
+    let max_bits = if float { 16 } else { 6 };
+    let bits = (1..=max_bits).find(|k| {
+        let q = f64::from(1u32 << k);
+        let slack = if float { 1e-3 / q } else { 0.6 / 255.0 };
+        levels
+            .iter()
+            .all(|v| (v - (v * q).round() / q).abs() < slack)
+    });
+    let (value, sure) = match (n, float, bits) {
+        (0, _, _) => (
+            "one tap (NEAREST), or depths filtered before the compare: only 0 and 1".to_string(),
+            Sure::Exact,
+        ),
+        (1..=2, _, _) => (format!("{n} values between 0 and 1"), Sure::Exact),
+        (_, _, Some(k)) => (
+            format!("bilinear of the compare results, {k}-bit weights"),
+            Sure::Exact,
+        ),
+        (_, true, None) => (
+            "bilinear of the compare results, weights finer than 16 bits".to_string(),
+            Sure::AtLeast,
+        ),
+        (_, false, _) => (
+            "bilinear of the compare results (weight bits hidden by the 8-bit visibility target)"
+                .to_string(),
+            Sure::AtLeast,
+        ),
+    };
+    // GL allows any weighting; Vulkan bilinear weights of at least 4 bits.
+    let inside = !vulkan || (n > 2 && bits.is_none_or(|k| k >= 4));
+    Entry::new(
+        key,
+        what,
+        value,
+        Some(n as f64),
+        spec,
+        Some(inside),
+        &if n <= 8 {
+            let v: Vec<String> = levels.iter().map(|v| format!("{v:.4}")).collect();
+            format!("{probe} ({n} found: {})", v.join(", "))
+        } else {
+            format!("{probe} ({n} found)")
+        },
+        sure,
+    )
+}
+
+/// The shadow pass's sub-pixel precision: an occluder's edge moved across a texel centre by
+/// δ; vertices snapped to 2⁻ᵇ of a pixel (round to nearest) leave the centre's coverage as
+/// at δ = 0 while |δ| < 2⁻⁽ᵇ⁺¹⁾, so the coverage flips at |δ| = 2⁻⁽ᵇ⁺¹⁾ (on the side the tie
+/// rule gives the centre). No snapping flips it at δ ≈ 0.
+fn subpixel(p: &mut Prober) -> Entry {
+    let key = "subpixel-bits";
+    let what = "shadow-pass rasterization: sub-pixel bits of a vertex";
+    let spec = "at least 4 (Vulkan subPixelPrecisionBits; GL SUBPIXEL_BITS, GL 4.6 §14.5)";
+    let probe = "an occluder's edge moved across a texel centre (D24): the offset, in pixels, at which the centre's coverage flips";
+    // A bias of 100 D24 codes keeps the floor off its own texels (a driver that truncates
+    // depth would shadow it), far below the occluder's 0.0625 in front of it.
+    let flat = Scene {
+        bias: 100.0 / f64::from((1u32 << 24) - 1),
+        ..Scene::flat(DepthFormat::Depth24, 0.25)
+    };
+    // x = −δ: as x grows the edge leaves the centre, which turns lit.
+    let make = |x: f64| Scene {
+        edge: Some(-x),
+        ..flat
+    };
+    match p.crossing(&make, -0.25, 0.25, 20) {
+        Ok((x, half)) => {
+            let d = x.abs();
+            let (value, sure, inside) = if d <= 2.0 * half + 1e-6 {
+                (
+                    "no snapping seen: the coverage flips within 2⁻²⁰ px of the centre".to_string(),
+                    Sure::AtLeast,
+                    true,
+                )
+            } else {
+                let b = -umbra_case::math::log2(d) - 1.0;
+                let k = b.round();
+                let side = if x > 0.0 { "covered" } else { "not covered" };
+                let v = if (b - k).abs() < 0.1 {
+                    format!("{k:.0} bits (a centre on the edge is {side})")
+                } else {
+                    format!("{b:.1} bits (flips at {d:.2e} px; a centre on the edge is {side})")
+                };
+                (v, Sure::Within(half), k >= 4.0)
+            };
+            Entry::new(
+                key,
+                what,
+                value,
+                Some(x),
+                spec,
+                Some(inside),
+                &format!("{probe}: {x:+.3e} px"),
+                sure,
+            )
+        }
+        Err(why) => Entry::unmeasured(key, what, spec, probe, why),
+    }
+}
+
+/// Whether the compare clamps a reference beyond the far plane (> 1) to 1.
+fn reference_clamp(p: &mut Prober, format: DepthFormat) -> Entry {
+    let key = format!("reference-clamp.{}", format.name());
+    let what = format!("compare reference beyond the far plane, {}", short(format));
+    let spec = if format.is_fixed() {
+        "clamped to [0, 1]: reads lit against the cleared map (GL 3.3 §3.8.16, Vulkan \"Depth Compare Operation\")"
+    } else {
+        "not clamped: reads shadowed against the cleared map (a float format's reference is compared as it is)"
+    };
+    let probe = "a floor at z = 4/3, beyond the light's far plane, over a map holding nothing but its clear value";
+    let scene = Scene {
+        far: 3.0,
+        ..Scene::flat(format, 0.25)
+    };
+    match p.lit(&scene) {
+        Ok(lit) => {
+            let clamped = lit > 0.5;
+            let value = if clamped { "clamped" } else { "not clamped" };
+            Entry::new(
+                &key,
+                &what,
+                value.to_string(),
+                Some(lit),
+                spec,
+                Some(clamped == format.is_fixed()),
+                &format!("{probe}: lit fraction {lit:.3}"),
+                Sure::Exact,
+            )
+        }
+        Err(why) => Entry::unmeasured(&key, &what, spec, probe, why),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The reference's card is what umbra's model says it does, entry by entry, each
+    /// expectation from the model's own documentation: so the probes read the conventions
+    /// right, and a change to either shows here.
+    #[test]
+    fn the_reference_card_is_the_model() {
+        let mut backend = umbra_ref::RefBackend;
+        let (entries, renders) = measure(&mut backend);
+        assert!(renders > 100, "{renders} renders");
+        let model: &[(&str, &str)] = &[
+            // DepthFormat::offset_unit: one code step for fixed point, 2^(e − 23) for float.
+            ("offset-unit.depth16.z0.25", "1 code"),
+            ("offset-unit.depth16.z0.75", "1 code"),
+            ("offset-unit.depth16.depends-on-depth", "no"),
+            ("offset-unit.depth24.z0.25", "1 code"),
+            ("offset-unit.depth24.z0.75", "1 code"),
+            ("offset-unit.depth24.depends-on-depth", "no"),
+            ("offset-unit.depth32f.z0.25", "1 × 2^(⌊log₂ z⌋ − 23)"),
+            ("offset-unit.depth32f.z0.75", "1 × 2^(⌊log₂ z⌋ − 23)"),
+            ("offset-unit.depth32f.depends-on-depth", "no"),
+            // shadow_pass: m = max(|∂z/∂x|, |∂z/∂y|) ("ours: max").
+            ("slope-term.axis", "1 × |∂z/∂x|"),
+            ("slope-term.diagonal", "max(|∂z/∂x|, |∂z/∂y|)"),
+            // DepthFormat::store: round to nearest.
+            ("depth-rounding.depth16", "to nearest"),
+            // lookup: bilinear weights of the compare results in f32.
+            (
+                "linear-compare",
+                "bilinear of the compare results, weights finer than 16 bits",
+            ),
+            // raster (SNAP_PX's note): vertices snapped to 8 bits by rounding; a centre on an
+            // edge is covered by the top-left rule only, and this edge is a right edge.
+            (
+                "subpixel-bits",
+                "8 bits (a centre on the edge is not covered)",
+            ),
+            // lookup step 6: clamped for a fixed-point hardware compare, never for float.
+            ("reference-clamp.depth16", "clamped"),
+            ("reference-clamp.depth24", "clamped"),
+            ("reference-clamp.depth32f", "not clamped"),
+        ];
+        for (key, value) in model {
+            let e = entries
+                .iter()
+                .find(|e| e.key == *key)
+                .unwrap_or_else(|| panic!("no entry {key}"));
+            assert_eq!(e.value, *value, "{key}: {e:?}");
+            assert_eq!(e.inside, Some(true), "{key}");
+        }
+        // D24's rounding cannot be seen through GL's clip convention, which the reference
+        // follows: f32 arithmetic rounds at about a D24 code there. It says so.
+        let d24 = entries
+            .iter()
+            .find(|e| e.key == "depth-rounding.depth24")
+            .expect("a D24 rounding entry");
+        assert!(
+            d24.value.starts_with("not measured: not observable"),
+            "{d24:?}"
+        );
+        assert_eq!(entries.len(), model.len() + 1);
+    }
+}
