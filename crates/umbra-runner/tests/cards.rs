@@ -175,3 +175,37 @@ fn conformance_holds_a_backend_to_its_kept_card() {
         "{t}"
     );
 }
+
+/// `umbra selftest cards` on one GL 3.3 and one GLES 2 backend (every card fault applies to
+/// one of them): each fault moves its own entry, and the card names it.
+#[test]
+fn every_card_fault_is_named_by_its_entry() {
+    let o = umbra(&[
+        "selftest",
+        "cards",
+        "--backend",
+        "gl33/llvmpipe",
+        "--backend",
+        "gles2/llvmpipe",
+    ]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(!t.contains("MISSED"), "{t}");
+    for fault in [
+        "offset-units@-0.5",
+        "offset-factor@0.41421356",
+        "bilinear-coarse",
+        "clamp-float",
+        "no-clamp",
+    ] {
+        assert!(
+            t.contains(&format!("caught gl33/llvmpipe {fault}"))
+                || t.contains(&format!("caught gles2/llvmpipe {fault}")),
+            "{fault}: {t}"
+        );
+    }
+    assert!(
+        t.contains("7 of 7 fault × backend pairs named by their entry"),
+        "{t}"
+    );
+}

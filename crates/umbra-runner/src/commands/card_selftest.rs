@@ -19,8 +19,9 @@
 //!   `reference-clamp.depth16`.
 //!
 //! Entries with no fault yet, because no umbra-side change can move them (they are the
-//! rasterizer's): `slope-term.diagonal` (max against exact needs the driver's own slope),
-//! `depth-rounding.*` (the conversion of the stored depth), `offset-unit.*.depends-on-depth`.
+//! rasterizer's and the sampler's): `slope-term.diagonal` (max against exact needs the
+//! driver's own slope), `depth-rounding.*` and `reference-precision.*` (the conversions of
+//! the stored depth and of the reference), `subpixel-bits`, `offset-unit.*.depends-on-depth`.
 
 use std::time::Duration;
 
@@ -40,7 +41,7 @@ pub const CARD_FAULTS: [(&str, &str); 5] = [
 ];
 
 /// The entries no card fault moves yet, and why.
-pub const UNFAULTED: [(&str, &str); 3] = [
+pub const UNFAULTED: [(&str, &str); 5] = [
     (
         "slope-term.diagonal",
         "max against exact is the rasterizer's slope; umbra cannot change it from outside",
@@ -48,6 +49,14 @@ pub const UNFAULTED: [(&str, &str); 3] = [
     (
         "depth-rounding.*",
         "the depth conversion is the driver's; umbra cannot change it from outside",
+    ),
+    (
+        "reference-precision.*",
+        "the compare's precision is the sampler's; umbra cannot change it from outside",
+    ),
+    (
+        "subpixel-bits",
+        "vertex snapping is the rasterizer's; umbra cannot change it from outside",
     ),
     (
         "offset-unit.*.depends-on-depth",

@@ -229,7 +229,7 @@ pub fn measure(backend: &mut dyn Backend) -> (Vec<Entry>, u32) {
     }
     entries.extend(slope_term(&mut p));
     for format in [DepthFormat::Depth16, DepthFormat::Depth24] {
-        entries.push(rounding(&mut p, format));
+        entries.extend(rounding(&mut p, format));
     }
     entries.push(linear(&mut p));
     entries.push(subpixel(&mut p));
@@ -441,58 +441,107 @@ fn classify(x: f64, known: &[(f64, &str)], tol: f64, unit: &str) -> String {
         .map_or_else(|| format!("{x:.2} {unit}"), |(_, n)| (*n).to_string())
 }
 
-/// How a fixed-point format rounds a depth that lies between two codes.
-fn rounding(p: &mut Prober, format: DepthFormat) -> Entry {
+/// How a fixed-point format rounds a depth that lies between two codes, and at what
+/// precision the compare takes its reference.
+///
+/// Three flat floors at code c + f, f = 0, ¼, ¾, no offset; t_f is the least bias (in codes)
+/// that reads each lit. A reference compared as it is gives t_f = (c + f) − stored: t₀ = 0
+/// (an exact code is stored exactly whatever the rounding), and t_¼, t_¾ = ¼, −¼ (to nearest),
+/// ¼, ¾ (truncated) or −¾, −¼ (up). A reference rounded to a code first shifts every t by
+/// −½, truncated by −1: t₀ measures the shift, and the rounding is read from t_¼ and t_¾
+/// less it.
+fn rounding(p: &mut Prober, format: DepthFormat) -> Vec<Entry> {
     let n = format.fixed_bits().unwrap_or(24);
     let m = f64::from((1u32 << n) - 1);
     // D16 mid-range; D24 near 0, where f32 has 64 values per code (near ½ it has one).
     let base = if n == 16 { 0.3 } else { 0.02 };
     let code = (base * m).floor();
-    let key = format!("depth-rounding.{}", format.name());
-    let what = format!("depth rounding, {}", short(format));
-    let spec = "to either neighbouring code; to nearest preferred (Vulkan \"Conversion from Floating-Point to Normalized Fixed-Point\", GL 4.6 §2.3.5.2)";
-    let probe = format!(
-        "flat floors at codes {code:.0} + ¼ and + ¾, no offset: the sign of the least bias that reads each lit"
+    let (rkey, rwhat) = (
+        format!("depth-rounding.{}", format.name()),
+        format!("depth rounding, {}", short(format)),
     );
-    let mut signs = Vec::new();
-    let mut closest = f64::INFINITY;
-    for frac in [0.25, 0.75] {
+    let rspec = "to either neighbouring code; to nearest preferred (Vulkan \"Conversion from Floating-Point to Normalized Fixed-Point\", GL 4.6 §2.3.5.2)";
+    let (qkey, qwhat) = (
+        format!("reference-precision.{}", format.name()),
+        format!("compare reference's precision, {}", short(format)),
+    );
+    let qspec = "not specified: GL 3.3 §3.8.16 and Vulkan \"Depth Compare Operation\" clamp a fixed-point format's reference to [0, 1] and say nothing of its precision";
+    let probe = format!(
+        "flat floors at codes {code:.0} + 0, ¼ and ¾, no offset: the least bias that reads each lit, in codes"
+    );
+    let mut t = Vec::new();
+    for frac in [0.0, 0.25, 0.75] {
         let scene = Scene::flat(format, (code + frac) / m);
         match p.threshold(scene, -2.0 / m, 2.0 / m) {
-            Ok((b, _)) => {
-                closest = closest.min((b * m).abs());
-                signs.push(b > 0.0);
+            Ok((b, _)) => t.push(b * m),
+            Err(why) => {
+                return vec![
+                    Entry::unmeasured(&qkey, &qwhat, qspec, &probe, why.clone()),
+                    Entry::unmeasured(&rkey, &rwhat, rspec, &probe, why),
+                ];
             }
-            Err(why) => return Entry::unmeasured(&key, what.as_str(), spec, &probe, why),
         }
     }
-    if closest < 0.1 {
-        return Entry::unmeasured(
-            &key,
-            &what,
-            spec,
-            &probe,
-            format!(
-                "not observable here: a threshold within {closest:.2} code of the floor's own depth (the stored value is not this format's code as a program sees it, or f32 arithmetic rounds at this format's step)"
-            ),
+    let probe = format!("{probe}: {:+.3}, {:+.3}, {:+.3}", t[0], t[1], t[2]);
+    // Against the code's own threshold every rounding puts ¼ at +¼ or −¾ and ¾ at −¼ or +¾;
+    // anything else is f32 noise of about a code (D24 through GL's clip convention).
+    let near = |x: f64, of: [f64; 2]| of.iter().any(|v| (x - v).abs() < 0.1);
+    let consistent = near(t[1] - t[0], [0.25, -0.75]) && near(t[2] - t[0], [-0.25, 0.75]);
+    let shift = [
+        (0.0, "compared as it is"),
+        (-0.5, "rounded to a code"),
+        (-1.0, "truncated to a code"),
+    ]
+    .into_iter()
+    .find(|(s, _)| consistent && (t[0] - s).abs() < 0.1);
+    let Some((shift, precision)) = shift else {
+        let why = format!(
+            "not observable here: thresholds {:+.2}, {:+.2}, {:+.2} code are no rounding's (f32 arithmetic rounds at about this format's step)",
+            t[0], t[1], t[2]
         );
-    }
-    let value = match signs[..] {
-        [true, false] => "to nearest",
-        [true, true] => "truncated (towards 0)",
-        [false, false] => "up (away from 0)",
-        _ => "inconsistent (¼ rounds up, ¾ down)",
+        return vec![
+            Entry::unmeasured(&qkey, &qwhat, qspec, &probe, why.clone()),
+            Entry::unmeasured(&rkey, &rwhat, rspec, &probe, why),
+        ];
     };
-    Entry::new(
-        &key,
-        &what,
+    let quantisation = Entry::new(
+        &qkey,
+        &qwhat,
+        precision.to_string(),
+        Some(t[0]),
+        qspec,
+        None,
+        &probe,
+        Sure::Margin(0.5 - (t[0] - shift).abs()),
+    );
+    let (a, b) = (t[1] - shift, t[2] - shift);
+    let closest = a.abs().min(b.abs());
+    if closest < 0.1 {
+        let why = format!(
+            "not observable here: a threshold within {closest:.2} code of the floor's own depth (the stored value is not this format's code as a program sees it)"
+        );
+        return vec![
+            quantisation,
+            Entry::unmeasured(&rkey, &rwhat, rspec, &probe, why),
+        ];
+    }
+    let value = match (a > 0.0, b > 0.0) {
+        (true, false) => "to nearest",
+        (true, true) => "truncated (towards 0)",
+        (false, false) => "up (away from 0)",
+        (false, true) => "inconsistent (¼ rounds up, ¾ down)",
+    };
+    let rounding = Entry::new(
+        &rkey,
+        &rwhat,
         value.to_string(),
         None,
-        spec,
-        Some(value != "inconsistent (¼ rounds up, ¾ down)"),
+        rspec,
+        Some(!value.starts_with("inconsistent")),
         &probe,
         Sure::Margin(closest),
-    )
+    );
+    vec![quantisation, rounding]
 }
 
 /// LINEAR with compare: how the 2×2 compare results are combined, and the weights' bits.
@@ -686,7 +735,8 @@ mod tests {
             // shadow_pass: m = max(|∂z/∂x|, |∂z/∂y|) ("ours: max").
             ("slope-term.axis", "1 × |∂z/∂x|"),
             ("slope-term.diagonal", "max(|∂z/∂x|, |∂z/∂y|)"),
-            // DepthFormat::store: round to nearest.
+            // DepthFormat::store: round to nearest; lookup step 6 compares the f32 reference.
+            ("reference-precision.depth16", "compared as it is"),
             ("depth-rounding.depth16", "to nearest"),
             // lookup: bilinear weights of the compare results in f32.
             (
@@ -710,18 +760,18 @@ mod tests {
                 .find(|e| e.key == *key)
                 .unwrap_or_else(|| panic!("no entry {key}"));
             assert_eq!(e.value, *value, "{key}: {e:?}");
-            assert_eq!(e.inside, Some(true), "{key}");
+            assert_ne!(e.inside, Some(false), "{key}");
         }
-        // D24's rounding cannot be seen through GL's clip convention, which the reference
-        // follows: f32 arithmetic rounds at about a D24 code there. It says so.
-        let d24 = entries
-            .iter()
-            .find(|e| e.key == "depth-rounding.depth24")
-            .expect("a D24 rounding entry");
-        assert!(
-            d24.value.starts_with("not measured: not observable"),
-            "{d24:?}"
-        );
-        assert_eq!(entries.len(), model.len() + 1);
+        // D24's rounding and reference precision cannot be seen through GL's clip
+        // convention, which the reference follows: f32 arithmetic rounds at about a D24 code
+        // there. It says so.
+        for key in ["reference-precision.depth24", "depth-rounding.depth24"] {
+            let d24 = entries.iter().find(|e| e.key == key).expect("a D24 entry");
+            assert!(
+                d24.value.starts_with("not measured: not observable"),
+                "{d24:?}"
+            );
+        }
+        assert_eq!(entries.len(), model.len() + 2);
     }
 }
