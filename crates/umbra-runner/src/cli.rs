@@ -201,7 +201,7 @@ pub mod help {
     /// `--diff` (card).
     pub const CARD_DIFF: &str = "compare two stored cards (card-RELEASE.json files, e.g. golden/gl33_zink/card-mesa-22.3.6.json and …-26.2.6.json) and name every entry that changed, old and new value and the spec, instead of measuring";
     /// `--card` (bisect).
-    pub const BISECT_CARD: &str = "bisect a behaviour: a commit is good when every selected backend's card entry KEY has VALUE (e.g. 'offset-unit.depth16.z0.25=4 codes', as `umbra card` or `cargo xtask drivers` names it), instead of when the chosen cases pass";
+    pub const BISECT_CARD: &str = "bisect a behaviour: a commit is good when every selected backend's card entry KEY has VALUE (e.g. 'offset-unit.depth16.z0.375=4 codes', as `umbra card` or `cargo xtask drivers` names it), instead of when the chosen cases pass";
     /// `--keep` (card).
     pub const CARD_KEEP: &str = "keep each measured card as its backend's baseline for this driver release in golden directory DIR (DIR/<backend>/card-<release>.json), as `cargo xtask bless` does; refused under CI=true";
     /// `--timeout` (card).

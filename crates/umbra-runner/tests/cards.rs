@@ -38,7 +38,7 @@ fn the_reference_card_is_measured_and_printed() {
             .cloned()
             .unwrap_or_else(|| panic!("no entry {k}: {card}"))
     };
-    assert_eq!(entry("offset-unit.depth16.z0.25")["value"], "1 code");
+    assert_eq!(entry("offset-unit.depth16.z0.375")["value"], "1 code");
     assert_eq!(entry("reference-clamp.depth32f")["value"], "not clamped");
     // Every entry carries its spec, its probe and how sure it is.
     for e in card["entries"].as_array().into_iter().flatten() {
@@ -48,7 +48,7 @@ fn the_reference_card_is_measured_and_printed() {
     }
     let t = umbra(&["card", "--backend", "ref"]);
     assert!(
-        text(&t).contains("polygon-offset unit r, D16, z ≈ 0.25"),
+        text(&t).contains("polygon-offset unit r, D16, z ≈ 0.375"),
         "{}",
         text(&t)
     );

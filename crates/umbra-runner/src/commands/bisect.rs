@@ -105,7 +105,13 @@ pub fn main(args: &BisectArgs) -> Outcome {
     if args.card.as_deref().is_some_and(|c| !c.contains('=')) {
         return Err(crate::cli::usage_error(
             "bisect",
-            "--card takes KEY=VALUE, an entry of `umbra card` and the value a good commit has (e.g. 'offset-unit.depth16.z0.25=4 codes')",
+            "--card takes KEY=VALUE, an entry of `umbra card` and the value a good commit has (e.g. 'offset-unit.depth16.z0.375=4 codes')",
+        ));
+    }
+    if args.card.is_some() && args.selection.backend.is_empty() {
+        return Err(crate::cli::usage_error(
+            "bisect",
+            "--card needs --backend: the backends whose card entry is bisected (the reference's card never changes with Mesa)",
         ));
     }
     let src = absolute(&args.mesa_src);
@@ -633,25 +639,37 @@ fn card_verdict(
 ) -> Option<i32> {
     let (key, want) = target.split_once('=')?;
     let mut lines = Vec::new();
+    let skip = i32::from(Exit::CouldNotRun.code());
     let mut code = i32::from(Exit::Pass.code());
     match cards {
         Err(e) => {
             lines.push(format!("no cards: {e}"));
-            code = i32::from(Exit::CouldNotRun.code());
+            code = skip;
+        }
+        Ok(cards) if cards.is_empty() => {
+            lines.push("no cards: no backend was measured".into());
+            code = skip;
         }
         Ok(cards) => {
             for c in &cards {
                 match c.entries.iter().find(|e| e.key == key) {
+                    // A probe that could not measure says nothing of good or bad.
+                    Some(e) if e.value.starts_with("not measured") => {
+                        lines.push(format!("{}: {key} {}", c.backend, e.value));
+                        code = skip;
+                    }
                     Some(e) if e.value == want => {
                         lines.push(format!("{}: {key} = {}", c.backend, e.value))
                     }
                     Some(e) => {
                         lines.push(format!("{}: {key} = {} (not {want})", c.backend, e.value));
-                        code = code.max(i32::from(Exit::Fail.code()));
+                        if code != skip {
+                            code = i32::from(Exit::Fail.code());
+                        }
                     }
                     None => {
                         lines.push(format!("{}: no entry {key}", c.backend));
-                        code = i32::from(Exit::CouldNotRun.code());
+                        code = skip;
                     }
                 }
             }
@@ -672,7 +690,7 @@ mod tests {
             driver: "d".into(),
             release: "mesa-26.2.6".into(),
             entries: vec![Entry::new(
-                "offset-unit.depth16.z0.25",
+                "offset-unit.depth16.z0.375",
                 "r",
                 value.into(),
                 None,
@@ -691,7 +709,7 @@ mod tests {
     #[test]
     fn a_card_step_is_good_bad_or_skipped_by_the_entry() {
         let log = std::env::temp_dir().join(format!("umbra-card-step-{}.log", std::process::id()));
-        let target = "offset-unit.depth16.z0.25=4 codes";
+        let target = "offset-unit.depth16.z0.375=4 codes";
         let v = |cards| card_verdict(target, cards, &log);
         assert_eq!(v(Ok(vec![card("gl33/zink", "4 codes")])), Some(0));
         assert_eq!(
@@ -703,6 +721,11 @@ mod tests {
         );
         assert!(std::fs::read_to_string(&log).is_ok_and(|t| t.contains("2 codes (not 4 codes)")));
         assert_eq!(v(Err("no driver".into())), Some(125));
+        assert_eq!(v(Ok(Vec::new())), Some(125));
+        assert_eq!(
+            v(Ok(vec![card("gl33/zink", "not measured: no crossing")])),
+            Some(125)
+        );
         assert_eq!(
             card_verdict(
                 "no-such-entry=x",

@@ -52,7 +52,7 @@ impl Sure {
 /// One choice of the driver's.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Entry {
-    /// Stable key (`offset-unit.depth16.z0.25`): what baselines are matched by.
+    /// Stable key (`offset-unit.depth16.z0.375`): what baselines are matched by.
     pub key: String,
     /// What it is, in words.
     pub what: String,
@@ -234,7 +234,7 @@ impl Card {
             .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
         serde_json::from_str(&text).map_err(|e| {
             format!(
-                "{} is not a behaviour card: {e} (write one with `umbra card --backend ID --json`, or bless it with `cargo xtask bless`)",
+                "{} is not a behaviour card: {e} (keep the live one with `umbra card --backend ID --keep golden`, or `cargo xtask bless`)",
                 file.display()
             )
         })
@@ -334,13 +334,17 @@ pub fn check(dir: &Path, live: &Card) -> Verdict {
     let nearest = kept(dir, &live.backend)
         .into_iter()
         .min_by_key(|(r, _)| release_distance(r, &live.release));
-    Verdict::New(
-        nearest.and_then(|(r, f)| Card::read(&f).ok().map(|old| (r, live.changes_since(&old)))),
-    )
+    match nearest {
+        None => Verdict::New(None),
+        Some((r, f)) => match Card::read(&f) {
+            Ok(old) => Verdict::New(Some((r, live.changes_since(&old)))),
+            Err(e) => Verdict::Unreadable(e),
+        },
+    }
 }
 
-/// How far apart two releases are, for picking the nearest kept card: the first differing
-/// numeric component, weighted by its place.
+/// How far apart two releases are, for picking the nearest kept card: the differences of
+/// their major, minor and patch numbers, weighted by place (10⁶, 10³, 1) and summed.
 fn release_distance(a: &str, b: &str) -> u64 {
     let parts = |s: &str| crate::judge::expectations::version_parts(s.trim_start_matches("mesa-"));
     let (pa, pb) = (parts(a), parts(b));
@@ -375,12 +379,12 @@ mod tests {
     #[test]
     fn a_change_names_the_entry_both_values_and_the_spec() {
         let old = card(vec![
-            entry("offset-unit.depth16.z0.25", "4 codes", Some(false)),
+            entry("offset-unit.depth16.z0.375", "4 codes", Some(false)),
             entry("same", "x", Some(true)),
             entry("gone", "y", None),
         ]);
         let new = card(vec![
-            entry("offset-unit.depth16.z0.25", "2 codes", Some(true)),
+            entry("offset-unit.depth16.z0.375", "2 codes", Some(true)),
             entry("same", "x", Some(true)),
         ]);
         let ch = new.changes_since(&old);
@@ -388,7 +392,7 @@ mod tests {
         assert_eq!(
             lines,
             [
-                "offset-unit.depth16.z0.25: 4 codes → 2 codes (was OUTSIDE, now inside the spec)",
+                "offset-unit.depth16.z0.375: 4 codes → 2 codes (was OUTSIDE, now inside the spec)",
                 "gone: y → (no entry)",
             ]
         );

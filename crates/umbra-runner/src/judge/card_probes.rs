@@ -199,8 +199,11 @@ impl<'a> Prober<'a> {
     ) -> Probe<(f64, f64)> {
         let (l, h) = (self.lit(&make(lo))?, self.lit(&make(hi))?);
         if !(l < 0.5 && h >= 0.5) {
+            let word = |f: f64| if f < 0.5 { "shadowed" } else { "lit" };
             return Err(format!(
-                "no crossing in the probe's range: lit fraction {l:.3} at {lo:.3e}, {h:.3} at {hi:.3e}"
+                "no crossing in the searched range: the floor reads {} at its low end and {} at its high end (the choice lies outside what the probe searches, far outside the spec's range)",
+                word(l),
+                word(h)
             ));
         }
         let (mut a, mut b) = (lo, hi);
@@ -240,7 +243,23 @@ pub fn measure(backend: &mut dyn Backend) -> (Vec<Entry>, u32) {
     ] {
         entries.push(reference_clamp(&mut p, format));
     }
+    if p.backend.profile().packed_depth {
+        emulated(&mut entries);
+    }
     (entries, p.renders)
+}
+
+/// On umbra's GLES 2 technique (depth packed into RGBA8, the polygon offset and the compare
+/// in umbra's own shaders), every entry but the rasterizer's sub-pixel bits measures umbra's
+/// emulation, not a choice of the driver's: the spec's clauses do not apply, and it says so.
+fn emulated(entries: &mut [Entry]) {
+    for e in entries.iter_mut().filter(|e| e.key != "subpixel-bits") {
+        e.spec = format!(
+            "umbra's GLES 2 emulation (packed RGBA8 depth, offset and compare in umbra's shaders), not the driver's choice; for a hardware path: {}",
+            e.spec
+        );
+        e.inside = None;
+    }
 }
 
 /// Short names of the formats, for entry titles.
@@ -261,11 +280,12 @@ fn unit_of(f: DepthFormat, z: f64) -> f64 {
     }
 }
 
-/// Polygon-offset unit r of `format` at window depths ¼ and ¾, and whether it differs.
+/// Polygon-offset unit r of `format` at window depths ⅜ and ¾, and whether it differs. Not
+/// ¼: a power of two, where a depth one f32 step low would halve a float format's unit.
 fn offset_unit(p: &mut Prober, format: DepthFormat) -> Vec<Entry> {
     let mut out = Vec::new();
     let mut seen = Vec::new();
-    for z0 in [0.25, 0.75] {
+    for z0 in [0.375, 0.75] {
         let unit = unit_of(format, z0);
         let (lo, hi) = format.offset_unit_range(z0 as f32);
         let scene = Scene {
@@ -286,7 +306,7 @@ fn offset_unit(p: &mut Prober, format: DepthFormat) -> Vec<Entry> {
                 hi / unit
             )
         } else {
-            "1: r = 2^(e − 23), e the exponent of the primitive's largest |z| (GL 4.6 §14.6.5, Vulkan \"Depth Bias\")".to_string()
+            "1 or 2: r = 2^(e − 23), e the exponent of the primitive's largest |z| (GL 4.6 §14.6.5, Vulkan \"Depth Bias\"), read as ⌊log₂ z⌋ by GL drivers and as ⌊log₂ z⌋ + 1 by the WebGPU CTS (dawn:2076)".to_string()
         };
         let probe = format!(
             "flat floor at z = {z0}, polygon offset units −{UNITS}: the least constant bias that reads it lit, ÷ {UNITS}"
@@ -295,10 +315,17 @@ fn offset_unit(p: &mut Prober, format: DepthFormat) -> Vec<Entry> {
         let entry = match measured {
             Ok((b, half)) => {
                 let x = b / UNITS / unit;
-                let sure = Sure::Within(half / UNITS / unit + 1.0 / UNITS);
+                // The bracket, and a code of storage rounding and of the reference's f32
+                // arithmetic, each spread over the 64 units.
+                let err = half / UNITS / unit + 2.0 / UNITS;
                 seen.push(x);
                 let value = whole_or_decimal(x, 0.1, unit_name);
-                let inside = x >= lo / unit - 0.02 && x <= hi / unit + 0.02;
+                let inside = if format.is_fixed() {
+                    x >= lo / unit - err && x <= hi / unit + err
+                } else {
+                    (x - 1.0).abs() <= err || (x - 2.0).abs() <= err
+                };
+                let sure = Sure::Within(err);
                 Entry::new(
                     &key,
                     &what,
@@ -334,14 +361,15 @@ fn offset_unit(p: &mut Prober, format: DepthFormat) -> Vec<Entry> {
             None,
             spec,
             Some(same),
-            "the two offset-unit probes, z ≈ 0.25 and 0.75",
+            "the two offset-unit probes, z ≈ 0.375 and 0.75",
             Sure::Exact,
         ));
     }
     out
 }
 
-/// `x` as a whole number of `unit` when within `tol` of one, else to two decimals.
+/// `x` as a whole number of `unit` when within `tol` of one, else to one decimal (`≈`): a
+/// value is compared as text, so it carries no digit the probe's noise could move.
 fn whole_or_decimal(x: f64, tol: f64, unit: &str) -> String {
     let k = x.round();
     if (x - k).abs() < tol && k > 0.0 {
@@ -352,7 +380,7 @@ fn whole_or_decimal(x: f64, tol: f64, unit: &str) -> String {
         };
         format!("{k:.0} {unit}")
     } else {
-        format!("{x:.2} {unit}")
+        format!("≈{x:.1} {unit}")
     }
 }
 
@@ -438,7 +466,7 @@ fn classify(x: f64, known: &[(f64, &str)], tol: f64, unit: &str) -> String {
     known
         .iter()
         .find(|(v, _)| (x - v).abs() < tol)
-        .map_or_else(|| format!("{x:.2} {unit}"), |(_, n)| (*n).to_string())
+        .map_or_else(|| format!("≈{x:.1} {unit}"), |(_, n)| (*n).to_string())
 }
 
 /// How a fixed-point format rounds a depth that lies between two codes, and at what
@@ -453,7 +481,7 @@ fn classify(x: f64, known: &[(f64, &str)], tol: f64, unit: &str) -> String {
 fn rounding(p: &mut Prober, format: DepthFormat) -> Vec<Entry> {
     let n = format.fixed_bits().unwrap_or(24);
     let m = f64::from((1u32 << n) - 1);
-    // D16 mid-range; D24 near 0, where f32 has 64 values per code (near ½ it has one).
+    // D16 mid-range; D24 near 0, where f32 has 32 values per code (near ½ it has one).
     let base = if n == 16 { 0.3 } else { 0.02 };
     let code = (base * m).floor();
     let (rkey, rwhat) = (
@@ -487,18 +515,24 @@ fn rounding(p: &mut Prober, format: DepthFormat) -> Vec<Entry> {
     // anything else is f32 noise of about a code (D24 through GL's clip convention).
     let near = |x: f64, of: [f64; 2]| of.iter().any(|v| (x - v).abs() < 0.1);
     let consistent = near(t[1] - t[0], [0.25, -0.75]) && near(t[2] - t[0], [-0.25, 0.75]);
+    // A stored value not quantised to the format at all (GLES 2's packed depth) puts every
+    // threshold at the floor's own depth.
+    if t.iter().all(|x| x.abs() < 0.1) {
+        let why = "not observable here: the stored depth is not quantised to this format's codes (every threshold lies at the floor's own depth)".to_string();
+        return vec![
+            Entry::unmeasured(&qkey, &qwhat, qspec, &probe, why.clone()),
+            Entry::unmeasured(&rkey, &rwhat, rspec, &probe, why),
+        ];
+    }
     let shift = [
-        (0.0, "compared as it is"),
+        (0.0, "compared as it is, or rounded up"),
         (-0.5, "rounded to a code"),
         (-1.0, "truncated to a code"),
     ]
     .into_iter()
     .find(|(s, _)| consistent && (t[0] - s).abs() < 0.1);
     let Some((shift, precision)) = shift else {
-        let why = format!(
-            "not observable here: thresholds {:+.2}, {:+.2}, {:+.2} code are no rounding's (f32 arithmetic rounds at about this format's step)",
-            t[0], t[1], t[2]
-        );
+        let why = "not observable here: the thresholds fit no rounding (f32 arithmetic rounds at about this format's step; the probe line has them)".to_string();
         return vec![
             Entry::unmeasured(&qkey, &qwhat, qspec, &probe, why.clone()),
             Entry::unmeasured(&rkey, &rwhat, rspec, &probe, why),
@@ -517,9 +551,7 @@ fn rounding(p: &mut Prober, format: DepthFormat) -> Vec<Entry> {
     let (a, b) = (t[1] - shift, t[2] - shift);
     let closest = a.abs().min(b.abs());
     if closest < 0.1 {
-        let why = format!(
-            "not observable here: a threshold within {closest:.2} code of the floor's own depth (the stored value is not this format's code as a program sees it)"
-        );
+        let why = "not observable here: a threshold within 0.1 code of the floor's own depth (the probe line has them)".to_string();
         return vec![
             quantisation,
             Entry::unmeasured(&rkey, &rwhat, rspec, &probe, why),
@@ -529,7 +561,7 @@ fn rounding(p: &mut Prober, format: DepthFormat) -> Vec<Entry> {
         (true, false) => "to nearest",
         (true, true) => "truncated (towards 0)",
         (false, false) => "up (away from 0)",
-        (false, true) => "inconsistent (¼ rounds up, ¾ down)",
+        (false, true) => "non-uniform (¼ rounds up, ¾ down)",
     };
     let rounding = Entry::new(
         &rkey,
@@ -537,7 +569,8 @@ fn rounding(p: &mut Prober, format: DepthFormat) -> Vec<Entry> {
         value.to_string(),
         None,
         rspec,
-        Some(!value.starts_with("inconsistent")),
+        // Either neighbouring code is allowed for each conversion on its own.
+        Some(true),
         &probe,
         Sure::Margin(closest),
     );
@@ -624,7 +657,9 @@ fn linear(p: &mut Prober) -> Entry {
 /// The shadow pass's sub-pixel precision: an occluder's edge moved across a texel centre by
 /// δ; vertices snapped to 2⁻ᵇ of a pixel (round to nearest) leave the centre's coverage as
 /// at δ = 0 while |δ| < 2⁻⁽ᵇ⁺¹⁾, so the coverage flips at |δ| = 2⁻⁽ᵇ⁺¹⁾ (on the side the tie
-/// rule gives the centre). No snapping flips it at δ ≈ 0.
+/// rule gives the centre). No snapping flips it at δ ≈ 0; below 2⁻¹⁷ px the f32 window
+/// coordinates themselves (a step of 2⁻¹⁹ px near x = 16.5) blur what the bisection sees, so
+/// that is read as 16 bits or more.
 fn subpixel(p: &mut Prober) -> Entry {
     let key = "subpixel-bits";
     let what = "shadow-pass rasterization: sub-pixel bits of a vertex";
@@ -641,12 +676,12 @@ fn subpixel(p: &mut Prober) -> Entry {
         edge: Some(-x),
         ..flat
     };
-    match p.crossing(&make, -0.25, 0.25, 20) {
+    match p.crossing(&make, -0.25, 0.25, 18) {
         Ok((x, half)) => {
             let d = x.abs();
-            let (value, sure, inside) = if d <= 2.0 * half + 1e-6 {
+            let (value, sure, inside) = if d < 2f64.powi(-17) {
                 (
-                    "no snapping seen: the coverage flips within 2⁻²⁰ px of the centre".to_string(),
+                    "16 bits or more: no snapping seen".to_string(),
                     Sure::AtLeast,
                     true,
                 )
@@ -657,7 +692,11 @@ fn subpixel(p: &mut Prober) -> Entry {
                 let v = if (b - k).abs() < 0.1 {
                     format!("{k:.0} bits (a centre on the edge is {side})")
                 } else {
-                    format!("{b:.1} bits (flips at {d:.2e} px; a centre on the edge is {side})")
+                    format!(
+                        "between {:.0} and {:.0} bits, not a power-of-two grid (a centre on the edge is {side})",
+                        b.floor(),
+                        b.ceil()
+                    )
                 };
                 (v, Sure::Within(half), k >= 4.0)
             };
@@ -723,20 +762,23 @@ mod tests {
         assert!(renders > 100, "{renders} renders");
         let model: &[(&str, &str)] = &[
             // DepthFormat::offset_unit: one code step for fixed point, 2^(e − 23) for float.
-            ("offset-unit.depth16.z0.25", "1 code"),
+            ("offset-unit.depth16.z0.375", "1 code"),
             ("offset-unit.depth16.z0.75", "1 code"),
             ("offset-unit.depth16.depends-on-depth", "no"),
-            ("offset-unit.depth24.z0.25", "1 code"),
+            ("offset-unit.depth24.z0.375", "1 code"),
             ("offset-unit.depth24.z0.75", "1 code"),
             ("offset-unit.depth24.depends-on-depth", "no"),
-            ("offset-unit.depth32f.z0.25", "1 × 2^(⌊log₂ z⌋ − 23)"),
+            ("offset-unit.depth32f.z0.375", "1 × 2^(⌊log₂ z⌋ − 23)"),
             ("offset-unit.depth32f.z0.75", "1 × 2^(⌊log₂ z⌋ − 23)"),
             ("offset-unit.depth32f.depends-on-depth", "no"),
             // shadow_pass: m = max(|∂z/∂x|, |∂z/∂y|) ("ours: max").
             ("slope-term.axis", "1 × |∂z/∂x|"),
             ("slope-term.diagonal", "max(|∂z/∂x|, |∂z/∂y|)"),
             // DepthFormat::store: round to nearest; lookup step 6 compares the f32 reference.
-            ("reference-precision.depth16", "compared as it is"),
+            (
+                "reference-precision.depth16",
+                "compared as it is, or rounded up",
+            ),
             ("depth-rounding.depth16", "to nearest"),
             // lookup: bilinear weights of the compare results in f32.
             (
