@@ -152,7 +152,12 @@ impl<'a> Prober<'a> {
     }
 
     fn render(&mut self, s: &Scene) -> Probe<Frame> {
-        let text = s.case().to_string();
+        self.render_case(&s.case())
+    }
+
+    /// Renders one probe case, given as JSON.
+    fn render_case(&mut self, case: &Value) -> Probe<Frame> {
+        let text = case.to_string();
         let point = umbra_case::load_str(&text, Path::new("<card probe>"))
             .map_err(|e| format!("the probe scene is not a valid case: {e}"))?
             .remove(0);
@@ -236,6 +241,20 @@ pub fn measure(backend: &mut dyn Backend) -> (Vec<Entry>, u32) {
     }
     entries.push(linear(&mut p));
     entries.push(subpixel(&mut p));
+    let one_tap = entries
+        .iter()
+        .any(|e| e.key == "linear-compare" && e.value.starts_with("one tap"));
+    entries.push(if one_tap {
+        Entry::unmeasured(
+            "cube-seams",
+            "cube map LINEAR at a face edge: filtered per face or across faces",
+            "per face (desktop GL) or across faces (GLES 3, Vulkan)",
+            "needs a LINEAR compare that blends",
+            "not observable here: this driver's LINEAR compare takes one tap, which blends nothing on either side of a seam".into(),
+        )
+    } else {
+        cube_seams(&mut p)
+    });
     for format in [
         DepthFormat::Depth16,
         DepthFormat::Depth24,
@@ -715,6 +734,87 @@ fn subpixel(p: &mut Prober) -> Entry {
     }
 }
 
+/// Whether LINEAR reads across a cube map's face edges: a point light's −y face sees the
+/// floor, its +x face, along its bottom edge, a small occluder (x = 0.5, y from −0.5 to
+/// −0.3); the floor's true shadow edge then lies exactly on the faces' seam (x = 1 at
+/// y = −1). Filtered per face, the floor steps from lit to shadowed there; across faces, it
+/// blends over half a texel each side. The camera sees a band of ±0.085 m about the seam,
+/// away from the occluder's sides; the share of its pixels strictly between 0 and 1 tells.
+fn cube_seams(p: &mut Prober) -> Entry {
+    let key = "cube-seams";
+    let what = "cube map LINEAR at a face edge: filtered per face or across faces";
+    let profile = p.backend.profile();
+    let (seamless, vulkan) = (
+        profile.seamless_cube,
+        profile.spec == umbra_case::Spec::Vulkan,
+    );
+    let spec = match (seamless, vulkan) {
+        (true, true) => "across faces (Vulkan \"Cube Map Edge Handling\", bilinear weights)",
+        (true, false) => {
+            "across faces (GLES 3.0 §3.8.9); GL's any weighting of the 2×2 results lets a per-face answer pass too"
+        }
+        (false, _) => {
+            "per face: desktop GL with TEXTURE_CUBE_MAP_SEAMLESS disabled, as umbra leaves it (GL 4.6 §8.13.1)"
+        }
+    };
+    let probe = "a point light's −y and +x faces (32² texels, D24, LINEAR), a shadow edge exactly on their seam, seen magnified: the share of floor pixels between 0 and 1";
+    let case = json!({
+        "name": "card-probe",
+        "about": "a behaviour-card probe (umbra_runner::judge::card_probes)",
+        "scene": { "objects": [
+            { "plane": { "point": [0, -1, 0], "normal": [0, 1, 0], "half_extent": 3 } },
+            { "plane": { "point": [0.5, -0.4, 0], "normal": [-1, 0, 0], "half_extent": 0.1 } }
+        ] },
+        "camera": { "eye": [1.0, -0.6, 0.0], "target": [1.0, -1, 0], "up": [0, 0, -1],
+                    "fov_y_deg": 20, "near": 0.05, "far": 10, "size": [64, 64] },
+        "light": { "point": { "position": [0, 0, 0], "near": 0.05, "far": 10 } },
+        "shadow": { "size": [32, 32], "format": "depth24", "filter": "linear",
+                    "bias": { "constant": 0.002 } },
+    });
+    let frame = match p.render_case(&case) {
+        Ok(f) => f,
+        Err(why) => return Entry::unmeasured(key, what, spec, probe, why),
+    };
+    let tol = 2.0 * f64::from(frame.visibility_storage.tolerance());
+    let covered: Vec<f64> = (0..frame.visibility.len())
+        .filter(|&i| frame.covered(i) && frame.visibility[i].is_finite())
+        .map(|i| f64::from(frame.visibility[i]))
+        .collect();
+    let blended = covered
+        .iter()
+        .filter(|v| **v > tol && **v < 1.0 - tol)
+        .count();
+    let share = blended as f64 / covered.len().max(1) as f64;
+    // Across faces blends about a third of the band; per face only the seam's own column.
+    let across = if share > 0.1 {
+        Some(true)
+    } else if share < 0.05 {
+        Some(false)
+    } else {
+        None
+    };
+    let value = match across {
+        Some(true) => "across faces",
+        Some(false) => "per face",
+        None => "unclear: between per face and across faces",
+    };
+    let inside = across.map(|a| match (seamless, vulkan) {
+        (false, _) => !a,
+        (true, false) => true,
+        (true, true) => a,
+    });
+    Entry::new(
+        key,
+        what,
+        value.to_string(),
+        Some(share),
+        spec,
+        inside,
+        &format!("{probe}: {:.1} %", 100.0 * share),
+        Sure::Exact,
+    )
+}
+
 /// Whether the compare clamps a reference beyond the far plane (> 1) to 1.
 fn reference_clamp(p: &mut Prober, format: DepthFormat) -> Entry {
     let key = format!("reference-clamp.{}", format.name());
@@ -791,6 +891,8 @@ mod tests {
                 "subpixel-bits",
                 "8 bits (a centre on the edge is not covered)",
             ),
+            // Desktop GL's profile: cube faces filtered one by one (seamless off).
+            ("cube-seams", "per face"),
             // lookup step 6: clamped for a fixed-point hardware compare, never for float.
             ("reference-clamp.depth16", "clamped"),
             ("reference-clamp.depth24", "clamped"),
