@@ -216,8 +216,13 @@ impl Card {
             self.backend, self.driver, self.renders, self.seconds, self.release
         );
         for e in &self.entries {
+            let measured = match e.measured {
+                Some(m) if m.fract() == 0.0 => format!("measured {m:.0}, "),
+                Some(m) => format!("measured {m:.4}, "),
+                None => String::new(),
+            };
             s.push_str(&format!(
-                "  {}\n      {}   [{}]\n      spec: {}\n      probe: {}\n",
+                "  {}\n      {}   [{measured}{}]\n      spec: {}\n      probe: {}\n",
                 e.what,
                 e.value_and_verdict(),
                 e.sure.words(),

@@ -25,7 +25,7 @@
 //!   to b bits, about 0 for none.
 //!
 //! Probes are small (32×32, the LINEAR one 512×32) so that a card costs a few seconds on a
-//! software rasterizer: about 200 renders in all.
+//! software rasterizer: about 235 renders in all.
 
 use std::path::Path;
 
