@@ -133,12 +133,14 @@ fn diff(old: &str, new: &str, json: bool) -> Outcome {
 /// kept in golden directory `dir` for its release ([`crate::judge::card::check`]). A change
 /// fails check `card`, naming each entry; a release with no card kept yet is a skip that
 /// names what differs from the nearest kept release's. `bless` keeps the live card (never
-/// under `CI=true`: conformance refuses `--bless` there).
+/// under `CI=true`: conformance refuses `--bless` there). A backend whose group cannot run
+/// (`not_run`: its status and reason) is not measured; the row says why, as its runs do.
 pub fn conformance_row(
     backend: &str,
     session: &mut Session,
     dir: &std::path::Path,
     bless: bool,
+    not_run: Option<(umbra_report::Status, String)>,
 ) -> umbra_report::RunResult {
     use umbra_report::Status;
     let t0 = std::time::Instant::now();
@@ -160,6 +162,10 @@ pub fn conformance_row(
         fingerprint: None,
         details: String::new(),
     };
+    if let Some((status, reason)) = not_run {
+        (row.status, row.reason) = (status, reason);
+        return row;
+    }
     match of_session(session) {
         Ok(live) => {
             row.details = live.table();

@@ -1283,11 +1283,14 @@ fn run_group(
         }
     }
     if let Some(dir) = settings.cards.as_deref().filter(|_| first) {
-        let mut row =
-            crate::commands::card::conformance_row(backend, &mut session, dir, settings.bless);
-        if let Some(a) = group.not_run() {
-            (row.status, row.reason) = (a.status, a.reason);
-        }
+        let not_run = group.not_run().map(|a| (a.status, a.reason));
+        let row = crate::commands::card::conformance_row(
+            backend,
+            &mut session,
+            dir,
+            settings.bless,
+            not_run,
+        );
         let unavailable = matches!(group.not_ready, Some(NotReady::Unavailable(_)));
         finished(done, row, None, total, settings.verbose, unavailable);
     }

@@ -175,16 +175,11 @@ impl<'a> Prober<'a> {
 
     /// The floor's lit fraction: the mean visibility over covered pixels.
     fn lit(&mut self, s: &Scene) -> Probe<f64> {
-        let f = self.render(s)?;
-        let (sum, n) = (0..f.visibility.len())
-            .filter(|&i| f.covered(i) && f.visibility[i].is_finite())
-            .fold((0.0, 0usize), |(s, n), i| {
-                (s + f64::from(f.visibility[i]), n + 1)
-            });
-        if n == 0 {
+        let values = covered_values(&self.render(s)?);
+        if values.is_empty() {
             return Err("the probe's floor covered no pixel".into());
         }
-        Ok(sum / n as f64)
+        Ok(values.iter().sum::<f64>() / values.len() as f64)
     }
 
     /// The constant bias at which `s`'s floor turns from shadowed to lit, searched in
@@ -222,6 +217,14 @@ impl<'a> Prober<'a> {
         }
         Ok((0.5 * (a + b), 0.5 * (b - a)))
     }
+}
+
+/// The visibility of every pixel a surface covers (NaN-free), what each probe reads.
+fn covered_values(f: &Frame) -> Vec<f64> {
+    (0..f.visibility.len())
+        .filter(|&i| f.covered(i) && f.visibility[i].is_finite())
+        .map(|i| f64::from(f.visibility[i]))
+        .collect()
 }
 
 /// The card's entries, measured on `backend` (whose frames the probes render).
@@ -612,9 +615,8 @@ fn linear(p: &mut Prober) -> Entry {
         Err(why) => return Entry::unmeasured(key, what, spec, probe, why),
     };
     let tol = f64::from(frame.visibility_storage.tolerance());
-    let mut levels: Vec<f64> = (0..frame.visibility.len())
-        .filter(|&i| frame.covered(i))
-        .map(|i| f64::from(frame.visibility[i]))
+    let mut levels: Vec<f64> = covered_values(&frame)
+        .into_iter()
         .filter(|v| *v > tol && *v < 1.0 - tol)
         .collect();
     levels.sort_by(f64::total_cmp);
@@ -776,10 +778,7 @@ fn cube_seams(p: &mut Prober) -> Entry {
         Err(why) => return Entry::unmeasured(key, what, spec, probe, why),
     };
     let tol = 2.0 * f64::from(frame.visibility_storage.tolerance());
-    let covered: Vec<f64> = (0..frame.visibility.len())
-        .filter(|&i| frame.covered(i) && frame.visibility[i].is_finite())
-        .map(|i| f64::from(frame.visibility[i]))
-        .collect();
+    let covered = covered_values(&frame);
     let blended = covered
         .iter()
         .filter(|v| **v > tol && **v < 1.0 - tol)
