@@ -43,7 +43,7 @@ pub fn main(args: &CardArgs) -> Outcome {
                 if let Some(dir) = &args.keep {
                     let f = crate::judge::card::file(std::path::Path::new(dir), id, &c.release);
                     std::fs::create_dir_all(f.parent().unwrap_or(std::path::Path::new(dir)))
-                        .and_then(|()| std::fs::write(&f, c.stored()))
+                        .and_then(|()| crate::atomic_file::write(&f, c.stored().as_bytes()))
                         .map_err(|e| Error::new(format!("cannot keep {}: {e}", f.display())))?;
                     eprintln!("kept {}", f.display());
                 }
@@ -199,7 +199,7 @@ fn judged(
     let kept = crate::judge::card::file(dir, backend, &live.release);
     let keep = |why: &str| {
         let written = std::fs::create_dir_all(kept.parent().unwrap_or(dir))
-            .and_then(|()| std::fs::write(&kept, live.stored()));
+            .and_then(|()| crate::atomic_file::write(&kept, live.stored().as_bytes()));
         match written {
             Ok(()) => (
                 Status::Pass,
