@@ -113,6 +113,27 @@ impl DepthFormat {
         }
     }
 
+    /// [`DepthFormat::code_range`] for an implementation whose rounding a card read: the
+    /// stored code of x codes is ⌊x + t⌋ with t in the reading's range
+    /// ([`crate::calibration::Rounding::t_range`]); without one, either neighbouring code.
+    pub fn code_range_rounded(
+        self,
+        lo: f64,
+        hi: f64,
+        rounding: Option<crate::calibration::Rounding>,
+    ) -> (f64, f64) {
+        let (Some(n), Some(r)) = (self.fixed_bits(), rounding) else {
+            return self.code_range(lo, hi);
+        };
+        let m = f64::from((1u32 << n) - 1);
+        let (t_lo, t_hi) = r.t_range();
+        let (lo, hi) = (lo.clamp(0.0, 1.0) * m, hi.clamp(0.0, 1.0) * m);
+        (
+            (lo + t_lo).floor().min(m) / m,
+            (hi + t_hi).floor().min(hi.ceil()) / m,
+        )
+    }
+
     /// The polygon-offset unit r umbra's reference uses: 1/(2ⁿ − 1) for fixed point (one
     /// code step; the GLES 2 path's shader uses the same); 2^(e − 23) for float, e the
     /// exponent of the primitive's largest |z|.
@@ -212,6 +233,25 @@ mod tests {
         assert_eq!(
             DepthFormat::Unsized.offset_unit_range(0.75),
             (2f64.powi(-32), 2f64.powi(-23))
+        );
+    }
+
+    #[test]
+    fn a_read_rounding_narrows_the_codes() {
+        use crate::calibration::Rounding;
+        let m = 65535.0;
+        let f = DepthFormat::Depth16;
+        let at = |x: f64, r| f.code_range_rounded(x / m, x / m, Some(r));
+        assert_eq!(at(100.4, Rounding::Nearest), (100.0 / m, 101.0 / m));
+        assert_eq!(at(100.1, Rounding::Nearest), (100.0 / m, 100.0 / m));
+        assert_eq!(at(100.9, Rounding::Nearest), (101.0 / m, 101.0 / m));
+        assert_eq!(at(100.6, Rounding::Truncate), (100.0 / m, 100.0 / m));
+        assert_eq!(at(100.3, Rounding::Up), (101.0 / m, 101.0 / m));
+        assert_eq!(at(100.0, Rounding::Up), (100.0 / m, 100.0 / m));
+        assert_eq!(f.code_range_rounded(0.1, 0.2, None), f.code_range(0.1, 0.2));
+        assert_eq!(
+            DepthFormat::Depth32f.code_range_rounded(0.1, 0.2, Some(Rounding::Up)),
+            (0.1, 0.2)
         );
     }
 

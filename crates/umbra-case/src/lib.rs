@@ -27,6 +27,7 @@
 //! depends on all of them). This crate depends on no GPU crate.
 
 pub mod backend;
+pub mod calibration;
 pub mod conventions;
 pub mod depth;
 pub mod error;
@@ -50,6 +51,7 @@ pub mod twin;
 pub mod validate;
 
 pub use backend::{Backend, BackendError, BackendId, DriverInfo, Needs, ReproProgram, Support};
+pub use calibration::Calibration;
 pub use conventions::{ClipDepth, Convention, LookupMatrices, ShadowCoord};
 pub use error::{CaseError, CaseErrors};
 pub use format::Case;

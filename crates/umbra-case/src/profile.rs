@@ -22,6 +22,8 @@
 //! backend or renderer does. README.md ("Any driver a machine has") tables every freedom the
 //! judge grants with its source.
 
+use crate::calibration::Calibration;
+
 /// The specification whose freedoms a backend's sampler has.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Spec {
@@ -46,6 +48,10 @@ pub struct Profile {
     /// (`Deviation:NAME` in expectations/*.txt), so that the deviations explain exactly what
     /// they explain and anything else still fails.
     pub deviations: Deviations,
+    /// The spec's freedom narrowed to what the backend's card read (calibrated judging,
+    /// [`crate::calibration`]): never set for a backend's own profile, only for the run's
+    /// second judgement.
+    pub calibration: Calibration,
 }
 
 /// A set of [`Deviation`]s.
@@ -177,6 +183,15 @@ impl Deviation {
     }
 }
 
+const CALIBRATION_NONE: Calibration = Calibration {
+    offset_unit: [None; 2],
+    slope: None,
+    rounding: [None; 2],
+    bilinear: false,
+    cube_seams: None,
+    subpixel_bits: None,
+};
+
 impl Profile {
     /// Desktop OpenGL (3.3 core and later), seamless cube filtering off.
     pub const GL: Profile = Profile {
@@ -184,6 +199,7 @@ impl Profile {
         seamless_cube: false,
         packed_depth: false,
         deviations: Deviations::NONE,
+        calibration: CALIBRATION_NONE,
     };
     /// OpenGL ES 3.x: seamless cube maps.
     pub const GLES3: Profile = Profile {
@@ -191,6 +207,7 @@ impl Profile {
         seamless_cube: true,
         packed_depth: false,
         deviations: Deviations::NONE,
+        calibration: CALIBRATION_NONE,
     };
     /// umbra's GLES 2 path: packed depth, manual compare.
     pub const GLES2: Profile = Profile {
@@ -198,6 +215,7 @@ impl Profile {
         seamless_cube: false,
         packed_depth: true,
         deviations: Deviations::NONE,
+        calibration: CALIBRATION_NONE,
     };
     /// Vulkan.
     pub const VULKAN: Profile = Profile {
@@ -205,10 +223,11 @@ impl Profile {
         seamless_cube: true,
         packed_depth: false,
         deviations: Deviations::NONE,
+        calibration: CALIBRATION_NONE,
     };
 
     /// A short stable name, for reports and cache keys (`gl`, `gles3`, `vulkan`, …, with
-    /// `+DEVIATION` when a deviation is allowed).
+    /// `+DEVIATION` when a deviation is allowed and ` card(…)` with a calibration).
     pub fn name(self) -> String {
         let api = match (self.spec, self.seamless_cube, self.packed_depth) {
             (_, _, true) => "gles2-packed",
@@ -217,10 +236,21 @@ impl Profile {
             (Spec::Gl, true, false) => "gles3",
             (Spec::Gl, false, false) => "gl",
         };
-        if self.deviations.is_empty() {
-            api.to_string()
-        } else {
-            format!("{api}+{}", self.deviations.names())
+        let mut name = api.to_string();
+        if !self.deviations.is_empty() {
+            name = format!("{name}+{}", self.deviations.names());
+        }
+        if !self.calibration.is_empty() {
+            name = format!("{name} card({})", self.calibration.encode());
+        }
+        name
+    }
+
+    /// This profile narrowed by the calibration `c`.
+    pub fn with_calibration(self, c: Calibration) -> Profile {
+        Profile {
+            calibration: c,
+            ..self
         }
     }
 
@@ -237,18 +267,46 @@ impl Profile {
     /// The profile with every freedom that cannot matter for `case` dropped, so that backends
     /// whose profiles differ only there share one judged render: seamless filtering matters
     /// only for a hardware LINEAR lookup in a cube map, and the LINEAR rule only for a
-    /// hardware LINEAR lookup.
+    /// hardware LINEAR lookup; of a calibration, the offset unit and rounding of the map's
+    /// format only, the slope form only with a slope factor, the rounding only without a
+    /// polygon offset (what the card's probe reads), nothing of the offset or the rounding on
+    /// the packed path (umbra's own shader), and the bilinear reading only where GL's LINEAR
+    /// rule would apply (in a cube map, only with the seams the profile judges by).
     pub fn effective_for(self, case: &crate::format::Case) -> Profile {
         use crate::format::{Compare, Filter, Light};
         let hardware_linear = case.shadow.filter == Filter::Linear
             && case.shadow.compare == Compare::Hardware
             && !self.packed_depth;
         let cube = matches!(case.light, Light::Point(_));
+        let spec = if hardware_linear { self.spec } else { Spec::Gl };
+        let c = self.calibration;
+        let own =
+            crate::calibration::fixed_index(case.shadow.format).filter(|_| !self.packed_depth);
+        let keep = |i: usize| own == Some(i);
+        let [factor, units] = case.shadow.bias.polygon_offset;
+        // The bilinear reading in a cube map only where the card saw the seams the profile
+        // judges by.
+        let bilinear = c.bilinear
+            && hardware_linear
+            && spec == Spec::Gl
+            && (!cube || c.cube_seams == Some(self.seamless_cube));
+        let calibration = Calibration {
+            offset_unit: [0, 1].map(|i| c.offset_unit[i].filter(|_| keep(i) && units != 0.0)),
+            slope: c.slope.filter(|_| factor != 0.0 && !self.packed_depth),
+            // The card reads the rounding of a depth without an offset; lavapipe rounds an
+            // offset depth otherwise (found on offset-clamp-magnified, D16).
+            rounding: [0, 1]
+                .map(|i| c.rounding[i].filter(|_| keep(i) && factor == 0.0 && units == 0.0)),
+            bilinear,
+            cube_seams: c.cube_seams.filter(|_| bilinear && cube),
+            subpixel_bits: c.subpixel_bits,
+        };
         Profile {
-            spec: if hardware_linear { self.spec } else { Spec::Gl },
+            spec,
             seamless_cube: hardware_linear && cube && self.seamless_cube,
             packed_depth: self.packed_depth,
             deviations: self.deviations,
+            calibration,
         }
     }
 }

@@ -1111,7 +1111,13 @@ impl Lookup<'_> {
                     {
                         flags |= ambiguity::FILTER;
                     }
-                    match self.profile.spec {
+                    // A GL driver whose card read bilinear filtering is held to it.
+                    let spec = if self.profile.calibration.bilinear {
+                        Spec::Vulkan
+                    } else {
+                        self.profile.spec
+                    };
+                    match spec {
                         Spec::Gl => {
                             // Any weighting of the four results, NEAREST included.
                             let lo = taps.iter().map(|t| t.min()).fold(1.0, f64::min);

@@ -88,6 +88,9 @@ pub struct Tri {
     /// far from the origin, where the clip rows cancel large terms, a vertex lands a
     /// fraction of a pixel off); 0 otherwise.
     pub xy_err: f64,
+    /// How far, in pixels, another implementation's snapping may put a corner: [`SNAP_PX`],
+    /// or less where a behaviour card read the driver's sub-pixel bits (shadow pass only).
+    pub snap: f64,
 }
 
 /// How far another implementation's vertex window coordinates may lie from ours, per axis, in
@@ -425,9 +428,9 @@ impl Tri {
     }
 
     /// How far, in pixels, another implementation may place this triangle's corners: the
-    /// snapping ([`SNAP_PX`]) and the transform ([`Tri::xy_err`]).
+    /// snapping ([`Tri::snap`]) and the transform ([`Tri::xy_err`]).
     pub fn reach(&self) -> f64 {
-        SNAP_PX + self.xy_err
+        self.snap + self.xy_err
     }
 
     /// Whether the centre with edge values `e` lies within `delta_px` of a diagonal the
@@ -669,6 +672,7 @@ impl Rasterizer {
             front,
             z_err: [0.0; 3],
             xy_err: 0.0,
+            snap: SNAP_PX,
         });
     }
 }

@@ -82,6 +82,7 @@ pub struct Freedom {
     clamp: f64,
     packed: bool,
     deviations: umbra_case::Deviations,
+    calibration: umbra_case::Calibration,
 }
 
 impl Freedom {
@@ -96,6 +97,7 @@ impl Freedom {
             clamp: f64::from(shadow.bias.polygon_offset_clamp),
             packed: profile.packed_depth,
             deviations: profile.deviations,
+            calibration: profile.calibration,
         }
     }
 
@@ -114,19 +116,22 @@ impl Freedom {
             let r = f64::from(self.format.offset_unit(0.0));
             ((m_max - snap - diff).max(0.0), m_max + snap + diff, r, r)
         } else {
-            let (r_lo, mut r_hi) = self.format.offset_unit_range(z);
+            let c = self.calibration;
+            let (r_lo, mut r_hi) = c.offset_unit(self.format, self.format.offset_unit_range(z));
             if self.deviations.has(umbra_case::Deviation::OffsetUnitX4) {
                 // The deviation's unit, where the format has codes (module note of Deviation).
                 if let Some(n) = self.format.fixed_bits() {
                     r_hi = r_hi.max(4.0 / f64::from((1u32 << n) - 1));
                 }
             }
-            (
-                (m_max - snap).max(0.0),
-                umbra_case::math::hypot(dx, dy) + snap,
-                r_lo,
-                r_hi,
-            )
+            let exact = umbra_case::math::hypot(dx, dy);
+            // The slope form a card read picks one end: max, or the exact gradient.
+            let (m_lo, m_hi) = match c.slope {
+                None => (m_max, exact),
+                Some(umbra_case::calibration::SlopeForm::Max) => (m_max, m_max),
+                Some(umbra_case::calibration::SlopeForm::Exact) => (exact, exact),
+            };
+            ((m_lo - snap).max(0.0), m_hi + snap, r_lo, r_hi)
         };
         let ends = |a: f64, b: f64, k: f64| {
             let (x, y) = (a * k, b * k);
@@ -203,7 +208,8 @@ impl Freedom {
         } else {
             (lo.min(lo.clamp(0.0, 1.0)), hi.max(hi.clamp(0.0, 1.0)))
         };
-        self.format.code_range(lo, hi)
+        self.format
+            .code_range_rounded(lo, hi, self.calibration.rounding_of(self.format))
     }
 }
 
@@ -223,7 +229,7 @@ pub fn render_face(
         height: h,
         cull: shadow.cull,
     };
-    let tris = setup_all(&raster, light, geo, judged.map(|j| j.0));
+    let mut tris = setup_all(&raster, light, geo, judged.map(|j| j.0));
     // The GLES 2 path stores the offset depth itself (packed to about 32 bits), not a code.
     let packed = judged.is_some_and(|j| j.1.packed_depth);
     let values = stored_values(conv, shadow, &tris, packed);
@@ -233,6 +239,11 @@ pub fn render_face(
             ..Default::default()
         };
     };
+    // A card's sub-pixel reading narrows how far another rasterizer's vertices may lie.
+    let snap = profile.calibration.snap_px(SNAP_PX);
+    for t in &mut tris {
+        t.snap = snap;
+    }
     let freedom = Freedom::new(conv, shadow, profile);
     let holes = profile.deviations.has(umbra_case::Deviation::EdgeHoles);
     let forward = conv.toward_far() > 0.0;

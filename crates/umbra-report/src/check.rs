@@ -100,7 +100,7 @@ impl Check {
             Check::Memory => "the run fits the worker's memory budget",
             Check::Render => "the backend renders the run without an API error",
             Check::Card => {
-                "the driver's choices inside the specs' freedom (its behaviour card: polygon-offset unit and slope, depth rounding, LINEAR weights, reference clamp) are the ones kept for its release"
+                "the driver's choices inside the specs' freedom (its behaviour card: polygon-offset unit and slope, depth rounding, LINEAR weights, sub-pixel bits, reference clamp) are the ones kept for its release (a BACKEND/card row), and each run stays inside the freedom narrowed to what its card's probes read (calibrated judging)"
             }
             Check::Twin(_) => {
                 "a metamorphic twin renders what its case renders, within what the specs allow"
@@ -129,7 +129,7 @@ impl Check {
             Check::Memory => "umbra's memory budget (--max-memory)",
             Check::Render => "the API's error reporting (glGetError, KHR_debug, wgpu's validation)",
             Check::Card => {
-                "review: a driver's card changes only through `cargo xtask bless`; each entry cites the clause whose freedom it measures"
+                "review: a driver's card changes only through `cargo xtask bless`; each entry cites the clause whose freedom it measures, and a run is narrowed only inside it (umbra_case::calibration)"
             }
             Check::Twin(_) => {
                 "the invariance the twin states (umbra_case::twin), within the spec's freedoms"

@@ -28,7 +28,7 @@ pub fn tables(results: &[RunResult]) -> Tables {
     let mut csv = String::new();
     let mut failures = String::new();
     let mut errors = String::from(
-        "test,status,judged,false_shadow,false_light,interior_judged,interior_false_shadow,interior_false_light,edge_px,silhouette,faces_away,outside,agreement,illegal,compared,blind,blind_pct,value_checked,value_margin,illegal_value,illegal_nan,illegal_coverage,illegal_colour,profile,shadow_ms,lit_ms,total_ms,clock\n",
+        "test,status,judged,false_shadow,false_light,interior_judged,interior_false_shadow,interior_false_light,edge_px,silhouette,faces_away,outside,agreement,illegal,compared,blind,blind_pct,value_checked,value_margin,illegal_value,illegal_nan,illegal_coverage,illegal_colour,profile,shadow_ms,lit_ms,total_ms,clock,blind_card_pct,judged_as_card\n",
     );
     let mut twins = String::from(
         "test,twin,agree,skipped,differ,legal_tie,legal_coverage,legal_texel,legal_filter,legal_position,legal_surface,blind,illegal,illegal_value,illegal_coverage,illegal_colour,interior_error,twin_interior_error,render_ms,ok,by_construction,shared_shadow_pass\n",
@@ -93,7 +93,7 @@ pub fn tables(results: &[RunResult]) -> Tables {
         if let Some(m) = &r.metrics {
             let _ = writeln!(
                 errors,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{}",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{},{},{}",
                 csv_field(&r.name),
                 r.status,
                 m.judged,
@@ -128,7 +128,12 @@ pub fn tables(results: &[RunResult]) -> Tables {
                 m.shadow_ms,
                 m.lit_ms,
                 m.total_ms,
-                m.clock
+                m.clock,
+                m.reference_card
+                    .as_ref()
+                    .map(|a| format!("{:.4}", 100.0 * a.blind_share()))
+                    .unwrap_or_default(),
+                csv_field(&m.judged_as_card)
             );
         }
     }

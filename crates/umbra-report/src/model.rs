@@ -140,6 +140,14 @@ pub struct Metrics {
     /// blind pixels, checked values and their closest margin, each illegal check.
     #[serde(default)]
     pub reference: Option<umbra_compare::reference::RefAgreement>,
+    /// The same comparison under the backend's card (calibrated judging: the spec's freedom
+    /// narrowed to what the card's probes read); None where the run was judged by the spec
+    /// alone. Its blind area is the run's blind area under the card.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_card: Option<umbra_compare::reference::RefAgreement>,
+    /// The effective calibrated profile of that judgement (`gl card(r24=…,slope=max,…)`).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub judged_as_card: String,
     /// The profile the run was judged for (`gl`, `gles3`, `gles2-packed`, `vulkan`).
     #[serde(default)]
     pub profile: String,

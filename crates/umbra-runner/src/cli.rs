@@ -198,6 +198,8 @@ pub mod help {
     pub const ORIENTATIONS: &str = "selftest: instead of the faults on the backends, the face/orientation table: every cube face and the 2D map drawn with each of the seven wrong orientations by the reference, and the catalogue points that catch each";
     /// `--json`.
     pub const JSON: &str = "print JSON for scripts instead of text";
+    /// `--spec-only`.
+    pub const SPEC_ONLY: &str = "judge every run by the specs alone: measure no behaviour card to narrow the judgement. By default each backend's card is measured once, before its runs, and every run is judged twice: against the specs (a failure there is a failure) and against the spec's freedom narrowed to what the card read (check `card`: the driver chose differently in the scene than in the probes); report.json and report.html give the blind area under both";
     /// `--diff` (card).
     pub const CARD_DIFF: &str = "compare two stored cards (card-RELEASE.json files, e.g. golden/gl33_zink/card-mesa-22.3.6.json and …-26.2.6.json) and name every entry that changed, old and new value and the spec, instead of measuring";
     /// `--card` (bisect).
@@ -263,6 +265,9 @@ pub struct Execution {
     /// `--judge-cache`: where the judging basis is cached.
     #[arg(long, value_name = "DIR", help = help::JUDGE_CACHE)]
     pub judge_cache: Option<String>,
+    /// `--spec-only`: no calibrated judging.
+    #[arg(long, help = help::SPEC_ONLY)]
+    pub spec_only: bool,
 }
 /// Where results go and how much is printed (conformance, selftest, soak, reduce).
 #[derive(Args, Debug, Clone, Default)]

@@ -209,3 +209,44 @@ fn every_card_fault_is_named_by_its_entry() {
         "{t}"
     );
 }
+
+/// Calibrated judging sees what the spec cannot: `slope-short` (a slope-scaled bias a little
+/// short) on the curved receiver's slope-scaled point stays inside the spec's freedom (the
+/// polygon-offset unit and slope form may be anything the specs allow), and outside the
+/// driver's own card, measured without the fault.
+#[test]
+fn a_run_inside_the_spec_but_outside_its_card_fails_card() {
+    let dir = scratch("curved");
+    let mut case: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(repo().join("cases/magnified/bias-forms-curved.json"))
+            .expect("the curved case"),
+    )
+    .expect("JSON");
+    case["sweep"]["shadow.bias"]["values"] =
+        serde_json::json!([{"slope": {"scale": 0.0001, "max": 0.005}}]);
+    std::fs::write(dir.join("curved.json"), case.to_string()).expect("write the case");
+    let cases = dir.to_string_lossy().into_owned();
+    let selftest = |extra: &[&str]| {
+        let mut args = vec![
+            "selftest",
+            "--cases",
+            &cases,
+            "--backend",
+            "gl33/llvmpipe",
+            "--fault",
+            "slope-short",
+        ];
+        args.extend_from_slice(extra);
+        text(&umbra(&args))
+    };
+    let calibrated = selftest(&[]);
+    assert!(
+        calibrated.contains("caught by 1 of 1 points (card×1)"),
+        "{calibrated}"
+    );
+    let spec = selftest(&["--spec-only"]);
+    assert!(
+        spec.contains("slope-short") && spec.contains("MISSED"),
+        "{spec}"
+    );
+}

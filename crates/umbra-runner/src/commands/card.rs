@@ -2,6 +2,7 @@
 //! measured in its own worker process as a run would be; `--diff OLD NEW` names what changed
 //! between two stored cards (two releases of one backend, or two backends).
 
+use std::sync::Arc;
 use std::time::Duration;
 
 use crate::cli::CardArgs;
@@ -90,6 +91,54 @@ pub fn of_session(session: &mut Session) -> Result<Card, String> {
     }
 }
 
+/// Each backend's live card in one run, measured once: by whichever of the backend's worker
+/// threads asks first, on its own session; the others wait for it (a `OnceLock` per backend).
+#[derive(Default)]
+pub struct LiveCards(std::sync::Mutex<std::collections::HashMap<String, Arc<Measured>>>);
+
+/// One backend's card, measured once ([`LiveCards`]).
+type Measured = std::sync::OnceLock<Result<Card, String>>;
+
+impl LiveCards {
+    /// `backend`'s card, measured on `session` unless another thread has measured it.
+    pub fn measured(&self, backend: &str, session: &mut Session) -> Result<Card, String> {
+        let cell = match self.0.lock() {
+            Ok(mut cells) => Arc::clone(cells.entry(backend.to_string()).or_default()),
+            Err(_) => return of_session(session),
+        };
+        cell.get_or_init(|| of_session(session)).clone()
+    }
+}
+
+/// The calibration a live card gives a backend's runs (encoded for the worker's request);
+/// none, said once (`first`) on stderr, where the card could not be measured or narrows
+/// nothing: those runs are judged by the spec alone, as the report's `judged_as_card` shows.
+pub fn calibration_of(
+    backend: &str,
+    live: Option<&Result<Card, String>>,
+    first: bool,
+) -> Option<String> {
+    match live? {
+        Ok(card) => {
+            let c = crate::judge::calibration::of_card(card);
+            if c.is_empty() && first {
+                eprintln!(
+                    "note: {backend}: its card narrows nothing; its runs are judged by the specs alone"
+                );
+            }
+            (!c.is_empty()).then(|| c.encode())
+        }
+        Err(why) => {
+            if first {
+                eprintln!(
+                    "note: {backend}: no behaviour card ({why}); its runs are judged by the specs alone"
+                );
+            }
+            None
+        }
+    }
+}
+
 /// `--diff OLD NEW`.
 fn diff(old: &str, new: &str, json: bool) -> Outcome {
     let read = |f: &str| Card::read(std::path::Path::new(f)).map_err(Error::new);
@@ -137,7 +186,7 @@ fn diff(old: &str, new: &str, json: bool) -> Outcome {
 /// (`not_run`: its status and reason) is not measured; the row says why, as its runs do.
 pub fn conformance_row(
     backend: &str,
-    session: &mut Session,
+    live: Option<Result<Card, String>>,
     dir: &std::path::Path,
     bless: bool,
     not_run: Option<(umbra_report::Status, String)>,
@@ -166,7 +215,7 @@ pub fn conformance_row(
         (row.status, row.reason) = (status, reason);
         return row;
     }
-    match of_session(session) {
+    match live.unwrap_or_else(|| Err("not measured".into())) {
         Ok(live) => {
             row.details = live.table();
             let (status, reason, failed) = judged(backend, &live, dir, bless);

@@ -82,6 +82,11 @@ struct Settings {
     /// Check each backend's behaviour card against the one kept beside its goldens: a whole
     /// run (no `--filter`, no `--shard`) with goldens.
     cards: Option<PathBuf>,
+    /// Judge every run against its backend's card too (calibrated judging; off with
+    /// `--spec-only`).
+    calibrate: bool,
+    /// Each backend's live card, measured once for the card row and the calibration.
+    live_cards: crate::commands::card::LiveCards,
 }
 
 /// Runs the command; returns its outcome.
@@ -638,6 +643,8 @@ fn settings(
             .golden
             .clone()
             .filter(|_| opts.filter == "*" && opts.shard.1 == 1),
+        calibrate: !args.execution.spec_only,
+        live_cards: Default::default(),
     }
 }
 
@@ -927,12 +934,18 @@ pub(crate) fn print_summary(
         );
     }
     println!("{}", budget.line());
-    if let Some((median, max, above, runs)) = umbra_report::html::blind_stats(results) {
+    use umbra_report::html::{Under, blind_stats};
+    if let Some(b) = blind_stats(results, Under::Spec) {
         println!(
-            "check strength: blind area median {:.3}%, max {:.2}%, {above} of {runs} judged runs above {:.0}% (report.html, Check strength)",
-            100.0 * median,
-            100.0 * max,
-            100.0 * umbra_report::html::BLIND_FLAG
+            "check strength: blind area under the specs: {} (report.html, Check strength)",
+            b.line()
+        );
+    }
+    if let Some(b) = blind_stats(results, Under::Card).filter(|b| b.calibrated > 0) {
+        println!(
+            "check strength: blind area under each backend's card: {} ({} runs judged against a card)",
+            b.line(),
+            b.calibrated
         );
     }
     println!("statuses: {}", umbra_report::model::breakdown(results));
@@ -1265,8 +1278,9 @@ fn run_group(
     // Only the lines that can name this backend's runs, so drivers.txt counts its own.
     let own = settings.expectations.for_backend(backend);
     let facts = hello.facts();
-    let group = Group {
+    let mut group = Group {
         backend,
+        calibration: None,
         not_ready: session.ready().err(),
         // Expectations for this backend's driver (`@applies`), and those a release before it
         // closed (their deviations were fixed: a failure they match may be one come back).
@@ -1282,15 +1296,18 @@ fn run_group(
             d.refused.push(format!("{backend}: {why}"));
         }
     }
-    if let Some(dir) = settings.cards.as_deref().filter(|_| first) {
+    // The live card, measured once per backend (by whichever of its threads comes first),
+    // for the card row and for calibrated judging.
+    let row_dir = settings.cards.as_deref().filter(|_| first);
+    let live = (group.not_run().is_none() && (settings.calibrate || row_dir.is_some()))
+        .then(|| settings.live_cards.measured(backend, &mut session));
+    if settings.calibrate {
+        group.calibration = crate::commands::card::calibration_of(backend, live.as_ref(), first);
+    }
+    if let Some(dir) = row_dir {
         let not_run = group.not_run().map(|a| (a.status, a.reason));
-        let row = crate::commands::card::conformance_row(
-            backend,
-            &mut session,
-            dir,
-            settings.bless,
-            not_run,
-        );
+        let row =
+            crate::commands::card::conformance_row(backend, live, dir, settings.bless, not_run);
         let unavailable = matches!(group.not_ready, Some(NotReady::Unavailable(_)));
         finished(done, row, None, total, settings.verbose, unavailable);
     }
@@ -1358,6 +1375,9 @@ fn group_env(backend: &str, settings: &Settings) -> Vec<(String, String)> {
 /// Mesa build, unavailable, its worker would not start) and the expectations for its driver.
 struct Group<'a> {
     backend: &'a str,
+    /// Its card read as the judge's narrowing ([`umbra_case::Calibration::encode`]); none:
+    /// judged by the spec alone.
+    calibration: Option<String>,
     /// Why its runs cannot run, where they cannot ([`Session::ready`]).
     not_ready: Option<NotReady>,
     expectations: Expectations,
@@ -1484,6 +1504,7 @@ impl Group<'_> {
                     deviation: Some(self.expectations.deviations(&p.name(), &p.case).names())
                         .filter(|n| !n.is_empty()),
                     card: false,
+                    calibration: self.calibration.clone(),
                 };
                 session.attempt_or_rerun(&req)
             }

@@ -369,6 +369,7 @@ impl Runs {
             gallery: None,
             deviation: Some(expectations.deviations(&run, json).names()).filter(|n| !n.is_empty()),
             card: false,
+            calibration: None,
         };
         let a = session.attempt(&req);
         let raw = deqp_status(&a.status);

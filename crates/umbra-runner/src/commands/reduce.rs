@@ -131,6 +131,7 @@ impl Judge {
             gallery: None,
             deviation: None,
             card: false,
+            calibration: None,
         };
         // A worker that crashed or timed out is started again by the session, for the next
         // candidate.

@@ -150,6 +150,7 @@ pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
         } => &["filters-magnified", "filters", "outside-filtered"],
         Fault::Scaled { .. } => &[
             "bias-forms-magnified",
+            "bias-forms-curved-magnified",
             "offset-magnified",
             "offset-clamp-magnified",
             "offset-boundary",
@@ -210,6 +211,10 @@ pub(crate) struct Setup {
     generated: Option<PathBuf>,
     /// Worker processes at once.
     pub(crate) jobs: usize,
+    /// Each backend's calibration, from its card measured without a fault (none with
+    /// `--spec-only`, or where the card could not be measured): a fault is a driver that
+    /// changed since its card was taken, judged as conformance judges it.
+    calibrations: BTreeMap<String, String>,
 }
 
 impl Setup {
@@ -221,8 +226,25 @@ impl Setup {
             timeout: self.timeout,
             verbose: self.verbose,
             every_point: self.generated.is_some(),
+            calibrations: &self.calibrations,
         }
     }
+}
+
+/// Each backend's calibration from its card, measured on a worker without a fault, one
+/// backend after another (a second or two each).
+fn clean_calibrations(backends: &[String], timeout: Duration) -> BTreeMap<String, String> {
+    let mut out = BTreeMap::new();
+    for b in backends {
+        let env = crate::harness::registry::worker_env(b);
+        let mut session = Session::start(b, &env, timeout);
+        let live = (session.ready().is_ok())
+            .then(|| crate::commands::card::LiveCards::default().measured(b, &mut session));
+        if let Some(c) = crate::commands::card::calibration_of(b, live.as_ref(), true) {
+            out.insert(b.clone(), c);
+        }
+    }
+    out
 }
 
 /// Checks the command line and loads what every mode needs; an error is what the command
@@ -307,7 +329,13 @@ pub(crate) fn setup(args: &SelftestArgs) -> Result<Setup, Error> {
                 .unwrap_or(crate::judge::judge_cache::DEFAULT_ROOT),
         ))
     };
+    let calibrations = if args.execution.spec_only || args.mode() != SelftestMode::Faults {
+        BTreeMap::new()
+    } else {
+        clean_calibrations(&backends, timeout)
+    };
     Ok(Setup {
+        calibrations,
         points,
         chosen: !args.backend.is_empty(),
         backends,
@@ -582,6 +610,8 @@ pub(crate) struct How<'a> {
     /// Run every exercising point (the catch rate on generated cases), not just until one
     /// catches after the sample.
     pub(crate) every_point: bool,
+    /// Each backend's calibration ([`Setup`]'s).
+    pub(crate) calibrations: &'a BTreeMap<String, String>,
 }
 
 /// A worker running `backend` with one fault on, and the expectations of its driver.
@@ -591,6 +621,7 @@ pub(crate) struct Faulted {
     expectations: Expectations,
     verbose: bool,
     fault: Fault,
+    calibration: Option<String>,
 }
 
 /// What one faulted point did.
@@ -634,6 +665,7 @@ impl Faulted {
             expectations,
             verbose: how.verbose,
             fault,
+            calibration: how.calibrations.get(backend).cloned(),
         })
     }
 
@@ -652,6 +684,7 @@ impl Faulted {
             deviation: Some(self.expectations.deviations(&name, &case).names())
                 .filter(|n| !n.is_empty()),
             card: false,
+            calibration: self.calibration.clone(),
         };
         // A crash or a timeout is a catch; the session starts a fresh worker for the next
         // point, and one that does not come up ends the hunt.

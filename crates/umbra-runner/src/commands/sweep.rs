@@ -402,6 +402,7 @@ impl Sweep<'_> {
                 gallery: None,
                 deviation: None,
                 card: false,
+                calibration: None,
             };
             let (result, skipped) = match session.reply(&req) {
                 Ok((Reply::Report(r), _)) => match (r.outcome, r.measured) {
@@ -473,6 +474,7 @@ pub fn measure_backends(
                     gallery: None,
                     deviation: None,
                     card: false,
+                    calibration: None,
                 };
                 match session.reply(&req)?.0 {
                     Reply::Report(r) => r.measured.ok_or(r.reason),

@@ -16,7 +16,7 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 
 use crate::exit::Exit;
-use crate::judge::run::{Outcome, describe, run_point, run_point_as};
+use crate::judge::run::{Outcome, describe, run_point_as};
 use umbra_report::Metrics;
 
 /// What a worker says once, when it has started: its driver, or why it cannot run. On the
@@ -122,6 +122,10 @@ pub struct Request {
     /// of [`crate::judge::card_probes`], answered in [`RunReport::card`].
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub card: bool,
+    /// The backend's card read as a narrowing ([`umbra_case::Calibration::encode`]): the run
+    /// is judged a second time against it (calibrated judging); none: by the spec alone.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<String>,
 }
 
 impl Request {
@@ -137,6 +141,7 @@ impl Request {
             gallery: None,
             deviation: None,
             card: true,
+            calibration: None,
         }
     }
 }
@@ -373,18 +378,24 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             },
         };
     }
-    let deviations = match umbra_case::Deviations::parse(req.deviation.as_deref().unwrap_or("")) {
-        Ok(d) => d,
-        Err(d) => {
+    let (deviations, calibration) = match judging_of(req) {
+        Ok(j) => j,
+        Err(reason) => {
             return RunReport {
                 outcome: RunVerdict::Fail,
-                reason: format!("unknown deviation {d:?} in the request"),
+                reason,
                 ..Default::default()
             };
         }
     };
     let again = (!deviations.is_empty()).then(|| (deviations, point.clone()));
-    match run_point(backend, point, !req.no_twins) {
+    match run_point_as(
+        backend,
+        point,
+        !req.no_twins,
+        umbra_case::Deviations::NONE,
+        calibration,
+    ) {
         Outcome::Skip(why) => RunReport {
             outcome: RunVerdict::Skip,
             reason: why,
@@ -426,18 +437,9 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
                     storage = Some(format!("cannot write pictures under {}: {e}", at.display()));
                 }
             }
-            // Judged again under the deviation the run's expectation names: what still fails
-            // is what the deviation does not explain.
-            let under_deviation = again.filter(|_| failing).map(|(d, point)| {
-                match run_point_as(backend, point, !req.no_twins, d) {
-                    Outcome::Done(j) => j.failed,
-                    // Judged again, it did not render: the check that fails is rendering.
-                    Outcome::Skip(_) | Outcome::Error(_) => vec![umbra_report::FailedCheck {
-                        check: umbra_report::check::Check::Render,
-                        count: 1,
-                    }],
-                }
-            });
+            let under_deviation = again
+                .filter(|_| failing)
+                .map(|(d, point)| judged_again(backend, point, !req.no_twins, d));
             RunReport {
                 under_deviation,
                 storage,
@@ -458,6 +460,35 @@ fn handle(backend: &mut dyn umbra_case::Backend, req: &Request) -> RunReport {
             }
         }
     }
+}
+
+/// The checks a failing run still fails judged again under the deviations `d` its
+/// expectation names: what the deviation does not explain. By the spec and the deviation
+/// alone: a modelled deviation is where the driver departs from what its card's probes read
+/// (softpipe's Z16 span stepping is not its probed rounding), so no card narrows it.
+fn judged_again(
+    backend: &mut dyn umbra_case::Backend,
+    point: umbra_case::CasePoint,
+    twins: bool,
+    d: umbra_case::Deviations,
+) -> Vec<umbra_report::FailedCheck> {
+    match run_point_as(backend, point, twins, d, Default::default()) {
+        Outcome::Done(j) => j.failed,
+        // Judged again, it did not render: the check that fails is rendering.
+        Outcome::Skip(_) | Outcome::Error(_) => vec![umbra_report::FailedCheck {
+            check: umbra_report::check::Check::Render,
+            count: 1,
+        }],
+    }
+}
+
+/// The deviations and the calibration a request names, or why they are not ones.
+fn judging_of(req: &Request) -> Result<(umbra_case::Deviations, umbra_case::Calibration), String> {
+    let deviations = umbra_case::Deviations::parse(req.deviation.as_deref().unwrap_or(""))
+        .map_err(|d| format!("unknown deviation {d:?} in the request"))?;
+    let calibration = umbra_case::Calibration::parse(req.calibration.as_deref().unwrap_or(""))
+        .map_err(|bad| format!("bad calibration in the request: {bad}"))?;
+    Ok((deviations, calibration))
 }
 
 /// Writes the run's gallery pictures (`req.gallery`, beside its golden and any pending one);
@@ -541,6 +572,11 @@ fn metrics_of(backend: &dyn umbra_case::Backend, j: &crate::judge::run::Judged) 
         }),
         illegal: j.agreement.as_ref().map(|a| a.illegal),
         reference: j.agreement.clone(),
+        reference_card: j.card.as_ref().map(|c| c.agreement.clone()),
+        judged_as_card: j
+            .card
+            .as_ref()
+            .map_or_else(String::new, |c| c.judged_as.clone()),
         profile: backend.profile().name(),
         judged_as: backend.profile().effective_for(j.prepared.case()).name(),
         visibility_storage: j.frame.visibility_storage.name().into(),

@@ -255,10 +255,17 @@ fn gcd(a: usize, b: usize) -> usize {
 /// The basis of `prepared` for a backend of `profile`: from the cache when the run has one,
 /// else computed.
 pub fn basis(prepared: &Prepared, profile: Profile) -> Basis {
+    let truth = truth(prepared);
+    let judged = judged(prepared, profile);
+    Basis { truth, judged }
+}
+
+/// The reference's judged render of `prepared` for `profile` (its effective profile), cached
+/// like [`basis`]'s.
+pub fn judged(prepared: &Prepared, profile: Profile) -> Judged {
     let profile = profile.effective_for(prepared.case());
     let dir = std::env::var_os(ENV).map(PathBuf::from);
-    let truth = truth(prepared);
-    let judged = cached(
+    cached(
         dir.as_deref(),
         "judged",
         key(prepared, &profile.name()),
@@ -266,14 +273,15 @@ pub fn basis(prepared: &Prepared, profile: Profile) -> Basis {
         |bytes, k| read_judged(bytes, k, profile),
         || {
             let mut j = umbra_ref::render_judged(prepared, ClipDepth::MinusOneToOne, profile);
-            // Only the GL 3.3 backends read their shadow map back; keep its ranges for them.
-            if profile != Profile::GL {
+            // Only the GL 3.3 backends read their shadow map back; keep its ranges for them
+            // (under their card's narrowing too).
+            let uncalibrated = profile.with_calibration(Default::default());
+            if uncalibrated != Profile::GL {
                 j.map = Vec::new();
             }
             j
         },
-    );
-    Basis { truth, judged }
+    )
 }
 
 /// One cached artefact: read it, or compute it and write it for the next worker. A cache that

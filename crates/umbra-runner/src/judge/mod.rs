@@ -3,11 +3,13 @@
 //! becomes under the checked-in expectations ([`expectations`]), and how a failing run
 //! compares with the other drivers' runs of its point ([`consensus`]), and the check
 //! across one backend's runs of a sweep ([`falls_along`]); and the backend's behaviour card
-//! ([`card`], measured by [`card_probes`]). Depends on nothing else in the
+//! ([`card`], measured by [`card_probes`], read as a narrowing of the judge by
+//! [`calibration`]). Depends on nothing else in the
 //! runner but the glob matcher.
 
 pub mod basis_key;
 pub mod blessings;
+pub mod calibration;
 pub mod card;
 pub mod card_probes;
 pub mod consensus;

@@ -6,7 +6,7 @@
 use std::time::{Duration, Instant};
 
 use umbra_case::format::{InteriorError, TwinAgree};
-use umbra_case::{Backend, CasePoint, Frame, Needs, Prepared, Support};
+use umbra_case::{Backend, Calibration, CasePoint, Frame, Needs, Prepared, Support};
 use umbra_compare::TruthError;
 use umbra_compare::consensus::{Failed, Fingerprint};
 use umbra_compare::reference::RefAgreement;
@@ -49,6 +49,18 @@ pub struct Judged {
     /// Where the frame, its map and its twins broke the model (empty when nothing did): what
     /// the consensus diagnosis compares across drivers.
     pub fingerprint: Fingerprint,
+    /// The second judgement, against the backend's card (None without a calibration).
+    pub card: Option<CardJudged>,
+}
+
+/// A run judged against its backend's card: the spec's freedom narrowed to what the card's
+/// probes read (calibrated judging, [`umbra_case::calibration`]).
+pub struct CardJudged {
+    /// The effective calibrated profile's name (what the intervals were computed for).
+    pub judged_as: String,
+    /// The comparison with the reference under the narrowed freedom: its blind area is the
+    /// run's blind area under the card.
+    pub agreement: RefAgreement,
 }
 
 /// The outcome of trying to run a point on a backend.
@@ -64,16 +76,24 @@ pub enum Outcome {
 /// Renders `point` on `backend` and judges it against the truth (and the reference), with its
 /// metamorphic twins when `twins` is set.
 pub fn run_point(backend: &mut dyn Backend, point: CasePoint, twins: bool) -> Outcome {
-    run_point_as(backend, point, twins, umbra_case::Deviations::NONE)
+    run_point_as(
+        backend,
+        point,
+        twins,
+        umbra_case::Deviations::NONE,
+        Calibration::default(),
+    )
 }
 
-/// [`run_point`], judged with `deviations` allowed besides the backend's profile: what the
-/// expectations that name modelled deviations ask for (`Deviation:NAME`).
+/// [`run_point`], judged with `deviations` allowed besides the backend's profile (what the
+/// expectations that name modelled deviations ask for, `Deviation:NAME`), and judged a second
+/// time against `calibration` (the backend's card) when it narrows anything.
 pub fn run_point_as(
     backend: &mut dyn Backend,
     point: CasePoint,
     twins: bool,
     deviations: umbra_case::Deviations,
+    calibration: Calibration,
 ) -> Outcome {
     let profile = backend.profile().with_deviations(deviations);
     if let Support::Unsupported(why) = backend.supports(&Needs::of(&point.case)) {
@@ -152,6 +172,16 @@ pub fn run_point_as(
             illegal_failed(a, &mut failed, &mut problems);
         }
     }
+    let spec_legal = agreement
+        .as_ref()
+        .is_some_and(|a| a.illegal == 0 && a.illegal_map == 0);
+    let card = (!calibration.is_empty()).then(|| {
+        let c = judged_by_card(&prepared, &frame, profile.with_calibration(calibration));
+        if spec_legal && prepared.case().expect.backends_agree {
+            card_failed(&c, is_ref, &mut failed, &mut problems);
+        }
+        c
+    });
     let judge_time = start.elapsed().saturating_sub(twins_time);
     interior_failed(&prepared, &error, &mut failed, &mut problems);
     Outcome::Done(Box::new(Judged {
@@ -170,7 +200,52 @@ pub fn run_point_as(
         twins,
         problems,
         fingerprint,
+        card,
     }))
+}
+
+/// `frame` judged against the reference's render for `profile`, a calibrated profile.
+fn judged_by_card(prepared: &Prepared, frame: &Frame, profile: umbra_case::Profile) -> CardJudged {
+    let judged = crate::judge::judge_cache::judged(prepared, profile);
+    let (agreement, _) = umbra_compare::reference::judge(&judged, frame);
+    CardJudged {
+        judged_as: judged.profile.name(),
+        agreement,
+    }
+}
+
+/// A run legal under the spec but not under its card: a failed `card` check and its line.
+/// Counted only where the spec's judgement passed (a spec failure says more, and keeps the
+/// signature an expectation names).
+fn card_failed(
+    c: &CardJudged,
+    is_ref: bool,
+    failed: &mut Vec<FailedCheck>,
+    problems: &mut Vec<String>,
+) {
+    let a = &c.agreement;
+    if a.illegal == 0 && a.illegal_map == 0 {
+        return;
+    }
+    problems.push(if is_ref {
+        format!(
+            "umbra's reference is outside its own card's narrowing of the spec ({}; {} map texels; judged as {}): a bug in the calibration, not in a driver",
+            a.illegal_summary(),
+            a.illegal_map,
+            c.judged_as
+        )
+    } else {
+        format!(
+            "inside the spec but outside its own card ({}; {} map texels; judged as {}): the driver chose differently in this scene than in its card's probes",
+            a.illegal_summary(),
+            a.illegal_map,
+            c.judged_as
+        )
+    });
+    failed.push(FailedCheck {
+        check: Check::Card,
+        count: a.illegal.max(a.illegal_map),
+    });
 }
 
 /// The backend's frame of `prepared`, or the outcome that ends the run: a skip (a backend
