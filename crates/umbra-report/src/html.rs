@@ -587,3 +587,61 @@ fn checks_line(r: &RunResult) -> String {
         .collect();
     format!("<ul class=\"checks\">{}</ul>", items.join(""))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use umbra_compare::reference::RefAgreement;
+
+    fn run(spec: Option<(u64, u64)>, card: Option<(u64, u64)>) -> RunResult {
+        let agreement = |(compared, blind): (u64, u64)| RefAgreement {
+            compared,
+            blind,
+            ..Default::default()
+        };
+        RunResult {
+            name: "ref/case".into(),
+            backend: "ref".into(),
+            case: "case".into(),
+            file: String::new(),
+            values: Vec::new(),
+            status: Status::Pass,
+            reason: String::new(),
+            metrics: Some(crate::Metrics {
+                reference: spec.map(agreement),
+                reference_card: card.map(agreement),
+                ..Default::default()
+            }),
+            failed: Vec::new(),
+            golden: None,
+            time_s: 0.0,
+            reproduce: String::new(),
+            diagnosis: None,
+            stderr: String::new(),
+            fingerprint: None,
+            details: String::new(),
+        }
+    }
+
+    #[test]
+    fn the_blind_area_is_counted_under_the_spec_and_under_the_card() {
+        let runs = [
+            run(Some((100, 60)), Some((100, 20))),
+            run(Some((100, 2)), Some((100, 0))),
+            // Judged by the spec alone: counts with its spec figure under the card too.
+            run(Some((100, 55)), None),
+            run(None, None),
+        ];
+        let spec = blind_stats(&runs, Under::Spec).expect("spec");
+        let card = blind_stats(&runs, Under::Card).expect("card");
+        assert_eq!((spec.runs, spec.above_flag, spec.above_half), (3, 3, 2));
+        assert_eq!((card.runs, card.above_flag, card.above_half), (3, 2, 1));
+        assert_eq!(card.calibrated, 2);
+        assert_eq!(spec.median, 0.55);
+        assert_eq!(card.median, 0.2);
+        assert!(card.line().contains("2 of 3 runs above 1%, 1 above 50%"));
+        let page = strength_section(&runs);
+        assert!(page.contains("narrowed to each backend's card"), "{page}");
+        assert!(page.contains("2 of 3 runs were judged against their backend's card"));
+    }
+}

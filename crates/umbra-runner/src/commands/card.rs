@@ -92,7 +92,7 @@ pub fn of_session(session: &mut Session) -> Result<Card, String> {
 }
 
 /// Each backend's live card in one run, measured once: by whichever of the backend's worker
-/// threads asks first, on its own session; the others wait for it (a `OnceLock` per backend).
+/// threads asks first, the others waiting for it (a `OnceLock` per backend).
 #[derive(Default)]
 pub struct LiveCards(std::sync::Mutex<std::collections::HashMap<String, Arc<Measured>>>);
 
@@ -100,14 +100,32 @@ pub struct LiveCards(std::sync::Mutex<std::collections::HashMap<String, Arc<Meas
 type Measured = std::sync::OnceLock<Result<Card, String>>;
 
 impl LiveCards {
-    /// `backend`'s card, measured on `session` unless another thread has measured it.
-    pub fn measured(&self, backend: &str, session: &mut Session) -> Result<Card, String> {
+    /// `backend`'s card ([`measured_alone`]) unless another thread has measured it.
+    pub fn measured(
+        &self,
+        backend: &str,
+        env: &[(String, String)],
+        limit: Duration,
+    ) -> Result<Card, String> {
         let cell = match self.0.lock() {
             Ok(mut cells) => Arc::clone(cells.entry(backend.to_string()).or_default()),
-            Err(_) => return of_session(session),
+            Err(_) => return measured_alone(backend, env, limit),
         };
-        cell.get_or_init(|| of_session(session)).clone()
+        cell.get_or_init(|| measured_alone(backend, env, limit))
+            .clone()
     }
+}
+
+/// `backend`'s card, measured in a worker of its own (environment `env`, probes within
+/// `limit`): the probes' renders leave nothing in the workers that run the cases (a driver's
+/// caches, a fake backend's call count), and a backend that crashes or hangs on a probe
+/// costs its card, not a run.
+pub fn measured_alone(
+    backend: &str,
+    env: &[(String, String)],
+    limit: Duration,
+) -> Result<Card, String> {
+    of_session(&mut Session::start(backend, env, limit))
 }
 
 /// The calibration a live card gives a backend's runs (encoded for the worker's request);

@@ -1299,8 +1299,12 @@ fn run_group(
     // The live card, measured once per backend (by whichever of its threads comes first),
     // for the card row and for calibrated judging.
     let row_dir = settings.cards.as_deref().filter(|_| first);
-    let live = (group.not_run().is_none() && (settings.calibrate || row_dir.is_some()))
-        .then(|| settings.live_cards.measured(backend, &mut session));
+    let live =
+        (group.not_run().is_none() && (settings.calibrate || row_dir.is_some())).then(|| {
+            settings
+                .live_cards
+                .measured(backend, &env, settings.timeout)
+        });
     if settings.calibrate {
         group.calibration = crate::commands::card::calibration_of(backend, live.as_ref(), first);
     }

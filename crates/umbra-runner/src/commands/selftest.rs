@@ -237,10 +237,8 @@ fn clean_calibrations(backends: &[String], timeout: Duration) -> BTreeMap<String
     let mut out = BTreeMap::new();
     for b in backends {
         let env = crate::harness::registry::worker_env(b);
-        let mut session = Session::start(b, &env, timeout);
-        let live = (session.ready().is_ok())
-            .then(|| crate::commands::card::LiveCards::default().measured(b, &mut session));
-        if let Some(c) = crate::commands::card::calibration_of(b, live.as_ref(), true) {
+        let live = crate::commands::card::measured_alone(b, &env, timeout);
+        if let Some(c) = crate::commands::card::calibration_of(b, Some(&live), true) {
             out.insert(b.clone(), c);
         }
     }
