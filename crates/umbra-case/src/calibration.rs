@@ -95,9 +95,19 @@ pub fn fixed_index(format: crate::format::DepthFormat) -> Option<usize> {
 const FIXED: [&str; 2] = ["16", "24"];
 
 impl Calibration {
+    /// Narrows nothing (the `Default`, usable in constants).
+    pub const NONE: Calibration = Calibration {
+        offset_unit: [None; 2],
+        slope: None,
+        rounding: [None; 2],
+        bilinear: false,
+        cube_seams: None,
+        subpixel_bits: None,
+    };
+
     /// Whether it narrows nothing.
     pub fn is_empty(&self) -> bool {
-        *self == Calibration::default()
+        *self == Calibration::NONE
     }
 
     /// The calibration as a short stable string (`r16=968-1032,slope=max,round16=nearest,
@@ -247,6 +257,7 @@ mod tests {
         );
         assert_eq!(Calibration::parse(&s), Ok(c));
         assert_eq!(Calibration::parse(""), Ok(Calibration::default()));
+        assert_eq!(Calibration::NONE, Calibration::default());
         for bad in [
             "r16=5",
             "r32=1-2",

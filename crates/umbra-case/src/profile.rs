@@ -183,15 +183,6 @@ impl Deviation {
     }
 }
 
-const CALIBRATION_NONE: Calibration = Calibration {
-    offset_unit: [None; 2],
-    slope: None,
-    rounding: [None; 2],
-    bilinear: false,
-    cube_seams: None,
-    subpixel_bits: None,
-};
-
 impl Profile {
     /// Desktop OpenGL (3.3 core and later), seamless cube filtering off.
     pub const GL: Profile = Profile {
@@ -199,7 +190,7 @@ impl Profile {
         seamless_cube: false,
         packed_depth: false,
         deviations: Deviations::NONE,
-        calibration: CALIBRATION_NONE,
+        calibration: Calibration::NONE,
     };
     /// OpenGL ES 3.x: seamless cube maps.
     pub const GLES3: Profile = Profile {
@@ -207,7 +198,7 @@ impl Profile {
         seamless_cube: true,
         packed_depth: false,
         deviations: Deviations::NONE,
-        calibration: CALIBRATION_NONE,
+        calibration: Calibration::NONE,
     };
     /// umbra's GLES 2 path: packed depth, manual compare.
     pub const GLES2: Profile = Profile {
@@ -215,7 +206,7 @@ impl Profile {
         seamless_cube: false,
         packed_depth: true,
         deviations: Deviations::NONE,
-        calibration: CALIBRATION_NONE,
+        calibration: Calibration::NONE,
     };
     /// Vulkan.
     pub const VULKAN: Profile = Profile {
@@ -223,7 +214,7 @@ impl Profile {
         seamless_cube: true,
         packed_depth: false,
         deviations: Deviations::NONE,
-        calibration: CALIBRATION_NONE,
+        calibration: Calibration::NONE,
     };
 
     /// A short stable name, for reports and cache keys (`gl`, `gles3`, `vulkan`, …, with
