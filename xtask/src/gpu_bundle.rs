@@ -37,7 +37,9 @@ backend of the machine it runs on (`./umbra backends` lists them).
 ```
 
 `results/` then holds report.json, results.csv (deqp-runner's `test,status,time`),
-drivers.txt, failures.csv, junit.xml, backends.txt and run.log; `results/run/latest/` the
+drivers.txt, failures.csv, junit.xml, backends.txt, cards.txt and cards.json (each backend's
+behaviour card: what its driver chose inside the specs' freedom) and run.log;
+`results/run/latest/` the
 report.html with every picture. Exit status 0 when every run is as expected, 1 on a failure,
 125 when nothing could run. Made by `cargo xtask gpu-bundle` in umbra's repository.
 ";
@@ -220,6 +222,9 @@ mod tests {
         );
         let drivers = std::fs::read_to_string(results.join("drivers.txt")).expect("drivers");
         assert!(drivers.contains("gl33/swrast"), "{drivers}");
+        let cards = std::fs::read_to_string(results.join("cards.json")).expect("cards.json");
+        let cards: serde_json::Value = serde_json::from_str(&cards).expect("cards.json parses");
+        assert!(cards.to_string().contains("gl33/swrast"), "{cards}");
         let _ = std::fs::remove_dir_all(&out);
     }
 }

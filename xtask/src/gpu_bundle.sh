@@ -13,7 +13,9 @@
 #
 # Leaves in OUT: report.json, results.csv, drivers.txt (the drivers, as the GL and Vulkan
 # implementations report themselves), failures.csv, junit.xml, backends.txt (what
-# `umbra backends` found) and run.log; OUT/run/latest/ holds report.html and the pictures.
+# `umbra backends` found), cards.txt and cards.json (each backend's behaviour card: what its
+# driver chose inside the specs' freedom) and run.log; OUT/run/latest/ holds report.html and
+# the pictures.
 # Exit status: umbra conformance's (0 as expected, 1 a failure, 125 nothing could run).
 set -u
 # Ids and paths are taken as they are: no pathname expansion of a glob-like id.
@@ -34,7 +36,7 @@ while [ $# -gt 0 ]; do
         --backend) need "$@"; backends="$backends --backend $2"; shift 2 ;;
         --loaders) need "$@"; loaders="$2"; shift 2 ;;
         --) shift; break ;;
-        -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+        -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
         *) echo "run.sh: unknown argument $1 (see ./run.sh --help)" >&2; exit 125 ;;
     esac
 done
@@ -43,7 +45,8 @@ mkdir -p "$out" || exit 125
 out=$(cd "$out" && pwd)
 # Nothing of an earlier run may pass for this one's.
 rm -f "$out/.rc" "$out/report.json" "$out/results.csv" "$out/drivers.txt" \
-    "$out/failures.csv" "$out/junit.xml" "$out/backends.txt" "$out/run.log"
+    "$out/failures.csv" "$out/junit.xml" "$out/backends.txt" "$out/run.log" \
+    "$out/cards.txt" "$out/cards.json"
 rm -f "$out/run/latest"
 trap 'echo "run.sh: interrupted" >&2; exit 125' INT TERM
 
@@ -85,6 +88,11 @@ sed -n '/^Backends/,/^$/p' "$out/backends.txt" | grep -E '^  [a-z]' || cat "$out
     echo $? > "$out/.rc"
 } | tee "$out/run.log"
 rc=$(cat "$out/.rc" 2>/dev/null || echo 125)
+# The cards, kept: the first thing a driver developer asks of a GPU umbra has never seen.
+# shellcheck disable=SC2086
+"$here/umbra" card $backends --timeout 120 > "$out/cards.txt" 2>&1
+# shellcheck disable=SC2086
+"$here/umbra" card $backends --timeout 120 --json > "$out/cards.json" 2>> "$out/cards.txt"
 latest="$out/run/latest"
 if [ -d "$latest" ]; then
     for f in report.json results.csv drivers.txt failures.csv junit.xml; do

@@ -85,7 +85,7 @@ pub enum Command {
     Repro(ReproArgs),
     /// `umbra card`.
     #[command(
-        about = "Measure each backend's behaviour card: what its driver chose wherever the specs leave a choice (polygon-offset unit and slope term, depth rounding, LINEAR-compare weights, the reference clamp), each with the spec's range, the probe and how sure it is; --diff OLD NEW names what changed between two stored cards (exit 0 measured, 125 could not run)"
+        about = "Measure each backend's behaviour card: what its driver chose wherever the specs leave a choice (polygon-offset unit and slope term, depth rounding, LINEAR-compare weights, sub-pixel bits, cube seams and face ties, the reference clamp, border compare, LOD scale factor and offset), each with the spec's range, the probe and how sure it is; --diff OLD NEW names what changed between two stored cards (exit 0 measured, 125 could not run)"
     )]
     Card(CardArgs),
     /// `umbra backends`.

@@ -130,14 +130,26 @@ pub fn adapter_slug(kind: Kind, driver: &str, name: &str, cpu: bool) -> String {
     umbra_case::BackendId::name_part(&raw)
 }
 
+/// A wgpu instance on `backends`, without the indirect-call validation wgpu turns on by
+/// default: umbra draws nothing indirect, and that validation builds compute pipelines at
+/// `request_device`, which wgpu's GL backend cannot compile on a desktop GL 3.3 context that
+/// advertises ARB_compute_shader (naga wants GLSL 4.20 for compute) and reports as "Parent
+/// device is lost": seen on NVIDIA 580.159.04 (H200), gfx-rs/wgpu#8616 and #4751.
+fn instance(backends: wgpu::Backends) -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = backends;
+    desc.flags = desc
+        .flags
+        .difference(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL);
+    wgpu::Instance::new(desc)
+}
+
 /// Every adapter of `kind` with its name in ids: [`adapter_slug`], and `.2`, `.3` … for a
 /// second and third adapter of one driver, in wgpu's enumeration order (the Vulkan loader's
 /// physical-device order), which is not tied to a PCI slot: drivers.txt records each
 /// adapter's vendor and device ids.
 pub fn named_adapters(kind: Kind) -> Vec<(String, wgpu::Adapter)> {
-    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.backends = kind.backends();
-    let instance = wgpu::Instance::new(desc);
+    let instance = instance(kind.backends());
     let adapters = pollster::block_on(instance.enumerate_adapters(kind.backends()));
     let mut seen: std::collections::HashMap<String, usize> = Default::default();
     adapters
@@ -241,9 +253,7 @@ pub fn open(target: &Target) -> Result<Gpu, Unavailable> {
 /// (`umbra backends`).
 pub fn adapters() -> Vec<wgpu::AdapterInfo> {
     let backends = wgpu::Backends::VULKAN | wgpu::Backends::GL;
-    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.backends = backends;
-    let instance = wgpu::Instance::new(desc);
+    let instance = instance(backends);
     pollster::block_on(instance.enumerate_adapters(backends))
         .into_iter()
         .map(|a| a.get_info())

@@ -16,13 +16,17 @@
 //! - `clamp-float`: a D32F reference clamped like a fixed-point one's:
 //!   `reference-clamp.depth32f`;
 //! - `no-clamp`: the GLES 2 path's emulated compare forgets to clamp its reference:
-//!   `reference-clamp.depth16`.
+//!   `reference-clamp.depth16`;
+//! - `mip-level-coarse`: a mipmapped map's base level one too coarse (an LOD off by a whole
+//!   level, outside the spec: no fault of umbra's moves the LOD by less): `lod-offset`, which
+//!   then finds no crossing and says so.
 //!
 //! Entries with no fault yet, because no umbra-side change can move them (they are the
 //! rasterizer's and the sampler's): `slope-term.diagonal` (max against exact needs the
 //! driver's own slope), `depth-rounding.*` and `reference-precision.*` (the conversions of
 //! the stored depth and of the reference), `subpixel-bits`, `cube-seams`,
-//! `offset-unit.*.depends-on-depth`.
+//! `offset-unit.*.depends-on-depth`, `cube-face-ties`, `border-compare`, `lod-scale-factor`,
+//! `lod-derivatives`.
 
 use std::time::Duration;
 
@@ -33,16 +37,17 @@ use crate::harness::scheduler::Session;
 use crate::judge::card::Card;
 
 /// Each card fault, and the key prefix of the entry it must move.
-pub const CARD_FAULTS: [(&str, &str); 5] = [
+pub const CARD_FAULTS: [(&str, &str); 6] = [
     ("offset-units@-0.5", "offset-unit."),
     ("offset-factor@0.41421356", "slope-term.axis"),
     ("bilinear-coarse", "linear-compare"),
     ("clamp-float", "reference-clamp.depth32f"),
     ("no-clamp", "reference-clamp.depth16"),
+    ("mip-level-coarse", "lod-offset"),
 ];
 
 /// The entries no card fault moves yet, and why.
-pub const UNFAULTED: [(&str, &str); 6] = [
+pub const UNFAULTED: [(&str, &str); 10] = [
     (
         "slope-term.diagonal",
         "max against exact is the rasterizer's slope; umbra cannot change it from outside",
@@ -66,6 +71,22 @@ pub const UNFAULTED: [(&str, &str); 6] = [
     (
         "offset-unit.*.depends-on-depth",
         "the unit's dependence on depth is the driver's",
+    ),
+    (
+        "cube-face-ties",
+        "the face a tied direction selects is the sampler's; umbra cannot change it from outside",
+    ),
+    (
+        "border-compare",
+        "what a border texel feeds the compare is the sampler's; umbra cannot change it from outside",
+    ),
+    (
+        "lod-scale-factor",
+        "the scale factor's form is the sampler's; umbra cannot change it from outside",
+    ),
+    (
+        "lod-derivatives",
+        "fine or coarse implicit derivatives are the shader compiler's; umbra cannot change them from outside",
     ),
 ];
 

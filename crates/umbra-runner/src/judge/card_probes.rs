@@ -25,7 +25,8 @@
 //!   to b bits, about 0 for none.
 //!
 //! Probes are small (32×32, the LINEAR one 512×32) so that a card costs a few seconds on a
-//! software rasterizer: about 235 renders in all.
+//! software rasterizer: about 265 renders in all, the sampler's probes
+//! ([`crate::judge::card_sampler_probes`]: cube-face ties, border, LOD) included.
 
 use std::path::Path;
 
@@ -34,6 +35,7 @@ use umbra_case::format::DepthFormat;
 use umbra_case::{Backend, Frame, Needs, Prepared, Support};
 
 use crate::judge::card::{Entry, Sure};
+use crate::judge::card_sampler_probes as sampler;
 
 /// The light's height over the floor.
 const H: f64 = 4.0;
@@ -156,7 +158,7 @@ impl<'a> Prober<'a> {
     }
 
     /// Renders one probe case, given as JSON.
-    fn render_case(&mut self, case: &Value) -> Probe<Frame> {
+    pub(crate) fn render_case(&mut self, case: &Value) -> Probe<Frame> {
         let text = case.to_string();
         let point = umbra_case::load_str(&text, Path::new("<card probe>"))
             .map_err(|e| format!("the probe scene is not a valid case: {e}"))?
@@ -258,6 +260,7 @@ pub fn measure(backend: &mut dyn Backend) -> (Vec<Entry>, u32) {
     } else {
         cube_seams(&mut p)
     });
+    entries.push(sampler::cube_tie(&mut p));
     for format in [
         DepthFormat::Depth16,
         DepthFormat::Depth24,
@@ -265,6 +268,9 @@ pub fn measure(backend: &mut dyn Backend) -> (Vec<Entry>, u32) {
     ] {
         entries.push(reference_clamp(&mut p, format));
     }
+    entries.push(sampler::border(&mut p));
+    entries.extend(sampler::lod(&mut p));
+    entries.push(sampler::derivatives(&mut p));
     if p.backend.profile().packed_depth {
         emulated(&mut entries);
     }
@@ -892,10 +898,19 @@ mod tests {
             ),
             // Desktop GL's profile: cube faces filtered one by one (seamless off).
             ("cube-seams", "per face"),
+            // light::cube_face: a tie goes to x, then y.
+            ("cube-face-ties", "x over y over z"),
             // lookup step 6: clamped for a fixed-point hardware compare, never for float.
             ("reference-clamp.depth16", "clamped"),
             ("reference-clamp.depth24", "clamped"),
             ("reference-clamp.depth32f", "not clamped"),
+            // lookup: a border texel holds the clear depth and is compared like any other.
+            ("border-compare", "compared"),
+            // Lookup::lod: ρ = the longer of |∂(s, t)/∂x| and |∂(s, t)/∂y|, λ = log₂ ρ.
+            ("lod-scale-factor", "the exact length √(∂s² + ∂t²)"),
+            ("lod-offset", "+0.00 levels"),
+            // Lookup::lod: forward differences to the next pixel, each pixel its own.
+            ("lod-derivatives", "per pixel (fine)"),
         ];
         for (key, value) in model {
             let e = entries

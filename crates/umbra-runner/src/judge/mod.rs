@@ -12,6 +12,7 @@ pub mod blessings;
 pub mod calibration;
 pub mod card;
 pub mod card_probes;
+pub mod card_sampler_probes;
 pub mod consensus;
 pub mod expectations;
 pub mod falls_along;
