@@ -197,6 +197,7 @@ fn every_card_fault_is_named_by_its_entry() {
         "bilinear-coarse",
         "clamp-float",
         "no-clamp",
+        "mip-level-coarse",
     ] {
         assert!(
             t.contains(&format!("caught gl33/llvmpipe {fault}"))
@@ -205,7 +206,7 @@ fn every_card_fault_is_named_by_its_entry() {
         );
     }
     assert!(
-        t.contains("7 of 7 fault × backend pairs named by their entry"),
+        t.contains("8 of 8 fault × backend pairs named by their entry"),
         "{t}"
     );
 }
