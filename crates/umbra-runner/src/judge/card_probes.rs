@@ -260,7 +260,7 @@ pub fn measure(backend: &mut dyn Backend) -> (Vec<Entry>, u32) {
     } else {
         cube_seams(&mut p)
     });
-    entries.push(sampler::cube_tie(&mut p));
+    entries.push(sampler::cube_tie(&mut |c| p.render_case(c)));
     for format in [
         DepthFormat::Depth16,
         DepthFormat::Depth24,
@@ -268,9 +268,9 @@ pub fn measure(backend: &mut dyn Backend) -> (Vec<Entry>, u32) {
     ] {
         entries.push(reference_clamp(&mut p, format));
     }
-    entries.push(sampler::border(&mut p));
-    entries.extend(sampler::lod(&mut p));
-    entries.push(sampler::derivatives(&mut p));
+    entries.push(sampler::border(&mut |c| p.render_case(c)));
+    entries.extend(sampler::lod(&mut |c| p.render_case(c)));
+    entries.push(sampler::derivatives(&mut |c| p.render_case(c)));
     if p.backend.profile().packed_depth {
         emulated(&mut entries);
     }

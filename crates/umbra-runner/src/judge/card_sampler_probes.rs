@@ -33,7 +33,11 @@ use serde_json::{Value, json};
 use umbra_case::Frame;
 
 use crate::judge::card::{Entry, Sure};
-use crate::judge::card_probes::Prober;
+
+/// Renders one probe case (given as JSON) on the backend whose card is measured:
+/// [`crate::judge::card_probes::Prober`]'s, passed in so that this module does not import
+/// that one (which calls it).
+pub type Render<'a> = dyn FnMut(&Value) -> Result<Frame, String> + 'a;
 
 /// The mean visibility over the covered pixels of `f` within `r` pixels of its centre.
 fn centre_lit(f: &Frame, r: u32) -> Option<f64> {
@@ -52,7 +56,7 @@ fn centre_lit(f: &Frame, r: u32) -> Option<f64> {
 
 /// Which face a cube lookup reads where two axes tie exactly, for the pairs (x, y), (y, z)
 /// and (x, z) (positive components): one render each.
-pub fn cube_tie(p: &mut Prober) -> Entry {
+pub fn cube_tie(render: &mut Render) -> Entry {
     let key = "cube-face-ties";
     let what = "cube map face at an exact tie of the major axis";
     let spec = "any rule (GL 4.6 and ES 3.2 §8.13: \"the implementation may define the rule\"); Vulkan: deterministic, and recommends z over y and x, then y over x (\"Cube Map Face Selection\")";
@@ -61,7 +65,7 @@ pub fn cube_tie(p: &mut Prober) -> Entry {
     let mut wins = Vec::new();
     let mut readings = Vec::new();
     for (a, b) in [(0, 1), (1, 2), (0, 2)] {
-        let lit = match p.render_case(&tie_case(a, b)).map(|f| centre_lit(&f, 4)) {
+        let lit = match render(&tie_case(a, b)).map(|f| centre_lit(&f, 4)) {
             Ok(Some(lit)) => lit,
             Ok(None) => {
                 let why = "the tie's receiver covered no pixel".to_string();
@@ -241,9 +245,9 @@ fn lod_case(h: f64, rotated: bool) -> Value {
 
 /// The camera height in `[lo, hi]` at which the LOD probe's centre turns from level 0
 /// (shadowed) to level 1 (lit), bisected over `steps` renders: middle and half-width.
-fn lod_crossing(p: &mut Prober, rotated: bool, steps: u32) -> Result<(f64, f64), String> {
+fn lod_crossing(render: &mut Render, rotated: bool, steps: u32) -> Result<(f64, f64), String> {
     let mut read = |h: f64| -> Result<f64, String> {
-        let f = p.render_case(&lod_case(h, rotated))?;
+        let f = render(&lod_case(h, rotated))?;
         centre_lit(&f, 1).ok_or_else(|| "the floor covered no centre pixel".to_string())
     };
     let (lo, hi) = (2.0, 14.0);
@@ -265,7 +269,7 @@ fn lod_crossing(p: &mut Prober, rotated: bool, steps: u32) -> Result<(f64, f64),
 
 /// The LOD's scale factor (from the rotated and the axis-aligned crossing) and its offset
 /// from log₂ of the footprint (from the axis-aligned one): two entries.
-pub fn lod(p: &mut Prober) -> Vec<Entry> {
+pub fn lod(render: &mut Render) -> Vec<Entry> {
     let key = "lod-scale-factor";
     let what = "LOD scale factor ρ of a footprint at 45° to the texel axes";
     let spec = "GL: max(m_u, m_v) ≤ ρ ≤ m_u + m_v (GL 4.6 §8.14.1); Vulkan: max(|∂s/∂x|, |∂t/∂x|) ≤ ρ_x ≤ √2·(|∂s/∂x| + |∂t/∂x|) (\"Scale Factor Operation\"): log₂ of ρ over the exact length from −1 (Vulkan's bound) to +½, ± 2⁻⁴ (the judge takes both)";
@@ -274,7 +278,10 @@ pub fn lod(p: &mut Prober) -> Vec<Entry> {
     let owhat = "LOD λ against log₂ of the footprint, screen axes along the texel axes";
     let ospec = "λ = log₂ ρ, within the LOD's precision: 2⁻⁴ (Vulkan mipmapPrecisionBits ≥ 4; GL sets none, dEQP's shadow tests accept 4 bits)";
     let oprobe = "the axis-aligned crossing of the same probe: λ = ½ there, against log₂ of the centre's footprint in level-0 texels";
-    let (axis, rotated) = match (lod_crossing(p, false, 10), lod_crossing(p, true, 10)) {
+    let (axis, rotated) = match (
+        lod_crossing(render, false, 10),
+        lod_crossing(render, true, 10),
+    ) {
         (Ok(a), Ok(r)) => (a, r),
         (Err(why), _) | (_, Err(why)) => {
             return vec![
@@ -335,7 +342,7 @@ pub fn lod(p: &mut Prober) -> Vec<Entry> {
 
 /// Whether CLAMP_TO_BORDER's border depth is compared with the reference, read on D32F
 /// where a reference beyond the far plane stays beyond 1.
-pub fn border(p: &mut Prober) -> Entry {
+pub fn border(render: &mut Render) -> Entry {
     let key = "border-compare";
     let what = "CLAMP_TO_BORDER with a depth compare: the border depth compared, or returned";
     let spec = "compared: a border texel takes the border colour as its depth, then the compare applies (GL 4.6 §8.14.2 and §8.23.1; Vulkan \"Texel Replacement\" before \"Depth Compare Operation\")";
@@ -354,7 +361,7 @@ pub fn border(p: &mut Prober) -> Entry {
         "shadow": { "size": [32, 32], "format": "depth32f", "filter": "nearest",
                     "outside": "border" },
     });
-    let lit = match p.render_case(&case).map(|f| centre_lit(&f, 16)) {
+    let lit = match render(&case).map(|f| centre_lit(&f, 16)) {
         Ok(Some(lit)) => lit,
         Ok(None) => {
             let why = "the floor covered no pixel".to_string();
@@ -417,7 +424,7 @@ fn level_steps(f: &Frame, x: u32) -> Vec<u32> {
 }
 
 /// Whether ∂/∂x is taken per pixel (fine) or per 2 × 2 quad (coarse) in the lit pass.
-pub fn derivatives(p: &mut Prober) -> Entry {
+pub fn derivatives(render: &mut Render) -> Entry {
     let key = "lod-derivatives";
     let what = "the LOD's derivatives: per pixel (fine) or per 2×2 quad (coarse)";
     let spec = "either: dFdx/dFdy may be fine or coarse (GLSL 4.60 and ES 3.20 §8.14.1; SPIR-V DPdx, WGSL dpdx), the judge takes every difference of the pixel's quad and neighbours";
@@ -425,7 +432,7 @@ pub fn derivatives(p: &mut Prober) -> Entry {
     let (mut inside, mut between) = (0, 0);
     for k in 0..12 {
         let h = 0.6 + 0.05 * f64::from(k);
-        let f = match p.render_case(&derivatives_case(h)) {
+        let f = match render(&derivatives_case(h)) {
             Ok(f) => f,
             Err(why) => return Entry::unmeasured(key, what, spec, probe, why),
         };
