@@ -24,6 +24,11 @@ pub fn cos(x: f64) -> f64 {
     libm::cos(x)
 }
 
+/// tan, f64.
+pub fn tan(x: f64) -> f64 {
+    libm::tan(x)
+}
+
 /// tan, f32.
 pub fn tanf(x: f32) -> f32 {
     libm::tanf(x)

@@ -178,7 +178,9 @@ const LOD_FOV_DEG: f64 = 10.0;
 
 /// The LOD probe's footprint in level-0 texels per pixel at camera height `h`.
 fn lod_footprint(h: f64) -> f64 {
-    2.0 * h * (LOD_FOV_DEG.to_radians() / 2.0).tan() / f64::from(LOD_SIZE) / LOD_TEXEL
+    2.0 * h * umbra_case::math::tan(LOD_FOV_DEG.to_radians() / 2.0)
+        / f64::from(LOD_SIZE)
+        / LOD_TEXEL
 }
 
 /// Casters 15 m up that make a 2-level map's level 0 all shadow and its level 1 all light: a
@@ -392,7 +394,7 @@ pub fn border(render: &mut Render) -> Entry {
 fn derivatives_case(h: f64) -> Value {
     // x from −1.5 to 1.5, z from −0.09 to 0.09: what the centre columns see.
     let casters = level_zero_casters(4..28, 10..22, [-2.0, -0.25], [LOD_TEXEL, 0.5 / 32.0]);
-    let back = h / 30f64.to_radians().tan();
+    let back = h / umbra_case::math::tan(30f64.to_radians());
     json!({
         "name": "card-probe",
         "about": "a behaviour-card probe (umbra_runner::judge::card_sampler_probes)",
