@@ -52,6 +52,11 @@ fn knobs() -> Vec<Knob> {
             prefer: &["filters-magnified", "filters"],
         },
         Knob {
+            path: "shadow.depth_clamp",
+            values: vec![json!(false), json!(true)],
+            prefer: &["pancake", "near-crossing"],
+        },
+        Knob {
             path: "shadow.compare",
             values: vec![json!("hardware"), json!("manual")],
             prefer: &["far-clamp", "beyond-far"],

@@ -92,6 +92,9 @@ pub struct Needs {
     pub fractional_offset_units: bool,
     /// A mipmapped map (levels, their filter, how they are filled).
     pub mipmaps: Option<crate::format::Mipmaps>,
+    /// Depth clamp in the shadow pass (GL 3.2 core / EXT_depth_clamp on GLES, Vulkan's
+    /// depthClamp feature, wgpu's DEPTH_CLIP_CONTROL).
+    pub depth_clamp: bool,
     /// The shadow map's larger side (each cube face's, for a point light).
     pub map_size: u32,
     /// The camera image's larger side.
@@ -112,6 +115,7 @@ impl Needs {
             polygon_offset_clamp: s.bias.polygon_offset_clamp != 0.0,
             fractional_offset_units: s.bias.polygon_offset[1].fract() != 0.0,
             mipmaps: s.mipmaps,
+            depth_clamp: s.depth_clamp,
             map_size: s.size[0].max(s.size[1]),
             image_size: case.camera.size[0].max(case.camera.size[1]),
         }

@@ -272,6 +272,14 @@ pub enum Fault {
     /// A mipmapped map's levels start one too coarse (level 1 read where level 0 is asked,
     /// and so on: an LOD off by one).
     MipLevelCoarse,
+    /// The shadow pass clips at the light's near and far planes although the case asks for
+    /// depth clamp (a driver that ignores GL_DEPTH_CLAMP or depthClampEnable): a caster
+    /// in front of the near plane is cut away.
+    ClampIgnored,
+    /// The shadow pass clamps depth although the case does not ask for it (a driver whose
+    /// clamp state leaks from an earlier draw): casters in front of the near plane are stored
+    /// at it.
+    ClampForced,
     /// One face of the map is drawn with a wrong orientation: cube face `face` (0–5 in the
     /// GL order +x, −x, +y, −y, +z, −z), or the 2D map when `face` is `None`.
     Oriented {
@@ -296,7 +304,7 @@ impl Fault {
     /// three stand for them here (a wrong handedness on the +x face, the one the
     /// four-fold symmetric point-light cases could not see; a wrong up vector on the −y face;
     /// a transposed 2D map), and `umbra selftest --fault` or `--orientations` runs any.
-    pub const ALL: [Fault; 31] = [
+    pub const ALL: [Fault; 33] = [
         Fault::CompareFlipped,
         Fault::NoDivide,
         Fault::NoGuard,
@@ -325,6 +333,8 @@ impl Fault {
         Fault::SpecularUnshadowed,
         Fault::MipBaseOnly,
         Fault::MipLevelCoarse,
+        Fault::ClampIgnored,
+        Fault::ClampForced,
         Fault::Oriented {
             face: Some(0),
             orientation: Orientation::MirrorX,
@@ -380,6 +390,8 @@ impl Fault {
             Fault::SpecularUnshadowed => "specular-unshadowed",
             Fault::MipBaseOnly => "mip-base-only",
             Fault::MipLevelCoarse => "mip-level-coarse",
+            Fault::ClampIgnored => "clamp-ignored",
+            Fault::ClampForced => "clamp-forced",
             Fault::Oriented { face, orientation } => {
                 return match face {
                     Some(f) => format!("face{f}-{}", orientation.name()),
@@ -448,6 +460,16 @@ impl Fault {
         match self {
             Fault::Scaled { param: p, ppm } if p == param => Some(ppm as f32 / 1e6),
             _ => None,
+        }
+    }
+
+    /// Whether a faulted backend's shadow pass clamps depth where the case `asks` it to
+    /// (`shadow.depth_clamp`) or not.
+    pub fn depth_clamp(fault: Option<Fault>, asks: bool) -> bool {
+        match fault {
+            Some(Fault::ClampIgnored) => false,
+            Some(Fault::ClampForced) => true,
+            _ => asks,
         }
     }
 

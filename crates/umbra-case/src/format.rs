@@ -63,6 +63,10 @@ fn is_zero3(v: &V3) -> bool {
     *v == [0.0; 3]
 }
 
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
 /// One primitive, written as `{ "box": { ... } }`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -347,6 +351,13 @@ pub struct Shadow {
     /// Face culling in the shadow pass (the lit pass never culls). Default `none`.
     #[serde(default)]
     pub cull: Cull,
+    /// Depth clamp in the shadow pass (GL_DEPTH_CLAMP, Vulkan's depthClampEnable, wgpu's
+    /// `unclipped_depth`): the light's near and far planes no longer clip, and each fragment's
+    /// depth is clamped to [0, 1] after the polygon offset, so a caster between the light and
+    /// its near plane is stored at the near plane ("pancaking") instead of being cut away.
+    /// Default `false`.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub depth_clamp: bool,
     /// Where the [0,1] bias matrix is applied relative to the perspective divide.
     /// Default `before_divide`.
     #[serde(default)]
@@ -781,6 +792,7 @@ impl Default for Shadow {
             compare: Compare::default(),
             bias: Bias::default(),
             cull: Cull::default(),
+            depth_clamp: false,
             bias_matrix: BiasMatrix::default(),
             attachments: Attachments::default(),
             outside: Outside::default(),

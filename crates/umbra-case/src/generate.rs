@@ -533,6 +533,8 @@ impl Gen {
             } else {
                 DepthOrder::Reversed
             },
+            // Drawn last, so that the fields above are what they were before it existed.
+            depth_clamp: self.rng.chance(0.15),
             mipmaps: None,
         }
     }
@@ -749,6 +751,7 @@ mod tests {
                 seen.insert(format!("outside {:?}", s.outside));
                 seen.insert(format!("guard {}", s.guard_behind_light));
                 seen.insert(format!("depth {:?}", s.depth_order));
+                seen.insert(format!("clamp {}", s.depth_clamp));
                 for form in bias_forms(&s.bias).split('+') {
                     seen.insert(format!("bias {form}"));
                 }
@@ -781,11 +784,11 @@ mod tests {
             }
         }
         // 4 formats, 3 filters, 2 compares, 3 culls, 2 orders, 2 attachments, 4 outside,
-        // 2 guards, 2 depth orders, 7 bias entries, 3 lights, 2 shadings, 4 objects, sweep,
-        // offset.
+        // 2 guards, 2 depth orders, 2 depth clamps, 7 bias entries, 3 lights, 2 shadings,
+        // 4 objects, sweep, offset.
         assert_eq!(
             seen.len(),
-            4 + 3 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 7 + 3 + 2 + 4 + 2,
+            4 + 3 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 7 + 3 + 2 + 4 + 2,
             "{seen:?}"
         );
     }

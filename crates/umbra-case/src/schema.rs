@@ -44,7 +44,7 @@ pub const EXEMPLARS: &[&str] = &[
                   "bias":{"constant":0.001,"polygon_offset":[1,1],"polygon_offset_clamp":0,"slope":{"scale":1,"max":1},
                           "n_dot_l":{"scale":1,"min":0,"light":"position"},"normal_offset":0},
                   "cull":"back","bias_matrix":"after_divide","attachments":"with_color","outside":"border",
-                  "beyond_far":"lit","guard_behind_light":true,"depth_order":"reversed",
+                  "beyond_far":"lit","depth_clamp":true,"guard_behind_light":true,"depth_order":"reversed",
                   "mipmaps":{"levels":2,"filter":"linear","source":"averaged"}},
         "shading":{"model":"classic","ambient":0.1,"dimming":0.5,"specular":0.2,"shininess":16,"shadowed_factor":0.2},
         "sweep":{"shadow.bias.constant":{"from":0,"to":1,"steps":2,"scale":"linear","values":[0]}},
@@ -210,8 +210,8 @@ pub fn check_term(path: &str, op: &str, value: &Value) -> Result<(), String> {
 }
 
 /// A case point as conditions read it: its JSON with the defaults serde leaves out written
-/// in (`scene.offset` `[0, 0, 0]`, `shadow.beyond_far` `compare`, `shadow.bias.n_dot_l.light`
-/// `direction`), so `@when shadow.beyond_far=compare` holds where the case did not write it.
+/// in (`scene.offset` `[0, 0, 0]`, `shadow.beyond_far` `compare`, `shadow.depth_clamp`
+/// `false`, `shadow.bias.n_dot_l.light` `direction`), so `@when shadow.beyond_far=compare` holds where the case did not write it.
 pub fn condition_json(case: &crate::format::Case) -> Value {
     let mut v = serde_json::to_value(case).unwrap_or_default();
     let mut put = |pointer: &str, key: &str, value: Value| {
@@ -221,6 +221,7 @@ pub fn condition_json(case: &crate::format::Case) -> Value {
     };
     put("/scene", "offset", serde_json::json!([0, 0, 0]));
     put("/shadow", "beyond_far", serde_json::json!("compare"));
+    put("/shadow", "depth_clamp", serde_json::json!(false));
     put(
         "/shadow/bias/n_dot_l",
         "light",
@@ -280,6 +281,10 @@ mod tests {
         assert_eq!(
             v.pointer("/shadow/beyond_far"),
             Some(&serde_json::json!("compare"))
+        );
+        assert_eq!(
+            v.pointer("/shadow/depth_clamp"),
+            Some(&serde_json::json!(false))
         );
         let full: crate::format::Case = serde_json::from_str(EXEMPLARS[1]).expect("case");
         assert_eq!(

@@ -163,6 +163,9 @@ impl Backend for GlBackend {
         if needs.polygon_offset_clamp && api != Api::Gles2 && caps.offset_clamp.is_none() {
             return Support::Unsupported("a polygon-offset clamp needs glPolygonOffsetClamp (GL 4.6, ARB_polygon_offset_clamp) or glPolygonOffsetClampEXT (EXT_polygon_offset_clamp), which this driver does not advertise".into());
         }
+        if needs.depth_clamp && !caps.depth_clamp {
+            return Support::Unsupported("depth clamp (shadow.depth_clamp) needs GL_DEPTH_CLAMP: core in GL 3.2, GL_EXT_depth_clamp on GLES, which this driver does not advertise".into());
+        }
         if !caps.depth24_renderbuffer {
             return Support::Unsupported("the GLES 2 path renders into 24-bit depth renderbuffers (the packed-depth profile models them), which need OES_depth24, and this driver does not advertise it".into());
         }

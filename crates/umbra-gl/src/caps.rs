@@ -37,8 +37,9 @@ pub struct Caps {
     /// Seamless cube filtering: GLES 3.0 always; GL 3.3 only when enabled
     /// (ARB_seamless_cube_map), which umbra leaves off (the GL profile models it off).
     pub seamless_cube_always: bool,
-    /// Depth clamping (ARB_depth_clamp, core in GL 3.2; EXT_depth_clamp on GLES): recorded,
-    /// not used (umbra's cases keep geometry within the clip volume or test its clipping).
+    /// Depth clamping (ARB_depth_clamp, core in GL 3.2; EXT_depth_clamp on GLES 2 and 3):
+    /// `shadow.depth_clamp` enables GL_DEPTH_CLAMP in the shadow pass; without it such a case
+    /// is a skip that names the extension.
     pub depth_clamp: bool,
     /// 24-bit depth renderbuffers: core in GL 3.3 and GLES 3.0, OES_depth24 on GLES 2, whose
     /// path renders both passes into DEPTH_COMPONENT24 renderbuffers (the packed-depth

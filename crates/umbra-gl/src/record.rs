@@ -1179,6 +1179,7 @@ const ENUMS: &[(u32, &str)] = &[
     (glow::COLOR, "GL_COLOR"),
     (glow::DEPTH_TEST, "GL_DEPTH_TEST"),
     (glow::CULL_FACE, "GL_CULL_FACE"),
+    (glow::DEPTH_CLAMP, "GL_DEPTH_CLAMP"),
     (glow::POLYGON_OFFSET_FILL, "GL_POLYGON_OFFSET_FILL"),
     (glow::BACK, "GL_BACK"),
     (glow::FRONT, "GL_FRONT"),

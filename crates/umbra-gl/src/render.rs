@@ -347,6 +347,10 @@ impl Renderer {
             }
             gl.bind_buffer(glow::ARRAY_BUFFER, None);
             gl.active_texture(glow::TEXTURE0);
+            // A run that failed inside its shadow pass may leave the pass's clamp on.
+            if self.caps.depth_clamp {
+                gl.disable(glow::DEPTH_CLAMP);
+            }
             if self.caps.timer_queries {
                 let probe = Timer::new(gl).map_err(|e| e.to_string())?;
                 probe.begin(gl, 0);

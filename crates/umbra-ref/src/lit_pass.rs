@@ -101,6 +101,7 @@ pub fn render(
         width: w,
         height: h,
         cull: Cull::None,
+        depth_clamp: false,
     };
     let tris = setup_all(
         &raster,

@@ -495,7 +495,18 @@ pub struct Rasterizer {
     pub height: u32,
     /// Face culling.
     pub cull: Cull,
+    /// Depth clamp (the shadow pass's `shadow.depth_clamp`): no clipping against the near
+    /// and far planes, only against w ≥ [`CLAMP_W_MIN`] and the guard band; the fragment's
+    /// depth is clamped after its offset, where the depth range's clamp is
+    /// (`shadow_pass::depth_test_run`).
+    pub depth_clamp: bool,
 }
+
+/// The least clip w a depth-clamped triangle keeps (clip w is the distance in front of a
+/// perspective light, in scene units): GL and Vulkan clip only at x, y = ±w then, and their
+/// guard-band clippers at some small w > 0; what lies nearer the light than this projects
+/// outside any viewport unless it is within 4 × this of the light's axis.
+pub const CLAMP_W_MIN: f32 = 1e-5;
 
 #[derive(Clone, Copy)]
 struct ClipVertex {
@@ -510,15 +521,22 @@ impl Rasterizer {
     /// when no judge needs it); edges made by clipping are open, fan diagonals internal.
     pub fn setup(&self, clip: [Vec4; 3], source: u32, edges: [EdgeKind; 3], out: &mut Vec<Tri>) {
         let zmin = self.conv.clip_z_min_over_w();
-        // Plane p: p · (x, y, z, w) ≥ 0.
-        let planes = [
-            Vec4::new(0.0, 0.0, 1.0, -zmin),
-            Vec4::new(0.0, 0.0, -1.0, 1.0),
-            Vec4::new(-1.0, 0.0, 0.0, GUARD),
-            Vec4::new(1.0, 0.0, 0.0, GUARD),
-            Vec4::new(0.0, -1.0, 0.0, GUARD),
-            Vec4::new(0.0, 1.0, 0.0, GUARD),
-        ];
+        // Plane (p, c): p · (x, y, z, w) + c ≥ 0. Depth clamp trades the near and far planes
+        // for w ≥ CLAMP_W_MIN.
+        let depth_planes = if self.depth_clamp {
+            [(Vec4::W, -CLAMP_W_MIN), (Vec4::W, -CLAMP_W_MIN)]
+        } else {
+            [
+                (Vec4::new(0.0, 0.0, 1.0, -zmin), 0.0),
+                (Vec4::new(0.0, 0.0, -1.0, 1.0), 0.0),
+            ]
+        };
+        let planes = depth_planes.into_iter().chain([
+            (Vec4::new(-1.0, 0.0, 0.0, GUARD), 0.0),
+            (Vec4::new(1.0, 0.0, 0.0, GUARD), 0.0),
+            (Vec4::new(0.0, -1.0, 0.0, GUARD), 0.0),
+            (Vec4::new(0.0, 1.0, 0.0, GUARD), 0.0),
+        ]);
         let mut poly: Vec<ClipVertex> = vec![
             ClipVertex {
                 clip: clip[0],
@@ -538,8 +556,8 @@ impl Rasterizer {
         }
         // What lies across the polygon's edge from vertex i to vertex i + 1.
         let mut tags = edges.to_vec();
-        for plane in planes {
-            let d: Vec<f32> = poly.iter().map(|v| plane.dot(v.clip)).collect();
+        for (plane, c) in planes {
+            let d: Vec<f32> = poly.iter().map(|v| plane.dot(v.clip) + c).collect();
             if d.iter().all(|&x| x >= 0.0) {
                 continue;
             }
@@ -708,6 +726,7 @@ mod tests {
                 width: 16,
                 height: 16,
                 cull: Cull::None,
+                depth_clamp: false,
             };
             // NDC of pixel centre (8.5, 8.5) in a 16-wide viewport: (8.5/8 − 1).
             let c = [8.5 / 8.0 - 1.0, 8.5 / 8.0 - 1.0];
@@ -747,6 +766,7 @@ mod tests {
                 width: 64,
                 height: 48,
                 cull: Cull::None,
+                depth_clamp: false,
             };
             let mut next = crate::test_rng::uniform(0x9e37_79b9_7f4a_7c15);
             let mut fragments = 0;
@@ -793,6 +813,7 @@ mod tests {
                 width: 8,
                 height: 8,
                 cull: Cull::Back,
+                depth_clamp: false,
             };
             assert_eq!(tri(&back, ccw).len(), 1, "{conv:?}");
             assert!(tri(&back, cw).is_empty(), "{conv:?}");
@@ -820,6 +841,7 @@ mod tests {
             width: 4,
             height: 4,
             cull: Cull::None,
+            depth_clamp: false,
         };
         let zo = Rasterizer {
             conv: Convention::ZERO_TO_ONE,
@@ -836,6 +858,7 @@ mod tests {
             width: 8,
             height: 8,
             cull: Cull::None,
+            depth_clamp: false,
         };
         let mut out = Vec::new();
         let clip = [

@@ -54,7 +54,8 @@ pub struct DepthLayer {
 ///   fixed for float ([`DepthFormat::offset_unit_range`]): a conformant offset lies between
 ///   the smallest and the largest of m·factor + r·units, clamped like ours.
 /// - **Depth range**: fixed-point stores clamp to [0,1]; a float attachment keeps the value
-///   (Vulkan "Depth Clamping and Range") or clamps it (GL): both.
+///   (Vulkan "Depth Clamping and Range") or clamps it (GL): both. Under depth clamp
+///   (`shadow.depth_clamp`) both APIs clamp every format, after the offset.
 /// - **Storage**: fixed point may round to either neighbouring code
 ///   ([`DepthFormat::code_range`]); float stores the value.
 ///
@@ -80,6 +81,7 @@ pub struct Freedom {
     factor: f64,
     units: f64,
     clamp: f64,
+    depth_clamp: bool,
     packed: bool,
     deviations: umbra_case::Deviations,
     calibration: umbra_case::Calibration,
@@ -95,6 +97,7 @@ impl Freedom {
             factor: f64::from(factor),
             units: f64::from(units),
             clamp: f64::from(shadow.bias.polygon_offset_clamp),
+            depth_clamp: shadow.depth_clamp,
             packed: profile.packed_depth,
             deviations: profile.deviations,
             calibration: profile.calibration,
@@ -189,6 +192,24 @@ impl Freedom {
             let step = 1.0 / f64::from((1u32 << bits) - 1);
             return (lo - pack(lo) - step, hi + pack(hi) + step);
         }
+        if self.depth_clamp
+            && (self.factor != 0.0 || self.units != 0.0)
+            && self
+                .deviations
+                .has(umbra_case::Deviation::OffsetVertexClamp)
+        {
+            // The deviation's per-vertex SATURATE(z + offset) under depth clamp: a vertex in
+            // front of the near plane (z < 0, unclipped) is moved to 0 itself, so the plane
+            // between the clamped corners is what the pass interpolates; as wide as the
+            // corners' own freedom around it.
+            let a = t.area as f64;
+            for o in [o1, o2] {
+                let v: f64 = (0..3)
+                    .map(|i| e[i] as f64 / a * (f64::from(t.z[i]) + o).clamp(0.0, 1.0))
+                    .sum();
+                (lo, hi) = (lo.min(v - err), hi.max(v + err));
+            }
+        }
         if self.deviations.has(umbra_case::Deviation::Z16SpanStep)
             && self.format.fixed_bits() == Some(16)
         {
@@ -203,7 +224,10 @@ impl Freedom {
                 hi += lag;
             }
         }
-        let (lo, hi) = if self.format.is_fixed() {
+        // Depth clamp clamps every format's value on both APIs (GL 4.6, "Depth Buffer Test":
+        // to the depth range; Vulkan, "Depth Clamping and Range Adjustment": to the
+        // viewport's).
+        let (lo, hi) = if self.format.is_fixed() || self.depth_clamp {
             (lo.clamp(0.0, 1.0), hi.clamp(0.0, 1.0))
         } else {
             (lo.min(lo.clamp(0.0, 1.0)), hi.max(hi.clamp(0.0, 1.0)))
@@ -228,6 +252,7 @@ pub fn render_face(
         width: w,
         height: h,
         cull: shadow.cull,
+        depth_clamp: shadow.depth_clamp,
     };
     let mut tris = setup_all(&raster, light, geo, judged.map(|j| j.0));
     // The GLES 2 path stores the offset depth itself (packed to about 32 bits), not a code.

@@ -182,6 +182,7 @@ mod tests {
                 width: 96,
                 height: 64,
                 cull: Cull::None,
+                depth_clamp: false,
             };
             for _ in 0..300 {
                 let positions: Vec<Vec3> = (0..3)

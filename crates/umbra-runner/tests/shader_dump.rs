@@ -198,11 +198,16 @@ fn faults() -> impl Iterator<Item = Option<Fault>> {
         Fault::ALL
             .into_iter()
             // Faults that act on the passes' state, not on any source (orientations, the
-            // mipmapped sampler's levels), leave the sources as they were.
+            // mipmapped sampler's levels, the shadow pass's depth clamp), leave the sources
+            // as they were.
             .filter(|f| {
                 !matches!(
                     f,
-                    Fault::Oriented { .. } | Fault::MipBaseOnly | Fault::MipLevelCoarse
+                    Fault::Oriented { .. }
+                        | Fault::MipBaseOnly
+                        | Fault::MipLevelCoarse
+                        | Fault::ClampIgnored
+                        | Fault::ClampForced
                 )
             })
             .map(Some),

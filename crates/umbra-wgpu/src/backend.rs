@@ -48,6 +48,7 @@ impl Backend for WgpuBackend {
                 wgpu::Features::ADDRESS_MODE_CLAMP_TO_BORDER,
                 "ADDRESS_MODE_CLAMP_TO_BORDER",
             ),
+            (wgpu::Features::DEPTH_CLIP_CONTROL, "DEPTH_CLIP_CONTROL"),
         ] {
             if self.gpu.features.contains(f) {
                 extensions.push(name.into());
@@ -106,6 +107,14 @@ impl Backend for WgpuBackend {
         }
         if needs.polygon_offset_clamp && !self.gpu.depth_bias_clamp {
             return Support::Unsupported("a polygon-offset clamp needs wgpu's DEPTH_BIAS_CLAMP downlevel capability, which this adapter lacks (wgpu's GL backend does not offer it)".into());
+        }
+        if needs.depth_clamp
+            && !self
+                .gpu
+                .features
+                .contains(wgpu::Features::DEPTH_CLIP_CONTROL)
+        {
+            return Support::Unsupported("depth clamp (shadow.depth_clamp) is wgpu's unclipped_depth, which needs the DEPTH_CLIP_CONTROL feature (Vulkan's depthClamp, GL_ARB/EXT_depth_clamp on its GL backend), and this adapter lacks it".into());
         }
         if needs.fractional_offset_units {
             return Support::Unsupported("wgpu's depth bias constant (DepthBiasState::constant) is an integer, and this case's polygon_offset units is not a whole number".into());

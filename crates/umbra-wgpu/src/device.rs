@@ -207,7 +207,9 @@ pub fn open(target: &Target) -> Result<Gpu, Unavailable> {
             )
         }));
     };
-    let wanted = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::ADDRESS_MODE_CLAMP_TO_BORDER;
+    let wanted = wgpu::Features::TIMESTAMP_QUERY
+        | wgpu::Features::ADDRESS_MODE_CLAMP_TO_BORDER
+        | wgpu::Features::DEPTH_CLIP_CONTROL;
     let features = adapter.features() & wanted;
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("umbra"),

@@ -59,6 +59,9 @@ impl Renderer {
         // SAFETY: state of the current context.
         unsafe {
             gl.disable(glow::POLYGON_OFFSET_FILL);
+            if self.caps.depth_clamp {
+                gl.disable(glow::DEPTH_CLAMP);
+            }
             gl.disable(glow::CULL_FACE);
             gl.front_face(glow::CCW);
             gl.color_mask(true, true, true, true);
@@ -196,6 +199,14 @@ impl Renderer {
             });
             gl.depth_mask(true);
             gl.front_face(glow::CCW);
+            // GL_DEPTH_CLAMP (ARB_depth_clamp; EXT_depth_clamp's enum has the same value):
+            // no near/far clipping, each fragment's depth clamped to the depth range after
+            // the offset. GLES 2's shader clamps its own depth too (shaders::shadow_fragment).
+            if self.caps.depth_clamp && Fault::depth_clamp(p.fault, s.depth_clamp) {
+                gl.enable(glow::DEPTH_CLAMP);
+            } else if self.caps.depth_clamp {
+                gl.disable(glow::DEPTH_CLAMP);
+            }
             match s.cull {
                 Cull::None => gl.disable(glow::CULL_FACE),
                 Cull::Back => {

@@ -37,13 +37,15 @@ use crate::harness::scheduler::Session;
 use crate::judge::card::Card;
 
 /// Each card fault, and the key prefix of the entry it must move.
-pub const CARD_FAULTS: [(&str, &str); 6] = [
+pub const CARD_FAULTS: [(&str, &str); 8] = [
     ("offset-units@-0.5", "offset-unit."),
     ("offset-factor@0.41421356", "slope-term.axis"),
     ("bilinear-coarse", "linear-compare"),
     ("clamp-float", "reference-clamp.depth32f"),
     ("no-clamp", "reference-clamp.depth16"),
     ("mip-level-coarse", "lod-offset"),
+    ("clamp-ignored", "depth-clamp"),
+    ("clamp-forced", "depth-clamp"),
 ];
 
 /// The entries no card fault moves yet, and why.

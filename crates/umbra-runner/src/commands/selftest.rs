@@ -99,6 +99,8 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
         }
         Fault::Oriented { face, .. } => face.is_some() == matches!(c.light, Light::Point(_)),
         Fault::MipBaseOnly | Fault::MipLevelCoarse => s.mipmaps.is_some(),
+        Fault::ClampIgnored => s.depth_clamp,
+        Fault::ClampForced => !s.depth_clamp,
         Fault::Scaled { param, .. } => {
             let b = &s.bias;
             match param {
@@ -140,6 +142,8 @@ pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
         }
         Fault::NoGuard => &["guard-magnified", "behind-spot", "bias-matrix"],
         Fault::Repeat => &["outside"],
+        Fault::ClampIgnored => &["pancake", "near-crossing-clamped"],
+        Fault::ClampForced => &["pancake", "near-crossing"],
         Fault::Oriented { face: Some(_), .. } => &["point-faces"],
         Fault::Scaled { param, .. } if param.in_texels() => {
             &["contact", "filters-magnified", "guard-magnified"]
@@ -909,6 +913,8 @@ mod tests {
             Fault::OffsetUnitsLow,
             Fault::Vis4Bit,
             Fault::NoGuard,
+            Fault::ClampIgnored,
+            Fault::ClampForced,
         ] {
             assert!(
                 points.iter().any(|p| aimed_at(f, &p.case)),

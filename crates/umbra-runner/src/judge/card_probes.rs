@@ -271,6 +271,7 @@ pub fn measure(backend: &mut dyn Backend) -> (Vec<Entry>, u32) {
     entries.push(sampler::border(&mut |c| p.render_case(c)));
     entries.extend(sampler::lod(&mut |c| p.render_case(c)));
     entries.push(sampler::derivatives(&mut |c| p.render_case(c)));
+    entries.push(sampler::depth_clamp(&mut |c| p.render_case(c)));
     if p.backend.profile().packed_depth {
         emulated(&mut entries);
     }
@@ -278,10 +279,15 @@ pub fn measure(backend: &mut dyn Backend) -> (Vec<Entry>, u32) {
 }
 
 /// On umbra's GLES 2 technique (depth packed into RGBA8, the polygon offset and the compare
-/// in umbra's own shaders), every entry but the rasterizer's sub-pixel bits measures umbra's
-/// emulation, not a choice of the driver's: the spec's clauses do not apply, and it says so.
+/// in umbra's own shaders), every entry but the rasterizer's sub-pixel bits and the clipper's
+/// depth clamp (EXT_depth_clamp, the driver's) measures umbra's emulation, not a choice of
+/// the driver's: the spec's clauses do not apply, and it says so.
 fn emulated(entries: &mut [Entry]) {
-    for e in entries.iter_mut().filter(|e| e.key != "subpixel-bits") {
+    let drivers = ["subpixel-bits", "depth-clamp"];
+    for e in entries
+        .iter_mut()
+        .filter(|e| !drivers.contains(&e.key.as_str()))
+    {
         e.spec = format!(
             "umbra's GLES 2 emulation (packed RGBA8 depth, offset and compare in umbra's shaders), not the driver's choice; for a hardware path: {}",
             e.spec
@@ -911,6 +917,8 @@ mod tests {
             ("lod-offset", "+0.00 levels"),
             // Lookup::lod: forward differences to the next pixel, each pixel its own.
             ("lod-derivatives", "per pixel (fine)"),
+            // raster: the near plane clips unless depth_clamp trades it for w > 0.
+            ("depth-clamp", "off: clipped, on: clamped"),
         ];
         for (key, value) in model {
             let e = entries

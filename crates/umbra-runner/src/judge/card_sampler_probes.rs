@@ -25,6 +25,10 @@
 //!   fine derivatives each row of a 2 × 2 quad has its own ∂/∂x, so the level's boundary in a
 //!   column can fall between a quad's two rows; with coarse ones the quad shares one, and it
 //!   falls only between quads. Twelve camera heights move the boundary through the rows.
+//! - **Depth clamp.** A slab between a downward orthographic light and its near plane, over
+//!   a floor, rendered with `depth_clamp` off and on: without it the slab is clipped and the
+//!   floor under it lit; with it the slab is stored at the near plane and shadows the floor.
+//!   Both APIs are exact here; the entry reads whether the driver does what it was asked.
 //! - **Border.** A D32F floor beyond the light's far plane (reference 4/3, which a float
 //!   format does not clamp) and outside the map, sampled with CLAMP_TO_BORDER at depth 1:
 //!   compared as a depth, the border shadows it; returned as the lookup's result, it lights it.
@@ -466,6 +470,64 @@ pub fn derivatives(render: &mut Render) -> Entry {
         spec,
         Some(true),
         &found,
+        Sure::Exact,
+    )
+}
+
+/// The depth-clamp probe's case: a slab between a downward orthographic light and its near
+/// plane, over a floor the camera sees from below the slab; `clamp` is `shadow.depth_clamp`.
+fn clamp_case(clamp: bool) -> Value {
+    json!({
+        "name": "card-probe",
+        "about": "a behaviour-card probe (umbra_runner::judge::card_sampler_probes)",
+        "scene": { "objects": [
+            { "plane": { "point": [0, 0, 0], "normal": [0, 1, 0], "half_extent": 2 } },
+            { "box": { "center": [0, 3.5, 0], "size": [1, 0.2, 1] } }
+        ] },
+        "camera": { "eye": [0, 2, 0], "target": [0, 0, 0], "up": [0, 0, -1],
+                    "fov_y_deg": 30, "near": 0.05, "far": 10, "size": [32, 32] },
+        "light": { "directional": { "position": [0, 4, 0], "target": [0, 0, 0],
+            "up": [0, 0, -1],
+            "ortho": { "left": -2, "right": 2, "bottom": -2, "top": 2, "near": 1, "far": 5 } } },
+        "shadow": { "size": [64, 64], "format": "depth24", "filter": "nearest",
+                    "depth_clamp": clamp },
+    })
+}
+
+/// Whether the shadow pass clips at the light's near plane without depth clamp and clamps
+/// with it: the floor under a slab in front of the near plane, rendered both ways.
+pub fn depth_clamp(render: &mut Render) -> Entry {
+    let key = "depth-clamp";
+    let what = "a caster in front of the light's near plane, with depth clamp off and on";
+    let spec = "off: clipped at the near plane; on: not clipped, its depth clamped to [0, 1] after the offset (GL 4.6 \"Primitive Clipping\" and \"Depth Buffer Test\" with DEPTH_CLAMP; Vulkan depthClampEnable, \"Primitive Clipping\" and \"Depth Clamping and Range Adjustment\")";
+    let probe = "a slab 0.4-0.6 m from a downward orthographic light whose near plane is 1 m away, over a D24 floor: the floor under it lit when the slab is clipped, shadowed when it is stored at the near plane";
+    let mut lit = [0.0; 2];
+    for (k, clamp) in [false, true].into_iter().enumerate() {
+        lit[k] = match render(&clamp_case(clamp)).map(|f| centre_lit(&f, 8)) {
+            Ok(Some(v)) => v,
+            Ok(None) => {
+                let why = "the floor covered no pixel".to_string();
+                return Entry::unmeasured(key, what, spec, probe, why);
+            }
+            Err(why) => {
+                let why = format!("depth clamp {}: {why}", if clamp { "on" } else { "off" });
+                return Entry::unmeasured(key, what, spec, probe, why);
+            }
+        };
+    }
+    let word = |v: f64| if v < 0.5 { "clamped" } else { "clipped" };
+    let value = format!("off: {}, on: {}", word(lit[0]), word(lit[1]));
+    Entry::new(
+        key,
+        what,
+        value,
+        Some(lit[1] - lit[0]),
+        spec,
+        Some(lit[0] >= 0.5 && lit[1] < 0.5),
+        &format!(
+            "{probe}: lit fraction {:.3} with clamp off, {:.3} on",
+            lit[0], lit[1]
+        ),
         Sure::Exact,
     )
 }

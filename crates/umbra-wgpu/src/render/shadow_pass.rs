@@ -47,8 +47,8 @@ impl Gpu {
         })
     }
 
-    /// The shadow pipelines: position only, the case's cull mode and depth order, the
-    /// (faulted) polygon offset as wgpu's depth bias.
+    /// The shadow pipelines: position only, the case's cull mode, depth clamp and depth
+    /// order, the (faulted) polygon offset as wgpu's depth bias.
     pub(super) fn shadow_pipelines(&self, p: &RunPlan) -> ShadowPipelines {
         let d = &self.device;
         let s = p.s;
@@ -75,6 +75,8 @@ impl Gpu {
             slope_scale: sign * factor,
             clamp: sign * p.bias.polygon_offset_clamp,
         };
+        let clamp = umbra_case::fault::Fault::depth_clamp(p.fault, s.depth_clamp)
+            && self.features.contains(wgpu::Features::DEPTH_CLIP_CONTROL);
         let position_only = [wgpu::VertexAttribute {
             format: wgpu::VertexFormat::Float32x3,
             offset: 0,
@@ -104,6 +106,10 @@ impl Gpu {
                         Cull::Back => Some(wgpu::Face::Back),
                         Cull::Front => Some(wgpu::Face::Front),
                     },
+                    // No near/far clipping, depth clamped to the viewport's [0, 1] (Vulkan's
+                    // depthClampEnable, GL_DEPTH_CLAMP on wgpu's GL backend). Only with the
+                    // feature: a forced clamp (the self-test's) without it stays off.
+                    unclipped_depth: clamp,
                     ..Default::default()
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {
