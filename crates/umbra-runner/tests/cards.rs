@@ -198,6 +198,8 @@ fn every_card_fault_is_named_by_its_entry() {
         "clamp-float",
         "no-clamp",
         "mip-level-coarse",
+        "clamp-ignored",
+        "clamp-forced",
     ] {
         assert!(
             t.contains(&format!("caught gl33/llvmpipe {fault}"))
@@ -206,7 +208,7 @@ fn every_card_fault_is_named_by_its_entry() {
         );
     }
     assert!(
-        t.contains("8 of 8 fault × backend pairs named by their entry"),
+        t.contains("12 of 12 fault × backend pairs named by their entry"),
         "{t}"
     );
 }
