@@ -526,15 +526,17 @@ impl Rasterizer {
         let zmin = self.conv.clip_z_min_over_w();
         // Plane (p, c): p · (x, y, z, w) + c ≥ 0. Depth clamp trades the near and far planes
         // for w ≥ CLAMP_W_MIN.
-        let depth_planes = if self.depth_clamp {
-            [(Vec4::W, -CLAMP_W_MIN), (Vec4::W, -CLAMP_W_MIN)]
+        let near_far = [
+            (Vec4::new(0.0, 0.0, 1.0, -zmin), 0.0),
+            (Vec4::new(0.0, 0.0, -1.0, 1.0), 0.0),
+        ];
+        let clamped = [(Vec4::W, -CLAMP_W_MIN)];
+        let depth_planes: &[(Vec4, f32)] = if self.depth_clamp {
+            &clamped
         } else {
-            [
-                (Vec4::new(0.0, 0.0, 1.0, -zmin), 0.0),
-                (Vec4::new(0.0, 0.0, -1.0, 1.0), 0.0),
-            ]
+            &near_far
         };
-        let planes = depth_planes.into_iter().chain([
+        let planes = depth_planes.iter().copied().chain([
             (Vec4::new(-1.0, 0.0, 0.0, GUARD), 0.0),
             (Vec4::new(1.0, 0.0, 0.0, GUARD), 0.0),
             (Vec4::new(0.0, -1.0, 0.0, GUARD), 0.0),
