@@ -202,10 +202,12 @@ impl Renderer {
             // GL_DEPTH_CLAMP (ARB_depth_clamp; EXT_depth_clamp's enum has the same value):
             // no near/far clipping, each fragment's depth clamped to the depth range after
             // the offset. GLES 2's shader clamps its own depth too (shaders::shadow_fragment).
-            if self.caps.depth_clamp && Fault::depth_clamp(p.fault, s.depth_clamp) {
-                gl.enable(glow::DEPTH_CLAMP);
-            } else if self.caps.depth_clamp {
-                gl.disable(glow::DEPTH_CLAMP);
+            if self.caps.depth_clamp {
+                if Fault::depth_clamp(p.fault, s.depth_clamp) {
+                    gl.enable(glow::DEPTH_CLAMP);
+                } else {
+                    gl.disable(glow::DEPTH_CLAMP);
+                }
             }
             match s.cull {
                 Cull::None => gl.disable(glow::CULL_FACE),
