@@ -95,6 +95,8 @@ pub struct Needs {
     /// Depth clamp in the shadow pass (GL 3.2 core / EXT_depth_clamp on GLES, Vulkan's
     /// depthClamp feature, wgpu's DEPTH_CLIP_CONTROL).
     pub depth_clamp: bool,
+    /// The layers of a cascade array (0: no array).
+    pub array_layers: u32,
     /// The shadow map's larger side (each cube face's, for a point light).
     pub map_size: u32,
     /// The camera image's larger side.
@@ -116,6 +118,10 @@ impl Needs {
             fractional_offset_units: s.bias.polygon_offset[1].fract() != 0.0,
             mipmaps: s.mipmaps,
             depth_clamp: s.depth_clamp,
+            array_layers: match &case.light {
+                Light::Directional(d) => d.cascades.map_or(0, |c| c.count),
+                _ => 0,
+            },
             map_size: s.size[0].max(s.size[1]),
             image_size: case.camera.size[0].max(case.camera.size[1]),
         }

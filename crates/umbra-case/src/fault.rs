@@ -280,6 +280,13 @@ pub enum Fault {
     /// clamp state leaks from an earlier draw): casters in front of the near plane are stored
     /// at it.
     ClampForced,
+    /// The shadow pass draws each cascade into the next layer of the array (the last into
+    /// layer 0): every receiver of a cascaded light is looked up in another slice's map.
+    LayerShift,
+    /// The lit pass picks the cascade by the receiver's distance from the eye instead of its
+    /// view depth (the camera's z): off the view axis the distance is larger, so receivers
+    /// near a split are looked up in the next cascade, whose map may not cover them.
+    CascadeByDistance,
     /// One face of the map is drawn with a wrong orientation: cube face `face` (0–5 in the
     /// GL order +x, −x, +y, −y, +z, −z), or the 2D map when `face` is `None`.
     Oriented {
@@ -304,7 +311,7 @@ impl Fault {
     /// three stand for them here (a wrong handedness on the +x face, the one the
     /// four-fold symmetric point-light cases could not see; a wrong up vector on the −y face;
     /// a transposed 2D map), and `umbra selftest --fault` or `--orientations` runs any.
-    pub const ALL: [Fault; 33] = [
+    pub const ALL: [Fault; 35] = [
         Fault::CompareFlipped,
         Fault::NoDivide,
         Fault::NoGuard,
@@ -335,6 +342,8 @@ impl Fault {
         Fault::MipLevelCoarse,
         Fault::ClampIgnored,
         Fault::ClampForced,
+        Fault::LayerShift,
+        Fault::CascadeByDistance,
         Fault::Oriented {
             face: Some(0),
             orientation: Orientation::MirrorX,
@@ -392,6 +401,8 @@ impl Fault {
             Fault::MipLevelCoarse => "mip-level-coarse",
             Fault::ClampIgnored => "clamp-ignored",
             Fault::ClampForced => "clamp-forced",
+            Fault::LayerShift => "layer-shift",
+            Fault::CascadeByDistance => "cascade-by-distance",
             Fault::Oriented { face, orientation } => {
                 return match face {
                     Some(f) => format!("face{f}-{}", orientation.name()),
@@ -524,6 +535,15 @@ impl Fault {
                 Some((orientation.clip(), orientation.mirrors()))
             }
             _ => None,
+        }
+    }
+
+    /// The light view the shadow pass draws into layer `face` of `faces` (`layered`: the
+    /// layers of a cascade array): LayerShift draws the next cascade's there.
+    pub fn drawn_view(fault: Option<Fault>, face: usize, faces: usize, layered: bool) -> usize {
+        match fault {
+            Some(Fault::LayerShift) if layered => (face + 1) % faces,
+            _ => face,
         }
     }
 

@@ -265,6 +265,58 @@ pub struct Directional {
     /// `"scene"`: fit the bounds to everything in the scene.
     #[serde(default)]
     pub fit: Option<Fit>,
+    /// Cascaded shadow maps, in place of `ortho` and `fit`: the camera's view depths from its
+    /// near to its far plane split into `count` slices, each with its own orthographic map
+    /// fitted to the slice, the maps in the layers of one 2D array, a receiver looked up in the
+    /// slice its view depth falls in.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cascades: Option<Cascades>,
+}
+
+/// `cascades`: how a directional light's map is split along the camera's view depth.
+///
+/// Slice k of `count` ends at the view depth s_k = λ·n·(f/n)^(k/N) + (1 − λ)·(n + (f − n)·k/N)
+/// (n, f the camera's near and far planes), the scheme of Zhang et al.'s parallel-split
+/// shadow maps ("practical" in GPU Gems 3, ch. 10): λ = 0 is `uniform`, λ = 1 `logarithmic`.
+/// Each slice's map is fitted in x and y to the light-view bounding box of the slice's eight
+/// corners (widened by 0.5 % a side), and in depth to the whole scene so that every caster
+/// between a receiver and the light is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Cascades {
+    /// Slices (array layers), 1 to [`crate::validate::MAX_CASCADES`].
+    pub count: u32,
+    /// How the view depths are split. Default `practical`.
+    #[serde(default)]
+    pub split: SplitScheme,
+    /// λ of the `practical` scheme, in [0, 1]. Default 0.5; only with `practical`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lambda: Option<f32>,
+}
+
+/// The split scheme of [`Cascades`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SplitScheme {
+    /// Equal view-depth ranges (λ = 0).
+    Uniform,
+    /// Equal ratios of far to near (λ = 1): the optimum for perspective aliasing in Lloyd et
+    /// al.'s analysis.
+    Logarithmic,
+    /// The blend of the two by `lambda`.
+    #[default]
+    Practical,
+}
+
+impl Cascades {
+    /// λ as the split formula reads it.
+    pub fn weight(&self) -> f32 {
+        match self.split {
+            SplitScheme::Uniform => 0.0,
+            SplitScheme::Logarithmic => 1.0,
+            SplitScheme::Practical => self.lambda.unwrap_or(0.5),
+        }
+    }
 }
 
 /// Orthographic bounds, as `glOrtho` takes them.

@@ -157,6 +157,24 @@ impl Gen {
                 },
             });
         }
+        // Cascades, drawn after everything else for the same reason, on a directional light
+        // whose map has no levels.
+        if let Light::Directional(d) = &mut case.light {
+            if case.shadow.mipmaps.is_none() && self.rng.chance(0.2) {
+                let split = self.rng.pick(&[
+                    SplitScheme::Uniform,
+                    SplitScheme::Logarithmic,
+                    SplitScheme::Practical,
+                ]);
+                d.cascades = Some(Cascades {
+                    count: self.rng.int(1, 4),
+                    split,
+                    lambda: (split == SplitScheme::Practical).then(|| self.rng.range(0.0, 1.0, 2)),
+                });
+                d.ortho = None;
+                d.fit = None;
+            }
+        }
         case.about = about(&case);
         case
     }
@@ -446,6 +464,7 @@ impl Gen {
                     up: [0.0, 1.0, 0.0],
                     ortho,
                     fit,
+                    cascades: None,
                 })
             }
             1 => {
@@ -682,6 +701,12 @@ fn about(c: &Case) -> String {
             )
             .to_lowercase()
         })
+        + &match &c.light {
+            Light::Directional(Directional {
+                cascades: Some(k), ..
+            }) => format!(", {} {:?} cascades", k.count, k.split).to_lowercase(),
+            _ => String::new(),
+        }
 }
 
 /// The bias forms a technique uses, as `constant+polygon_offset` (or `no`).
@@ -755,6 +780,11 @@ mod tests {
                 for form in bias_forms(&s.bias).split('+') {
                     seen.insert(format!("bias {form}"));
                 }
+                if let Light::Directional(d) = &case.light {
+                    if let Some(c) = d.cascades {
+                        seen.insert(format!("cascades {:?}", c.split));
+                    }
+                }
                 seen.insert(format!(
                     "light {}",
                     match case.light {
@@ -784,11 +814,11 @@ mod tests {
             }
         }
         // 4 formats, 3 filters, 2 compares, 3 culls, 2 orders, 2 attachments, 4 outside,
-        // 2 guards, 2 depth orders, 2 depth clamps, 7 bias entries, 3 lights, 2 shadings,
-        // 4 objects, sweep, offset.
+        // 2 guards, 2 depth orders, 2 depth clamps, 7 bias entries, 3 split schemes, 3 lights,
+        // 2 shadings, 4 objects, sweep, offset.
         assert_eq!(
             seen.len(),
-            4 + 3 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 7 + 3 + 2 + 4 + 2,
+            4 + 3 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 7 + 3 + 3 + 2 + 4 + 2,
             "{seen:?}"
         );
     }

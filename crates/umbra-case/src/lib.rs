@@ -28,6 +28,7 @@
 
 pub mod backend;
 pub mod calibration;
+pub mod camera;
 pub mod conventions;
 pub mod depth;
 pub mod error;

@@ -3,15 +3,20 @@
 //! has six (+x, −x, +y, −y, +z, −z), each a 90° perspective with the up vectors of the GL cube
 //! map table, selected by the major axis of (point − light) with ties going to x, then y.
 //!
+//! A cascaded directional light (`cascades`) has one face per cascade: each an orthographic
+//! view fitted to its slice of the camera's view depths, selected by the receiver's view
+//! depth ([`Cascading`]).
+//!
 //! A fitted directional frustum (`"fit": "scene"`) encloses every vertex of the scene in the
 //! light's view space, widened by 0.5 % of its extent on each side in x and y and by 1 % of the
 //! depth range (plus 1e-3 m) at near and far, so that no geometry sits exactly on a clip plane
 //! or on the map's outermost texel border.
 
-use glam::{Mat4, Vec3};
+use glam::{DVec3, Mat4, Vec3, Vec4};
 
+use crate::camera::CameraSetup;
 use crate::conventions::{Convention, look_at};
-use crate::format::{Fit, Light};
+use crate::format::{Cascades, Fit, Light};
 use crate::scene::Geometry;
 
 /// The unit direction *towards* a light at `azimuth_deg` (from +z towards +x) and
@@ -115,8 +120,87 @@ pub enum LightKind {
 pub struct LightSetup {
     /// Where the light is.
     pub kind: LightKind,
-    /// One face, or six for a point light.
+    /// One face, six for a point light, or one per cascade.
     pub views: Vec<LightView>,
+    /// How a cascaded directional light picks its face.
+    pub cascading: Option<Cascading>,
+}
+
+/// A cascaded light's face selection: the receiver's view depth d (the distance in front of
+/// the camera along its view axis, d = −(V·p).z) against the split depths.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cascading {
+    /// d = `depth_row` · (p, 1): the camera view matrix's third row, negated.
+    pub depth_row: Vec4,
+    /// s_0 (the camera's near plane) to s_N (its far plane); cascade k covers [s_k, s_{k+1}].
+    pub splits: Vec<f32>,
+}
+
+impl Cascading {
+    /// The cascade of view depth `d`: the last k ≥ 1 with d > s_k, else 0 (a depth exactly on
+    /// a split goes to the nearer cascade; the judge lets either serve it).
+    pub fn cascade_of(&self, d: f64) -> usize {
+        let n = self.splits.len() - 1;
+        (1..n)
+            .filter(|&k| d > f64::from(self.splits[k]))
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// The view depth of `p` in f32, as the lit shaders compute it.
+    pub fn depth(&self, p: Vec3) -> f32 {
+        self.depth_row.truncate().dot(p) + self.depth_row.w
+    }
+
+    /// The view depth of `p`, exact but for f64 rounding.
+    pub fn depth_f64(&self, p: DVec3) -> f64 {
+        self.depth_row.truncate().as_dvec3().dot(p) + f64::from(self.depth_row.w)
+    }
+
+    /// The lit shaders' cascade uniforms: the depth row, then s_0 … s_7 (zero past s_N).
+    pub fn uniforms(&self) -> [[f32; 4]; 3] {
+        let mut split = [0.0f32; 8];
+        for (k, s) in self.splits.iter().take(8).enumerate() {
+            split[k] = *s;
+        }
+        [
+            self.depth_row.to_array(),
+            [split[0], split[1], split[2], split[3]],
+            [split[4], split[5], split[6], split[7]],
+        ]
+    }
+
+    /// Every cascade whose range lies within `reach` of view depth `d`.
+    pub fn cascades_near(&self, d: f64, reach: f64) -> Vec<usize> {
+        let n = self.splits.len() - 1;
+        (0..n)
+            .filter(|&k| {
+                let (lo, hi) = (f64::from(self.splits[k]), f64::from(self.splits[k + 1]));
+                (k == 0 || d >= lo - reach) && (k + 1 == n || d <= hi + reach)
+            })
+            .collect()
+    }
+}
+
+/// The split depths s_0 = `near` … s_N = `far` of `c`: s_k = λ·n·(f/n)^(k/N) +
+/// (1 − λ)·(n + (f − n)·k/N), in f64, the ends exact.
+pub fn cascade_splits(c: &Cascades, near: f32, far: f32) -> Vec<f32> {
+    let (n, f, count) = (f64::from(near), f64::from(far), c.count.max(1));
+    let lambda = f64::from(c.weight());
+    (0..=count)
+        .map(|k| {
+            if k == 0 {
+                return near;
+            }
+            if k == count {
+                return far;
+            }
+            let x = f64::from(k) / f64::from(count);
+            let log = n * crate::math::pow(f / n, x);
+            let uni = n + (f - n) * x;
+            (lambda * log + (1.0 - lambda) * uni) as f32
+        })
+        .collect()
 }
 
 /// Cube faces: (direction, up) for +x, −x, +y, −y, +z, −z (the GL cube-map table).
@@ -130,8 +214,14 @@ pub const CUBE_FACES: [(Vec3, Vec3); 6] = [
 ];
 
 impl LightSetup {
-    /// The light of a validated case, with a `map_size` map, fitted to `geometry` if asked.
-    pub fn new(light: &Light, map_size: [u32; 2], geometry: &Geometry) -> Self {
+    /// The light of a validated case, with a `map_size` map, fitted to `geometry` if asked
+    /// (and, for cascades, to the slices of `camera`'s view).
+    pub fn new(
+        light: &Light,
+        map_size: [u32; 2],
+        geometry: &Geometry,
+        camera: &CameraSetup,
+    ) -> Self {
         let aspect = map_size[0] as f32 / map_size[1] as f32;
         match light {
             Light::Directional(d) => {
@@ -147,19 +237,24 @@ impl LightSetup {
                     }
                 };
                 let view = look_at(eye, target, Vec3::from(d.up));
+                let kind = LightKind::Directional {
+                    towards,
+                    position: eye,
+                };
+                if let Some(c) = &d.cascades {
+                    return cascaded(kind, view, c, geometry, camera);
+                }
                 let bounds = match (&d.ortho, d.fit) {
                     (Some(o), _) => [o.left, o.right, o.bottom, o.top, o.near, o.far],
                     (None, Some(Fit::Scene) | None) => fit_bounds(view, geometry),
                 };
                 LightSetup {
-                    kind: LightKind::Directional {
-                        towards,
-                        position: eye,
-                    },
+                    kind,
                     views: vec![LightView {
                         view,
                         projection: Projection::Ortho { bounds },
                     }],
+                    cascading: None,
                 }
             }
             Light::Spot(s) => {
@@ -174,6 +269,7 @@ impl LightSetup {
                 LightSetup {
                     kind: LightKind::Spot { position },
                     views: vec![LightView { view, projection }],
+                    cascading: None,
                 }
             }
             Light::Point(p) => {
@@ -194,17 +290,25 @@ impl LightSetup {
                 LightSetup {
                     kind: LightKind::Point { position },
                     views,
+                    cascading: None,
                 }
             }
         }
     }
 
-    /// The face a world point is looked up in (0 unless this is a point light).
+    /// The face a world point is looked up in: a point light's cube face, a cascaded
+    /// light's cascade (by the f32 view depth), else 0.
     pub fn face_for(&self, p: Vec3) -> usize {
-        match self.kind {
-            LightKind::Point { position } => cube_face((p - position).as_dvec3()),
+        match (self.kind, &self.cascading) {
+            (LightKind::Point { position }, _) => cube_face((p - position).as_dvec3()),
+            (_, Some(c)) => c.cascade_of(f64::from(c.depth(p))),
             _ => 0,
         }
+    }
+
+    /// A cube map (point light): faces chosen by direction.
+    pub fn is_cube(&self) -> bool {
+        matches!(self.kind, LightKind::Point { .. })
     }
 
     /// Unit vector from `p` towards the light.
@@ -291,6 +395,58 @@ pub fn cube_coords_on(d: glam::DVec3, f: usize) -> (f64, f64) {
     }
 }
 
+/// A cascaded directional light: one orthographic face per slice of the camera's view
+/// depths, fitted in x and y to the slice's corners (widened by 0.5 % of their extent a
+/// side) and in depth to the scene (every caster of the slice's receivers is drawn).
+fn cascaded(
+    kind: LightKind,
+    view: Mat4,
+    c: &Cascades,
+    geometry: &Geometry,
+    camera: &CameraSetup,
+) -> LightSetup {
+    let splits = cascade_splits(c, camera.near, camera.far);
+    let scene = fit_bounds(view, geometry);
+    let to_light = view.as_dmat4() * camera.view.as_dmat4().inverse();
+    let tan_y = crate::math::tan(0.5 * f64::from(camera.fov_y));
+    let tan_x = tan_y * f64::from(camera.size[0]) / f64::from(camera.size[1]);
+    let views = splits
+        .windows(2)
+        .map(|s| {
+            let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+            for d in [f64::from(s[0]), f64::from(s[1])] {
+                for (a, b) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)] {
+                    let q = to_light.transform_point3(DVec3::new(a * tan_x * d, b * tan_y * d, -d));
+                    lo = lo.min(q);
+                    hi = hi.max(q);
+                }
+            }
+            let m = 0.005 * (hi - lo);
+            let bounds = [
+                (lo.x - m.x) as f32,
+                (hi.x + m.x) as f32,
+                (lo.y - m.y) as f32,
+                (hi.y + m.y) as f32,
+                scene[4],
+                scene[5],
+            ];
+            LightView {
+                view,
+                projection: Projection::Ortho { bounds },
+            }
+        })
+        .collect();
+    let r = camera.view.row(2);
+    LightSetup {
+        kind,
+        views,
+        cascading: Some(Cascading {
+            depth_row: -r,
+            splits,
+        }),
+    }
+}
+
 fn fit_bounds(view: Mat4, geometry: &Geometry) -> [f32; 6] {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for p in &geometry.positions {
@@ -309,4 +465,53 @@ fn fit_bounds(view: Mat4, geometry: &Geometry) -> [f32; 6] {
         -hi.z - mz,
         -lo.z + mz,
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::format::SplitScheme;
+
+    fn splits(split: SplitScheme, lambda: Option<f32>) -> Vec<f32> {
+        let c = Cascades {
+            count: 4,
+            split,
+            lambda,
+        };
+        cascade_splits(&c, 1.0, 16.0)
+    }
+
+    /// Uniform splits are equal ranges, logarithmic ones equal ratios, and the practical
+    /// scheme their blend by λ; the ends are the camera's planes exactly.
+    #[test]
+    fn the_split_schemes_are_zhangs() {
+        assert_eq!(
+            splits(SplitScheme::Uniform, None),
+            [1.0, 4.75, 8.5, 12.25, 16.0]
+        );
+        assert_eq!(
+            splits(SplitScheme::Logarithmic, None),
+            [1.0, 2.0, 4.0, 8.0, 16.0]
+        );
+        let p = splits(SplitScheme::Practical, Some(0.5));
+        for (k, want) in [1.0, 3.375, 6.25, 10.125, 16.0].iter().enumerate() {
+            assert!((p[k] - want).abs() < 1e-5, "{p:?}");
+        }
+    }
+
+    /// A depth on a split goes to the nearer cascade; the judge's reach admits both.
+    #[test]
+    fn a_depth_on_a_split_is_the_nearer_cascade_and_near_it_either() {
+        let c = Cascading {
+            depth_row: Vec4::new(0.0, 0.0, -1.0, 0.0),
+            splits: vec![1.0, 2.0, 4.0],
+        };
+        assert_eq!(c.cascade_of(2.0), 0);
+        assert_eq!(c.cascade_of(2.000_001), 1);
+        assert_eq!(c.cascades_near(2.0, 1e-6), [0, 1]);
+        assert_eq!(c.cascades_near(3.0, 1e-6), [1]);
+        assert_eq!(c.cascades_near(0.5, 0.0), [0]);
+        assert_eq!(c.cascades_near(9.0, 0.0), [1]);
+        assert_eq!(c.depth(Vec3::new(5.0, 1.0, -3.0)), 3.0);
+    }
 }

@@ -35,7 +35,8 @@ pub enum Uniform {
     LightPosition,
 }
 
-/// One shading language's pieces of the lit pass. Each method returns source text, whole
+/// One shading language's pieces of the lit pass. A dialect is made for one technique's
+/// map: where that is a 2D array (cascades), `fetch`, `tap` and the samples read layer `f`. Each method returns source text, whole
 /// lines ending in `\n`; the functions named are those every dialect defines (`to_light`,
 /// `cube_face`, `texel_dir`, `fetch`, `tap`, `visibility`, `shade`) and the locals are those
 /// of `umbra_ref::lookup` (`p`, `n`, `f`, `c`, `bias`, `r`).
@@ -66,6 +67,11 @@ pub trait Dialect {
     fn lookup_start(&self, offset: &str) -> String;
     /// `f`: the face (`cube_face` of the direction from the light, or 0).
     fn face(&self, cube: bool) -> &'static str;
+    /// `f`: the cascade of `p` among `count`, by its view depth (the camera view matrix's
+    /// third row, negated, against the split depths), or by its distance from the eye
+    /// (`by_distance`, the self-test's CascadeByDistance); a depth on a split goes to the
+    /// nearer cascade, as `umbra_case::light::Cascading::cascade_of` decides.
+    fn cascade(&self, count: usize, by_distance: bool) -> String;
     /// `c` = (u, v, depth, w) from `p` (reads `bias_matrix` and `left_out`).
     fn coordinate(&self, c: &Coordinate) -> &'static str;
     /// The bias matrix applied to `c` again.
@@ -123,7 +129,7 @@ pub fn lit_fragment(d: &impl Dialect, t: &Technique) -> String {
     s += &d.constant("TOWARD_FAR", if forward { "1.0" } else { "-1.0" });
     s += &d.constant("CLEAR", if forward { "1.0" } else { "0.0" });
     s += d.to_light(t.directional);
-    s += &d.face_matrices(if t.cube { 6 } else { 1 });
+    s += &d.face_matrices(if t.cube { 6 } else { t.cascades.max(1) });
     if t.cube {
         s += d.cube_helpers();
     }
@@ -160,7 +166,11 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
         k => format!("({k} * {offset})"),
     };
     *s += &d.lookup_start(&offset);
-    *s += d.face(t.cube);
+    if t.layered() {
+        *s += &d.cascade(t.cascades, t.cascade_by_distance());
+    } else {
+        *s += d.face(t.cube);
+    }
     let c = t.coordinate();
     *s += d.coordinate(&c);
     if c.bias_again {

@@ -96,18 +96,21 @@ impl Estimate {
 pub fn estimate(case: &Case, triangles: usize) -> Estimate {
     let [cw, ch] = case.camera.size;
     let [sw, sh] = case.shadow.size;
-    let faces: u64 = if matches!(case.light, Light::Point(_)) {
-        6
-    } else {
-        1
+    let faces: u64 = match &case.light {
+        Light::Point(_) => 6,
+        Light::Directional(d) => d.cascades.map_or(1, |c| u64::from(c.count)),
+        Light::Spot(_) => 1,
     };
+    let cube = matches!(case.light, Light::Point(_));
     let pixels = u64::from(cw) * u64::from(ch);
     let texels = faces * u64::from(sw) * u64::from(sh);
     let mut parts = vec![
         Part {
             field: "shadow.size",
-            what: if faces == 6 {
+            what: if cube {
                 format!("{sw}×{sh} × 6 cube faces")
+            } else if faces > 1 {
+                format!("{sw}×{sh} × {faces} cascades")
             } else {
                 format!("{sw}×{sh}")
             },

@@ -3,42 +3,13 @@
 
 use std::sync::Arc;
 
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 
-use crate::conventions::{Convention, look_at};
+pub use crate::camera::CameraSetup;
+use crate::conventions::look_at;
 use crate::light::LightSetup;
 use crate::point::CasePoint;
 use crate::scene::{Geometry, tessellate};
-
-/// The camera of a case.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CameraSetup {
-    /// Eye position.
-    pub eye: Vec3,
-    /// World → view.
-    pub view: Mat4,
-    /// Vertical field of view, radians.
-    pub fov_y: f32,
-    /// Near plane.
-    pub near: f32,
-    /// Far plane.
-    pub far: f32,
-    /// Image `[width, height]`.
-    pub size: [u32; 2],
-}
-
-impl CameraSetup {
-    /// P · V under `conv` (the camera pass always uses forward depth).
-    pub fn view_proj(&self, conv: Convention) -> Mat4 {
-        let conv = conv.with_order(crate::format::DepthOrder::Forward);
-        conv.perspective(
-            self.fov_y,
-            self.size[0] as f32 / self.size[1] as f32,
-            self.near,
-            self.far,
-        ) * self.view
-    }
-}
 
 /// One run's inputs.
 #[derive(Clone, Debug)]
@@ -74,7 +45,12 @@ impl Prepared {
             far: c.far,
             size: c.size,
         };
-        let light = LightSetup::new(&point.case.light, point.case.shadow.size, &geometry);
+        let light = LightSetup::new(
+            &point.case.light,
+            point.case.shadow.size,
+            &geometry,
+            &camera,
+        );
         Prepared {
             point,
             geometry,

@@ -56,6 +56,10 @@ pub const EXEMPLARS: &[&str] = &[
     r#"{"name":"d","about":"d","scene":{"objects":[{"plane":{"point":[0,0,0],"half_extent":1}}]},
         "camera":{"eye":[0,1,1],"target":[0,0,0]},
         "light":{"point":{"position":[0,1,0],"near":0.1,"far":10}}}"#,
+    r#"{"name":"e","about":"e","scene":{"objects":[{"plane":{"point":[0,0,0],"half_extent":1}}]},
+        "camera":{"eye":[0,1,1],"target":[0,0,0]},
+        "light":{"directional":{"azimuth_deg":0,"elevation_deg":45,
+                 "cascades":{"count":3,"split":"practical","lambda":0.5}}}}"#,
 ];
 
 /// The exemplars as JSON with every default filled in, as a case point's JSON is.

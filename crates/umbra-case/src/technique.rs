@@ -29,6 +29,9 @@ pub struct Technique {
     pub cube: bool,
     /// Parallel rays (directional light): the direction to the light is the same everywhere.
     pub directional: bool,
+    /// Cascades (the layers of a 2D array, one chosen per receiver by its view depth), or 0
+    /// for a single map.
+    pub cascades: usize,
     /// The case's filter.
     pub filter: Filter,
     /// Who compares: the sampler or the shader (see [`Technique::with_manual_compare`]).
@@ -155,6 +158,11 @@ impl Technique {
         Technique {
             cube: matches!(run.light.kind, LightKind::Point { .. }),
             directional: matches!(run.light.kind, LightKind::Directional { .. }),
+            cascades: run
+                .light
+                .cascading
+                .as_ref()
+                .map_or(0, |_| run.light.views.len()),
             filter: s.filter,
             compare: s.compare,
             clamp_reference: s.compare == Compare::Hardware && s.format.is_fixed(),
@@ -259,6 +267,18 @@ impl Technique {
         }
     }
 
+    /// The map is a 2D array, one layer per cascade.
+    pub fn layered(&self) -> bool {
+        self.cascades > 0
+    }
+
+    /// The cascade is chosen by the receiver's distance from the eye instead of its view
+    /// depth (CascadeByDistance): off the view axis a receiver goes to a farther cascade
+    /// than its slice.
+    pub fn cascade_by_distance(&self) -> bool {
+        self.is(Fault::CascadeByDistance)
+    }
+
     /// The lookup reads lit where w ≤ 0 (NoGuard drops it).
     pub fn guards(&self) -> bool {
         self.guard && !self.is(Fault::NoGuard)
@@ -287,7 +307,8 @@ impl Technique {
     }
 
     /// How the map is read (BilinearCoarse, PcfOffCentre, PcfDoubleCentre). The projective
-    /// form needs the coordinate untouched, so any fault samples c instead.
+    /// form needs the coordinate untouched, so any fault samples c instead; an array has
+    /// no projective compare (GLSL's textureProj takes no layer).
     pub fn taps(&self) -> Taps {
         let sampler_filters = !self.manual() && !matches!(self.filter, Filter::Pcf(_));
         match self.filter {
@@ -295,7 +316,8 @@ impl Technique {
             _ if sampler_filters && self.mipmapped => Taps::HardwareMipmapped,
             _ if sampler_filters
                 && self.bias_matrix == BiasMatrix::BeforeDivide
-                && self.fault.is_none() =>
+                && self.fault.is_none()
+                && !self.layered() =>
             {
                 Taps::HardwareProjective
             }

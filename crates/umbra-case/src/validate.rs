@@ -19,6 +19,9 @@ pub const MAX_MAP_SIZE: u32 = 16384;
 pub const MAX_IMAGE_SIZE: u32 = 8192;
 /// Widest PCF kernel.
 pub const MAX_PCF: u32 = 15;
+/// Most cascades of a directional light: the six light matrices every backend's lit pass
+/// already holds for a cube map's faces (engines ship 1 to 4).
+pub const MAX_CASCADES: u32 = 6;
 /// Smallest |sin| between an up hint and a view direction (about 0.06°).
 const MIN_UP_SIN: f32 = 1e-3;
 
@@ -397,7 +400,16 @@ impl Validator<'_> {
 
     fn light(&mut self, l: &Light, shadow: &Shadow) {
         match l {
-            Light::Directional(d) => self.directional(d),
+            Light::Directional(d) => {
+                self.directional(d);
+                if d.cascades.is_some() && shadow.mipmaps.is_some() {
+                    self.err(
+                        "shadow.mipmaps",
+                        "mipmapped maps are modelled for one 2D map, not a cascade array",
+                        "remove shadow.mipmaps or light.directional.cascades",
+                    );
+                }
+            }
             Light::Spot(s) => {
                 self.view("light.spot", ("position", s.position), s.target, s.up);
                 self.fov("light.spot.fov_y_deg", s.fov_y_deg);
@@ -471,6 +483,10 @@ impl Validator<'_> {
                 "give position (with target), or azimuth_deg and elevation_deg",
             ),
         }
+        if let Some(c) = &d.cascades {
+            self.cascades(p, d, c);
+            return;
+        }
         match (&d.ortho, &d.fit) {
             (Some(o), None) => {
                 let op = format!("{p}.ortho");
@@ -510,6 +526,39 @@ impl Validator<'_> {
                 "a directional light needs bounds",
                 "give ortho {left, right, bottom, top, near, far} or \"fit\": \"scene\"",
             ),
+        }
+    }
+
+    /// Cascades fit their own bounds, one set per slice of the camera's view depths.
+    fn cascades(&mut self, p: &str, d: &Directional, c: &Cascades) {
+        let cp = format!("{p}.cascades");
+        if d.ortho.is_some() || d.fit.is_some() {
+            let which = if d.ortho.is_some() { "ortho" } else { "fit" };
+            self.err(
+                format!("{p}.{which}"),
+                "cascades fit each cascade's bounds to its slice of the camera's view",
+                format!("remove {which}, or remove cascades for one map"),
+            );
+        }
+        if c.count == 0 || c.count > MAX_CASCADES {
+            self.err(
+                format!("{cp}.count"),
+                format!("from 1 to {MAX_CASCADES} cascades, got {}", c.count),
+                "use 1 to 4, as engines do",
+            );
+        }
+        match (c.split, c.lambda) {
+            (SplitScheme::Practical, Some(l)) if !(0.0..=1.0).contains(&l) => self.err(
+                format!("{cp}.lambda"),
+                format!("λ blends the logarithmic (1) and uniform (0) splits, got {l}"),
+                "use a value in [0, 1], e.g. 0.5",
+            ),
+            (SplitScheme::Uniform | SplitScheme::Logarithmic, Some(_)) => self.err(
+                format!("{cp}.lambda"),
+                "lambda belongs to the practical scheme only",
+                "remove lambda, or use \"split\": \"practical\"",
+            ),
+            _ => {}
         }
     }
 

@@ -617,6 +617,64 @@ fn mipmaps_validate_and_name_the_field_that_breaks_them() {
     );
 }
 
+fn cascaded(cascades: Value) -> Value {
+    set(
+        base(),
+        "/light",
+        json!({ "directional": { "azimuth_deg": 30, "elevation_deg": 50, "cascades": cascades } }),
+    )
+}
+
+#[test]
+fn cascades_validate_and_name_the_field_that_breaks_them() {
+    for ok in [
+        json!({ "count": 1 }),
+        json!({ "count": 6, "split": "logarithmic" }),
+        json!({ "count": 3, "split": "practical", "lambda": 1 }),
+    ] {
+        let r = load_str(&cascaded(ok.clone()).to_string(), Path::new("c.json"));
+        assert!(r.is_ok(), "{ok}: {r:?}");
+    }
+    assert_error(
+        cascaded(json!({ "count": 0 })),
+        "light.directional.cascades.count",
+        "from 1 to 6",
+    );
+    assert_error(
+        cascaded(json!({ "count": 7 })),
+        "light.directional.cascades.count",
+        "from 1 to 6",
+    );
+    assert_error(
+        cascaded(json!({ "count": 2, "lambda": 1.5 })),
+        "light.directional.cascades.lambda",
+        "got 1.5",
+    );
+    assert_error(
+        cascaded(json!({ "count": 2, "split": "uniform", "lambda": 0.5 })),
+        "light.directional.cascades.lambda",
+        "practical scheme only",
+    );
+    assert_error(
+        set(
+            cascaded(json!({ "count": 2 })),
+            "/light/directional/fit",
+            json!("scene"),
+        ),
+        "light.directional.fit",
+        "fit each cascade's bounds",
+    );
+    assert_error(
+        set(
+            cascaded(json!({ "count": 2 })),
+            "/shadow/mipmaps",
+            json!({ "levels": 2 }),
+        ),
+        "shadow.mipmaps",
+        "cascade array",
+    );
+}
+
 /// Two sweep points with one name (a value repeated or written two ways) would be two runs,
 /// two report rows and one golden under one name (issue 36); two values that round to one
 /// f32 would be the same run twice.

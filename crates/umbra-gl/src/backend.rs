@@ -173,6 +173,11 @@ impl Backend for GlBackend {
             return Support::Unsupported("the GLES 2 path needs OES_standard_derivatives and EXT_frag_depth to apply the polygon offset to packed depth".into());
         }
         match api {
+            // GLES 2 has no array textures; separate textures per cascade are not built yet.
+            Api::Gles2 if needs.array_layers > 0 => Support::Unsupported(
+                "cascades are drawn into a 2D array texture (GL 3.0, GLES 3.0), which GLES 2 lacks; umbra's GLES 2 placement in separate textures is not built yet"
+                    .into(),
+            ),
             // OES_depth_texture (issue 1) gives GLES 2 no compare sampler, and its path keeps
             // depth packed in RGBA8: a mip chain of packed depths would be filtered as
             // colours, which is neither mipmapped compare nor anything a program relies on.

@@ -431,6 +431,24 @@ impl<'a> Gl<'a> {
         });
         unsafe { self.raw.uniform_3_f32(l, x, y, z) }
     }
+    pub unsafe fn uniform_4_f32_slice(&self, l: Option<&glow::UniformLocation>, v: &[f32]) {
+        log!(self, |r| {
+            let a = [
+                r.location(l.map(|l| l.0)),
+                (v.len() / 4).to_string(),
+                r.floats(v),
+            ];
+            r.call("glUniform4fv", &a);
+        });
+        unsafe { self.raw.uniform_4_f32_slice(l, v) }
+    }
+    pub unsafe fn uniform_1_f32_slice(&self, l: Option<&glow::UniformLocation>, v: &[f32]) {
+        log!(self, |r| {
+            let a = [r.location(l.map(|l| l.0)), v.len().to_string(), r.floats(v)];
+            r.call("glUniform1fv", &a);
+        });
+        unsafe { self.raw.uniform_1_f32_slice(l, v) }
+    }
     pub unsafe fn uniform_1_i32(&self, l: Option<&glow::UniformLocation>, x: i32) {
         log!(self, |r| {
             let a = [r.location(l.map(|l| l.0)), x.to_string()];
@@ -576,6 +594,40 @@ impl<'a> Gl<'a> {
                 .tex_image_2d(target, level, internal, w, h, border, format, ty, pixels)
         }
     }
+    pub unsafe fn tex_image_3d(
+        &self,
+        target: u32,
+        level: i32,
+        internal: i32,
+        w: i32,
+        h: i32,
+        depth: i32,
+        border: i32,
+        format: u32,
+        ty: u32,
+        pixels: glow::PixelUnpackData,
+    ) {
+        log!(self, |r| {
+            let a = [
+                r.en(target),
+                level.to_string(),
+                r.en(internal as u32),
+                w.to_string(),
+                h.to_string(),
+                depth.to_string(),
+                border.to_string(),
+                r.en(format),
+                r.en(ty),
+                "NULL".into(),
+            ];
+            r.call("glTexImage3D", &a);
+        });
+        unsafe {
+            self.raw.tex_image_3d(
+                target, level, internal, w, h, depth, border, format, ty, pixels,
+            )
+        }
+    }
     pub unsafe fn tex_parameter_i32(&self, target: u32, p: u32, v: i32) {
         log!(self, |r| {
             let value = if ENUM_VALUED.contains(&p) {
@@ -637,6 +689,29 @@ impl<'a> Gl<'a> {
         unsafe {
             self.raw
                 .framebuffer_texture_2d(target, attachment, tex_target, t, level)
+        }
+    }
+    pub unsafe fn framebuffer_texture_layer(
+        &self,
+        target: u32,
+        attachment: u32,
+        t: Option<glow::Texture>,
+        level: i32,
+        layer: i32,
+    ) {
+        log!(self, |r| {
+            let a = [
+                r.en(target),
+                r.en(attachment),
+                r.object("texture", n(t, |t| t.0.get())),
+                level.to_string(),
+                layer.to_string(),
+            ];
+            r.call("glFramebufferTextureLayer", &a);
+        });
+        unsafe {
+            self.raw
+                .framebuffer_texture_layer(target, attachment, t, level, layer)
         }
     }
     pub unsafe fn framebuffer_renderbuffer(
@@ -1025,6 +1100,11 @@ const SIGNATURES: &[(&str, &str, &str)] = &[
         "void",
         "GLenum, GLenum, GLenum, GLuint, GLint",
     ),
+    (
+        "glFramebufferTextureLayer",
+        "void",
+        "GLenum, GLenum, GLuint, GLint, GLint",
+    ),
     ("glFrontFace", "void", "GLenum"),
     ("glGenBuffers", "void", "GLsizei, GLuint *"),
     ("glGenFramebuffers", "void", "GLsizei, GLuint *"),
@@ -1082,6 +1162,11 @@ const SIGNATURES: &[(&str, &str, &str)] = &[
         "GLenum, GLint, GLint, GLsizei, GLsizei, GLint, GLenum, GLenum, const void *",
     ),
     (
+        "glTexImage3D",
+        "void",
+        "GLenum, GLint, GLint, GLsizei, GLsizei, GLsizei, GLint, GLenum, GLenum, const void *",
+    ),
+    (
         "glTexParameterfv",
         "void",
         "GLenum, GLenum, const GLfloat *",
@@ -1091,7 +1176,9 @@ const SIGNATURES: &[(&str, &str, &str)] = &[
     ("glUseProgram", "void", "GLuint"),
     ("glUniform1i", "void", "GLint, GLint"),
     ("glUniform2f", "void", "GLint, GLfloat, GLfloat"),
+    ("glUniform1fv", "void", "GLint, GLsizei, const GLfloat *"),
     ("glUniform3f", "void", "GLint, GLfloat, GLfloat, GLfloat"),
+    ("glUniform4fv", "void", "GLint, GLsizei, const GLfloat *"),
     (
         "glUniformMatrix4fv",
         "void",
@@ -1111,6 +1198,7 @@ const ENUMS: &[(u32, &str)] = &[
     (glow::NONE, "GL_NONE"),
     (glow::TEXTURE_2D, "GL_TEXTURE_2D"),
     (glow::TEXTURE_CUBE_MAP, "GL_TEXTURE_CUBE_MAP"),
+    (glow::TEXTURE_2D_ARRAY, "GL_TEXTURE_2D_ARRAY"),
     (
         glow::TEXTURE_CUBE_MAP_POSITIVE_X,
         "GL_TEXTURE_CUBE_MAP_POSITIVE_X",

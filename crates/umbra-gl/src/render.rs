@@ -484,6 +484,8 @@ struct RunPlan<'a> {
     conv: Convention,
     /// A cube map (point light).
     cube: bool,
+    /// A 2D array, one layer per cascade.
+    layered: bool,
     es2: bool,
     /// A deliberate mistake, only under `cargo xtask selftest`.
     fault: Option<Fault>,
@@ -491,7 +493,7 @@ struct RunPlan<'a> {
     bias: umbra_case::format::Bias,
     /// Faces (views) of the light.
     faces: usize,
-    /// TEXTURE_2D or TEXTURE_CUBE_MAP.
+    /// TEXTURE_2D, TEXTURE_CUBE_MAP or TEXTURE_2D_ARRAY.
     target: u32,
     /// Vertices drawn.
     count: i32,
@@ -506,6 +508,7 @@ impl<'a> RunPlan<'a> {
         let s = &run.case().shadow;
         let fault = Fault::active();
         let cube = matches!(run.light.kind, LightKind::Point { .. });
+        let layered = run.light.cascading.is_some();
         let levels = s.mipmaps.map_or(1, |m| m.levels);
         RunPlan {
             run,
@@ -513,12 +516,15 @@ impl<'a> RunPlan<'a> {
             api,
             conv: Convention::GL.with_order(s.depth_order),
             cube,
+            layered,
             es2: api == Api::Gles2,
             fault,
             bias: fault.map_or_else(|| s.bias.clone(), |f| f.bias(&s.bias)),
             faces: run.light.views.len(),
             target: if cube {
                 glow::TEXTURE_CUBE_MAP
+            } else if layered {
+                glow::TEXTURE_2D_ARRAY
             } else {
                 glow::TEXTURE_2D
             },
@@ -536,14 +542,41 @@ impl<'a> RunPlan<'a> {
         self.fault == Some(f)
     }
 
-    /// The texture target of each face: the six cube faces in GL's order, or TEXTURE_2D.
+    /// The texture target of each face: the six cube faces in GL's order, TEXTURE_2D, or
+    /// none for an array's layers (allocated at once, attached by layer).
     fn face_targets(&self) -> Vec<u32> {
         if self.cube {
             (0..6)
                 .map(|k| glow::TEXTURE_CUBE_MAP_POSITIVE_X + k)
                 .collect()
+        } else if self.layered {
+            vec![glow::TEXTURE_2D_ARRAY; self.faces]
         } else {
             vec![glow::TEXTURE_2D]
+        }
+    }
+
+    /// Attaches face `k` (target `ft`) of `map` at `level` as the bound framebuffer's depth.
+    fn attach_depth(&self, gl: &Gl, ft: u32, k: usize, map: glow::Texture, level: u32) {
+        // SAFETY: attaching a texture of the current context to its bound framebuffer.
+        unsafe {
+            if self.layered {
+                gl.framebuffer_texture_layer(
+                    glow::FRAMEBUFFER,
+                    glow::DEPTH_ATTACHMENT,
+                    Some(map),
+                    level as i32,
+                    k as i32,
+                );
+            } else {
+                gl.framebuffer_texture_2d(
+                    glow::FRAMEBUFFER,
+                    glow::DEPTH_ATTACHMENT,
+                    ft,
+                    Some(map),
+                    level as i32,
+                );
+            }
         }
     }
 }

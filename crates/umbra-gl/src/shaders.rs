@@ -166,19 +166,26 @@ pub fn lit_fragment(api: Api, t: &Technique) -> String {
         api != Api::Gles2 || t.manual(),
         "GLES 2 compares in the shader: pass Api::technique's technique"
     );
-    lit_shader::lit_fragment(&Glsl { api }, t)
+    let layered = t.layered();
+    debug_assert!(
+        api != Api::Gles2 || !layered,
+        "GLES 2 has no array textures: the backend skips cascades"
+    );
+    lit_shader::lit_fragment(&Glsl { api, layered }, t)
 }
 
-/// GLSL in one API's flavour.
+/// GLSL in one API's flavour, for one technique's map.
 struct Glsl {
     api: Api,
+    /// The map is a 2D array (cascades).
+    layered: bool,
 }
 
 impl Dialect for Glsl {
     fn declarations(&self, t: &Technique) -> String {
         let es2 = self.api == Api::Gles2;
         let mut s = header(self.api, true);
-        let faces = if t.cube { 6 } else { 1 };
+        let faces = if t.cube { 6 } else { t.cascades.max(1) };
         let _ = writeln!(
             s,
             "IN vec3 v_pos;\nIN vec3 v_normal;\nIN vec3 v_albedo;\nFLAT IN float v_face;"
@@ -190,12 +197,22 @@ impl Dialect for Glsl {
         s.push_str("uniform vec3 u_light_pos;\nuniform vec3 u_towards;\nuniform vec3 u_eye;\nuniform vec2 u_size;\n");
         s.push_str("uniform float u_constant;\nuniform float u_slope_scale;\nuniform float u_slope_max;\nuniform float u_normal_offset;\nuniform float u_ndl_scale;\nuniform float u_ndl_min;\n");
         s.push_str("uniform float u_output;\n"); // GLES 2: 0 colour, 1 visibility + face
-        let sampler = match (t.cube, t.manual()) {
-            (false, false) => "sampler2DShadow",
-            (true, false) => "samplerCubeShadow",
-            (false, true) => "sampler2D",
-            (true, true) => "samplerCube",
+        let sampler = match (t.cube, self.layered, t.manual()) {
+            (false, false, false) => "sampler2DShadow",
+            (true, _, false) => "samplerCubeShadow",
+            (false, true, false) => "sampler2DArrayShadow",
+            (false, false, true) => "sampler2D",
+            (true, _, true) => "samplerCube",
+            (false, true, true) => "sampler2DArray",
         };
+        if self.layered {
+            if self.api == Api::Gles3 {
+                s.push_str(
+                    "precision highp sampler2DArray;\nprecision highp sampler2DArrayShadow;\n",
+                );
+            }
+            s.push_str("uniform vec4 u_view_row;\nuniform float u_split[8];\n");
+        }
         let _ = writeln!(s, "uniform {sampler} u_map;");
         if !es2 {
             s.push_str(
@@ -265,6 +282,13 @@ impl Dialect for Glsl {
         });
         // Never `.z`: a core depth read returns (d, 0, 0, 1); GLES 2 unpacks RGBA8.
         let read = match (cube, self.api == Api::Gles2, wrong_component) {
+            _ if self.layered => {
+                if wrong_component {
+                    "texelFetch(u_map, ivec3(int(i), int(j), f), 0).g"
+                } else {
+                    "texelFetch(u_map, ivec3(int(i), int(j), f), 0).r"
+                }
+            }
             (false, false, false) => "texelFetch(u_map, ivec2(int(i), int(j)), 0).r",
             (false, false, true) => "texelFetch(u_map, ivec2(int(i), int(j)), 0).g",
             (false, true, false) => "unpack_depth(texture2D(u_map, (vec2(i, j) + 0.5) / u_size))",
@@ -286,6 +310,9 @@ impl Dialect for Glsl {
             (true, _) => format!(
                 "{head} {{ return r {} fetch(f, i, j) ? 1.0 : 0.0; }}\n",
                 op.symbol()
+            ),
+            (false, false) if self.layered => format!(
+                "{head} {{ return texture(u_map, vec4((vec2(i, j) + 0.5) / u_size, float(f), r)); }}\n"
             ),
             (false, true) => {
                 format!("{head} {{ return texture(u_map, vec4(texel_dir(f, i, j), r)); }}\n")
@@ -318,6 +345,19 @@ impl Dialect for Glsl {
         } else {
             "  int f = 0;\n"
         }
+    }
+
+    /// An if-chain on constant indices (GLSL ES's rule for uniform arrays in fragments).
+    fn cascade(&self, count: usize, by_distance: bool) -> String {
+        let mut s = String::from(if by_distance {
+            "  float d = length(p - u_eye);\n  int f = 0;\n"
+        } else {
+            "  float d = dot(u_view_row.xyz, p) + u_view_row.w;\n  int f = 0;\n"
+        });
+        for k in 1..count {
+            let _ = writeln!(s, "  if (d > u_split[{k}]) f = {k};");
+        }
+        s
     }
 
     fn coordinate(&self, c: &Coordinate) -> &'static str {
@@ -389,9 +429,14 @@ impl Dialect for Glsl {
     }
 
     fn sample(&self) -> &'static str {
-        "  return texture(u_map, vec3(c.xy, r));\n"
+        if self.layered {
+            "  return texture(u_map, vec4(c.xy, float(f), r));\n"
+        } else {
+            "  return texture(u_map, vec3(c.xy, r));\n"
+        }
     }
 
+    /// A cascade array has no levels (validation refuses them).
     fn sample_mipmapped(&self) -> &'static str {
         "  float m = texture(u_map, vec3(c.xy, r));\n"
     }

@@ -254,8 +254,10 @@ fn face_view(
     k: usize,
     fault: Option<Fault>,
 ) -> (glam::Mat4, Cull) {
-    let cube = run.light.views.len() == 6;
-    let vp = run.light.views[k].view_proj(conv);
+    let cube = run.light.is_cube();
+    let layered = run.light.cascading.is_some();
+    let drawn = Fault::drawn_view(fault, k, run.light.views.len(), layered);
+    let vp = run.light.views[drawn].view_proj(conv);
     let cull = run.case().shadow.cull;
     match fault.and_then(|f| f.face_mistake(k, cube)) {
         None => (vp, cull),

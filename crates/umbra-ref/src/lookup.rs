@@ -325,7 +325,7 @@ impl<'a> Lookup<'a> {
 
 impl Lookup<'_> {
     fn cube(&self) -> bool {
-        self.layers.len() == 6
+        self.light.is_cube()
     }
 
     fn hardware(&self) -> bool {
@@ -508,7 +508,7 @@ impl Lookup<'_> {
     }
 
     /// [`Lookup::visibility`] of every point of a run (`out[k]` for point k of `surfaces`), the
-    /// same steps with the same operations: on a 2D map without per-point bias terms, the
+    /// same steps with the same operations: on one 2D map without per-point bias terms, the
     /// coordinates of the whole run first (a loop the compiler vectorises: one matrix, no
     /// branches), then each point's guard, outside test and filter; otherwise point by point.
     pub fn visibility_run(
@@ -519,6 +519,7 @@ impl Lookup<'_> {
     ) {
         let s = self.shadow;
         if self.cube()
+            || self.light.cascading.is_some()
             || s.bias.slope.is_some()
             || s.bias.n_dot_l.is_some()
             || s.beyond_far == BeyondFar::Lit
@@ -852,12 +853,33 @@ impl Lookup<'_> {
                 }
             }
         }
+        for f in self.cascades_within(p, n, moves) {
+            if !faces.contains(&f) {
+                faces.push(f);
+            }
+        }
         let mut out: Option<Legal> = None;
         for f in faces {
             let l = self.legal_on(p, n, moves, f);
             out = Some(out.map_or(l, |o| o.hull(l)));
         }
         out.unwrap_or(Legal::LIT)
+    }
+
+    /// A cascaded light's cascades that may serve `p`: those whose view-depth range lies
+    /// within the region of moves or the shader's arithmetic of the view depth d = r · (p, 1)
+    /// (four terms, γ₄ of their magnitudes: GLSL's and WGSL's dot products round each product
+    /// and sum, or fuse them) of d. A receiver on a split may be looked up in either cascade
+    /// (both maps cover it); nothing else is free.
+    fn cascades_within(&self, p: Vec3, n: Vec3, moves: &[Vec3]) -> Vec<usize> {
+        let Some(c) = &self.light.cascading else {
+            return Vec::new();
+        };
+        let q = p + n * self.shadow.bias.normal_offset;
+        let row = c.depth_row.truncate();
+        let spread: f64 = moves.iter().map(|m| f64::from(row.dot(*m).abs())).sum();
+        let terms = f64::from((row * q).abs().element_sum() + c.depth_row.w.abs());
+        c.cascades_near(f64::from(c.depth(q)), spread + gamma(4.0) * terms)
     }
 
     /// [`Lookup::legal_at`] on face `face` (the only face of a 2D map).

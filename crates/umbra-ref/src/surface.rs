@@ -214,6 +214,7 @@ mod tests {
                 .map(|kind| LightSetup {
                     kind,
                     views: Vec::new(),
+                    cascading: None,
                 });
                 let mut s = Surfaces::default();
                 for (t, light) in tris.iter().zip(lights.iter().cycle()) {

@@ -223,6 +223,8 @@ struct RunPlan<'a> {
     conv: Convention,
     /// A cube map (point light): six layers.
     cube: bool,
+    /// A cascade array: one layer per cascade.
+    layered: bool,
     /// Faces (layers) of the map.
     faces: u32,
     /// The map's format, and whether its depths can be copied back.
@@ -256,6 +258,7 @@ impl<'a> RunPlan<'a> {
             fault,
             conv,
             cube: matches!(run.light.kind, LightKind::Point { .. }),
+            layered: run.light.cascading.is_some(),
             faces: run.light.views.len() as u32,
             format,
             copyable: gpu.depth_copies && format != wgpu::TextureFormat::Depth24Plus,
@@ -312,18 +315,16 @@ fn uniform_entry(visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-#[allow(clippy::too_many_arguments)]
+/// The uniform block ([`crate::shaders::UNIFORMS`]): the camera, six light and six texture
+/// matrices (identity past those given), then its vectors in order (light_pos, towards, eye,
+/// size, bias, view_row, split[0], split[1]; zero past those given).
 fn uniform_buffer(
     d: &wgpu::Device,
     q: &wgpu::Queue,
     view_proj: glam::Mat4,
     light: &[glam::Mat4],
     tex: &[glam::Mat4],
-    light_pos: [f32; 4],
-    towards: [f32; 4],
-    eye: [f32; 4],
-    size: [f32; 4],
-    bias: [f32; 4],
+    vectors: &[[f32; 4]],
 ) -> wgpu::Buffer {
     let mut data: Vec<f32> = Vec::with_capacity((UNIFORM_SIZE / 4) as usize);
     data.extend_from_slice(&view_proj.to_cols_array());
@@ -337,8 +338,8 @@ fn uniform_buffer(
             );
         }
     }
-    for v in [light_pos, towards, eye, size, bias] {
-        data.extend_from_slice(&v);
+    for k in 0..8 {
+        data.extend_from_slice(&vectors.get(k).copied().unwrap_or([0.0; 4]));
     }
     let buf = d.create_buffer(&wgpu::BufferDescriptor {
         label: Some("uniforms"),

@@ -23,10 +23,12 @@ use umbra_case::lit_shader::{self, Dialect, Uniform};
 use umbra_case::technique::{CompareOp, Coordinate, CoordinateStep};
 
 /// The uniform block shared by both passes (std140-compatible layout, 16-byte vectors).
-pub const UNIFORMS: &str = "struct U {\n  view_proj: mat4x4<f32>,\n  light: array<mat4x4<f32>, 6>,\n  tex: array<mat4x4<f32>, 6>,\n  light_pos: vec4<f32>,\n  towards: vec4<f32>,\n  eye: vec4<f32>,\n  size: vec4<f32>,\n  bias: vec4<f32>,\n}\n@group(0) @binding(0) var<uniform> u: U;\n";
+/// `view_row` and `split` serve cascades: the view depth d = view_row · (p, 1) and the split
+/// depths s_0 … s_7 in two vectors.
+pub const UNIFORMS: &str = "struct U {\n  view_proj: mat4x4<f32>,\n  light: array<mat4x4<f32>, 6>,\n  tex: array<mat4x4<f32>, 6>,\n  light_pos: vec4<f32>,\n  towards: vec4<f32>,\n  eye: vec4<f32>,\n  size: vec4<f32>,\n  bias: vec4<f32>,\n  view_row: vec4<f32>,\n  split: array<vec4<f32>, 2>,\n}\n@group(0) @binding(0) var<uniform> u: U;\n";
 
-/// Size of [`UNIFORMS`] in bytes: 13 matrices and 5 vectors.
-pub const UNIFORM_SIZE: u64 = 13 * 64 + 5 * 16;
+/// Size of [`UNIFORMS`] in bytes: 13 matrices and 8 vectors.
+pub const UNIFORM_SIZE: u64 = 13 * 64 + 8 * 16;
 
 /// The shadow pass: position only; a constant colour for the `with_color` variant.
 pub fn shadow(with_color: bool) -> String {
@@ -61,16 +63,25 @@ pub const AVERAGE: &str = "@group(0) @binding(0) var src: texture_depth_2d;
 /// The lit pass: its vertex stage and the shared lookup and shading
 /// ([`umbra_case::lit_shader`]) in WGSL.
 pub fn lit(t: &Technique) -> String {
-    lit_shader::lit_fragment(&Wgsl, t)
+    lit_shader::lit_fragment(
+        &Wgsl {
+            layered: t.layered(),
+        },
+        t,
+    )
 }
 
-/// WGSL, in the zero-to-one convention.
-struct Wgsl;
+/// WGSL, in the zero-to-one convention, for one technique's map.
+struct Wgsl {
+    /// The map is a 2D array (cascades).
+    layered: bool,
+}
 
 impl Dialect for Wgsl {
     fn declarations(&self, t: &Technique) -> String {
         let mut s = String::from(UNIFORMS);
         let texture = match (t.cube, t.manual()) {
+            _ if self.layered => "texture_depth_2d_array",
             (false, _) => "texture_depth_2d",
             (true, false) => "texture_depth_cube",
             (true, true) => "texture_depth_2d_array",
@@ -131,7 +142,7 @@ impl Dialect for Wgsl {
             Outside::Repeat => "  i = i - u.size.x * floor(i / u.size.x);\n  j = j - u.size.y * floor(j / u.size.y);\n",
             Outside::Lit | Outside::ClampToEdge => "  i = clamp(i, 0.0, u.size.x - 1.0);\n  j = clamp(j, 0.0, u.size.y - 1.0);\n",
         });
-        if cube {
+        if cube || self.layered {
             s.push_str("  return textureLoad(map, vec2<i32>(i32(i), i32(j)), f, 0);\n}\n");
         } else {
             s.push_str("  return textureLoad(map, vec2<i32>(i32(i), i32(j)), 0);\n}\n");
@@ -148,6 +159,9 @@ impl Dialect for Wgsl {
             ),
             (false, true) => format!(
                 "{head} {{ return textureSampleCompareLevel(map, samp, texel_dir(f, i, j), r); }}\n"
+            ),
+            (false, false) if self.layered => format!(
+                "{head} {{ return textureSampleCompareLevel(map, samp, (vec2<f32>(i, j) + 0.5) / u.size.xy, f, r); }}\n"
             ),
             (false, false) => format!(
                 "{head} {{ return textureSampleCompareLevel(map, samp, (vec2<f32>(i, j) + 0.5) / u.size.xy, r); }}\n"
@@ -179,6 +193,18 @@ impl Dialect for Wgsl {
         } else {
             "  let f = 0;\n"
         }
+    }
+
+    fn cascade(&self, count: usize, by_distance: bool) -> String {
+        let mut s = String::from(if by_distance {
+            "  let d = length(p - u.eye.xyz);\n  var f = 0;\n"
+        } else {
+            "  let d = dot(u.view_row.xyz, p) + u.view_row.w;\n  var f = 0;\n"
+        });
+        for k in 1..count {
+            let _ = writeln!(s, "  if (d > u.split[{}][{}]) {{ f = {k}; }}", k / 4, k % 4);
+        }
+        s
     }
 
     /// The bias matrix maps v = 0.5 − 0.5·y and leaves depth alone (zero-to-one).
@@ -252,7 +278,11 @@ impl Dialect for Wgsl {
     }
 
     fn sample(&self) -> &'static str {
-        "  return textureSampleCompareLevel(map, samp, c.xy, r);\n"
+        if self.layered {
+            "  return textureSampleCompareLevel(map, samp, c.xy, f, r);\n"
+        } else {
+            "  return textureSampleCompareLevel(map, samp, c.xy, r);\n"
+        }
     }
 
     fn sample_mipmapped(&self) -> &'static str {

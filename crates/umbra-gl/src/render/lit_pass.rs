@@ -178,6 +178,15 @@ impl Renderer {
             gl.uniform_1_f32(loc("u_ndl_scale").as_ref(), ndl_scale);
             gl.uniform_1_f32(loc("u_ndl_min").as_ref(), ndl_min);
             gl.uniform_1_f32(loc("u_normal_offset").as_ref(), bias.normal_offset);
+            if let Some(c) = &run.light.cascading {
+                let [row, s0, s1] = c.uniforms();
+                gl.uniform_4_f32_slice(loc("u_view_row").as_ref(), &row);
+                let split: Vec<f32> = s0.into_iter().chain(s1).collect();
+                gl.uniform_1_f32_slice(
+                    loc("u_split[0]").or_else(|| loc("u_split")).as_ref(),
+                    &split,
+                );
+            }
             gl.uniform_1_i32(loc("u_map").as_ref(), 0);
             gl.active_texture(glow::TEXTURE0);
             gl.bind_texture(p.target, Some(map));

@@ -21,13 +21,7 @@ impl Renderer {
         // SAFETY: reading DEPTH_COMPONENT as FLOAT from the complete shadow framebuffer.
         unsafe {
             for (k, ft) in p.face_targets().into_iter().enumerate() {
-                gl.framebuffer_texture_2d(
-                    glow::FRAMEBUFFER,
-                    glow::DEPTH_ATTACHMENT,
-                    ft,
-                    Some(map),
-                    0,
-                );
+                p.attach_depth(gl, ft, k, map, 0);
                 let mut bytes = vec![0u8; (mw * mh * 4) as usize];
                 gl.tag_readback(Readback::MapLayer(k as u32));
                 gl.read_pixels(

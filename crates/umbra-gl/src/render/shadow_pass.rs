@@ -103,7 +103,23 @@ impl Renderer {
             } else {
                 depth_format(s.format)
             };
-            for ft in p.face_targets() {
+            if p.layered {
+                // One level (validation refuses levels on a cascade array), a layer a cascade.
+                gl.tex_image_3d(
+                    target,
+                    0,
+                    internal,
+                    s.size[0] as i32,
+                    s.size[1] as i32,
+                    p.faces as i32,
+                    0,
+                    format,
+                    ty,
+                    glow::PixelUnpackData::Slice(None),
+                );
+            }
+            // An array's layers were allocated at once above.
+            for ft in p.face_targets().into_iter().filter(|_| !p.layered) {
                 for level in 0..levels {
                     let [lw, lh] = Mipmaps::level_size(s.size, level);
                     gl.tex_image_2d(
@@ -302,13 +318,7 @@ impl Renderer {
                         t.depth_rb,
                     );
                 } else {
-                    gl.framebuffer_texture_2d(
-                        glow::FRAMEBUFFER,
-                        glow::DEPTH_ATTACHMENT,
-                        ft,
-                        Some(map),
-                        level as i32,
-                    );
+                    p.attach_depth(gl, ft, k, map, level);
                     if let Some(c) = t.dummy {
                         gl.framebuffer_texture_2d(
                             glow::FRAMEBUFFER,
@@ -438,7 +448,8 @@ impl Renderer {
 /// Face `k`'s view-projection at a `lw` × `lh` level, with the self-test's geometric faults
 /// (a shift in texels, a wrong orientation) applied.
 fn face_matrix(p: &RunPlan, k: usize, lw: u32, lh: u32) -> glam::Mat4 {
-    let mut m = p.run.light.views[k].view_proj(p.conv);
+    let drawn = Fault::drawn_view(p.fault, k, p.faces, p.layered);
+    let mut m = p.run.light.views[drawn].view_proj(p.conv);
     let [sx, sy] = p.fault.map_or([0.0; 2], |f| f.shadow_shift_texels());
     if sx != 0.0 || sy != 0.0 {
         // Texels to NDC: 2 · t / size.

@@ -23,6 +23,7 @@
 //! being counted as their own occluders; a convex curved receiver lies behind its tangent plane
 //! as seen from the light, so it does not either.
 
+pub mod aliasing;
 pub mod bvh;
 pub mod ray;
 
@@ -89,6 +90,8 @@ struct Scene<'a> {
     bvh: Bvh,
     face: &'a [u32],
     light: LightKind,
+    /// A cascaded light's face selection.
+    cascading: Option<umbra_case::light::Cascading>,
     faces: Vec<(DMat4, DMat4)>,
     map: [u32; 2],
     eps: f64,
@@ -159,6 +162,7 @@ impl<'a> Scene<'a> {
             bvh: Bvh::new(geo),
             face: &geo.face,
             light: run.light.kind,
+            cascading: run.light.cascading.clone(),
             faces,
             map: case.shadow.size,
             eps: extent * 1e-9,
@@ -170,14 +174,36 @@ impl<'a> Scene<'a> {
 
     /// The truth at camera pixel `i` (row-major), through the pixel's centre.
     fn camera_pixel(&self, i: u32) -> (Class, bool, u32, DVec3) {
-        let [w, h] = self.size;
-        let (x, y) = (i % w, i / w);
-        let ndc_x = (f64::from(x) + 0.5) / f64::from(w) * 2.0 - 1.0;
-        let ndc_y = 1.0 - (f64::from(y) + 0.5) / f64::from(h) * 2.0;
-        let near = project(self.inv_cam, DVec3::new(ndc_x, ndc_y, 0.0));
-        let far = project(self.inv_cam, DVec3::new(ndc_x, ndc_y, 1.0));
-        self.pixel(&Ray::new(near, far - near))
+        self.pixel(&camera_ray(self.inv_cam, self.size, i))
     }
+}
+
+/// The ray through the centre of camera pixel `i` (row-major), from the near plane (t = 0)
+/// to the far plane (t = 1).
+fn camera_ray(inv_cam: DMat4, [w, h]: [u32; 2], i: u32) -> Ray {
+    let (x, y) = (i % w, i / w);
+    let ndc_x = (f64::from(x) + 0.5) / f64::from(w) * 2.0 - 1.0;
+    let ndc_y = 1.0 - (f64::from(y) + 0.5) / f64::from(h) * 2.0;
+    let near = project(inv_cam, DVec3::new(ndc_x, ndc_y, 0.0));
+    let far = project(inv_cam, DVec3::new(ndc_x, ndc_y, 1.0));
+    Ray::new(near, far - near)
+}
+
+/// The world point each camera pixel's centre ray hits first (`None`: background), found as
+/// the truth finds it but without its shadow rays: for measures that need where the pixels
+/// land when the truth came from the judge cache, which keeps no hit points.
+pub fn camera_hits(run: &Prepared) -> Vec<Option<DVec3>> {
+    let bvh = Bvh::new(&run.geometry);
+    let inv_cam = to_f64(run.camera.view_proj(Convention::ZERO_TO_ONE)).inverse();
+    let [w, h] = run.camera.size;
+    (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let ray = camera_ray(inv_cam, run.camera.size, i);
+            bvh.closest(&ray, 0.0, 1.0 + 1e-12)
+                .map(|hit| ray.origin + ray.dir * hit.t)
+        })
+        .collect()
 }
 
 impl Scene<'_> {
@@ -225,9 +251,13 @@ impl Scene<'_> {
         }
     }
 
+    /// The face of `p`, exactly: the cube face, or the cascade of its exact view depth.
     fn face_for(&self, p: DVec3) -> usize {
-        match self.light {
-            LightKind::Point { position } => umbra_case::light::cube_face(p - position.as_dvec3()),
+        match (self.light, &self.cascading) {
+            (LightKind::Point { position }, _) => {
+                umbra_case::light::cube_face(p - position.as_dvec3())
+            }
+            (_, Some(c)) => c.cascade_of(c.depth_f64(p)),
             _ => 0,
         }
     }

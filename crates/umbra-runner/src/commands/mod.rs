@@ -17,4 +17,5 @@ pub mod selftest;
 pub mod selftest_modes;
 pub mod soak;
 pub mod sweep;
+pub mod sweep_cascades;
 pub mod thresholds;

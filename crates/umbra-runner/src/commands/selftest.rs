@@ -58,6 +58,8 @@ fn applies_to(fault: Fault, b: &Descriptor) -> bool {
         // The GLES 2 path has no float depth, and is the only one that clamps in the shader.
         Fault::ClampFloat => !b.gles2_technique(),
         Fault::NoClamp => b.gles2_technique(),
+        // GLES 2 has no array textures (it skips every cascaded case).
+        Fault::LayerShift | Fault::CascadeByDistance => !b.gles2_technique(),
         // GLES 2 has no mipmapped compare (it skips every mipmapped case).
         Fault::MipBaseOnly | Fault::MipLevelCoarse => !b.gles2_technique(),
         // A manual LINEAR filter; wgpu's GL backend has no manual compare.
@@ -101,6 +103,9 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
         Fault::MipBaseOnly | Fault::MipLevelCoarse => s.mipmaps.is_some(),
         Fault::ClampIgnored => s.depth_clamp,
         Fault::ClampForced => !s.depth_clamp,
+        Fault::LayerShift | Fault::CascadeByDistance => {
+            matches!(&c.light, Light::Directional(d) if d.cascades.is_some_and(|k| k.count > 1))
+        }
         Fault::Scaled { param, .. } => {
             let b = &s.bias;
             match param {
@@ -144,6 +149,7 @@ pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
         Fault::Repeat => &["outside"],
         Fault::ClampIgnored => &["pancake", "near-crossing-clamped"],
         Fault::ClampForced => &["pancake", "near-crossing"],
+        Fault::LayerShift | Fault::CascadeByDistance => &["street", "on-split"],
         Fault::Oriented { face: Some(_), .. } => &["point-faces"],
         Fault::Scaled { param, .. } if param.in_texels() => {
             &["contact", "filters-magnified", "guard-magnified"]
@@ -915,6 +921,8 @@ mod tests {
             Fault::NoGuard,
             Fault::ClampIgnored,
             Fault::ClampForced,
+            Fault::LayerShift,
+            Fault::CascadeByDistance,
         ] {
             assert!(
                 points.iter().any(|p| aimed_at(f, &p.case)),

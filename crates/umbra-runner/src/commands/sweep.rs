@@ -283,7 +283,11 @@ pub fn main(args: &SweepArgs) -> Outcome {
     };
     let point = match wanted {
         None => points[0].clone(),
-        Some(id) => match points.iter().find(|p| p.id() == id) {
+        // An id, or a glob over the ids (the first point it matches).
+        Some(id) => match points
+            .iter()
+            .find(|p| p.id() == id || crate::glob::matches(id, &p.id()))
+        {
             Some(p) => p.clone(),
             None => {
                 return Err(Error::new(format!(
@@ -294,7 +298,9 @@ pub fn main(args: &SweepArgs) -> Outcome {
             }
         },
     };
-    let techniques = matrix(&point.case);
+    // A cascaded light sweeps its cascades instead (`sweep_cascades`).
+    let techniques =
+        super::sweep_cascades::matrix(&point.case).unwrap_or_else(|| matrix(&point.case));
     let (file, plan) = write_case(&point, &techniques, &out)
         .map_err(|e| Error::new(format!("cannot generate the sweep case: {e}")))?;
     let started = Instant::now();
@@ -323,7 +329,7 @@ pub fn main(args: &SweepArgs) -> Outcome {
         "umbra {}",
         std::env::args().skip(1).collect::<Vec<_>>().join(" ")
     );
-    write_outputs(&out, &rows, &point.id(), &command, wall).map_err(|e| {
+    write_outputs(&out, &rows, &point, &command, wall).map_err(|e| {
         Error::new(format!(
             "cannot write the sweep's outputs under {}: {e}",
             out.display()
@@ -510,13 +516,14 @@ pub fn pareto(rows: &[Row]) -> Vec<bool> {
 fn write_outputs(
     out: &Path,
     rows: &[Row],
-    scene: &str,
+    point: &umbra_case::CasePoint,
     command: &str,
     wall: Duration,
 ) -> std::io::Result<()> {
+    let scene = &point.id();
     let front = pareto(rows);
     let mut csv = String::from(
-        "backend,size,format,filter,bias,frustum,status,clock,samples,shadow_ms,lit_ms,frame_ms,wall_ms,judged,false_shadow,false_light,error_pct,edge_mean_px,edge_max_px,pareto,reason\n",
+        "backend,size,format,filter,bias,frustum,status,clock,samples,shadow_ms,lit_ms,frame_ms,wall_ms,judged,false_shadow,false_light,error_pct,edge_mean_px,edge_max_px,aliasing_max,aliasing_mean,pareto,reason\n",
     );
     for (r, on_front) in rows.iter().zip(&front) {
         let t = &r.technique;
@@ -525,7 +532,7 @@ fn write_outputs(
             Ok(m) => {
                 let _ = writeln!(
                     csv,
-                    "{},{},{},{},{},{},ok,{},{},{:.3},{:.3},{:.3},{:.3},{},{},{},{:.4},{},{},{on_front},",
+                    "{},{},{},{},{},{},ok,{},{},{:.3},{:.3},{:.3},{:.3},{},{},{},{:.4},{},{},{},{},{on_front},",
                     r.backend,
                     t.size,
                     t.format,
@@ -543,13 +550,15 @@ fn write_outputs(
                     m.false_light,
                     r.error_pct().unwrap_or_default(),
                     opt(m.edge_mean_px),
-                    opt(m.edge_max_px)
+                    opt(m.edge_max_px),
+                    opt(m.aliasing_max),
+                    opt(m.aliasing_mean)
                 );
             }
             Err(e) => {
                 let _ = writeln!(
                     csv,
-                    "{},{},{},{},{},{},{},,,,,,,,,,,,,false,\"{}\"",
+                    "{},{},{},{},{},{},{},,,,,,,,,,,,,,,false,\"{}\"",
                     r.backend,
                     t.size,
                     t.format,
@@ -587,7 +596,10 @@ fn write_outputs(
         out.join("pareto.png"),
         umbra_report::pareto::png(&plotted, &title).map_err(std::io::Error::other)?,
     )?;
-    let section = section(rows, &front, scene, command, wall, out);
+    let mut section = section(rows, &front, scene, command, wall, out);
+    if super::sweep_cascades::matrix(&point.case).is_some() {
+        section += &super::sweep_cascades::section(rows, &point.case);
+    }
     std::fs::write(out.join("section.html"), &section)?;
     std::fs::write(
         out.join("report.html"),

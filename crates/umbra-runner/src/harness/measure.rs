@@ -34,6 +34,16 @@ pub struct Measured {
     pub edge_mean_px: Option<f64>,
     /// Edge displacement against the truth: max, px.
     pub edge_max_px: Option<f64>,
+    /// Perspective aliasing at the judged pixels (screen pixels per shadow-map texel, Lloyd
+    /// et al.'s measure): the worst pixel's.
+    #[serde(default)]
+    pub aliasing_max: Option<f64>,
+    /// Perspective aliasing: the mean over the judged pixels.
+    #[serde(default)]
+    pub aliasing_mean: Option<f64>,
+    /// The nearest and farthest judged view depths (where the aliasing was measured).
+    #[serde(default)]
+    pub view_depths: Option<(f64, f64)>,
 }
 
 /// Outcome of measuring one point.
@@ -96,6 +106,7 @@ pub fn measure(backend: &mut dyn Backend, point: CasePoint, repeat: u32) -> Meas
     let truth = crate::judge::judge_cache::truth(&prepared);
     let error = umbra_compare::truth_error(&frame, &truth);
     let edges = umbra_compare::edges::edge_displacement(&frame, &truth);
+    let aliasing = umbra_ref::truth::aliasing::perspective_aliasing(&prepared, &truth);
     Measurement::Done(Measured {
         clock: clock.into(),
         samples: timed.len() as u32,
@@ -113,6 +124,9 @@ pub fn measure(backend: &mut dyn Backend, point: CasePoint, repeat: u32) -> Meas
         false_light: error.all.false_light,
         edge_mean_px: edges.mean_px,
         edge_max_px: edges.max_px,
+        aliasing_max: aliasing.map(|a| a.max),
+        aliasing_mean: aliasing.map(|a| a.mean),
+        view_depths: aliasing.map(|a| a.depths),
     })
 }
 

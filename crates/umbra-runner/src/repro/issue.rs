@@ -174,10 +174,14 @@ fn issue_description(o: &mut String, facts: &Value, m: &Measured) {
         facts["triangles"],
         facts["frame"][0],
         facts["frame"][1],
-        if facts["faces"].as_u64().unwrap_or(1) == 6 {
-            "cube "
-        } else {
-            ""
+        match (
+            facts["cube"].as_bool(),
+            facts["faces"].as_u64().unwrap_or(1)
+        ) {
+            // Bundles written before cascades carry no "cube": six faces were a cube.
+            (Some(true), _) | (None, 6) => "cube ".to_string(),
+            (_, 1) => String::new(),
+            (_, n) => format!("{n}-cascade "),
         },
         facts["map"][0],
         facts["map"][1],

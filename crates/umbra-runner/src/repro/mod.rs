@@ -148,6 +148,7 @@ pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> Outcome {
         "frame": probes.frame,
         "map": point.case.shadow.size,
         "faces": prepared.light.views.len(),
+        "cube": prepared.light.is_cube(),
         "triangles": size.triangles,
         "crop": crop,
         "deterministic": same,

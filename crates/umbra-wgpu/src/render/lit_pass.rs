@@ -44,6 +44,7 @@ impl Gpu {
             source: wgpu::ShaderSource::Wgsl(shaders::lit(technique).into()),
         });
         let view_dimension = match (p.cube, manual) {
+            _ if p.layered => wgpu::TextureViewDimension::D2Array,
             (false, _) => wgpu::TextureViewDimension::D2,
             (true, false) => wgpu::TextureViewDimension::Cube,
             (true, true) => wgpu::TextureViewDimension::D2Array,
@@ -169,17 +170,27 @@ impl Gpu {
         let eye = run.camera.eye;
         let (slope_scale, slope_max) = b.slope.map_or((0.0, 0.0), |sl| (sl.scale, sl.max));
         let (ndl_scale, ndl_min) = b.n_dot_l.map_or((0.0, 0.0), |nl| (nl.scale, nl.min));
+        let cascade = run
+            .light
+            .cascading
+            .as_ref()
+            .map_or([[0.0; 4]; 3], |c| c.uniforms());
         let uniforms = uniform_buffer(
             &self.device,
             &self.queue,
             run.camera.view_proj(conv),
             &light,
             &tex,
-            [pos.x, pos.y, pos.z, 0.0],
-            [towards.x, towards.y, towards.z, 0.0],
-            [eye.x, eye.y, eye.z, 0.0],
-            [mw as f32, mh as f32, ndl_scale, ndl_min],
-            [b.constant, slope_scale, slope_max, b.normal_offset],
+            &[
+                [pos.x, pos.y, pos.z, 0.0],
+                [towards.x, towards.y, towards.z, 0.0],
+                [eye.x, eye.y, eye.z, 0.0],
+                [mw as f32, mh as f32, ndl_scale, ndl_min],
+                [b.constant, slope_scale, slope_max, b.normal_offset],
+                cascade[0],
+                cascade[1],
+                cascade[2],
+            ],
         );
         // The mip faults: level 0 alone, or the levels from 1 on.
         let (base_mip_level, mip_level_count) = match p.fault {

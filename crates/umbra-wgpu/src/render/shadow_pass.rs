@@ -3,6 +3,7 @@
 //! self-test's orientation faults), the dummy colour chain of `with_color`, one render pass
 //! per face and drawn level, and averaged mip levels after them.
 
+use umbra_case::fault::Fault;
 use umbra_case::format::{Attachments, Cull, DepthOrder, Mipmaps};
 
 use super::{Encoding, RunPlan, STRIDE, uniform_buffer, uniform_entry};
@@ -210,11 +211,7 @@ impl Gpu {
                 face_matrix(p, k, lw, lh),
                 &[],
                 &[],
-                [0.0; 4],
-                [0.0; 4],
-                [0.0; 4],
-                [0.0; 4],
-                [0.0; 4],
+                &[],
             );
             let bg = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("shadow face"),
@@ -382,7 +379,8 @@ impl Gpu {
 /// Face `k`'s view-projection at a `lw` × `lh` level, with the self-test's geometric faults
 /// and, on a cube, the convention's face flip.
 fn face_matrix(p: &RunPlan, k: u32, lw: u32, lh: u32) -> glam::Mat4 {
-    let mut m = p.run.light.views[k as usize].view_proj(p.conv);
+    let drawn = Fault::drawn_view(p.fault, k as usize, p.faces as usize, p.layered);
+    let mut m = p.run.light.views[drawn].view_proj(p.conv);
     // A face drawn with a wrong orientation (the self-test's Oriented fault), before the
     // convention's flip so that it moves the content as on GL.
     if let Some((wrong, _)) = p.fault.and_then(|f| f.face_mistake(k as usize, p.cube)) {
