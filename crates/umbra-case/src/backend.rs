@@ -119,7 +119,7 @@ impl Needs {
             mipmaps: s.mipmaps,
             depth_clamp: s.depth_clamp,
             array_layers: match &case.light {
-                Light::Directional(d) => d.cascades.map_or(0, |c| c.count),
+                Light::Directional(d) => d.cascades.as_ref().map_or(0, |c| c.count),
                 _ => 0,
             },
             map_size: s.size[0].max(s.size[1]),

@@ -287,6 +287,9 @@ pub enum Fault {
     /// view depth (the camera's z): off the view axis the distance is larger, so receivers
     /// near a split are looked up in the next cascade, whose map may not cover them.
     CascadeByDistance,
+    /// The lit pass switches cascades hard where the case asks for a blend band (a blend
+    /// weight that never leaves 0).
+    BlendIgnored,
     /// One face of the map is drawn with a wrong orientation: cube face `face` (0–5 in the
     /// GL order +x, −x, +y, −y, +z, −z), or the 2D map when `face` is `None`.
     Oriented {
@@ -311,7 +314,7 @@ impl Fault {
     /// three stand for them here (a wrong handedness on the +x face, the one the
     /// four-fold symmetric point-light cases could not see; a wrong up vector on the −y face;
     /// a transposed 2D map), and `umbra selftest --fault` or `--orientations` runs any.
-    pub const ALL: [Fault; 35] = [
+    pub const ALL: [Fault; 36] = [
         Fault::CompareFlipped,
         Fault::NoDivide,
         Fault::NoGuard,
@@ -344,6 +347,7 @@ impl Fault {
         Fault::ClampForced,
         Fault::LayerShift,
         Fault::CascadeByDistance,
+        Fault::BlendIgnored,
         Fault::Oriented {
             face: Some(0),
             orientation: Orientation::MirrorX,
@@ -403,6 +407,7 @@ impl Fault {
             Fault::ClampForced => "clamp-forced",
             Fault::LayerShift => "layer-shift",
             Fault::CascadeByDistance => "cascade-by-distance",
+            Fault::BlendIgnored => "blend-ignored",
             Fault::Oriented { face, orientation } => {
                 return match face {
                     Some(f) => format!("face{f}-{}", orientation.name()),

@@ -276,12 +276,14 @@ pub struct Directional {
 /// `cascades`: how a directional light's map is split along the camera's view depth.
 ///
 /// Slice k of `count` ends at the view depth s_k = λ·n·(f/n)^(k/N) + (1 − λ)·(n + (f − n)·k/N)
-/// (n, f the camera's near and far planes), the scheme of Zhang et al.'s parallel-split
-/// shadow maps ("practical" in GPU Gems 3, ch. 10): λ = 0 is `uniform`, λ = 1 `logarithmic`.
-/// Each slice's map is fitted in x and y to the light-view bounding box of the slice's eight
-/// corners (widened by 0.5 % a side), and in depth to the whole scene so that every caster
-/// between a receiver and the light is drawn.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+/// (n the camera's near plane, f the shadow `distance`), the scheme of Zhang et al.'s
+/// parallel-split shadow maps ("practical" in GPU Gems 3, ch. 10): λ = 0 is `uniform`, λ = 1
+/// `logarithmic`; or, with `fractions`, at s_k = n + a_k·(f − n) for the fractions `at` (as
+/// Unity's cascade splits and Godot's `split_1..3` give them). Each slice's map is fitted in x
+/// and y to the light-view bounding box of the slice's eight corners (widened by 0.5 % a
+/// side), and in depth to the whole scene so that every caster between a receiver and the
+/// light is drawn.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Cascades {
     /// Slices (array layers), 1 to [`crate::validate::MAX_CASCADES`].
@@ -292,6 +294,23 @@ pub struct Cascades {
     /// λ of the `practical` scheme, in [0, 1]. Default 0.5; only with `practical`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lambda: Option<f32>,
+    /// The `fractions` scheme's inner splits: `count − 1` increasing fractions in (0, 1) of
+    /// the range from the camera's near plane to `distance`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at: Option<Vec<f32>>,
+    /// The shadow distance: the view depth where the last cascade ends, beyond which
+    /// receivers read lit (engines' "max shadow distance"). Default: the camera's far plane.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distance: Option<f32>,
+    /// The blend band: the share of each cascade's depth range, at its far end, over which its
+    /// visibility fades linearly into the next cascade's (Unity's and Godot's blended splits).
+    /// In [0, 0.5]; default 0 (a hard switch).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub blend: f32,
+}
+
+fn is_zero(x: &f32) -> bool {
+    *x == 0.0
 }
 
 /// The split scheme of [`Cascades`].
@@ -306,6 +325,8 @@ pub enum SplitScheme {
     /// The blend of the two by `lambda`.
     #[default]
     Practical,
+    /// Explicit fractions of the range (`at`).
+    Fractions,
 }
 
 impl Cascades {
@@ -315,6 +336,7 @@ impl Cascades {
             SplitScheme::Uniform => 0.0,
             SplitScheme::Logarithmic => 1.0,
             SplitScheme::Practical => self.lambda.unwrap_or(0.5),
+            SplitScheme::Fractions => 0.0,
         }
     }
 }

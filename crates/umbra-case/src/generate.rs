@@ -165,11 +165,37 @@ impl Gen {
                     SplitScheme::Uniform,
                     SplitScheme::Logarithmic,
                     SplitScheme::Practical,
+                    SplitScheme::Fractions,
                 ]);
+                let count = self.rng.int(1, 4);
+                let at = (split == SplitScheme::Fractions).then(|| {
+                    (1..count)
+                        .map(|k| {
+                            let jitter = self.rng.range(-0.3, 0.3, 2);
+                            round((f64::from(k) + f64::from(jitter)) / f64::from(count), 3)
+                        })
+                        .collect()
+                });
+                let lambda = (split == SplitScheme::Practical).then(|| self.rng.range(0.0, 1.0, 2));
+                let (near, far) = (case.camera.near, case.camera.far);
+                let distance = self.rng.chance(0.3).then(|| {
+                    round(
+                        f64::from(near + (far - near) * self.rng.range(0.3, 0.9, 2)),
+                        2,
+                    )
+                });
+                let blend = if self.rng.chance(0.3) {
+                    self.rng.range(0.05, 0.3, 2)
+                } else {
+                    0.0
+                };
                 d.cascades = Some(Cascades {
-                    count: self.rng.int(1, 4),
+                    count,
                     split,
-                    lambda: (split == SplitScheme::Practical).then(|| self.rng.range(0.0, 1.0, 2)),
+                    lambda,
+                    at,
+                    distance,
+                    blend,
                 });
                 d.ortho = None;
                 d.fit = None;
@@ -781,8 +807,14 @@ mod tests {
                     seen.insert(format!("bias {form}"));
                 }
                 if let Light::Directional(d) = &case.light {
-                    if let Some(c) = d.cascades {
+                    if let Some(c) = &d.cascades {
                         seen.insert(format!("cascades {:?}", c.split));
+                        if c.blend > 0.0 {
+                            seen.insert("cascade blend".into());
+                        }
+                        if c.distance.is_some() {
+                            seen.insert("cascade distance".into());
+                        }
                     }
                 }
                 seen.insert(format!(
@@ -814,11 +846,11 @@ mod tests {
             }
         }
         // 4 formats, 3 filters, 2 compares, 3 culls, 2 orders, 2 attachments, 4 outside,
-        // 2 guards, 2 depth orders, 2 depth clamps, 7 bias entries, 3 split schemes, 3 lights,
-        // 2 shadings, 4 objects, sweep, offset.
+        // 2 guards, 2 depth orders, 2 depth clamps, 7 bias entries, 4 split schemes, a
+        // cascade blend and distance, 3 lights, 2 shadings, 4 objects, sweep, offset.
         assert_eq!(
             seen.len(),
-            4 + 3 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 7 + 3 + 3 + 2 + 4 + 2,
+            4 + 3 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 7 + 4 + 2 + 3 + 2 + 4 + 2,
             "{seen:?}"
         );
     }

@@ -132,8 +132,13 @@ pub struct LightSetup {
 pub struct Cascading {
     /// d = `depth_row` · (p, 1): the camera view matrix's third row, negated.
     pub depth_row: Vec4,
-    /// s_0 (the camera's near plane) to s_N (its far plane); cascade k covers [s_k, s_{k+1}].
+    /// s_0 (the camera's near plane) to s_N (the shadow distance); cascade k covers
+    /// [s_k, s_{k+1}].
     pub splits: Vec<f32>,
+    /// The blend band's share of a cascade's range (0: none).
+    pub blend: f32,
+    /// Receivers beyond s_N read lit (a shadow distance was given).
+    pub lit_beyond: bool,
 }
 
 impl Cascading {
@@ -147,6 +152,42 @@ impl Cascading {
             .unwrap_or(0)
     }
 
+    /// The last split, s_N.
+    pub fn end(&self) -> f32 {
+        self.splits[self.splits.len() - 1]
+    }
+
+    /// Whether view depth `d` lies beyond the shadow distance (lit).
+    pub fn beyond(&self, d: f32) -> bool {
+        self.lit_beyond && d > self.end()
+    }
+
+    /// The weight of cascade k + 1 at view depth `d` in cascade k's blend band, in f32 as
+    /// the lit shaders compute it: t = (d − (s_{k+1} − b·w)) / (b·w), w = s_{k+1} − s_k,
+    /// clamped to 1; `None` outside the band, without a band, or in the last cascade.
+    pub fn blend_weight(&self, k: usize, d: f32) -> Option<f32> {
+        if self.blend <= 0.0 || k + 2 >= self.splits.len() {
+            return None;
+        }
+        let (lo, hi) = (self.splits[k], self.splits[k + 1]);
+        let band = self.blend * (hi - lo);
+        let t = (d - (hi - band)) / band;
+        (t > 0.0).then_some(t.min(1.0))
+    }
+
+    /// The blend weights of cascade k + 1 that view depths within `reach` of `d` give, as
+    /// an interval (0 where some lie outside the band), or `None` where none lies in it.
+    pub fn blend_range(&self, k: usize, d: f64, reach: f64) -> Option<(f64, f64)> {
+        if self.blend <= 0.0 || k + 2 >= self.splits.len() {
+            return None;
+        }
+        let (lo, hi) = (f64::from(self.splits[k]), f64::from(self.splits[k + 1]));
+        let band = f64::from(self.blend) * (hi - lo);
+        let t = |x: f64| ((x - (hi - band)) / band).clamp(0.0, 1.0);
+        let (a, b) = (t(d - reach), t(d + reach));
+        (b > 0.0).then_some((a, b))
+    }
+
     /// The view depth of `p` in f32, as the lit shaders compute it.
     pub fn depth(&self, p: Vec3) -> f32 {
         self.depth_row.truncate().dot(p) + self.depth_row.w
@@ -157,7 +198,8 @@ impl Cascading {
         self.depth_row.truncate().as_dvec3().dot(p) + f64::from(self.depth_row.w)
     }
 
-    /// The lit shaders' cascade uniforms: the depth row, then s_0 … s_7 (zero past s_N).
+    /// The lit shaders' cascade uniforms: the depth row, then s_0 … s_7 (zero past s_N;
+    /// s_N is at most s_6).
     pub fn uniforms(&self) -> [[f32; 4]; 3] {
         let mut split = [0.0f32; 8];
         for (k, s) in self.splits.iter().take(8).enumerate() {
@@ -182,9 +224,11 @@ impl Cascading {
     }
 }
 
-/// The split depths s_0 = `near` … s_N = `far` of `c`: s_k = λ·n·(f/n)^(k/N) +
-/// (1 − λ)·(n + (f − n)·k/N), in f64, the ends exact.
+/// The split depths s_0 = `near` … s_N = f of `c`, f its shadow distance or the camera's
+/// `far`: s_k = λ·n·(f/n)^(k/N) + (1 − λ)·(n + (f − n)·k/N), or n + a_k·(f − n) for
+/// explicit fractions, in f64, the ends exact.
 pub fn cascade_splits(c: &Cascades, near: f32, far: f32) -> Vec<f32> {
+    let far = c.distance.unwrap_or(far);
     let (n, f, count) = (f64::from(near), f64::from(far), c.count.max(1));
     let lambda = f64::from(c.weight());
     (0..=count)
@@ -194,6 +238,9 @@ pub fn cascade_splits(c: &Cascades, near: f32, far: f32) -> Vec<f32> {
             }
             if k == count {
                 return far;
+            }
+            if let Some(a) = c.at.as_ref().and_then(|at| at.get(k as usize - 1)) {
+                return (n + f64::from(*a) * (f - n)) as f32;
             }
             let x = f64::from(k) / f64::from(count);
             let log = n * crate::math::pow(f / n, x);
@@ -397,7 +444,8 @@ pub fn cube_coords_on(d: glam::DVec3, f: usize) -> (f64, f64) {
 
 /// A cascaded directional light: one orthographic face per slice of the camera's view
 /// depths, fitted in x and y to the slice's corners (widened by 0.5 % of their extent a
-/// side) and in depth to the scene (every caster of the slice's receivers is drawn).
+/// side; a slice after a blend band starts where the band does) and in depth to the scene
+/// (every caster of the slice's receivers is drawn).
 fn cascaded(
     kind: LightKind,
     view: Mat4,
@@ -410,11 +458,23 @@ fn cascaded(
     let to_light = view.as_dmat4() * camera.view.as_dmat4().inverse();
     let tan_y = crate::math::tan(0.5 * f64::from(camera.fov_y));
     let tan_x = tan_y * f64::from(camera.size[0]) / f64::from(camera.size[1]);
+    // With a blend band, cascade k + 1 is fitted from where cascade k's band starts (as
+    // Bevy's cascade overlap does), so that the band's receivers lie in both maps.
+    let starts: Vec<f64> = (0..splits.len() - 1)
+        .map(|k| match k {
+            0 => f64::from(splits[0]),
+            _ => {
+                let (a, b) = (f64::from(splits[k - 1]), f64::from(splits[k]));
+                b - f64::from(c.blend) * (b - a)
+            }
+        })
+        .collect();
     let views = splits
         .windows(2)
-        .map(|s| {
+        .zip(&starts)
+        .map(|(s, start)| {
             let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-            for d in [f64::from(s[0]), f64::from(s[1])] {
+            for d in [*start, f64::from(s[1])] {
                 for (a, b) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)] {
                     let q = to_light.transform_point3(DVec3::new(a * tan_x * d, b * tan_y * d, -d));
                     lo = lo.min(q);
@@ -443,6 +503,8 @@ fn cascaded(
         cascading: Some(Cascading {
             depth_row: -r,
             splits,
+            blend: c.blend,
+            lit_beyond: c.distance.is_some(),
         }),
     }
 }
@@ -477,6 +539,9 @@ mod tests {
             count: 4,
             split,
             lambda,
+            at: None,
+            distance: None,
+            blend: 0.0,
         };
         cascade_splits(&c, 1.0, 16.0)
     }
@@ -493,6 +558,15 @@ mod tests {
             splits(SplitScheme::Logarithmic, None),
             [1.0, 2.0, 4.0, 8.0, 16.0]
         );
+        let c = Cascades {
+            count: 4,
+            split: SplitScheme::Fractions,
+            lambda: None,
+            at: Some(vec![0.1, 0.2, 0.5]),
+            distance: Some(11.0),
+            blend: 0.0,
+        };
+        assert_eq!(cascade_splits(&c, 1.0, 16.0), [1.0, 2.0, 3.0, 6.0, 11.0]);
         let p = splits(SplitScheme::Practical, Some(0.5));
         for (k, want) in [1.0, 3.375, 6.25, 10.125, 16.0].iter().enumerate() {
             assert!((p[k] - want).abs() < 1e-5, "{p:?}");
@@ -505,7 +579,15 @@ mod tests {
         let c = Cascading {
             depth_row: Vec4::new(0.0, 0.0, -1.0, 0.0),
             splits: vec![1.0, 2.0, 4.0],
+            blend: 0.25,
+            lit_beyond: true,
         };
+        // The band is the last quarter of [1, 2]: from 1.75.
+        assert_eq!(c.blend_weight(0, 1.5), None);
+        assert_eq!(c.blend_weight(0, 1.875), Some(0.5));
+        assert_eq!(c.blend_weight(1, 3.9), None, "the last cascade has no band");
+        assert_eq!(c.blend_range(0, 1.875, 0.125), Some((0.0, 1.0)));
+        assert!(c.beyond(4.001) && !c.beyond(4.0));
         assert_eq!(c.cascade_of(2.0), 0);
         assert_eq!(c.cascade_of(2.000_001), 1);
         assert_eq!(c.cascades_near(2.0, 1e-6), [0, 1]);

@@ -14,6 +14,7 @@
 //! the face matrices, WGSL's cube rows) returns an empty string there.
 
 use crate::format::{DepthOrder, Outside, Shading, ShadingModel};
+pub use crate::technique::CascadeSelect;
 use crate::technique::{CompareOp, Coordinate, Taps, Technique};
 
 /// Uniforms that lines written here read, by role.
@@ -67,11 +68,16 @@ pub trait Dialect {
     fn lookup_start(&self, offset: &str) -> String;
     /// `f`: the face (`cube_face` of the direction from the light, or 0).
     fn face(&self, cube: bool) -> &'static str;
-    /// `f`: the cascade of `p` among `count`, by its view depth (the camera view matrix's
-    /// third row, negated, against the split depths), or by its distance from the eye
-    /// (`by_distance`, the self-test's CascadeByDistance); a depth on a split goes to the
-    /// nearer cascade, as `umbra_case::light::Cascading::cascade_of` decides.
-    fn cascade(&self, count: usize, by_distance: bool) -> String;
+    /// Opens `lookup(p, n, f)`, a layered map's lookup in layer `f` of the already offset
+    /// point `p`.
+    fn layer_lookup_start(&self) -> &'static str;
+    /// `visibility(p, n)` of a cascaded light: moves `p` by `offset` along `n`, takes its
+    /// view depth d (the camera view matrix's third row, negated), reads lit beyond the
+    /// shadow distance, picks the cascade `f` (a depth on a split goes to the nearer one, as
+    /// `umbra_case::light::Cascading::cascade_of` decides) with its range [lo, hi], returns
+    /// `lookup(p, n, f)`, blended in the band into `lookup(p, n, f + 1)` as
+    /// `Cascading::blend_weight` weighs it.
+    fn cascaded_visibility(&self, offset: &str, c: &CascadeSelect) -> String;
     /// `c` = (u, v, depth, w) from `p` (reads `bias_matrix` and `left_out`).
     fn coordinate(&self, c: &Coordinate) -> &'static str;
     /// The bias matrix applied to `c` again.
@@ -165,10 +171,11 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
         1.0 => offset.to_string(),
         k => format!("({k} * {offset})"),
     };
-    *s += &d.lookup_start(&offset);
-    if t.layered() {
-        *s += &d.cascade(t.cascades, t.cascade_by_distance());
+    let cascades = t.cascade_select();
+    if cascades.is_some() {
+        *s += d.layer_lookup_start();
     } else {
+        *s += &d.lookup_start(&offset);
         *s += d.face(t.cube);
     }
     let c = t.coordinate();
@@ -277,6 +284,9 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
         }
     }
     *s += "}\n";
+    if let Some(c) = cascades {
+        *s += &d.cascaded_visibility(&offset, &c);
+    }
 }
 
 /// The guard, the outside test and the beyond-far test: each returns lit.

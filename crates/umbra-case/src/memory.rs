@@ -98,7 +98,7 @@ pub fn estimate(case: &Case, triangles: usize) -> Estimate {
     let [sw, sh] = case.shadow.size;
     let faces: u64 = match &case.light {
         Light::Point(_) => 6,
-        Light::Directional(d) => d.cascades.map_or(1, |c| u64::from(c.count)),
+        Light::Directional(d) => d.cascades.as_ref().map_or(1, |c| u64::from(c.count)),
         Light::Spot(_) => 1,
     };
     let cube = matches!(case.light, Light::Point(_));

@@ -59,7 +59,7 @@ pub const EXEMPLARS: &[&str] = &[
     r#"{"name":"e","about":"e","scene":{"objects":[{"plane":{"point":[0,0,0],"half_extent":1}}]},
         "camera":{"eye":[0,1,1],"target":[0,0,0]},
         "light":{"directional":{"azimuth_deg":0,"elevation_deg":45,
-                 "cascades":{"count":3,"split":"practical","lambda":0.5}}}}"#,
+                 "cascades":{"count":3,"split":"practical","lambda":0.5,"at":[0.2,0.5,0.8],"distance":5,"blend":0.1}}}}"#,
 ];
 
 /// The exemplars as JSON with every default filled in, as a case point's JSON is.

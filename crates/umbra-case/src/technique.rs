@@ -32,6 +32,10 @@ pub struct Technique {
     /// Cascades (the layers of a 2D array, one chosen per receiver by its view depth), or 0
     /// for a single map.
     pub cascades: usize,
+    /// A cascaded light reads lit beyond its shadow distance.
+    pub cascade_beyond: bool,
+    /// A cascaded light's blend band (0: none).
+    pub cascade_blend: f32,
     /// The case's filter.
     pub filter: Filter,
     /// Who compares: the sampler or the shader (see [`Technique::with_manual_compare`]).
@@ -62,6 +66,27 @@ pub struct Technique {
     pub shading: Shading,
     /// The self-test's fault: read by the methods below and nowhere else.
     fault: Option<Fault>,
+}
+
+/// How a cascaded light's lit pass picks (and blends) its cascade.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CascadeSelect {
+    /// Cascades.
+    pub count: usize,
+    /// By the distance from the eye instead of the view depth (CascadeByDistance).
+    pub by_distance: bool,
+    /// Lit beyond the last split (a shadow distance).
+    pub beyond: bool,
+    /// The blend band's share of a cascade's range (0: none).
+    pub blend: f32,
+}
+
+impl CascadeSelect {
+    /// The blend band's share as a literal, where there is a band.
+    pub fn blend_literal(&self) -> Option<String> {
+        // Nine decimals, as every float the lit shaders are written with.
+        (self.blend > 0.0 && self.count > 1).then(|| format!("{:.9}", self.blend))
+    }
 }
 
 /// A depth compare, `reference OP stored` (true is lit).
@@ -163,6 +188,8 @@ impl Technique {
                 .cascading
                 .as_ref()
                 .map_or(0, |_| run.light.views.len()),
+            cascade_beyond: run.light.cascading.as_ref().is_some_and(|c| c.lit_beyond),
+            cascade_blend: run.light.cascading.as_ref().map_or(0.0, |c| c.blend),
             filter: s.filter,
             compare: s.compare,
             clamp_reference: s.compare == Compare::Hardware && s.format.is_fixed(),
@@ -270,6 +297,21 @@ impl Technique {
     /// The map is a 2D array, one layer per cascade.
     pub fn layered(&self) -> bool {
         self.cascades > 0
+    }
+
+    /// How the cascade is picked and blended, for a cascaded light (BlendIgnored drops the
+    /// band).
+    pub fn cascade_select(&self) -> Option<CascadeSelect> {
+        self.layered().then_some(CascadeSelect {
+            count: self.cascades,
+            by_distance: self.cascade_by_distance(),
+            beyond: self.cascade_beyond,
+            blend: if self.is(Fault::BlendIgnored) {
+                0.0
+            } else {
+                self.cascade_blend
+            },
+        })
     }
 
     /// The cascade is chosen by the receiver's distance from the eye instead of its view

@@ -206,7 +206,7 @@ impl Validator<'_> {
         }
         self.scene(&c.scene);
         self.camera(&c.camera);
-        self.light(&c.light, &c.shadow);
+        self.light(&c.light, &c.shadow, &c.camera);
         self.shadow(&c.shadow);
         self.shading(&c.shading);
         self.twins(&c.expect.twins);
@@ -398,10 +398,10 @@ impl Validator<'_> {
         }
     }
 
-    fn light(&mut self, l: &Light, shadow: &Shadow) {
+    fn light(&mut self, l: &Light, shadow: &Shadow, camera: &Camera) {
         match l {
             Light::Directional(d) => {
-                self.directional(d);
+                self.directional(d, camera);
                 if d.cascades.is_some() && shadow.mipmaps.is_some() {
                     self.err(
                         "shadow.mipmaps",
@@ -439,7 +439,7 @@ impl Validator<'_> {
         }
     }
 
-    fn directional(&mut self, d: &Directional) {
+    fn directional(&mut self, d: &Directional, camera: &Camera) {
         let p = "light.directional";
         let by_angles = d.azimuth_deg.is_some() || d.elevation_deg.is_some();
         match (d.position, by_angles) {
@@ -484,7 +484,7 @@ impl Validator<'_> {
             ),
         }
         if let Some(c) = &d.cascades {
-            self.cascades(p, d, c);
+            self.cascades(p, d, c, camera);
             return;
         }
         match (&d.ortho, &d.fit) {
@@ -530,7 +530,7 @@ impl Validator<'_> {
     }
 
     /// Cascades fit their own bounds, one set per slice of the camera's view depths.
-    fn cascades(&mut self, p: &str, d: &Directional, c: &Cascades) {
+    fn cascades(&mut self, p: &str, d: &Directional, c: &Cascades, camera: &Camera) {
         let cp = format!("{p}.cascades");
         if d.ortho.is_some() || d.fit.is_some() {
             let which = if d.ortho.is_some() { "ortho" } else { "fit" };
@@ -553,12 +553,69 @@ impl Validator<'_> {
                 format!("λ blends the logarithmic (1) and uniform (0) splits, got {l}"),
                 "use a value in [0, 1], e.g. 0.5",
             ),
-            (SplitScheme::Uniform | SplitScheme::Logarithmic, Some(_)) => self.err(
+            (SplitScheme::Practical, _) | (_, None) => {}
+            (_, Some(_)) => self.err(
                 format!("{cp}.lambda"),
                 "lambda belongs to the practical scheme only",
                 "remove lambda, or use \"split\": \"practical\"",
             ),
-            _ => {}
+        }
+        self.cascade_fractions(&cp, c);
+        if let Some(f) = c.distance {
+            if !(f.is_finite() && f > camera.near && f <= camera.far) {
+                self.err(
+                    format!("{cp}.distance"),
+                    format!(
+                        "the shadow distance must lie beyond the camera's near plane ({}) and not beyond its far plane ({}), got {f}",
+                        camera.near, camera.far
+                    ),
+                    "use a view depth in that range, or remove distance for the far plane",
+                );
+            }
+        }
+        if !(0.0..=0.5).contains(&c.blend) {
+            self.err(
+                format!("{cp}.blend"),
+                format!(
+                    "the blend band is a share of a cascade's range, at most half of it, got {}",
+                    c.blend
+                ),
+                "use a value in [0, 0.5], e.g. 0.1",
+            );
+        }
+    }
+
+    /// `at`: with `fractions` only, `count − 1` increasing values in (0, 1).
+    fn cascade_fractions(&mut self, cp: &str, c: &Cascades) {
+        match (c.split, &c.at) {
+            (SplitScheme::Fractions, None) => self.err(
+                format!("{cp}.at"),
+                "the fractions scheme needs its split fractions",
+                format!(
+                    "give at: {} increasing fractions in (0, 1), e.g. [0.1, 0.2, 0.5] for 4 cascades",
+                    c.count.saturating_sub(1)
+                ),
+            ),
+            (SplitScheme::Fractions, Some(at)) => {
+                let inner = c.count.saturating_sub(1) as usize;
+                let rising = at.windows(2).all(|w| w[0] < w[1]);
+                if at.len() != inner || !rising || at.iter().any(|a| !(*a > 0.0 && *a < 1.0)) {
+                    self.err(
+                        format!("{cp}.at"),
+                        format!(
+                            "{} cascades need {inner} increasing fractions in (0, 1), got {at:?}",
+                            c.count
+                        ),
+                        "list the inner splits as fractions of the range, e.g. [0.1, 0.2, 0.5]",
+                    );
+                }
+            }
+            (_, Some(_)) => self.err(
+                format!("{cp}.at"),
+                "split fractions belong to the fractions scheme only",
+                "remove at, or use \"split\": \"fractions\"",
+            ),
+            (_, None) => {}
         }
     }
 

@@ -673,6 +673,41 @@ fn cascades_validate_and_name_the_field_that_breaks_them() {
         "shadow.mipmaps",
         "cascade array",
     );
+    let ok = cascaded(
+        json!({ "count": 3, "split": "fractions", "at": [0.2, 0.5], "distance": 8, "blend": 0.5 }),
+    );
+    let r = load_str(&ok.to_string(), Path::new("c.json"));
+    assert!(r.is_ok(), "{r:?}");
+    assert_error(
+        cascaded(json!({ "count": 3, "split": "fractions" })),
+        "light.directional.cascades.at",
+        "needs its split fractions",
+    );
+    for at in [json!([0.5]), json!([0.5, 0.2]), json!([0.2, 1.0])] {
+        assert_error(
+            cascaded(json!({ "count": 3, "split": "fractions", "at": at })),
+            "light.directional.cascades.at",
+            "increasing fractions",
+        );
+    }
+    assert_error(
+        cascaded(json!({ "count": 3, "at": [0.2, 0.5] })),
+        "light.directional.cascades.at",
+        "fractions scheme only",
+    );
+    // The base camera sees from its default near plane (0.1) to its far plane (100).
+    for distance in [0.05, 101.0] {
+        assert_error(
+            cascaded(json!({ "count": 2, "distance": distance })),
+            "light.directional.cascades.distance",
+            "beyond the camera's near plane",
+        );
+    }
+    assert_error(
+        cascaded(json!({ "count": 2, "blend": 0.6 })),
+        "light.directional.cascades.blend",
+        "at most half",
+    );
 }
 
 /// Two sweep points with one name (a value repeated or written two ways) would be two runs,

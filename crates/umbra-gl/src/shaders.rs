@@ -23,7 +23,7 @@ use std::fmt::Write as _;
 
 use umbra_case::Technique;
 use umbra_case::format::{BiasMatrix, Outside, Shading};
-use umbra_case::lit_shader::{self, Dialect, Uniform};
+use umbra_case::lit_shader::{self, CascadeSelect, Dialect, Uniform};
 use umbra_case::technique::{CompareOp, Coordinate, CoordinateStep};
 
 use crate::api::Api;
@@ -347,16 +347,40 @@ impl Dialect for Glsl {
         }
     }
 
+    fn layer_lookup_start(&self) -> &'static str {
+        "float lookup(vec3 p, vec3 n, int f) {\n"
+    }
+
     /// An if-chain on constant indices (GLSL ES's rule for uniform arrays in fragments).
-    fn cascade(&self, count: usize, by_distance: bool) -> String {
-        let mut s = String::from(if by_distance {
-            "  float d = length(p - u_eye);\n  int f = 0;\n"
+    fn cascaded_visibility(&self, offset: &str, c: &CascadeSelect) -> String {
+        let n = c.count;
+        let mut s = format!("float visibility(vec3 p, vec3 n) {{\n  p = p + n * {offset};\n");
+        s.push_str(if c.by_distance {
+            "  float d = length(p - u_eye);\n"
         } else {
-            "  float d = dot(u_view_row.xyz, p) + u_view_row.w;\n  int f = 0;\n"
+            "  float d = dot(u_view_row.xyz, p) + u_view_row.w;\n"
         });
-        for k in 1..count {
-            let _ = writeln!(s, "  if (d > u_split[{k}]) f = {k};");
+        if c.beyond {
+            let _ = writeln!(s, "  if (d > u_split[{n}]) return 1.0;");
         }
+        s.push_str("  int f = 0;\n  float lo = u_split[0];\n  float hi = u_split[1];\n");
+        for k in 1..n {
+            let _ = writeln!(
+                s,
+                "  if (d > u_split[{k}]) {{ f = {k}; lo = u_split[{k}]; hi = u_split[{}]; }}",
+                k + 1
+            );
+        }
+        s.push_str("  float v = lookup(p, n, f);\n");
+        if let Some(b) = c.blend_literal() {
+            let _ = write!(
+                s,
+                "  float band = {b} * (hi - lo);\n  float t = (d - (hi - band)) / band;\n\
+                   if (f < {} && t > 0.0) v = mix(v, lookup(p, n, f + 1), min(t, 1.0));\n",
+                n - 1
+            );
+        }
+        s.push_str("  return v;\n}\n");
         s
     }
 

@@ -99,7 +99,7 @@ pub fn explain(
         Judged {
             frame,
             legal,
-            quantum: lookup::quantum(&run.case().shadow),
+            quantum: lookup::quantum(&run.case().shadow, &run.light),
             profile,
             map,
         },

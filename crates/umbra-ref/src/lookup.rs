@@ -39,6 +39,7 @@ use glam::{DVec2, Vec3};
 use umbra_case::format::{
     BeyondFar, BiasMatrix, Compare, Filter, LightVector, MipFilter, Outside, Shadow,
 };
+use umbra_case::light::Cascading;
 use umbra_case::{Convention, LightKind, LightSetup, LookupMatrices, Profile, ShadowCoord, Spec};
 
 use crate::rounding::{floor_f32, floor_i64};
@@ -149,11 +150,14 @@ impl Legal {
 }
 
 /// The step between the values a filter can produce: NEAREST returns 0 or 1, PCF N sums of
-/// N² results over N², LINEAR anything (0); a blend of two mip levels anything too.
-pub fn quantum(shadow: &Shadow) -> f32 {
-    if shadow
-        .mipmaps
-        .is_some_and(|m| m.filter == MipFilter::Linear)
+/// N² results over N², LINEAR anything (0); a blend of two mip levels anything too, and so
+/// does a blend of two cascades (`light`'s blend band).
+pub fn quantum(shadow: &Shadow, light: &LightSetup) -> f32 {
+    let blends_cascades = light.cascading.as_ref().is_some_and(|c| c.blend > 0.0);
+    if blends_cascades
+        || shadow
+            .mipmaps
+            .is_some_and(|m| m.filter == MipFilter::Linear)
     {
         return 0.0;
     }
@@ -334,9 +338,33 @@ impl Lookup<'_> {
 
     /// The shadow term at world point `p` with unit normal `n`: 1 lit .. 0 shadowed.
     pub fn visibility(&self, p: Vec3, n: Vec3) -> f32 {
+        if let Some(c) = &self.light.cascading {
+            return self.cascaded_visibility(c, p, n);
+        }
         match self.setup(p, n) {
             None => 1.0,
             Some(st) => self.filter_value(&st),
+        }
+    }
+
+    /// [`Lookup::visibility`] of a cascaded light, in the lit shaders' steps and f32
+    /// arithmetic: the view depth of the offset point, lit beyond the shadow distance, the
+    /// cascade's lookup, blended in the band into the next cascade's as `mix` does,
+    /// v·(1 − t) + v'·t.
+    fn cascaded_visibility(&self, c: &Cascading, p: Vec3, n: Vec3) -> f32 {
+        let d = c.depth(p + n * self.shadow.bias.normal_offset);
+        if c.beyond(d) {
+            return 1.0;
+        }
+        let f = c.cascade_of(f64::from(d));
+        let on = |face: usize| match self.setup_on(p, n, face) {
+            None => 1.0,
+            Some(st) => self.filter_value(&st),
+        };
+        let v = on(f);
+        match c.blend_weight(f, d) {
+            Some(t) => v * (1.0 - t) + on(f + 1) * t,
+            None => v,
         }
     }
 
@@ -683,8 +711,13 @@ impl Lookup<'_> {
     }
 
     fn setup(&self, p: Vec3, n: Vec3) -> Option<Setup> {
+        self.setup_on(p, n, self.probe(p, n).0)
+    }
+
+    /// [`Lookup::setup`] in face `face`.
+    fn setup_on(&self, p: Vec3, n: Vec3, face: usize) -> Option<Setup> {
         let s = self.shadow;
-        let (face, c, mut reference) = self.probe(p, n);
+        let (c, mut reference) = self.probe_on(p, n, face);
         if (s.guard_behind_light && c.w <= 0.0)
             || self.outside_lit(c.u, c.v)
             || self.beyond_far(c.depth)
@@ -841,6 +874,9 @@ impl Lookup<'_> {
     /// reaches another cube face, each face's share is judged in that face's projection and
     /// the intervals are hulled.
     fn legal_at(&self, p: Vec3, n: Vec3, moves: &[Vec3]) -> Legal {
+        if let Some(c) = &self.light.cascading {
+            return self.legal_cascaded(c, p, n, moves);
+        }
         let face = self.probe(p, n).0;
         let mut faces = vec![face];
         if self.cube() {
@@ -853,11 +889,6 @@ impl Lookup<'_> {
                 }
             }
         }
-        for f in self.cascades_within(p, n, moves) {
-            if !faces.contains(&f) {
-                faces.push(f);
-            }
-        }
         let mut out: Option<Legal> = None;
         for f in faces {
             let l = self.legal_on(p, n, moves, f);
@@ -866,20 +897,49 @@ impl Lookup<'_> {
         out.unwrap_or(Legal::LIT)
     }
 
-    /// A cascaded light's cascades that may serve `p`: those whose view-depth range lies
-    /// within the region of moves or the shader's arithmetic of the view depth d = r · (p, 1)
-    /// (four terms, γ₄ of their magnitudes: GLSL's and WGSL's dot products round each product
-    /// and sum, or fuse them) of d. A receiver on a split may be looked up in either cascade
-    /// (both maps cover it); nothing else is free.
-    fn cascades_within(&self, p: Vec3, n: Vec3, moves: &[Vec3]) -> Vec<usize> {
-        let Some(c) = &self.light.cascading else {
-            return Vec::new();
-        };
+    /// [`Lookup::legal_at`] for a cascaded light. Every cascade whose view-depth range lies
+    /// within reach of the offset point's view depth d = r · (p, 1) may serve it: the reach
+    /// is the region of moves and the shader's arithmetic of d (four terms, γ₄ of their
+    /// magnitudes: GLSL's and WGSL's dot products round each product and sum, or fuse them).
+    /// A receiver on a split may be looked up in either cascade (both maps cover it). In a
+    /// blend band the value is (1 − t)·v + t·v' for the weight t of every depth within reach
+    /// ([`Cascading::blend_range`]), v and v' anywhere in their cascades' intervals; linear in
+    /// t, its extremes are at the ends of t's range. Within reach of the shadow distance it
+    /// may also read lit, and beyond it does.
+    fn legal_cascaded(&self, c: &Cascading, p: Vec3, n: Vec3, moves: &[Vec3]) -> Legal {
         let q = p + n * self.shadow.bias.normal_offset;
         let row = c.depth_row.truncate();
         let spread: f64 = moves.iter().map(|m| f64::from(row.dot(*m).abs())).sum();
         let terms = f64::from((row * q).abs().element_sum() + c.depth_row.w.abs());
-        c.cascades_near(f64::from(c.depth(q)), spread + gamma(4.0) * terms)
+        let reach = spread + gamma(4.0) * terms;
+        let d = f64::from(c.depth(q));
+        let end = f64::from(c.end());
+        if c.lit_beyond && d - reach > end {
+            note(|| "    beyond the shadow distance: lit".into());
+            return Legal::LIT;
+        }
+        let mut out: Option<Legal> = None;
+        for f in c.cascades_near(d, reach) {
+            let mut l = self.legal_on(p, n, moves, f);
+            if let Some((t0, t1)) = c.blend_range(f, d, reach) {
+                let next = self.legal_on(p, n, moves, f + 1);
+                let at =
+                    |t: f64, a: f32, b: f32| ((1.0 - t) * f64::from(a) + t * f64::from(b)) as f32;
+                l = Legal {
+                    lo: at(t0, l.lo, next.lo).min(at(t1, l.lo, next.lo)),
+                    hi: at(t0, l.hi, next.hi).max(at(t1, l.hi, next.hi)),
+                    flags: l.flags | next.flags,
+                };
+                note(|| format!("    blended into cascade {} with t in [{t0}, {t1}]", f + 1));
+            }
+            out = Some(out.map_or(l, |o| o.hull(l)));
+        }
+        let l = out.unwrap_or(Legal::LIT);
+        if c.lit_beyond && d + reach > end {
+            l.hull(Legal::LIT)
+        } else {
+            l
+        }
     }
 
     /// [`Lookup::legal_at`] on face `face` (the only face of a 2D map).

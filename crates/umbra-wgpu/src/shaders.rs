@@ -19,7 +19,7 @@ use std::fmt::Write as _;
 
 use umbra_case::Technique;
 use umbra_case::format::{BiasMatrix, Outside, Shading};
-use umbra_case::lit_shader::{self, Dialect, Uniform};
+use umbra_case::lit_shader::{self, CascadeSelect, Dialect, Uniform};
 use umbra_case::technique::{CompareOp, Coordinate, CoordinateStep};
 
 /// The uniform block shared by both passes (std140-compatible layout, 16-byte vectors).
@@ -195,15 +195,48 @@ impl Dialect for Wgsl {
         }
     }
 
-    fn cascade(&self, count: usize, by_distance: bool) -> String {
-        let mut s = String::from(if by_distance {
-            "  let d = length(p - u.eye.xyz);\n  var f = 0;\n"
+    fn layer_lookup_start(&self) -> &'static str {
+        "fn lookup(p: vec3<f32>, n: vec3<f32>, f: i32) -> f32 {\n"
+    }
+
+    fn cascaded_visibility(&self, offset: &str, c: &CascadeSelect) -> String {
+        let n = c.count;
+        let split = |k: usize| format!("u.split[{}][{}]", k / 4, k % 4);
+        let mut s = format!(
+            "fn visibility(p_in: vec3<f32>, n: vec3<f32>) -> f32 {{\n  let p = p_in + n * {offset};\n"
+        );
+        s.push_str(if c.by_distance {
+            "  let d = length(p - u.eye.xyz);\n"
         } else {
-            "  let d = dot(u.view_row.xyz, p) + u.view_row.w;\n  var f = 0;\n"
+            "  let d = dot(u.view_row.xyz, p) + u.view_row.w;\n"
         });
-        for k in 1..count {
-            let _ = writeln!(s, "  if (d > u.split[{}][{}]) {{ f = {k}; }}", k / 4, k % 4);
+        if c.beyond {
+            let _ = writeln!(s, "  if (d > {}) {{ return 1.0; }}", split(n));
         }
+        let _ = writeln!(
+            s,
+            "  var f = 0;\n  var lo = {};\n  var hi = {};",
+            split(0),
+            split(1)
+        );
+        for k in 1..n {
+            let _ = writeln!(
+                s,
+                "  if (d > {a}) {{ f = {k}; lo = {a}; hi = {b}; }}",
+                a = split(k),
+                b = split(k + 1)
+            );
+        }
+        s.push_str("  var v = lookup(p, n, f);\n");
+        if let Some(b) = c.blend_literal() {
+            let _ = write!(
+                s,
+                "  let band = {b} * (hi - lo);\n  let t = (d - (hi - band)) / band;\n\
+                   if (f < {} && t > 0.0) {{ v = mix(v, lookup(p, n, f + 1), min(t, 1.0)); }}\n",
+                n - 1
+            );
+        }
+        s.push_str("  return v;\n}\n");
         s
     }
 

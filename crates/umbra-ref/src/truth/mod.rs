@@ -7,8 +7,9 @@
 //! - `FacesAway`: the surface's geometric normal faces away from the light (N·L ≤ 0). The
 //!   shadow term does not show there (diffuse and specular are zero), and shadow maps
 //!   legitimately differ on such faces, so they are excluded from error and counted.
-//! - `Outside`: the point is outside the light's frustum (beyond its bounds, near or far), where
-//!   the map holds nothing and the case's outside policy decides; excluded and counted.
+//! - `Outside`: the point is outside the light's frustum (beyond its bounds, near or far, or a
+//!   cascaded light's shadow distance), where the map holds nothing and the case's outside
+//!   policy decides; excluded and counted.
 //! - `Lit` or `Shadowed`: the answer of the shadow ray (skipping the surface's own planar face,
 //!   which cannot shadow itself).
 //!
@@ -219,6 +220,12 @@ impl Scene<'_> {
         let to_light = self.to_light(p);
         if n.dot(to_light) <= 0.0 {
             return (Class::FacesAway, false, face + 1, p);
+        }
+        // Beyond a cascaded light's shadow distance the map holds nothing: lit by policy.
+        if let Some(c) = &self.cascading {
+            if c.lit_beyond && c.depth_f64(p) > f64::from(c.end()) {
+                return (Class::Outside, false, face + 1, p);
+            }
         }
         let light_face = self.face_for(p);
         let (m, inv) = self.faces[light_face];

@@ -18,4 +18,5 @@ pub mod selftest_modes;
 pub mod soak;
 pub mod sweep;
 pub mod sweep_cascades;
+pub mod sweep_matrix;
 pub mod thresholds;

@@ -59,7 +59,7 @@ fn applies_to(fault: Fault, b: &Descriptor) -> bool {
         Fault::ClampFloat => !b.gles2_technique(),
         Fault::NoClamp => b.gles2_technique(),
         // GLES 2 has no array textures (it skips every cascaded case).
-        Fault::LayerShift | Fault::CascadeByDistance => !b.gles2_technique(),
+        Fault::LayerShift | Fault::CascadeByDistance | Fault::BlendIgnored => !b.gles2_technique(),
         // GLES 2 has no mipmapped compare (it skips every mipmapped case).
         Fault::MipBaseOnly | Fault::MipLevelCoarse => !b.gles2_technique(),
         // A manual LINEAR filter; wgpu's GL backend has no manual compare.
@@ -104,8 +104,10 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
         Fault::ClampIgnored => s.depth_clamp,
         Fault::ClampForced => !s.depth_clamp,
         Fault::LayerShift | Fault::CascadeByDistance => {
-            matches!(&c.light, Light::Directional(d) if d.cascades.is_some_and(|k| k.count > 1))
+            matches!(&c.light, Light::Directional(d) if d.cascades.as_ref().is_some_and(|k| k.count > 1))
         }
+        Fault::BlendIgnored => matches!(&c.light, Light::Directional(d)
+            if d.cascades.as_ref().is_some_and(|k| k.count > 1 && k.blend > 0.0)),
         Fault::Scaled { param, .. } => {
             let b = &s.bias;
             match param {
@@ -149,7 +151,8 @@ pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
         Fault::Repeat => &["outside"],
         Fault::ClampIgnored => &["pancake", "near-crossing-clamped"],
         Fault::ClampForced => &["pancake", "near-crossing"],
-        Fault::LayerShift | Fault::CascadeByDistance => &["street", "on-split"],
+        Fault::LayerShift | Fault::CascadeByDistance => &["street", "on-split", "blend"],
+        Fault::BlendIgnored => &["blend"],
         Fault::Oriented { face: Some(_), .. } => &["point-faces"],
         Fault::Scaled { param, .. } if param.in_texels() => {
             &["contact", "filters-magnified", "guard-magnified"]
@@ -923,6 +926,7 @@ mod tests {
             Fault::ClampForced,
             Fault::LayerShift,
             Fault::CascadeByDistance,
+            Fault::BlendIgnored,
         ] {
             assert!(
                 points.iter().any(|p| aimed_at(f, &p.case)),

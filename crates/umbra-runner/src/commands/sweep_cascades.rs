@@ -1,6 +1,6 @@
 //! `umbra sweep` on a cascaded directional light: cascade count (1 to 4) × split scheme
 //! (uniform, logarithmic, practical λ = 0.5) in place of the technique matrix, the rest of
-//! the scene's technique as written. Each point reports, beside its frame time and its error
+//! the scene's technique as written (its shadow distance kept, no blend band). Each point reports, beside its frame time and its error
 //! against the exact truth, its perspective aliasing (screen pixels per shadow-map texel,
 //! `umbra_ref::truth::aliasing`), and the section sets the worst pixel's against what Lloyd
 //! et al.'s analysis of z-partitioning predicts for the same splits.
@@ -18,7 +18,7 @@ use std::fmt::Write as _;
 
 use serde_json::{Value, json};
 
-use super::sweep::{Row, Technique};
+use super::sweep_matrix::{Row, Technique};
 use umbra_case::format::{Cascades, Light, SplitScheme};
 use umbra_report::escape::esc;
 
@@ -37,6 +37,7 @@ fn scheme_name(s: SplitScheme) -> &'static str {
         SplitScheme::Uniform => "uniform",
         SplitScheme::Logarithmic => "logarithmic",
         SplitScheme::Practical => "practical",
+        SplitScheme::Fractions => "fractions",
     }
 }
 
@@ -45,7 +46,7 @@ pub fn matrix(case: &umbra_case::Case) -> Option<Vec<Technique>> {
     let Light::Directional(d) = &case.light else {
         return None;
     };
-    d.cascades?;
+    let distance = d.cascades.as_ref()?.distance;
     let shadow = serde_json::to_value(&case.shadow).ok()?;
     let format = shadow["format"].as_str().unwrap_or("depth24").to_string();
     let filter = match &shadow["filter"] {
@@ -60,6 +61,9 @@ pub fn matrix(case: &umbra_case::Case) -> Option<Vec<Technique>> {
                 count,
                 split,
                 lambda,
+                at: None,
+                distance,
+                blend: 0.0,
             });
             out.push(Technique {
                 size: case.shadow.size[0],
@@ -138,19 +142,33 @@ fn plot_svg(points: &[(String, u32, f64, f64)]) -> String {
         return String::new();
     }
     let (w, h, pad) = (480.0, 300.0, 44.0);
-    let ys: Vec<f64> = points.iter().map(|p| p.2.max(1e-6).ln()).collect();
+    let log = |v: f64| umbra_case::math::log10(v.max(1e-6));
+    let ys: Vec<f64> = points.iter().map(|p| log(p.2)).collect();
     let (lo, hi) = ys
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| {
             (a.min(*y), b.max(*y))
         });
-    let (lo, hi) = (lo - 0.1, hi + 0.1);
+    let (lo, hi) = (lo - 0.05, hi + 0.05);
     let x = |n: u32| pad + (f64::from(n) - 1.0) / 3.0 * (w - 2.0 * pad);
-    let y = |v: f64| h - pad - (v.max(1e-6).ln() - lo) / (hi - lo) * (h - 2.0 * pad);
+    let y = |v: f64| h - pad - (log(v) - lo) / (hi - lo) * (h - 2.0 * pad);
     let mut s = format!(
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-size=\"11\">\
          <text x=\"{pad}\" y=\"16\">worst m (solid) and P scaled at 1 cascade (dashed), log scale</text>"
     );
+    for tick in [1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0] {
+        if (lo..=hi).contains(&log(tick)) {
+            let _ = write!(
+                s,
+                "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{tick}</text>\
+                 <line x1=\"{pad}\" x2=\"{:.1}\" y1=\"{y:.1}\" y2=\"{y:.1}\" stroke=\"#ddd\"/>",
+                pad - 4.0,
+                y(tick) + 4.0,
+                w - pad,
+                y = y(tick)
+            );
+        }
+    }
     for n in COUNTS {
         let _ = write!(
             s,
