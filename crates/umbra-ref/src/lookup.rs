@@ -153,7 +153,11 @@ impl Legal {
 /// N² results over N², LINEAR anything (0); a blend of two mip levels anything too, and so
 /// does a blend of two cascades (`light`'s blend band).
 pub fn quantum(shadow: &Shadow, light: &LightSetup) -> f32 {
-    let blends_cascades = light.cascading.as_ref().is_some_and(|c| c.blend > 0.0);
+    // A band exists where there are two cascades or more.
+    let blends_cascades = light
+        .cascading
+        .as_ref()
+        .is_some_and(|c| c.blend > 0.0 && c.splits.len() > 2);
     if blends_cascades
         || shadow
             .mipmaps
@@ -903,6 +907,7 @@ impl Lookup<'_> {
     /// magnitudes: GLSL's and WGSL's dot products round each product and sum, or fuse them).
     /// A receiver on a split may be looked up in either cascade (both maps cover it). In a
     /// blend band the value is (1 − t)·v + t·v' for the weight t of every depth within reach
+    /// (widened by the rounding of t's own arithmetic)
     /// ([`Cascading::blend_range`]), v and v' anywhere in their cascades' intervals; linear in
     /// t, its extremes are at the ends of t's range. Within reach of the shadow distance it
     /// may also read lit, and beyond it does.
@@ -911,7 +916,9 @@ impl Lookup<'_> {
         let row = c.depth_row.truncate();
         let spread: f64 = moves.iter().map(|m| f64::from(row.dot(*m).abs())).sum();
         let terms = f64::from((row * q).abs().element_sum() + c.depth_row.w.abs());
-        let reach = spread + gamma(4.0) * terms;
+        // Twice γ₄: the centre d is the reference's own f32 arithmetic, as far from the exact
+        // value as the shader's may be on the other side.
+        let reach = spread + 2.0 * gamma(4.0) * terms;
         let d = f64::from(c.depth(q));
         let end = f64::from(c.end());
         if c.lit_beyond && d - reach > end {
@@ -921,15 +928,20 @@ impl Lookup<'_> {
         let mut out: Option<Legal> = None;
         for f in c.cascades_near(d, reach) {
             let mut l = self.legal_on(p, n, moves, f);
-            if let Some((t0, t1)) = c.blend_range(f, d, reach) {
+            // The shader's weight t = (d − (hi − band)) / band rounds in hi − lo, hi − band,
+            // d − (…) and the division (2.5 ulp in GLSL and WGSL): within 8u·(hi + band) of
+            // depth, which widens t's range beside d's own reach.
+            let hi = f64::from(c.splits.get(f + 1).copied().unwrap_or(c.end()));
+            let band = f64::from(c.blend) * (hi - f64::from(c.splits[f]));
+            let t_reach = reach + 8.0 * U * (hi.abs() + band);
+            if let Some((t0, t1)) = c.blend_range(f, d, t_reach) {
                 let next = self.legal_on(p, n, moves, f + 1);
-                let at =
-                    |t: f64, a: f32, b: f32| ((1.0 - t) * f64::from(a) + t * f64::from(b)) as f32;
-                l = Legal {
-                    lo: at(t0, l.lo, next.lo).min(at(t1, l.lo, next.lo)),
-                    hi: at(t0, l.hi, next.hi).max(at(t1, l.hi, next.hi)),
-                    flags: l.flags | next.flags,
-                };
+                let at = |t: f64, a: f32, b: f32| (1.0 - t) * f64::from(a) + t * f64::from(b);
+                l = legal(
+                    at(t0, l.lo, next.lo).min(at(t1, l.lo, next.lo)),
+                    at(t0, l.hi, next.hi).max(at(t1, l.hi, next.hi)),
+                    l.flags | next.flags,
+                );
                 note(|| format!("    blended into cascade {} with t in [{t0}, {t1}]", f + 1));
             }
             out = Some(out.map_or(l, |o| o.hull(l)));
@@ -1607,44 +1619,72 @@ mod tests {
             let point = umbra_case::load_str(&text, std::path::Path::new("g.json"))
                 .expect("a generated case is valid")
                 .swap_remove(0);
-            let run = umbra_case::Prepared::new(point);
-            let clip = umbra_case::ClipDepth::MinusOneToOne;
-            let conv = crate::convention(run.case(), clip);
-            let layers = crate::judged_layers(&run, clip, Profile::GL);
-            let lookup = Lookup::new(&run, conv, &layers, Profile::GL);
-            let geo = &run.geometry;
-            for _ in 0..120 {
-                let t = (rand() * geo.triangles.len() as f32) as usize % geo.triangles.len();
-                let [a, b, c] = geo.corners(t);
-                let [na, nb, nc] = geo.triangles[t].map(|k| geo.normals[k as usize]);
-                let (u, v) = (rand(), rand());
-                let (u, v) = if u + v > 1.0 {
-                    (1.0 - u, 1.0 - v)
-                } else {
-                    (u, v)
-                };
-                let p = a + (b - a) * u + (c - a) * v;
-                let n = (na * (1.0 - u - v) + nb * u + nc * v).normalize();
-                // Moves of a few millimetres in the surface, as a pixel's snapping gives.
-                let k = 0.002 + 0.02 * rand();
-                let sx = (b - a).normalize_or_zero() * k;
-                let sy = (c - a).normalize_or_zero() * k * rand();
-                let (_, legal) = lookup.judged(p, n, [sx, sy]);
-                for _ in 0..24 {
-                    let q = p + sx * (2.0 * rand() - 1.0) + sy * (2.0 * rand() - 1.0);
-                    let vis = lookup.visibility(q, n);
-                    assert!(
-                        legal.lo - 1e-6 <= vis && vis <= legal.hi + 1e-6,
-                        "{}: the value {vis} at {q} (moved from {p}) is outside the interval [{}, {}] judged for the region",
-                        case.name,
-                        legal.lo,
-                        legal.hi
-                    );
-                    checked += 1;
-                }
+            checked += region_checks(&umbra_case::Prepared::new(point), &mut rand, 120);
+        }
+        assert!(checked > 50_000, "{checked}");
+    }
+
+    /// The same on the cascade cases, whose receivers cross splits, blend bands and the
+    /// shadow distance: the value at every point of a region (the reference's f32 view
+    /// depth, cascade and blend weight there) lies in the interval judged for it.
+    #[test]
+    fn the_interval_holds_across_cascade_splits_and_bands() {
+        let mut rand = crate::test_rng::uniform(0x5EED_4321);
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases/cascades");
+        let mut checked = 0;
+        for name in ["blend.json", "on-split.json"] {
+            for point in umbra_case::load_file(&dir.join(name)).expect("a cascade case loads") {
+                checked += region_checks(&umbra_case::Prepared::new(point), &mut rand, 400);
             }
         }
         assert!(checked > 50_000, "{checked}");
+    }
+
+    /// Judges `tries` random surface points of `run` with snapping-like moves and checks the
+    /// reference's value at 24 points of each region against the region's interval; returns
+    /// how many values it checked.
+    fn region_checks(
+        run: &umbra_case::Prepared,
+        rand: &mut impl FnMut() -> f32,
+        tries: usize,
+    ) -> usize {
+        let clip = umbra_case::ClipDepth::MinusOneToOne;
+        let conv = crate::convention(run.case(), clip);
+        let layers = crate::judged_layers(run, clip, Profile::GL);
+        let lookup = Lookup::new(run, conv, &layers, Profile::GL);
+        let geo = &run.geometry;
+        let mut checked = 0;
+        for _ in 0..tries {
+            let t = (rand() * geo.triangles.len() as f32) as usize % geo.triangles.len();
+            let [a, b, c] = geo.corners(t);
+            let [na, nb, nc] = geo.triangles[t].map(|k| geo.normals[k as usize]);
+            let (u, v) = (rand(), rand());
+            let (u, v) = if u + v > 1.0 {
+                (1.0 - u, 1.0 - v)
+            } else {
+                (u, v)
+            };
+            let p = a + (b - a) * u + (c - a) * v;
+            let n = (na * (1.0 - u - v) + nb * u + nc * v).normalize();
+            // Moves of a few millimetres in the surface, as a pixel's snapping gives.
+            let k = 0.002 + 0.02 * rand();
+            let sx = (b - a).normalize_or_zero() * k;
+            let sy = (c - a).normalize_or_zero() * k * rand();
+            let (_, legal) = lookup.judged(p, n, [sx, sy]);
+            for _ in 0..24 {
+                let q = p + sx * (2.0 * rand() - 1.0) + sy * (2.0 * rand() - 1.0);
+                let vis = lookup.visibility(q, n);
+                assert!(
+                    legal.lo - 1e-6 <= vis && vis <= legal.hi + 1e-6,
+                    "{}: the value {vis} at {q} (moved from {p}) is outside the interval [{}, {}] judged for the region",
+                    run.point.id(),
+                    legal.lo,
+                    legal.hi
+                );
+                checked += 1;
+            }
+        }
+        checked
     }
 }
 

@@ -24,14 +24,22 @@ pub(super) type FaceResources = Vec<(wgpu::Buffer, wgpu::BindGroup)>;
 impl Gpu {
     /// The map: every face a layer, every level allocated; copyable where the adapter can
     /// copy depth (not Depth24Plus, whose bytes are the adapter's own).
+    ///
+    /// A one-cascade array gets a second, unused layer on wgpu's GL backend: wgpu-hal's GLES
+    /// backend guesses a texture's GL target from its layer count and makes a one-layer
+    /// texture a GL_TEXTURE_2D, which the shader's `sampler2DArrayShadow` cannot read
+    /// (gfx-rs/wgpu#2161, #4665: "GLES backend guesses the type of the texture … it checks
+    /// for n == 1"; the soak's 1,000 cases found it: 2 of them read garbage). Vulkan keeps
+    /// the one-layer array, a path of its own.
     pub(super) fn create_map(&self, p: &RunPlan) -> wgpu::Texture {
         let [mw, mh] = p.s.size;
+        let gl_guesses_2d = p.layered && p.faces == 1 && self.info.backend == wgpu::Backend::Gl;
         self.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("shadow map"),
             size: wgpu::Extent3d {
                 width: mw,
                 height: mh,
-                depth_or_array_layers: p.faces,
+                depth_or_array_layers: if gl_guesses_2d { 2 } else { p.faces },
             },
             mip_level_count: p.levels,
             sample_count: 1,
