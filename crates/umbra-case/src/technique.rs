@@ -181,7 +181,7 @@ impl Technique {
         let case = run.case();
         let s = &case.shadow;
         Technique {
-            cube: matches!(run.light.kind, LightKind::Point { .. }),
+            cube: run.light.is_cube(),
             directional: matches!(run.light.kind, LightKind::Directional { .. }),
             cascades: run
                 .light

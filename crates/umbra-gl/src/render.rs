@@ -29,9 +29,7 @@ use std::time::{Duration, Instant};
 use glow::HasContext;
 use umbra_case::fault::Fault;
 use umbra_case::format::MipSource;
-use umbra_case::{
-    BackendError, Clock, Convention, Frame, LightKind, Prepared, Timings, VisibilityStorage,
-};
+use umbra_case::{BackendError, Clock, Convention, Frame, Prepared, Timings, VisibilityStorage};
 
 use crate::api::Api;
 use crate::caps::Caps;
@@ -507,7 +505,7 @@ impl<'a> RunPlan<'a> {
     fn new(run: &'a Prepared, api: Api) -> RunPlan<'a> {
         let s = &run.case().shadow;
         let fault = Fault::active();
-        let cube = matches!(run.light.kind, LightKind::Point { .. });
+        let cube = run.light.is_cube();
         let layered = run.light.cascading.is_some();
         let levels = s.mipmaps.map_or(1, |m| m.levels);
         RunPlan {

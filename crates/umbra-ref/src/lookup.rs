@@ -345,10 +345,12 @@ impl Lookup<'_> {
         if let Some(c) = &self.light.cascading {
             return self.cascaded_visibility(c, p, n);
         }
-        match self.setup(p, n) {
-            None => 1.0,
-            Some(st) => self.filter_value(&st),
-        }
+        self.value_of(self.setup(p, n))
+    }
+
+    /// The shadow term of a lookup set up (`None`: the tests read lit).
+    fn value_of(&self, st: Option<Setup>) -> f32 {
+        st.map_or(1.0, |st| self.filter_value(&st))
     }
 
     /// [`Lookup::visibility`] of a cascaded light, in the lit shaders' steps and f32
@@ -361,10 +363,7 @@ impl Lookup<'_> {
             return 1.0;
         }
         let f = c.cascade_of(f64::from(d));
-        let on = |face: usize| match self.setup_on(p, n, face) {
-            None => 1.0,
-            Some(st) => self.filter_value(&st),
-        };
+        let on = |face: usize| self.value_of(self.setup_on(p, n, face));
         let v = on(f);
         match c.blend_weight(f, d) {
             Some(t) => v * (1.0 - t) + on(f + 1) * t,
@@ -931,7 +930,7 @@ impl Lookup<'_> {
             // The shader's weight t = (d − (hi − band)) / band rounds in hi − lo, hi − band,
             // d − (…) and the division (2.5 ulp in GLSL and WGSL): within 8u·(hi + band) of
             // depth, which widens t's range beside d's own reach.
-            let hi = f64::from(c.splits.get(f + 1).copied().unwrap_or(c.end()));
+            let hi = f64::from(c.splits[f + 1]);
             let band = f64::from(c.blend) * (hi - f64::from(c.splits[f]));
             let t_reach = reach + 8.0 * U * (hi.abs() + band);
             if let Some((t0, t1)) = c.blend_range(f, d, t_reach) {

@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use umbra_case::fault::Fault;
 use umbra_case::format::{DepthFormat, MipSource};
-use umbra_case::{BackendError, Convention, Frame, LightKind, Prepared, Technique};
+use umbra_case::{BackendError, Convention, Frame, Prepared, Technique};
 
 use crate::shaders::UNIFORM_SIZE;
 
@@ -257,7 +257,7 @@ impl<'a> RunPlan<'a> {
             s,
             fault,
             conv,
-            cube: matches!(run.light.kind, LightKind::Point { .. }),
+            cube: run.light.is_cube(),
             layered: run.light.cascading.is_some(),
             faces: run.light.views.len() as u32,
             format,
