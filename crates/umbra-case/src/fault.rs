@@ -290,6 +290,15 @@ pub enum Fault {
     /// The lit pass switches cascades hard where the case asks for a blend band (a blend
     /// weight that never leaves 0).
     BlendIgnored,
+    /// The lit pass shades with a white light of intensity 1 whatever the case's light
+    /// colour and intensity (a colour uniform that never reaches the shader).
+    LightColourIgnored,
+    /// The lit pass clears its colour target to black whatever the case's clear colour (a
+    /// clear value dropped on the way to the driver).
+    ClearIgnored,
+    /// The lit pass culls the other face than the case asks (a front-face winding taken the
+    /// wrong way round, as a y-flipped framebuffer does): back faces show, front faces go.
+    LitCullFlipped,
     /// One face of the map is drawn with a wrong orientation: cube face `face` (0–5 in the
     /// GL order +x, −x, +y, −y, +z, −z), or the 2D map when `face` is `None`.
     Oriented {
@@ -314,7 +323,7 @@ impl Fault {
     /// three stand for them here (a wrong handedness on the +x face, the one the
     /// four-fold symmetric point-light cases could not see; a wrong up vector on the −y face;
     /// a transposed 2D map), and `umbra selftest --fault` or `--orientations` runs any.
-    pub const ALL: [Fault; 36] = [
+    pub const ALL: [Fault; 39] = [
         Fault::CompareFlipped,
         Fault::NoDivide,
         Fault::NoGuard,
@@ -348,6 +357,9 @@ impl Fault {
         Fault::LayerShift,
         Fault::CascadeByDistance,
         Fault::BlendIgnored,
+        Fault::LightColourIgnored,
+        Fault::ClearIgnored,
+        Fault::LitCullFlipped,
         Fault::Oriented {
             face: Some(0),
             orientation: Orientation::MirrorX,
@@ -408,6 +420,9 @@ impl Fault {
             Fault::LayerShift => "layer-shift",
             Fault::CascadeByDistance => "cascade-by-distance",
             Fault::BlendIgnored => "blend-ignored",
+            Fault::LightColourIgnored => "light-colour-ignored",
+            Fault::ClearIgnored => "clear-ignored",
+            Fault::LitCullFlipped => "lit-cull-flipped",
             Fault::Oriented { face, orientation } => {
                 return match face {
                     Some(f) => format!("face{f}-{}", orientation.name()),
@@ -435,7 +450,10 @@ impl Fault {
             | Fault::Vis4Bit
             | Fault::MipBaseOnly
             | Fault::MipLevelCoarse => Subtlety::Filtered,
-            Fault::ColourGamma | Fault::DimmingOff | Fault::SpecularUnshadowed => Subtlety::Colour,
+            Fault::ColourGamma
+            | Fault::DimmingOff
+            | Fault::SpecularUnshadowed
+            | Fault::LightColourIgnored => Subtlety::Colour,
             Fault::Oriented { .. } => Subtlety::Orientation,
             Fault::Scaled { param, .. } if param.in_texels() => Subtlety::SubTexel,
             Fault::Scaled {
@@ -486,6 +504,26 @@ impl Fault {
             Some(Fault::ClampIgnored) => false,
             Some(Fault::ClampForced) => true,
             _ => asks,
+        }
+    }
+
+    /// The colour a backend under `fault` (if any) clears its lit pass's colour target to:
+    /// the case's `camera.clear`, black under ClearIgnored.
+    pub fn clear_colour(fault: Option<Fault>, camera: &crate::format::Camera) -> [f32; 3] {
+        if fault == Some(Fault::ClearIgnored) {
+            [0.0; 3]
+        } else {
+            camera.clear
+        }
+    }
+
+    /// The faces a backend under `fault` (if any) culls in its lit pass: the case's
+    /// `camera.cull`, the other face under LitCullFlipped.
+    pub fn lit_cull(fault: Option<Fault>, camera: &crate::format::Camera) -> crate::format::Cull {
+        if fault == Some(Fault::LitCullFlipped) {
+            camera.cull.flipped()
+        } else {
+            camera.cull
         }
     }
 

@@ -63,6 +63,22 @@ fn is_zero3(v: &V3) -> bool {
     *v == [0.0; 3]
 }
 
+fn white() -> V3 {
+    [1.0; 3]
+}
+
+fn is_white(v: &V3) -> bool {
+    *v == [1.0; 3]
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+fn is_one(x: &f32) -> bool {
+    *x == 1.0
+}
+
 fn is_false(b: &bool) -> bool {
     !*b
 }
@@ -220,6 +236,16 @@ pub struct Camera {
     /// Image size in pixels `[width, height]`, 1 to 8192 each. Default `[512, 512]`.
     #[serde(default = "default_camera_size")]
     pub size: [u32; 2],
+    /// The colour the lit pass clears its colour target to (linear RGB, each channel in
+    /// [0, 1], alpha 1): what every background pixel shows, judged like any other colour.
+    /// Default `[0, 0, 0]`.
+    #[serde(default, skip_serializing_if = "is_zero3")]
+    pub clear: V3,
+    /// Face culling in the lit pass: `none`, `back` or `front` (counter-clockwise seen from
+    /// the eye is front, as in the shadow pass). Culled faces show what lies behind them; the
+    /// exact truth's camera rays pass through them too. Default `none`.
+    #[serde(default, skip_serializing_if = "Cull::is_none")]
+    pub cull: Cull,
 }
 
 /// The one light, written as `{ "spot": { ... } }`.
@@ -232,6 +258,27 @@ pub enum Light {
     Spot(Spot),
     /// A point light with a six-face cube shadow map.
     Point(Point),
+}
+
+impl Light {
+    /// What the light multiplies the diffuse and specular terms by: `color · intensity`.
+    pub fn radiance(&self) -> V3 {
+        let (c, i) = match self {
+            Light::Directional(d) => (d.color, d.intensity),
+            Light::Spot(s) => (s.color, s.intensity),
+            Light::Point(p) => (p.color, p.intensity),
+        };
+        c.map(|x| x * i)
+    }
+
+    /// The light's field path in a case (`light.spot`), for errors.
+    pub fn path(&self) -> &'static str {
+        match self {
+            Light::Directional(_) => "light.directional",
+            Light::Spot(_) => "light.spot",
+            Light::Point(_) => "light.point",
+        }
+    }
 }
 
 /// `directional`: placed either by `position` (as the write-ups do: the light's eye, looking at
@@ -271,6 +318,15 @@ pub struct Directional {
     /// slice its view depth falls in.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cascades: Option<Cascades>,
+    /// Light colour, linear RGB, each channel in [0, 1]: multiplies the diffuse and specular
+    /// terms of the shading (the ambient term is the scene's, not the light's). Default
+    /// `[1, 1, 1]`.
+    #[serde(default = "white", skip_serializing_if = "is_white")]
+    pub color: V3,
+    /// Scales `color`, ≥ 0 (above 1 the lit colour saturates at the target's 1.0, as an
+    /// engine's HDR light does on an 8-bit target without tone mapping). Default 1.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub intensity: f32,
 }
 
 /// `cascades`: how a directional light's map is split along the camera's view depth.
@@ -386,6 +442,15 @@ pub struct Spot {
     /// Far plane, > near. Default 100.
     #[serde(default = "default_far")]
     pub far: f32,
+    /// Light colour, linear RGB, each channel in [0, 1]: multiplies the diffuse and specular
+    /// terms of the shading (the ambient term is the scene's, not the light's). Default
+    /// `[1, 1, 1]`.
+    #[serde(default = "white", skip_serializing_if = "is_white")]
+    pub color: V3,
+    /// Scales `color`, ≥ 0 (above 1 the lit colour saturates at the target's 1.0, as an
+    /// engine's HDR light does on an 8-bit target without tone mapping). Default 1.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub intensity: f32,
 }
 
 /// `point`: an omnidirectional light with a cube shadow map (six 90° faces).
@@ -400,6 +465,15 @@ pub struct Point {
     /// Far plane, > near. Default 100.
     #[serde(default = "default_far")]
     pub far: f32,
+    /// Light colour, linear RGB, each channel in [0, 1]: multiplies the diffuse and specular
+    /// terms of the shading (the ambient term is the scene's, not the light's). Default
+    /// `[1, 1, 1]`.
+    #[serde(default = "white", skip_serializing_if = "is_white")]
+    pub color: V3,
+    /// Scales `color`, ≥ 0 (above 1 the lit colour saturates at the target's 1.0, as an
+    /// engine's HDR light does on an 8-bit target without tone mapping). Default 1.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub intensity: f32,
 }
 
 /// The shadow-mapping technique.
@@ -422,7 +496,7 @@ pub struct Shadow {
     /// Depth bias. Default: none at all.
     #[serde(default)]
     pub bias: Bias,
-    /// Face culling in the shadow pass (the lit pass never culls). Default `none`.
+    /// Face culling in the shadow pass (the lit pass culls by `camera.cull`). Default `none`.
     #[serde(default)]
     pub cull: Cull,
     /// Depth clamp in the shadow pass (GL_DEPTH_CLAMP, Vulkan's depthClampEnable, wgpu's
@@ -658,6 +732,22 @@ pub enum Cull {
     Back,
     /// Cull front faces (moves acne to back faces).
     Front,
+}
+
+impl Cull {
+    /// `none` (left out of a point's JSON).
+    pub fn is_none(&self) -> bool {
+        *self == Cull::None
+    }
+
+    /// The other face culled: what a pass whose front-face winding is wrong culls.
+    pub fn flipped(self) -> Cull {
+        match self {
+            Cull::Back => Cull::Front,
+            Cull::Front => Cull::Back,
+            Cull::None => Cull::None,
+        }
+    }
 }
 
 /// Order of the bias matrix and the perspective divide.

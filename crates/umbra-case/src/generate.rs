@@ -201,6 +201,43 @@ impl Gen {
                 d.fit = None;
             }
         }
+        // The light's colour and intensity and the clear colour, drawn last for the same
+        // reason: a tinted light in a quarter of the cases (an intensity above 1 in a third
+        // of those, where lit colours saturate), a clear colour in a fifth.
+        if self.rng.chance(0.25) {
+            let color = [
+                self.rng.range(0.3, 1.0, 2),
+                self.rng.range(0.3, 1.0, 2),
+                self.rng.range(0.3, 1.0, 2),
+            ];
+            let intensity = if self.rng.chance(0.33) {
+                self.rng.range(1.0, 3.0, 2)
+            } else {
+                self.rng.range(0.5, 1.0, 2)
+            };
+            match &mut case.light {
+                Light::Directional(d) => (d.color, d.intensity) = (color, intensity),
+                Light::Spot(l) => (l.color, l.intensity) = (color, intensity),
+                Light::Point(l) => (l.color, l.intensity) = (color, intensity),
+            }
+        }
+        if self.rng.chance(0.2) {
+            case.camera.clear = [
+                self.rng.range(0.0, 1.0, 2),
+                self.rng.range(0.0, 1.0, 2),
+                self.rng.range(0.0, 1.0, 2),
+            ];
+        }
+        // Lit-pass culling, drawn last too: back faces in a sixth of the cases, front faces
+        // in a twentieth (the insides of boxes and spheres show).
+        let r = self.rng.unit();
+        case.camera.cull = if r < 0.05 {
+            Cull::Front
+        } else if r < 0.22 {
+            Cull::Back
+        } else {
+            Cull::None
+        };
         case.about = about(&case);
         case
     }
@@ -437,6 +474,8 @@ impl Gen {
             near: self.rng.range(0.3, 1.0, 2),
             far: self.rng.range(60.0, 100.0, 0),
             size,
+            clear: [0.0; 3],
+            cull: Cull::None,
         }
     }
 
@@ -491,6 +530,8 @@ impl Gen {
                     ortho,
                     fit,
                     cascades: None,
+                    color: [1.0; 3],
+                    intensity: 1.0,
                 })
             }
             1 => {
@@ -511,6 +552,8 @@ impl Gen {
                     fov_y_deg: self.rng.range(25.0, 95.0, 0),
                     near: self.rng.range(0.5, 3.0, 1),
                     far: self.rng.range(30.0, 80.0, 0),
+                    color: [1.0; 3],
+                    intensity: 1.0,
                 })
             }
             _ => Light::Point(Point {
@@ -521,6 +564,8 @@ impl Gen {
                 ],
                 near: self.rng.range(0.05, 0.5, 2),
                 far: self.rng.range(20.0, 60.0, 0),
+                color: [1.0; 3],
+                intensity: 1.0,
             }),
         }
     }
@@ -826,6 +871,17 @@ mod tests {
                     }
                 ));
                 seen.insert(format!("shading {:?}", case.shading.model));
+                let radiance = case.light.radiance();
+                if radiance != [1.0; 3] {
+                    seen.insert("tinted light".into());
+                }
+                if radiance.iter().any(|x| *x > 1.0) {
+                    seen.insert("light above 1".into());
+                }
+                if case.camera.clear != [0.0; 3] {
+                    seen.insert("clear colour".into());
+                }
+                seen.insert(format!("lit cull {:?}", case.camera.cull));
                 for o in &case.scene.objects {
                     seen.insert(
                         match o {
@@ -847,10 +903,11 @@ mod tests {
         }
         // 4 formats, 3 filters, 2 compares, 3 culls, 2 orders, 2 attachments, 4 outside,
         // 2 guards, 2 depth orders, 2 depth clamps, 7 bias entries, 4 split schemes, a
-        // cascade blend and distance, 3 lights, 2 shadings, 4 objects, sweep, offset.
+        // cascade blend and distance, 3 lights, 2 shadings, a tinted light, one above 1, a
+        // clear colour, 3 lit-pass culls, 4 objects, sweep, offset.
         assert_eq!(
             seen.len(),
-            4 + 3 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 7 + 4 + 2 + 3 + 2 + 4 + 2,
+            4 + 3 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 7 + 4 + 2 + 3 + 2 + 3 + 3 + 4 + 2,
             "{seen:?}"
         );
     }

@@ -117,8 +117,11 @@ pub trait Dialect {
     fn pcf_mean(&self, n: u32) -> String;
     /// Opens `shade(albedo, n, l, e, vis)`: `ndl` and `diffuse`.
     fn shade_start(&self) -> &'static str;
-    /// The dimmed model: `kept` of diffuse in shadow, `lit_spec` the specular term.
-    fn dimmed(&self, kept: &str, lit_spec: &str, shading: &Shading) -> String;
+    /// The dimmed model: `kept` of diffuse in shadow, `lit_spec` the specular term; with
+    /// `light` (a vec3 expression), both terms multiplied by it.
+    fn dimmed(&self, kept: &str, lit_spec: &str, light: Option<&str>, shading: &Shading) -> String;
+    /// A vec3 literal.
+    fn vec3(&self, v: [f32; 3]) -> String;
     /// Opens the entry point, up to `vis`.
     fn main_start(&self) -> &'static str;
     /// The shaded colour `col` (and the face id) from `vis`.
@@ -310,6 +313,7 @@ fn tests(s: &mut String, d: &impl Dialect, t: &Technique) {
 /// `shade(albedo, n, l, e, vis)` (umbra_ref::shading).
 fn shade(s: &mut String, d: &impl Dialect, t: &Technique) {
     let shading = &t.shading;
+    let light = t.light_colour().map(|c| d.vec3(c));
     *s += d.shade_start();
     match shading.model {
         ShadingModel::Dimmed => {
@@ -323,11 +327,15 @@ fn shade(s: &mut String, d: &impl Dialect, t: &Technique) {
             } else {
                 "spec"
             };
-            *s += &d.dimmed(&kept, lit_spec, shading);
+            *s += &d.dimmed(&kept, lit_spec, light.as_deref(), shading);
         }
         ShadingModel::Classic => {
+            let diffuse = match &light {
+                Some(l) => format!("diffuse * {l}"),
+                None => "diffuse".to_string(),
+            };
             *s += &format!(
-                "  return ({a:.9} + diffuse) * albedo * ({f:.9} + (1.0 - {f:.9}) * vis);\n",
+                "  return ({a:.9} + {diffuse}) * albedo * ({f:.9} + (1.0 - {f:.9}) * vis);\n",
                 a = shading.ambient,
                 f = shading.shadowed_factor
             );

@@ -37,9 +37,11 @@ pub const EXEMPLARS: &[&str] = &[
             {"sphere":{"center":[0,0,0],"radius":1,"segments":16,"color":[1,1,1],"transform":{"translate":[0,0,0],"rotate_deg":{"axis":[0,1,0],"angle":10}}}},
             {"mesh":{"positions":[[0,0,0],[1,0,0],[0,1,0]],"triangles":[[0,1,2]],"color":[1,1,1],"transform":{"translate":[0,0,0],"rotate_deg":{"axis":[0,1,0],"angle":10}}}}],
             "offset":[1,0,0]},
-        "camera":{"eye":[0,1,1],"target":[0,0,0],"up":[0,1,0],"fov_y_deg":45,"near":0.1,"far":10,"size":[64,64]},
+        "camera":{"eye":[0,1,1],"target":[0,0,0],"up":[0,1,0],"fov_y_deg":45,"near":0.1,"far":10,"size":[64,64],
+                  "clear":[0.1,0.2,0.3],"cull":"back"},
         "light":{"directional":{"position":[0,1,0],"azimuth_deg":0,"elevation_deg":45,"distance":10,"target":[0,0,0],
-                 "up":[0,1,0],"ortho":{"left":-1,"right":1,"bottom":-1,"top":1,"near":0.1,"far":10},"fit":"scene"}},
+                 "up":[0,1,0],"ortho":{"left":-1,"right":1,"bottom":-1,"top":1,"near":0.1,"far":10},"fit":"scene",
+                 "color":[1,0.5,0.5],"intensity":2}},
         "shadow":{"size":[256,256],"format":"depth24","filter":{"pcf":3},"compare":"manual",
                   "bias":{"constant":0.001,"polygon_offset":[1,1],"polygon_offset_clamp":0,"slope":{"scale":1,"max":1},
                           "n_dot_l":{"scale":1,"min":0,"light":"position"},"normal_offset":0},
@@ -52,10 +54,11 @@ pub const EXEMPLARS: &[&str] = &[
                   "error_falls_along":"shadow.bias.constant"}}"#,
     r#"{"name":"c","about":"c","scene":{"objects":[{"plane":{"point":[0,0,0],"half_extent":1}}]},
         "camera":{"eye":[0,1,1],"target":[0,0,0]},
-        "light":{"spot":{"position":[0,1,0],"target":[0,0,0],"up":[0,0,1],"fov_y_deg":60,"near":0.1,"far":10}}}"#,
+        "light":{"spot":{"position":[0,1,0],"target":[0,0,0],"up":[0,0,1],"fov_y_deg":60,"near":0.1,"far":10,
+                 "color":[0.5,1,0.5],"intensity":0.5}}}"#,
     r#"{"name":"d","about":"d","scene":{"objects":[{"plane":{"point":[0,0,0],"half_extent":1}}]},
         "camera":{"eye":[0,1,1],"target":[0,0,0]},
-        "light":{"point":{"position":[0,1,0],"near":0.1,"far":10}}}"#,
+        "light":{"point":{"position":[0,1,0],"near":0.1,"far":10,"color":[1,1,0.5],"intensity":3}}}"#,
     r#"{"name":"e","about":"e","scene":{"objects":[{"plane":{"point":[0,0,0],"half_extent":1}}]},
         "camera":{"eye":[0,1,1],"target":[0,0,0]},
         "light":{"directional":{"azimuth_deg":0,"elevation_deg":45,
@@ -215,7 +218,8 @@ pub fn check_term(path: &str, op: &str, value: &Value) -> Result<(), String> {
 
 /// A case point as conditions read it: its JSON with the defaults serde leaves out written
 /// in (`scene.offset` `[0, 0, 0]`, `shadow.beyond_far` `compare`, `shadow.depth_clamp`
-/// `false`, `shadow.bias.n_dot_l.light` `direction`), so `@when shadow.beyond_far=compare` holds where the case did not write it.
+/// `false`, `shadow.bias.n_dot_l.light` `direction`, `camera.clear` `[0, 0, 0]`,
+/// `camera.cull` `none`, the light's `color` `[1, 1, 1]` and `intensity` 1), so `@when shadow.beyond_far=compare` holds where the case did not write it.
 pub fn condition_json(case: &crate::format::Case) -> Value {
     let mut v = serde_json::to_value(case).unwrap_or_default();
     let mut put = |pointer: &str, key: &str, value: Value| {
@@ -226,6 +230,16 @@ pub fn condition_json(case: &crate::format::Case) -> Value {
     put("/scene", "offset", serde_json::json!([0, 0, 0]));
     put("/shadow", "beyond_far", serde_json::json!("compare"));
     put("/shadow", "depth_clamp", serde_json::json!(false));
+    put("/camera", "clear", serde_json::json!([0, 0, 0]));
+    put("/camera", "cull", serde_json::json!("none"));
+    for kind in ["directional", "spot", "point"] {
+        put(
+            &format!("/light/{kind}"),
+            "color",
+            serde_json::json!([1, 1, 1]),
+        );
+        put(&format!("/light/{kind}"), "intensity", serde_json::json!(1));
+    }
     put(
         "/shadow/bias/n_dot_l",
         "light",

@@ -64,6 +64,9 @@ pub struct Technique {
     pub mipmapped: bool,
     /// The illumination model and its constants (written into the shader).
     pub shading: Shading,
+    /// The light's colour times its intensity (written into the shader where it is not
+    /// white: [`Technique::light_colour`]).
+    radiance: [f32; 3],
     /// The self-test's fault: read by the methods below and nowhere else.
     fault: Option<Fault>,
 }
@@ -206,6 +209,7 @@ impl Technique {
             beyond_far_lit: s.beyond_far == BeyondFar::Lit,
             mipmapped: s.mipmaps.is_some(),
             shading: case.shading.clone(),
+            radiance: case.light.radiance(),
             fault,
         }
     }
@@ -386,6 +390,13 @@ impl Technique {
     /// The dimmed model keeps its share of diffuse in shadow (DimmingOff keeps none).
     pub fn keeps_diffuse_in_shadow(&self) -> bool {
         !self.is(Fault::DimmingOff)
+    }
+
+    /// What the diffuse and specular terms are multiplied by: the light's colour times its
+    /// intensity, or `None` for a white light of intensity 1 (the shader then has no factor
+    /// at all, as before lights had colours). LightColourIgnored drops it.
+    pub fn light_colour(&self) -> Option<[f32; 3]> {
+        (self.radiance != [1.0; 3] && !self.is(Fault::LightColourIgnored)).then_some(self.radiance)
     }
 
     /// The specular term is shadowed (SpecularUnshadowed forgets).

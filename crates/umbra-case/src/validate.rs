@@ -387,6 +387,9 @@ impl Validator<'_> {
         self.view("camera", ("eye", c.eye), c.target, c.up);
         self.fov("camera.fov_y_deg", c.fov_y_deg);
         self.near_far("camera", c.near, c.far, true);
+        for (k, x) in c.clear.iter().enumerate() {
+            self.unit_range(&format!("camera.clear[{k}]"), *x);
+        }
         for (k, s) in c.size.iter().enumerate() {
             if *s == 0 || *s > MAX_IMAGE_SIZE {
                 self.err(
@@ -399,6 +402,7 @@ impl Validator<'_> {
     }
 
     fn light(&mut self, l: &Light, shadow: &Shadow, camera: &Camera) {
+        self.emission(l);
         match l {
             Light::Directional(d) => {
                 self.directional(d, camera);
@@ -436,6 +440,25 @@ impl Validator<'_> {
                     );
                 }
             }
+        }
+    }
+
+    /// The light's `color` (each channel in [0, 1]) and `intensity` (finite, ≥ 0).
+    fn emission(&mut self, l: &Light) {
+        let p = l.path();
+        let (color, intensity) = match l {
+            Light::Directional(d) => (d.color, d.intensity),
+            Light::Spot(s) => (s.color, s.intensity),
+            Light::Point(q) => (q.color, q.intensity),
+        };
+        self.color(p, color);
+        let ip = format!("{p}.intensity");
+        if self.finite(&ip, intensity) && intensity < 0.0 {
+            self.err(
+                ip,
+                format!("must be ≥ 0, got {intensity}"),
+                "use 0 for a light that adds nothing, 1 for its colour as given",
+            );
         }
     }
 

@@ -732,3 +732,42 @@ fn sweep_points_with_one_name_or_one_case() {
     );
     assert_error(doc, "sweep.shadow.bias.constant", "are the same case");
 }
+
+#[test]
+fn light_colour_intensity_and_clear_colour_validate_and_name_the_field() {
+    let ok = set(
+        set(base(), "/light/spot/color", json!([1, 0.5, 0.25])),
+        "/light/spot/intensity",
+        json!(2.5),
+    );
+    let ok = set(ok, "/camera/clear", json!([0.1, 0.2, 0.3]));
+    let points = load_str(&ok.to_string(), Path::new(FILE)).expect("valid");
+    // Written back only where given, so no existing point's id moves.
+    let text = serde_json::to_string(&points[0].case).expect("json");
+    assert!(text.contains("\"intensity\":2.5") && text.contains("\"clear\":[0.1,0.2,0.3]"));
+    let plain = load_str(&base().to_string(), Path::new(FILE)).expect("valid");
+    let light = serde_json::to_string(&plain[0].case.light).expect("json");
+    let camera = serde_json::to_string(&plain[0].case.camera).expect("json");
+    assert!(!light.contains("intensity") && !light.contains("color") && !camera.contains("clear"));
+    assert_error(
+        set(base(), "/light/spot/color", json!([1, 1.5, 0])),
+        "light.spot.color[1]",
+        "must be in [0, 1]",
+    );
+    assert_error(
+        set(base(), "/light/spot/intensity", json!(-1)),
+        "light.spot.intensity",
+        "must be ≥ 0",
+    );
+    assert_error(
+        set(base(), "/camera/clear", json!([0, 0, 2])),
+        "camera.clear[2]",
+        "must be in [0, 1]",
+    );
+    let point = set(
+        remove(base(), "/light/spot"),
+        "/light/point",
+        json!({ "position": [0, 5, 0], "color": [0, -0.5, 0] }),
+    );
+    assert_error(point, "light.point.color[1]", "must be in [0, 1]");
+}

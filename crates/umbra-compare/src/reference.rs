@@ -228,6 +228,15 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
     for i in 0..n {
         let (ref_cov, b_cov) = (reference.covered(i), frame.covered(i));
         if !ref_cov && !b_cov {
+            // The background: the clear colour (`camera.clear`), the only thing a backend
+            // writes there (a clear value converted as any colour is: either code of a value
+            // halfway between two).
+            r.colour_checked += 1;
+            if !colour_ok(&frame.color[i * 4..i * 4 + 3], 0.0, 0.0, &basis.legal[i]) {
+                r.illegal_colour += 1;
+                r.illegal += 1;
+                px[i] = PixelJudgement::Illegal;
+            }
             continue;
         }
         r.compared += 1;

@@ -495,15 +495,23 @@ impl Dialect for Glsl {
         "vec3 shade(vec3 albedo, vec3 n, vec3 l, vec3 e, float vis) {\n  float ndl = dot(n, l);\n  float diffuse = max(ndl, 0.0);\n"
     }
 
-    fn dimmed(&self, kept: &str, lit_spec: &str, shading: &Shading) -> String {
+    fn dimmed(&self, kept: &str, lit_spec: &str, light: Option<&str>, shading: &Shading) -> String {
+        let (ld, ls) = match light {
+            Some(l) => (format!(" * {l}"), format!("{l} * ")),
+            None => (String::new(), String::new()),
+        };
         format!(
             "  float kept = {kept};\n  float spec = 0.0;\n\
                if (ndl > 0.0) {{ vec3 hv = l + e; float len = length(hv); if (len > 0.0) spec = {ks:.9} * pow(max(dot(n, hv / len), 0.0), {sh:.9}); }}\n\
-               return ({a:.9} + kept * diffuse) * albedo + vec3({lit_spec});\n",
+               return ({a:.9} + kept * diffuse{ld}) * albedo + {ls}vec3({lit_spec});\n",
             ks = shading.specular,
             sh = shading.shininess,
             a = shading.ambient
         )
+    }
+
+    fn vec3(&self, v: [f32; 3]) -> String {
+        format!("vec3({:.9}, {:.9}, {:.9})", v[0], v[1], v[2])
     }
 
     /// Outputs: colour; visibility in R and face id + 1 in G, B, A (base 256).

@@ -175,13 +175,9 @@ fn render_inner(
     if !level_shadows.is_empty() {
         lookup = lookup.with_levels(&level_shadows, &below);
     }
-    let camera_kinds = adjacency.as_ref().map(|a| {
-        a.edge_kinds(
-            &run.geometry,
-            run.camera.view_proj(conv),
-            umbra_case::format::Cull::None,
-        )
-    });
+    let camera_kinds = adjacency
+        .as_ref()
+        .map(|a| a.edge_kinds(&run.geometry, run.camera.view_proj(conv), case.camera.cull));
     let [cw, ch] = run.camera.size;
     // The raster row of a top-first pixel: rows run up in the GL convention.
     let explain = pixel.map(|(x, y)| {
@@ -262,14 +258,7 @@ fn face_view(
     match fault.and_then(|f| f.face_mistake(k, cube)) {
         None => (vp, cull),
         Some((wrong, false)) => (wrong * vp, cull),
-        Some((wrong, true)) => (
-            wrong * vp,
-            match cull {
-                Cull::Back => Cull::Front,
-                Cull::Front => Cull::Back,
-                Cull::None => Cull::None,
-            },
-        ),
+        Some((wrong, true)) => (wrong * vp, cull.flipped()),
     }
 }
 

@@ -16,13 +16,12 @@
 
 use glam::Vec3;
 use rayon::prelude::*;
-use umbra_case::format::Cull;
 use umbra_case::{Convention, Geometry, Prepared, Profile};
 
 use crate::bands::for_each_band;
 use crate::lookup::{Legal, Lookup, Neighbours, ambiguity, position_freedom};
 use crate::raster::{Coverage, EdgeKind, Rasterizer, Tri};
-use crate::shading::{BACKGROUND, shade_linear, shade_run, shade_tolerance};
+use crate::shading::{background, shade_linear, shade_run, shade_tolerance};
 use crate::shadow_pass::setup_all;
 use crate::surface::{Surfaces, interpolate};
 
@@ -100,7 +99,7 @@ pub fn render(
         conv,
         width: w,
         height: h,
-        cull: Cull::None,
+        cull: run.case().camera.cull,
         depth_clamp: false,
     };
     let tris = setup_all(
@@ -113,6 +112,8 @@ pub fn render(
     let surface_free = judged.map(|(_, profile)| surface_freedom(&tris, &nearest, w, geo, profile));
     let case = run.case();
     let eye = run.camera.eye;
+    let bg = background(case.camera.clear);
+    let light = Vec3::from(case.light.radiance());
     // The judged lookup at a surface point: its value and what it allows.
     let judge = |pt: &Point, free: u8| judged_point(run, &tris, lookup, pt, free);
     // Shade row by row straight into the outputs, a run of pixels that show the same
@@ -152,12 +153,15 @@ pub fn render(
                     x0 += len;
                     if winner == NONE {
                         for x in xs {
-                            c_row[4 * x..4 * x + 4].copy_from_slice(&BACKGROUND);
+                            c_row[4 * x..4 * x + 4].copy_from_slice(&bg);
                             v_row[x] = f32::NAN;
                             s_row[x] = 0;
+                            // The clear colour exactly: the judge holds the background to it.
                             if let Some(slot) = l_row.get_mut(x) {
                                 *slot = PixelLegal {
                                     flags: free(x),
+                                    c0: case.camera.clear,
+                                    c1: case.camera.clear,
                                     ..Default::default()
                                 };
                             }
@@ -213,6 +217,7 @@ pub fn render(
                     let albedo = geo.albedo[geo.object[t] as usize];
                     shade_run(
                         &case.shading,
+                        light,
                         albedo,
                         surfaces,
                         vis,
@@ -297,8 +302,9 @@ fn judged_point(
         lookup.judged(p, n, moves)
     };
     let (albedo, to_light, to_eye) = (pt.albedo, pt.to_light, pt.to_eye);
-    let c0 = shade_linear(&case.shading, albedo, n, to_light, to_eye, 0.0);
-    let c1 = shade_linear(&case.shading, albedo, n, to_light, to_eye, 1.0);
+    let light = Vec3::from(case.light.radiance());
+    let c0 = shade_linear(&case.shading, light, albedo, n, to_light, to_eye, 0.0);
+    let c1 = shade_linear(&case.shading, light, albedo, n, to_light, to_eye, 1.0);
     let d = position_freedom(p, lookup.reach) + moves[0].length() + moves[1].length();
     let moved = normal_moves
         + d / (eye - p).length().max(1e-6)
@@ -307,7 +313,7 @@ fn judged_point(
             umbra_case::LightKind::Spot { position }
             | umbra_case::LightKind::Point { position } => d / (position - p).length().max(1e-6),
         };
-    let ctol = shade_tolerance(&case.shading, albedo, n, to_light, to_eye, moved);
+    let ctol = shade_tolerance(&case.shading, light, albedo, n, to_light, to_eye, moved);
     (
         vis,
         PixelLegal {

@@ -33,6 +33,11 @@ fn sources(run: &Prepared, fault: Option<Fault>) -> String {
     let mut out = String::new();
     for api in Api::ALL {
         let name = api.name();
+        // GLES 2 has no array textures: its backend skips a cascaded case, and has no source.
+        if api == Api::Gles2 && technique.layered() {
+            let _ = writeln!(out, "===== {name}: skipped (cascades need array textures)");
+            continue;
+        }
         let _ = write!(
             out,
             "===== {name} shadow.vert\n{}===== {name} shadow.frag\n{}===== {name} lit.vert\n{}===== {name} lit.frag\n{}",
@@ -88,6 +93,10 @@ fn synthetic_runs() -> Vec<(&'static str, Prepared)> {
         (
             "point",
             r#"{ "point": { "position": [0, 3, 0], "near": 0.1, "far": 40 } }"#,
+        ),
+        (
+            "spot-tinted",
+            r#"{ "spot": { "position": [8, 22, 12], "target": [0, 0, 0], "fov_y_deg": 20, "near": 1, "far": 50, "color": [1, 0.5, 0.25], "intensity": 2 } }"#,
         ),
     ];
     light
@@ -199,7 +208,7 @@ fn faults() -> impl Iterator<Item = Option<Fault>> {
             .into_iter()
             // Faults that act on the passes' state, not on any source (orientations, the
             // mipmapped sampler's levels, the shadow pass's depth clamp, the layer it draws
-            // a cascade into), leave the sources as they were.
+            // a cascade into, the lit pass's clear colour and culling), leave the sources as they were.
             .filter(|f| {
                 !matches!(
                     f,
@@ -209,6 +218,8 @@ fn faults() -> impl Iterator<Item = Option<Fault>> {
                         | Fault::ClampIgnored
                         | Fault::ClampForced
                         | Fault::LayerShift
+                        | Fault::ClearIgnored
+                        | Fault::LitCullFlipped
                 )
             })
             .map(Some),
@@ -220,8 +231,9 @@ fn faults() -> impl Iterator<Item = Option<Fault>> {
 /// WGSL's uniform block carrying the cascades' view row and splits (a dump before and after
 /// differed in those two lines of every WGSL source and nothing else) and the
 /// cascade-by-distance and blend-ignored faults' sources (the no-fault sources on the
-/// uncascaded product).
-const EXPECTED: u64 = 0xac6f_9e33_48bc_c8bd;
+/// uncascaded product), and a tinted spot light with the light-colour-ignored fault (the
+/// hash without those two was the one before them: no byte of the other sources moved).
+const EXPECTED: u64 = 0x01a3_8f83_d078_8af1;
 
 #[test]
 fn every_source_is_unchanged() {

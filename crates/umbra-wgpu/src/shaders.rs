@@ -352,15 +352,23 @@ impl Dialect for Wgsl {
         "fn shade(albedo: vec3<f32>, n: vec3<f32>, l: vec3<f32>, e: vec3<f32>, vis: f32) -> vec3<f32> {\n  let ndl = dot(n, l);\n  let diffuse = max(ndl, 0.0);\n"
     }
 
-    fn dimmed(&self, kept: &str, lit_spec: &str, shading: &Shading) -> String {
+    fn dimmed(&self, kept: &str, lit_spec: &str, light: Option<&str>, shading: &Shading) -> String {
+        let (ld, ls) = match light {
+            Some(l) => (format!(" * {l}"), format!("{l} * ")),
+            None => (String::new(), String::new()),
+        };
         format!(
             "  let kept = {kept};\n  var spec = 0.0;\n\
                if (ndl > 0.0) {{ let hv = l + e; let len = length(hv); if (len > 0.0) {{ spec = {ks:.9} * pow(max(dot(n, hv / len), 0.0), {sh:.9}); }} }}\n\
-               return ({a:.9} + kept * diffuse) * albedo + vec3<f32>({lit_spec});\n",
+               return ({a:.9} + kept * diffuse{ld}) * albedo + {ls}vec3<f32>({lit_spec});\n",
             ks = shading.specular,
             sh = shading.shininess,
             a = shading.ambient
         )
+    }
+
+    fn vec3(&self, v: [f32; 3]) -> String {
+        format!("vec3<f32>({:.9}, {:.9}, {:.9})", v[0], v[1], v[2])
     }
 
     fn main_start(&self) -> &'static str {

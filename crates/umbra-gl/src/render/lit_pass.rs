@@ -4,13 +4,13 @@
 //! read back right after its draw.
 
 use umbra_case::fault::Fault;
-use umbra_case::format::{DepthFormat, Filter, MipFilter, Outside};
+use umbra_case::format::{Cull, DepthFormat, Filter, MipFilter, Outside};
 use umbra_case::technique::CompareOp;
 use umbra_case::{BackendError, LightKind, LookupMatrices, Technique};
 
 use super::shadow_pass::es2_depth;
 use super::{Renderer, Resources, RunPlan, flip_rows, gl_err, status_name};
-use crate::record::Readback;
+use crate::record::{Gl, Readback};
 use crate::shaders;
 
 impl Renderer {
@@ -280,6 +280,9 @@ impl Renderer {
                     format!("framebuffer incomplete: {}", status_name(status)),
                 ));
             }
+            // The case's clear colour (`camera.clear`): what the background shows.
+            let clear = Fault::clear_colour(p.fault, &p.run.case().camera);
+            lit_cull(gl, p);
             gl.viewport(0, 0, w as i32, h as i32);
             gl.enable(glow::DEPTH_TEST);
             gl.depth_func(glow::LESS);
@@ -287,7 +290,7 @@ impl Renderer {
             gl.clear_depth_f32(1.0);
             if es2 {
                 let bg = if pass == 0 {
-                    [0.0, 0.0, 0.0, 1.0]
+                    [clear[0], clear[1], clear[2], 1.0]
                 } else {
                     [0.0; 4]
                 };
@@ -298,7 +301,7 @@ impl Renderer {
                     pass as f32,
                 );
             } else {
-                gl.clear_buffer_f32_slice(glow::COLOR, 0, &[0.0, 0.0, 0.0, 1.0]);
+                gl.clear_buffer_f32_slice(glow::COLOR, 0, &[clear[0], clear[1], clear[2], 1.0]);
                 gl.clear_buffer_f32_slice(glow::COLOR, 1, &[0.0, 0.0, 0.0, 0.0]);
                 gl.clear(glow::DEPTH_BUFFER_BIT);
             }
@@ -333,5 +336,25 @@ impl Renderer {
         }
         self.check("readback")?;
         Ok(images)
+    }
+}
+
+/// `camera.cull` in the lit pass, counter-clockwise front (the shadow pass leaves CCW and no
+/// culling behind).
+fn lit_cull(gl: &Gl, p: &RunPlan) {
+    // SAFETY: state of the current context.
+    unsafe {
+        match Fault::lit_cull(p.fault, &p.run.case().camera) {
+            Cull::None => gl.disable(glow::CULL_FACE),
+            cull => {
+                gl.enable(glow::CULL_FACE);
+                gl.front_face(glow::CCW);
+                gl.cull_face(if cull == Cull::Back {
+                    glow::BACK
+                } else {
+                    glow::FRONT
+                });
+            }
+        }
     }
 }

@@ -5,6 +5,7 @@
 
 use glam::DVec3;
 use umbra_case::Geometry;
+use umbra_case::format::Cull;
 
 use super::ray::Ray;
 
@@ -72,9 +73,29 @@ impl Bvh {
 
     /// The nearest hit in (t_min, t_max).
     pub fn closest(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<Hit> {
+        self.closest_facing(ray, t_min, t_max, Cull::None)
+    }
+
+    /// The nearest hit in (t_min, t_max) on a triangle that `cull` keeps: a triangle is
+    /// front-facing where its corners run counter-clockwise seen from the ray's origin
+    /// (its normal (b − a) × (c − a) points against the ray), as a rasteriser's front face
+    /// is; an edge-on triangle (normal ⟂ ray) covers nothing and is culled either way.
+    pub fn closest_facing(&self, ray: &Ray, t_min: f64, t_max: f64, cull: Cull) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let mut limit = t_max;
         self.walk(ray, t_min, &mut limit, &mut |tri, t, limit| {
+            if cull != Cull::None {
+                let [a, b, c] = self.verts[tri as usize];
+                let facing = (b - a).cross(c - a).dot(ray.dir);
+                let kept = match cull {
+                    Cull::Back => facing < 0.0,
+                    Cull::Front => facing > 0.0,
+                    Cull::None => true,
+                };
+                if !kept {
+                    return false;
+                }
+            }
             if t < *limit {
                 *limit = t;
                 best = Some(Hit { tri, t });

@@ -99,6 +99,8 @@ struct Scene<'a> {
     radius: i32,
     inv_cam: DMat4,
     size: [u32; 2],
+    /// The lit pass's culling (`camera.cull`): camera rays pass through culled faces.
+    camera_cull: umbra_case::format::Cull,
 }
 
 /// Computes the truth of `run`.
@@ -170,6 +172,7 @@ impl<'a> Scene<'a> {
             radius: edge_radius(case.shadow.filter),
             inv_cam: to_f64(run.camera.view_proj(conv)).inverse(),
             size: run.camera.size,
+            camera_cull: case.camera.cull,
         }
     }
 
@@ -201,7 +204,7 @@ pub fn camera_hits(run: &Prepared) -> Vec<Option<DVec3>> {
         .into_par_iter()
         .map(|i| {
             let ray = camera_ray(inv_cam, run.camera.size, i);
-            bvh.closest(&ray, 0.0, 1.0 + 1e-12)
+            bvh.closest_facing(&ray, 0.0, 1.0 + 1e-12, run.case().camera.cull)
                 .map(|hit| ray.origin + ray.dir * hit.t)
         })
         .collect()
@@ -210,7 +213,10 @@ pub fn camera_hits(run: &Prepared) -> Vec<Option<DVec3>> {
 impl Scene<'_> {
     fn pixel(&self, camera_ray: &Ray) -> (Class, bool, u32, DVec3) {
         // t in (0, 1]: from the near plane to the far plane.
-        let Some(hit) = self.bvh.closest(camera_ray, 0.0, 1.0 + 1e-12) else {
+        let Some(hit) = self
+            .bvh
+            .closest_facing(camera_ray, 0.0, 1.0 + 1e-12, self.camera_cull)
+        else {
             return (Class::Background, false, 0, DVec3::ZERO);
         };
         let p = camera_ray.origin + camera_ray.dir * hit.t;

@@ -108,6 +108,9 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
         }
         Fault::BlendIgnored => matches!(&c.light, Light::Directional(d)
             if d.cascades.as_ref().is_some_and(|k| k.count > 1 && k.blend > 0.0)),
+        Fault::LightColourIgnored => c.light.radiance() != [1.0; 3],
+        Fault::ClearIgnored => c.camera.clear != [0.0; 3],
+        Fault::LitCullFlipped => !c.camera.cull.is_none(),
         Fault::Scaled { param, .. } => {
             let b = &s.bias;
             match param {
@@ -153,6 +156,8 @@ pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
         Fault::ClampForced => &["pancake", "near-crossing"],
         Fault::LayerShift | Fault::CascadeByDistance => &["street", "on-split", "blend"],
         Fault::BlendIgnored => &["blend"],
+        Fault::LightColourIgnored | Fault::ClearIgnored => &["tinted"],
+        Fault::LitCullFlipped => &["lit-cull"],
         Fault::Oriented { face: Some(_), .. } => &["point-faces"],
         Fault::Scaled { param, .. } if param.in_texels() => {
             &["contact", "filters-magnified", "guard-magnified"]
@@ -927,6 +932,9 @@ mod tests {
             Fault::LayerShift,
             Fault::CascadeByDistance,
             Fault::BlendIgnored,
+            Fault::LightColourIgnored,
+            Fault::ClearIgnored,
+            Fault::LitCullFlipped,
         ] {
             assert!(
                 points.iter().any(|p| aimed_at(f, &p.case)),

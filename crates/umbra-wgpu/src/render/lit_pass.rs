@@ -2,7 +2,8 @@
 //! id), its bind group (uniforms, the map's view, the compare sampler unless the technique
 //! compares by hand), its targets, and the recorded pass with its timestamps.
 
-use umbra_case::format::{Filter, MipFilter, Outside};
+use umbra_case::fault::Fault;
+use umbra_case::format::{Cull, Filter, MipFilter, Outside};
 use umbra_case::technique::CompareOp;
 use umbra_case::{LightKind, LookupMatrices, Technique};
 
@@ -113,8 +114,14 @@ impl Gpu {
                     attributes: &attributes,
                 })],
             },
+            // `camera.cull`, counter-clockwise front as in the shadow pass.
             primitive: wgpu::PrimitiveState {
-                cull_mode: None,
+                front_face: wgpu::FrontFace::Ccw,
+                cull_mode: match Fault::lit_cull(p.fault, &p.run.case().camera) {
+                    Cull::None => None,
+                    Cull::Back => Some(wgpu::Face::Back),
+                    Cull::Front => Some(wgpu::Face::Front),
+                },
                 ..Default::default()
             },
             depth_stencil: Some(wgpu::DepthStencilState {
@@ -297,7 +304,16 @@ impl Gpu {
         let mut pass = enc.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("lit pass"),
             color_attachments: &[
-                attach(0, wgpu::Color::BLACK),
+                attach(0, {
+                    // The case's clear colour (`camera.clear`): what the background shows.
+                    let [r, g, b] = Fault::clear_colour(p.fault, &p.run.case().camera);
+                    wgpu::Color {
+                        r: f64::from(r),
+                        g: f64::from(g),
+                        b: f64::from(b),
+                        a: 1.0,
+                    }
+                }),
                 attach(1, wgpu::Color::TRANSPARENT),
                 attach(2, wgpu::Color::TRANSPARENT),
             ],
