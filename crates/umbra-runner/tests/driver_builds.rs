@@ -156,7 +156,7 @@ fn fake_build(name: &str, version: &str, fault: bool) -> PathBuf {
 }
 
 /// A fake build directory reporting `version`, with the fake's `fault` (`invert`: every
-/// shadow wrong; `background`: the background painted, where only a golden looks).
+/// shadow wrong; `background`: the background's alpha changed, where only a golden looks).
 fn fake_build_with(name: &str, version: &str, fault: Option<&str>) -> PathBuf {
     let p = scratch(name);
     let marker = serde_json::json!({"version": version, "fault": fault});
@@ -463,7 +463,7 @@ fn a_bless_records_its_release_and_the_same_picture_passes_on_another(golden: &P
 }
 
 /// On 2.0.0, wrong shadows fail by the judge's own checks with the change reported, and a
-/// change where the judge does not look (the background) fails the golden check; on 1.0.0 it
+/// change where the judge does not look (the background's alpha) fails the golden check; on 1.0.0 it
 /// fails plainly.
 fn off_its_release_the_judge_speaks_and_the_golden_only_where_it_does_not_look(golden: &Path) {
     // Wrong shadows on 2.0.0 fail by the judge's own checks; the changed picture is reported
@@ -485,7 +485,7 @@ fn off_its_release_the_judge_speaks_and_the_golden_only_where_it_does_not_look(g
         csv.contains("fake/mesa/l-occluder,Fail,changed-judged,1.0.0,2.0.0,"),
         "{csv}"
     );
-    // A change where the judge does not look (the background) fails the golden check on
+    // A change where the judge does not look (the background's alpha) fails the golden check on
     // 2.0.0, naming both versions.
     let (o, _) = golden_versions_run(
         golden,

@@ -39,7 +39,7 @@
 //!   it is a changed picture (`changed-legal`), reported with both versions (terminal,
 //!   goldens.csv, report.html) and not failed; where some changed pixels are illegal, the
 //!   judge's own checks fail the run there (`changed-judged`: the golden adds nothing); only a
-//!   change where the judge does not look (the background, the frame's size) fails the golden
+//!   change where the judge does not look (alpha, the frame's size) fails the golden
 //!   check, with both versions named. So a Mesa developer's CI on main is green when the
 //!   driver is right, and every spec-legal change is still visible.
 //!
@@ -131,7 +131,8 @@ pub struct Checked {
 
 /// How `frame` differs from golden `img` (same size): pixels with a channel more than one
 /// step apart, the largest step, how many of those the judge found illegal, and how many it
-/// did not compare (the background, where only the golden speaks).
+/// did not compare (the background, whose RGB it holds to the clear colour but whose alpha
+/// only the golden sees).
 fn difference(
     img: &image::RgbaImage,
     frame: &Frame,
@@ -314,7 +315,7 @@ impl Seen {
     /// Outside the tolerance, or no golden: how the picture changed. On a release the golden
     /// was not blessed on, the judge decides every pixel it compared: a change there is legal
     /// (reported, never failed: the driver's choice inside the spec) or illegal (failed by
-    /// its own checks); only a change where it did not look (the background, a resized
+    /// its own checks); only a change where it did not look (alpha, a resized
     /// frame) is the golden's to fail.
     fn change(
         &self,
