@@ -261,13 +261,18 @@ pub enum Light {
 }
 
 impl Light {
-    /// What the light multiplies the diffuse and specular terms by: `color · intensity`.
-    pub fn radiance(&self) -> V3 {
-        let (c, i) = match self {
+    /// The light's `color` and `intensity`, whatever its kind.
+    pub fn emission(&self) -> (V3, f32) {
+        match self {
             Light::Directional(d) => (d.color, d.intensity),
             Light::Spot(s) => (s.color, s.intensity),
             Light::Point(p) => (p.color, p.intensity),
-        };
+        }
+    }
+
+    /// What the light multiplies the diffuse and specular terms by: `color · intensity`.
+    pub fn radiance(&self) -> V3 {
+        let (c, i) = self.emission();
         c.map(|x| x * i)
     }
 

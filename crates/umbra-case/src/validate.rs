@@ -446,11 +446,7 @@ impl Validator<'_> {
     /// The light's `color` (each channel in [0, 1]) and `intensity` (finite, ≥ 0).
     fn emission(&mut self, l: &Light) {
         let p = l.path();
-        let (color, intensity) = match l {
-            Light::Directional(d) => (d.color, d.intensity),
-            Light::Spot(s) => (s.color, s.intensity),
-            Light::Point(q) => (q.color, q.intensity),
-        };
+        let (color, intensity) = l.emission();
         self.color(p, color);
         let ip = format!("{p}.intensity");
         if self.finite(&ip, intensity) && intensity < 0.0 {

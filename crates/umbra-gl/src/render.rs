@@ -78,6 +78,26 @@ const FRESH_MAP_SAMPLER: [(u32, u32); 4] = [
 /// rendered again for the twin rather than held in memory between runs.
 const KEEP_LIMIT: u64 = 256 << 20;
 
+/// Face culling as `cull` asks (the winding that counts as front is the caller's): the shadow
+/// pass's `shadow.cull` and the lit pass's `camera.cull`.
+fn set_cull(gl: &Gl, cull: umbra_case::format::Cull) {
+    use umbra_case::format::Cull;
+    // SAFETY: state of the current context.
+    unsafe {
+        match cull {
+            Cull::None => gl.disable(glow::CULL_FACE),
+            Cull::Back | Cull::Front => {
+                gl.enable(glow::CULL_FACE);
+                gl.cull_face(if cull == Cull::Back {
+                    glow::BACK
+                } else {
+                    glow::FRONT
+                });
+            }
+        }
+    }
+}
+
 fn gl_err(stage: &str, message: impl Into<String>) -> BackendError {
     BackendError::Api {
         stage: stage.into(),

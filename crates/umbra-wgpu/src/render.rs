@@ -46,6 +46,16 @@ pub struct Gpu {
     pub depth_bias_clamp: bool,
 }
 
+/// wgpu's cull mode for `cull`: the shadow pass's `shadow.cull`, the lit pass's `camera.cull`.
+fn cull_mode(cull: umbra_case::format::Cull) -> Option<wgpu::Face> {
+    use umbra_case::format::Cull;
+    match cull {
+        Cull::None => None,
+        Cull::Back => Some(wgpu::Face::Back),
+        Cull::Front => Some(wgpu::Face::Front),
+    }
+}
+
 fn err(stage: &str, message: impl Into<String>) -> BackendError {
     BackendError::Api {
         stage: stage.into(),

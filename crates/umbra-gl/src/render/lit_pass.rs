@@ -4,13 +4,13 @@
 //! read back right after its draw.
 
 use umbra_case::fault::Fault;
-use umbra_case::format::{Cull, DepthFormat, Filter, MipFilter, Outside};
+use umbra_case::format::{DepthFormat, Filter, MipFilter, Outside};
 use umbra_case::technique::CompareOp;
 use umbra_case::{BackendError, LightKind, LookupMatrices, Technique};
 
 use super::shadow_pass::es2_depth;
-use super::{Renderer, Resources, RunPlan, flip_rows, gl_err, status_name};
-use crate::record::{Gl, Readback};
+use super::{Renderer, Resources, RunPlan, flip_rows, gl_err, set_cull, status_name};
+use crate::record::Readback;
 use crate::shaders;
 
 impl Renderer {
@@ -282,7 +282,9 @@ impl Renderer {
             }
             // The case's clear colour (`camera.clear`): what the background shows.
             let clear = Fault::clear_colour(p.fault, &p.run.case().camera);
-            lit_cull(gl, p);
+            // `camera.cull`, counter-clockwise front (as the shadow pass leaves it).
+            gl.front_face(glow::CCW);
+            set_cull(gl, Fault::lit_cull(p.fault, &p.run.case().camera));
             gl.viewport(0, 0, w as i32, h as i32);
             gl.enable(glow::DEPTH_TEST);
             gl.depth_func(glow::LESS);
@@ -336,25 +338,5 @@ impl Renderer {
         }
         self.check("readback")?;
         Ok(images)
-    }
-}
-
-/// `camera.cull` in the lit pass, counter-clockwise front (the shadow pass leaves CCW and no
-/// culling behind).
-fn lit_cull(gl: &Gl, p: &RunPlan) {
-    // SAFETY: state of the current context.
-    unsafe {
-        match Fault::lit_cull(p.fault, &p.run.case().camera) {
-            Cull::None => gl.disable(glow::CULL_FACE),
-            cull => {
-                gl.enable(glow::CULL_FACE);
-                gl.front_face(glow::CCW);
-                gl.cull_face(if cull == Cull::Back {
-                    glow::BACK
-                } else {
-                    glow::FRONT
-                });
-            }
-        }
     }
 }

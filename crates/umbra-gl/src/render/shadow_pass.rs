@@ -6,9 +6,9 @@
 
 use umbra_case::BackendError;
 use umbra_case::fault::Fault;
-use umbra_case::format::{Attachments, Cull, DepthFormat, DepthOrder, Mipmaps};
+use umbra_case::format::{Attachments, DepthFormat, DepthOrder, Mipmaps};
 
-use super::{FRESH_MAP_SAMPLER, Renderer, Resources, RunPlan, gl_err, status_name};
+use super::{FRESH_MAP_SAMPLER, Renderer, Resources, RunPlan, gl_err, set_cull, status_name};
 use crate::shaders;
 
 /// The shadow pass's programs: the depth pass's, and the down-sampling one for averaged levels.
@@ -225,17 +225,7 @@ impl Renderer {
                     gl.disable(glow::DEPTH_CLAMP);
                 }
             }
-            match s.cull {
-                Cull::None => gl.disable(glow::CULL_FACE),
-                Cull::Back => {
-                    gl.enable(glow::CULL_FACE);
-                    gl.cull_face(glow::BACK);
-                }
-                Cull::Front => {
-                    gl.enable(glow::CULL_FACE);
-                    gl.cull_face(glow::FRONT);
-                }
-            }
+            set_cull(gl, s.cull);
             let [factor, units] = bias.polygon_offset;
             let clamp = bias.polygon_offset_clamp;
             let sign = p.conv.toward_far();

@@ -3,11 +3,11 @@
 //! compares by hand), its targets, and the recorded pass with its timestamps.
 
 use umbra_case::fault::Fault;
-use umbra_case::format::{Cull, Filter, MipFilter, Outside};
+use umbra_case::format::{Filter, MipFilter, Outside};
 use umbra_case::technique::CompareOp;
 use umbra_case::{LightKind, LookupMatrices, Technique};
 
-use super::{Encoding, RunPlan, STRIDE, uniform_buffer, uniform_entry};
+use super::{Encoding, RunPlan, STRIDE, cull_mode, uniform_buffer, uniform_entry};
 use crate::render::Gpu;
 use crate::shaders;
 
@@ -117,11 +117,7 @@ impl Gpu {
             // `camera.cull`, counter-clockwise front as in the shadow pass.
             primitive: wgpu::PrimitiveState {
                 front_face: wgpu::FrontFace::Ccw,
-                cull_mode: match Fault::lit_cull(p.fault, &p.run.case().camera) {
-                    Cull::None => None,
-                    Cull::Back => Some(wgpu::Face::Back),
-                    Cull::Front => Some(wgpu::Face::Front),
-                },
+                cull_mode: cull_mode(Fault::lit_cull(p.fault, &p.run.case().camera)),
                 ..Default::default()
             },
             depth_stencil: Some(wgpu::DepthStencilState {

@@ -4,9 +4,9 @@
 //! per face and drawn level, and averaged mip levels after them.
 
 use umbra_case::fault::Fault;
-use umbra_case::format::{Attachments, Cull, DepthOrder, Mipmaps};
+use umbra_case::format::{Attachments, DepthOrder, Mipmaps};
 
-use super::{Encoding, RunPlan, STRIDE, uniform_buffer, uniform_entry};
+use super::{Encoding, RunPlan, STRIDE, cull_mode, uniform_buffer, uniform_entry};
 use crate::render::Gpu;
 use crate::shaders;
 
@@ -110,11 +110,7 @@ impl Gpu {
                 },
                 primitive: wgpu::PrimitiveState {
                     front_face,
-                    cull_mode: match s.cull {
-                        Cull::None => None,
-                        Cull::Back => Some(wgpu::Face::Back),
-                        Cull::Front => Some(wgpu::Face::Front),
-                    },
+                    cull_mode: cull_mode(s.cull),
                     // No near/far clipping, depth clamped to the viewport's [0, 1] (Vulkan's
                     // depthClampEnable, GL_DEPTH_CLAMP on wgpu's GL backend). Only with the
                     // feature: a forced clamp (the self-test's) without it stays off.
