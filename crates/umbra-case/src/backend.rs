@@ -101,6 +101,9 @@ pub struct Needs {
     pub map_size: u32,
     /// The camera image's larger side.
     pub image_size: u32,
+    /// An sRGB colour target for the lit pass (`camera.color_format` `srgb8_alpha8`): core
+    /// in GL 3.0 and GLES 3.0, GL_EXT_sRGB on GLES 2.
+    pub srgb_target: bool,
 }
 
 impl Needs {
@@ -124,6 +127,7 @@ impl Needs {
             },
             map_size: s.size[0].max(s.size[1]),
             image_size: case.camera.size[0].max(case.camera.size[1]),
+            srgb_target: case.camera.color_format == crate::format::ColorFormat::Srgb8Alpha8,
         }
     }
 }

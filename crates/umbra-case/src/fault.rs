@@ -299,6 +299,14 @@ pub enum Fault {
     /// The lit pass culls the other face than the case asks (a front-face winding taken the
     /// wrong way round, as a y-flipped framebuffer does): back faces show, front faces go.
     LitCullFlipped,
+    /// The shadow pass applies the mirrored depth function where the case asks for an
+    /// inclusive one (a compare-op table with its LEQUAL and GEQUAL entries swapped): the map
+    /// keeps the farthest surface instead of the nearest.
+    DepthFuncSwapped,
+    /// The lit pass's colour target is linear where the case asks for sRGB (desktop GL's
+    /// GL_FRAMEBUFFER_SRGB left disabled, the classic; a driver that drops the encoding):
+    /// colours are stored unencoded, darker in every mid-tone.
+    SrgbIgnored,
     /// One face of the map is drawn with a wrong orientation: cube face `face` (0–5 in the
     /// GL order +x, −x, +y, −y, +z, −z), or the 2D map when `face` is `None`.
     Oriented {
@@ -323,7 +331,7 @@ impl Fault {
     /// three stand for them here (a wrong handedness on the +x face, the one the
     /// four-fold symmetric point-light cases could not see; a wrong up vector on the −y face;
     /// a transposed 2D map), and `umbra selftest --fault` or `--orientations` runs any.
-    pub const ALL: [Fault; 39] = [
+    pub const ALL: [Fault; 41] = [
         Fault::CompareFlipped,
         Fault::NoDivide,
         Fault::NoGuard,
@@ -360,6 +368,8 @@ impl Fault {
         Fault::LightColourIgnored,
         Fault::ClearIgnored,
         Fault::LitCullFlipped,
+        Fault::DepthFuncSwapped,
+        Fault::SrgbIgnored,
         Fault::Oriented {
             face: Some(0),
             orientation: Orientation::MirrorX,
@@ -423,6 +433,8 @@ impl Fault {
             Fault::LightColourIgnored => "light-colour-ignored",
             Fault::ClearIgnored => "clear-ignored",
             Fault::LitCullFlipped => "lit-cull-flipped",
+            Fault::DepthFuncSwapped => "depth-func-swapped",
+            Fault::SrgbIgnored => "srgb-ignored",
             Fault::Oriented { face, orientation } => {
                 return match face {
                     Some(f) => format!("face{f}-{}", orientation.name()),
@@ -453,7 +465,8 @@ impl Fault {
             Fault::ColourGamma
             | Fault::DimmingOff
             | Fault::SpecularUnshadowed
-            | Fault::LightColourIgnored => Subtlety::Colour,
+            | Fault::LightColourIgnored
+            | Fault::SrgbIgnored => Subtlety::Colour,
             Fault::Oriented { .. } => Subtlety::Orientation,
             Fault::Scaled { param, .. } if param.in_texels() => Subtlety::SubTexel,
             Fault::Scaled {
@@ -524,6 +537,34 @@ impl Fault {
             camera.cull.flipped()
         } else {
             camera.cull
+        }
+    }
+
+    /// The colour target a backend under `fault` (if any) gives its lit pass: the case's
+    /// `camera.color_format`, linear RGBA8 under SrgbIgnored.
+    pub fn colour_format(
+        fault: Option<Fault>,
+        camera: &crate::format::Camera,
+    ) -> crate::format::ColorFormat {
+        if fault == Some(Fault::SrgbIgnored) {
+            crate::format::ColorFormat::Rgba8
+        } else {
+            camera.color_format
+        }
+    }
+
+    /// The depth test a backend under `fault` (if any) gives its shadow pass: the case's
+    /// ([`crate::format::Shadow::depth_test`]), mirrored under DepthFuncSwapped where that is
+    /// an inclusive function.
+    pub fn depth_func(
+        fault: Option<Fault>,
+        shadow: &crate::format::Shadow,
+    ) -> crate::format::DepthFunc {
+        let f = shadow.depth_test();
+        if fault == Some(Fault::DepthFuncSwapped) && f.inclusive() {
+            f.mirrored()
+        } else {
+            f
         }
     }
 

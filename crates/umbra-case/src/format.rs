@@ -246,6 +246,39 @@ pub struct Camera {
     /// exact truth's camera rays pass through them too. Default `none`.
     #[serde(default, skip_serializing_if = "Cull::is_none")]
     pub cull: Cull,
+    /// The lit pass's colour target: `rgba8` (linear, 8-bit unsigned normalised) or
+    /// `srgb8_alpha8` (GL_SRGB8_ALPHA8 with GL_FRAMEBUFFER_SRGB, Vulkan's
+    /// R8G8B8A8_SRGB, wgpu's `Rgba8UnormSrgb`): the shaded linear colour, and the clear
+    /// colour, are stored sRGB-encoded ([`crate::colour`]). Default `rgba8`.
+    #[serde(default, skip_serializing_if = "ColorFormat::is_rgba8")]
+    pub color_format: ColorFormat,
+}
+
+/// The lit pass's colour target format (`camera.color_format`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ColorFormat {
+    /// RGBA8 unsigned normalised: the linear colour rounded to 8 bits.
+    #[default]
+    Rgba8,
+    /// sRGB-encoded RGB, linear alpha, 8 bits each: the linear colour through the sRGB
+    /// transfer function, then rounded.
+    Srgb8Alpha8,
+}
+
+impl ColorFormat {
+    /// `rgba8` (left out of a point's JSON).
+    pub fn is_rgba8(&self) -> bool {
+        *self == ColorFormat::Rgba8
+    }
+
+    /// The name the case format uses.
+    pub fn name(self) -> &'static str {
+        match self {
+            ColorFormat::Rgba8 => "rgba8",
+            ColorFormat::Srgb8Alpha8 => "srgb8_alpha8",
+        }
+    }
 }
 
 /// The one light, written as `{ "spot": { ... } }`.
@@ -531,6 +564,11 @@ pub struct Shadow {
     /// `forward`.
     #[serde(default)]
     pub depth_order: DepthOrder,
+    /// The shadow pass's depth test: `less` or `less_equal` in forward order, `greater` or
+    /// `greater_equal` in reversed order (GL's glDepthFunc, Vulkan's and wgpu's
+    /// `depthCompareOp`). Default: the strict one of the order (`less`, `greater`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_func: Option<DepthFunc>,
     /// Mip levels of the map, sampled with a mipmapped compare filter (see [`Mipmaps`]).
     /// Default: none (one level).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -803,6 +841,69 @@ pub enum DepthOrder {
     Reversed,
 }
 
+/// The shadow pass's depth test (`shadow.depth_func`). The inclusive functions differ from
+/// the strict ones only on a tie, where both keep the same depth: the stored map is the same
+/// (GL 4.6 §17.3.4, Vulkan "Depth Comparison"). What a case with one tests is that the
+/// driver honours the function it is given (a compare-op table with an entry swapped stores
+/// the farthest surface instead of the nearest).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DepthFunc {
+    /// GL_LESS: forward order's default.
+    Less,
+    /// GL_LEQUAL: what wgpu's shadow example and many engines use in forward order.
+    LessEqual,
+    /// GL_GREATER: reversed order's default.
+    Greater,
+    /// GL_GEQUAL.
+    GreaterEqual,
+}
+
+impl DepthFunc {
+    /// Whether a fragment whose depth equals the stored one passes.
+    pub fn inclusive(self) -> bool {
+        matches!(self, DepthFunc::LessEqual | DepthFunc::GreaterEqual)
+    }
+
+    /// Whether the function keeps the nearer fragment in `order`.
+    pub fn fits(self, order: DepthOrder) -> bool {
+        match order {
+            DepthOrder::Forward => matches!(self, DepthFunc::Less | DepthFunc::LessEqual),
+            DepthOrder::Reversed => matches!(self, DepthFunc::Greater | DepthFunc::GreaterEqual),
+        }
+    }
+
+    /// The name the case format uses.
+    pub fn name(self) -> &'static str {
+        match self {
+            DepthFunc::Less => "less",
+            DepthFunc::LessEqual => "less_equal",
+            DepthFunc::Greater => "greater",
+            DepthFunc::GreaterEqual => "greater_equal",
+        }
+    }
+
+    /// The function a shadow pass uses: `asked` (the case's `shadow.depth_func`) or the
+    /// strict one of `order`.
+    pub fn resolve(asked: Option<DepthFunc>, order: DepthOrder) -> DepthFunc {
+        asked.unwrap_or(match order {
+            DepthOrder::Forward => DepthFunc::Less,
+            DepthOrder::Reversed => DepthFunc::Greater,
+        })
+    }
+
+    /// The same function with its direction flipped (less_equal ↔ greater_equal, less ↔
+    /// greater): what a compare-op table with the entry swapped applies.
+    pub fn mirrored(self) -> DepthFunc {
+        match self {
+            DepthFunc::Less => DepthFunc::Greater,
+            DepthFunc::LessEqual => DepthFunc::GreaterEqual,
+            DepthFunc::Greater => DepthFunc::Less,
+            DepthFunc::GreaterEqual => DepthFunc::LessEqual,
+        }
+    }
+}
+
 /// The illumination model (docs/catalogue.md §17); `shade` ∈ [0,1] is the shadow lookup.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -952,6 +1053,13 @@ pub enum InteriorError {
     NoFalseShadow,
 }
 
+impl Shadow {
+    /// The shadow pass's depth test: `depth_func`, or the strict one of `depth_order`.
+    pub fn depth_test(&self) -> DepthFunc {
+        DepthFunc::resolve(self.depth_func, self.depth_order)
+    }
+}
+
 impl Default for Shadow {
     fn default() -> Self {
         Shadow {
@@ -968,6 +1076,7 @@ impl Default for Shadow {
             beyond_far: BeyondFar::default(),
             guard_behind_light: true,
             depth_order: DepthOrder::default(),
+            depth_func: None,
             mipmaps: None,
         }
     }

@@ -238,6 +238,18 @@ impl Gen {
         } else {
             Cull::None
         };
+        // The shadow pass's inclusive depth function in a third of the cases, drawn last
+        // too (wgpu's example and many engines use LEQUAL).
+        if self.rng.chance(0.33) {
+            case.shadow.depth_func = Some(match case.shadow.depth_order {
+                DepthOrder::Forward => DepthFunc::LessEqual,
+                DepthOrder::Reversed => DepthFunc::GreaterEqual,
+            });
+        }
+        // An sRGB colour target in a fifth of the cases, drawn last too.
+        if self.rng.chance(0.2) {
+            case.camera.color_format = ColorFormat::Srgb8Alpha8;
+        }
         case.about = about(&case);
         case
     }
@@ -476,6 +488,7 @@ impl Gen {
             size,
             clear: [0.0; 3],
             cull: Cull::None,
+            color_format: ColorFormat::Rgba8,
         }
     }
 
@@ -625,6 +638,8 @@ impl Gen {
             },
             // Drawn last, so that the fields above are what they were before it existed.
             depth_clamp: self.rng.chance(0.15),
+            // Drawn at the end of the case (`case`), after every earlier field.
+            depth_func: None,
             mipmaps: None,
         }
     }
@@ -778,6 +793,13 @@ fn about(c: &Case) -> String {
             }) => format!(", {} {:?} cascades", k.count, k.split).to_lowercase(),
             _ => String::new(),
         }
+        + &s.depth_func
+            .map_or(String::new(), |f| format!(", depth test {}", f.name()))
+        + if c.camera.color_format.is_rgba8() {
+            ""
+        } else {
+            ", srgb target"
+        }
 }
 
 /// The bias forms a technique uses, as `constant+polygon_offset` (or `no`).
@@ -882,6 +904,11 @@ mod tests {
                     seen.insert("clear colour".into());
                 }
                 seen.insert(format!("lit cull {:?}", case.camera.cull));
+                seen.insert(format!(
+                    "depth func inclusive {}",
+                    case.shadow.depth_test().inclusive()
+                ));
+                seen.insert(format!("colour target {:?}", case.camera.color_format));
                 for o in &case.scene.objects {
                     seen.insert(
                         match o {
@@ -904,10 +931,11 @@ mod tests {
         // 4 formats, 3 filters, 2 compares, 3 culls, 2 orders, 2 attachments, 4 outside,
         // 2 guards, 2 depth orders, 2 depth clamps, 7 bias entries, 4 split schemes, a
         // cascade blend and distance, 3 lights, 2 shadings, a tinted light, one above 1, a
-        // clear colour, 3 lit-pass culls, 4 objects, sweep, offset.
+        // clear colour, 3 lit-pass culls, strict and inclusive depth functions, 2 colour
+        // targets, 4 objects, sweep, offset.
         assert_eq!(
             seen.len(),
-            4 + 3 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 7 + 4 + 2 + 3 + 2 + 3 + 3 + 4 + 2,
+            4 + 3 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 7 + 4 + 2 + 3 + 2 + 3 + 3 + 2 + 2 + 4 + 2,
             "{seen:?}"
         );
     }

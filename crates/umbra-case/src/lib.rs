@@ -11,7 +11,8 @@
 //! - [`conventions`]: clip ranges, projections, the bias matrix, window mapping, compares. The
 //!   only place a projection is built.
 //! - [`light`] and [`prepare`]: the light faces and camera of a run, fitted where asked.
-//! - [`depth`]: storage per depth format and the polygon-offset unit.
+//! - [`depth`]: storage per depth format and the polygon-offset unit; [`colour`]: the lit
+//!   pass's colour target (linear or sRGB) and the freedom of its encoding.
 //! - [`math`]: the transcendental functions, the same on every C library (musl's, in Rust).
 //! - [`frame`] and [`backend`]: what a backend returns and the trait it implements.
 //! - [`profile`]: what an API lets an implementation do differently (the judge's input), and
@@ -29,6 +30,7 @@
 pub mod backend;
 pub mod calibration;
 pub mod camera;
+pub mod colour;
 pub mod conventions;
 pub mod depth;
 pub mod error;

@@ -217,6 +217,16 @@ impl Profile {
         calibration: Calibration::NONE,
     };
 
+    /// Whether a clear of an sRGB colour target may store the clear colour unencoded: GL
+    /// 3.3's §4.2.3 (to 4.1) lists no sRGB conversion among what Clear applies, GL 4.2 added
+    /// it (§17.4.3 in 4.6), so a GL 3.3 core program may get either; GLES 2's EXT_sRGB does
+    /// not say. GLES 3.0 (§4.2.3) and Vulkan ("Clear Values": linear, encoded) always encode.
+    /// The GL and GLES 2 profiles, not GLES 3 (the one `Spec::Gl` profile with seamless cube
+    /// maps) nor Vulkan.
+    pub fn srgb_clear_may_be_unencoded(self) -> bool {
+        self.spec == Spec::Gl && !self.seamless_cube
+    }
+
     /// A short stable name, for reports and cache keys (`gl`, `gles3`, `vulkan`, …, with
     /// `+DEVIATION` when a deviation is allowed and ` card(…)` with a calibration).
     pub fn name(self) -> String {

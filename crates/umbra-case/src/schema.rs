@@ -38,7 +38,7 @@ pub const EXEMPLARS: &[&str] = &[
             {"mesh":{"positions":[[0,0,0],[1,0,0],[0,1,0]],"triangles":[[0,1,2]],"color":[1,1,1],"transform":{"translate":[0,0,0],"rotate_deg":{"axis":[0,1,0],"angle":10}}}}],
             "offset":[1,0,0]},
         "camera":{"eye":[0,1,1],"target":[0,0,0],"up":[0,1,0],"fov_y_deg":45,"near":0.1,"far":10,"size":[64,64],
-                  "clear":[0.1,0.2,0.3],"cull":"back"},
+                  "clear":[0.1,0.2,0.3],"cull":"back","color_format":"srgb8_alpha8"},
         "light":{"directional":{"position":[0,1,0],"azimuth_deg":0,"elevation_deg":45,"distance":10,"target":[0,0,0],
                  "up":[0,1,0],"ortho":{"left":-1,"right":1,"bottom":-1,"top":1,"near":0.1,"far":10},"fit":"scene",
                  "color":[1,0.5,0.5],"intensity":2}},
@@ -47,7 +47,7 @@ pub const EXEMPLARS: &[&str] = &[
                           "n_dot_l":{"scale":1,"min":0,"light":"position"},"normal_offset":0},
                   "cull":"back","bias_matrix":"after_divide","attachments":"with_color","outside":"border",
                   "beyond_far":"lit","depth_clamp":true,"guard_behind_light":true,"depth_order":"reversed",
-                  "mipmaps":{"levels":2,"filter":"linear","source":"averaged"}},
+                  "depth_func":"greater_equal","mipmaps":{"levels":2,"filter":"linear","source":"averaged"}},
         "shading":{"model":"classic","ambient":0.1,"dimming":0.5,"specular":0.2,"shininess":16,"shadowed_factor":0.2},
         "sweep":{"shadow.bias.constant":{"from":0,"to":1,"steps":2,"scale":"linear","values":[0]}},
         "expect":{"backends_agree":true,"interior_error":"zero","twins":[{"name":"t","set":{},"agree":"legal"}],
@@ -219,7 +219,9 @@ pub fn check_term(path: &str, op: &str, value: &Value) -> Result<(), String> {
 /// A case point as conditions read it: its JSON with the defaults serde leaves out written
 /// in (`scene.offset` `[0, 0, 0]`, `shadow.beyond_far` `compare`, `shadow.depth_clamp`
 /// `false`, `shadow.bias.n_dot_l.light` `direction`, `camera.clear` `[0, 0, 0]`,
-/// `camera.cull` `none`, the light's `color` `[1, 1, 1]` and `intensity` 1), so `@when shadow.beyond_far=compare` holds where the case did not write it.
+/// `camera.cull` `none`, `camera.color_format` `rgba8`, the light's `color` `[1, 1, 1]` and
+/// `intensity` 1,
+/// `shadow.depth_func` the order's strict function), so `@when shadow.beyond_far=compare` holds where the case did not write it.
 pub fn condition_json(case: &crate::format::Case) -> Value {
     let mut v = serde_json::to_value(case).unwrap_or_default();
     let mut put = |pointer: &str, key: &str, value: Value| {
@@ -230,8 +232,14 @@ pub fn condition_json(case: &crate::format::Case) -> Value {
     put("/scene", "offset", serde_json::json!([0, 0, 0]));
     put("/shadow", "beyond_far", serde_json::json!("compare"));
     put("/shadow", "depth_clamp", serde_json::json!(false));
+    put(
+        "/shadow",
+        "depth_func",
+        serde_json::json!(case.shadow.depth_test().name()),
+    );
     put("/camera", "clear", serde_json::json!([0, 0, 0]));
     put("/camera", "cull", serde_json::json!("none"));
+    put("/camera", "color_format", serde_json::json!("rgba8"));
     for kind in ["directional", "spot", "point"] {
         put(
             &format!("/light/{kind}"),
@@ -303,6 +311,10 @@ mod tests {
         assert_eq!(
             v.pointer("/shadow/depth_clamp"),
             Some(&serde_json::json!(false))
+        );
+        assert_eq!(
+            v.pointer("/shadow/depth_func"),
+            Some(&serde_json::json!("less"))
         );
         let full: crate::format::Case = serde_json::from_str(EXEMPLARS[1]).expect("case");
         assert_eq!(

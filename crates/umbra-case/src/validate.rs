@@ -660,6 +660,20 @@ impl Validator<'_> {
         if let Some(m) = s.mipmaps {
             self.mipmaps(s, m);
         }
+        if let Some(f) = s.depth_func.filter(|f| !f.fits(s.depth_order)) {
+            let (fits, order) = match s.depth_order {
+                DepthOrder::Forward => ("\"less\" or \"less_equal\"", "forward"),
+                DepthOrder::Reversed => ("\"greater\" or \"greater_equal\"", "reversed"),
+            };
+            self.err(
+                "shadow.depth_func",
+                format!(
+                    "\"{}\" keeps the farther surface in {order} depth order (depth_order \"{order}\"), so the map would hold no caster's front",
+                    f.name()
+                ),
+                format!("use {fits}, or change shadow.depth_order"),
+            );
+        }
         let b = &s.bias;
         self.finite("shadow.bias.constant", b.constant);
         self.finite("shadow.bias.polygon_offset[0]", b.polygon_offset[0]);

@@ -771,3 +771,34 @@ fn light_colour_intensity_and_clear_colour_validate_and_name_the_field() {
     );
     assert_error(point, "light.point.color[1]", "must be in [0, 1]");
 }
+
+#[test]
+fn a_depth_function_that_keeps_the_farther_surface_is_refused_with_the_fix() {
+    for (order, func) in [
+        ("forward", "less_equal"),
+        ("forward", "less"),
+        ("reversed", "greater_equal"),
+        ("reversed", "greater"),
+    ] {
+        let doc = set(base(), "/shadow/depth_order", json!(order));
+        let doc = set(doc, "/shadow/depth_func", json!(func));
+        let points = load_str(&doc.to_string(), Path::new(FILE)).expect("valid");
+        assert_eq!(points[0].case.shadow.depth_test().name(), func);
+    }
+    // Left out of a point's JSON where not given, so no existing point's id moves.
+    let plain = load_str(&base().to_string(), Path::new(FILE)).expect("valid");
+    let shadow = serde_json::to_string(&plain[0].case.shadow).expect("json");
+    assert!(!shadow.contains("depth_func"));
+    assert_eq!(plain[0].case.shadow.depth_test().name(), "less");
+    let wrong = set(base(), "/shadow/depth_func", json!("greater_equal"));
+    assert_error(wrong, "shadow.depth_func", "keeps the farther surface");
+    let wrong = set(base(), "/shadow/depth_order", json!("reversed"));
+    let wrong = set(wrong, "/shadow/depth_func", json!("less"));
+    assert_error(
+        wrong,
+        "shadow.depth_func",
+        "farther surface in reversed depth order",
+    );
+    let unknown = set(base(), "/shadow/depth_func", json!("lequal"));
+    assert_error(unknown, "shadow.depth_func", "unknown variant");
+}

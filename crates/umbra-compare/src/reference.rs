@@ -25,6 +25,7 @@
 
 use serde::{Deserialize, Serialize};
 use umbra_case::Frame;
+use umbra_case::format::ColorFormat;
 use umbra_ref::Judged;
 use umbra_ref::lookup::ambiguity;
 
@@ -230,9 +231,14 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
         if !ref_cov && !b_cov {
             // The background: the clear colour (`camera.clear`), the only thing a backend
             // writes there (a clear value converted as any colour is: either code of a value
-            // halfway between two).
+            // halfway between two; in an sRGB target encoded, or on desktop GL and GLES 2
+            // possibly not: Profile::srgb_clear_may_be_unencoded).
             r.colour_checked += 1;
-            if !colour_ok(&frame.color[i * 4..i * 4 + 3], 0.0, 0.0, &basis.legal[i]) {
+            let rgb = &frame.color[i * 4..i * 4 + 3];
+            let cleared = |format| colour_ok(rgb, 0.0, 0.0, &basis.legal[i], format);
+            if !(cleared(basis.color_format)
+                || (basis.profile.srgb_clear_may_be_unencoded() && cleared(ColorFormat::Rgba8)))
+            {
                 r.illegal_colour += 1;
                 r.illegal += 1;
                 px[i] = PixelJudgement::Illegal;
@@ -305,7 +311,13 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
             };
         }
         r.colour_checked += 1;
-        if !colour_ok(&frame.color[i * 4..i * 4 + 3], v, eps, &l) {
+        if !colour_ok(
+            &frame.color[i * 4..i * 4 + 3],
+            v,
+            eps,
+            &l,
+            basis.color_format,
+        ) {
             r.illegal_colour += 1;
             if ok {
                 r.illegal += 1;
@@ -356,16 +368,24 @@ pub fn frame_failures(frame: &Frame, px: &[PixelJudgement]) -> Failed {
     failed
 }
 
-/// Whether an RGB8 colour is the shading of visibility `v` (± `eps`) at this pixel: each
-/// channel within the codes that the unclamped colour's range, widened by the shading's
-/// arithmetic freedom, rounds to either way.
-pub fn colour_ok(rgb: &[u8], v: f32, eps: f32, l: &umbra_ref::PixelLegal) -> bool {
+/// Whether an RGB8 colour is the shading of visibility `v` (± `eps`) at this pixel, stored
+/// in a `format` target: each channel within the codes that the unclamped colour's range,
+/// widened by the shading's arithmetic freedom, clamped, encoded with the encoding's own
+/// freedom ([`ColorFormat::encoded_bounds`]: nothing for `rgba8`), rounds to either way.
+pub fn colour_ok(
+    rgb: &[u8],
+    v: f32,
+    eps: f32,
+    l: &umbra_ref::PixelLegal,
+    format: ColorFormat,
+) -> bool {
     let (v0, v1) = ((v - eps).clamp(0.0, 1.0), (v + eps).clamp(0.0, 1.0));
     (0..3).all(|c| {
         let at = |v: f32| l.c0[c] + (l.c1[c] - l.c0[c]) * v;
         let (a, b) = (at(v0), at(v1));
         let lo = (a.min(b) - l.ctol).clamp(0.0, 1.0);
         let hi = (a.max(b) + l.ctol).clamp(0.0, 1.0);
+        let (lo, hi) = format.encoded_bounds(lo, hi);
         within_codes(lo, hi, rgb[c])
     })
 }

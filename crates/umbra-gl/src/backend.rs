@@ -166,6 +166,9 @@ impl Backend for GlBackend {
         if needs.depth_clamp && !caps.depth_clamp {
             return Support::Unsupported("depth clamp (shadow.depth_clamp) needs GL_DEPTH_CLAMP: core in GL 3.2, GL_EXT_depth_clamp on GLES, which this driver does not advertise".into());
         }
+        if needs.srgb_target && !caps.srgb_target {
+            return Support::Unsupported("an sRGB colour target (camera.color_format srgb8_alpha8) needs GL_EXT_sRGB on GLES 2 (core in GLES 3.0 and GL 3.0), which this driver does not advertise".into());
+        }
         if !caps.depth24_renderbuffer {
             return Support::Unsupported("the GLES 2 path renders into 24-bit depth renderbuffers (the packed-depth profile models them), which need OES_depth24, and this driver does not advertise it".into());
         }

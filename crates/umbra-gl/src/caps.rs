@@ -41,6 +41,9 @@ pub struct Caps {
     /// `shadow.depth_clamp` enables GL_DEPTH_CLAMP in the shadow pass; without it such a case
     /// is a skip that names the extension.
     pub depth_clamp: bool,
+    /// sRGB colour targets (`camera.color_format` `srgb8_alpha8`): SRGB8_ALPHA8 is
+    /// colour-renderable in GL 3.0 and GLES 3.0 core; GLES 2 needs GL_EXT_sRGB (SRGB_ALPHA_EXT).
+    pub srgb_target: bool,
     /// 24-bit depth renderbuffers: core in GL 3.3 and GLES 3.0, OES_depth24 on GLES 2, whose
     /// path renders both passes into DEPTH_COMPONENT24 renderbuffers (the packed-depth
     /// profile models a 24-bit camera depth buffer); without it GLES 2 is a skip.
@@ -89,6 +92,7 @@ impl Caps {
             shader_offset: has("GL_OES_standard_derivatives") && has("GL_EXT_frag_depth"),
             seamless_cube_always: api == Api::Gles3,
             depth_clamp: api == Api::Gl33 || has("GL_EXT_depth_clamp"),
+            srgb_target: api != Api::Gles2 || has("GL_EXT_sRGB"),
             extensions,
         }
     }

@@ -31,7 +31,7 @@ pub mod truth;
 use std::time::Instant;
 
 use umbra_case::fault::Fault;
-use umbra_case::format::{Case, Cull, MipSource, Mipmaps, Shadow};
+use umbra_case::format::{Case, ColorFormat, Cull, MipSource, Mipmaps, Shadow};
 use umbra_case::{
     Backend, BackendError, BackendId, ClipDepth, Clock, Convention, DepthMap, DriverInfo, Frame,
     Needs, Prepared, Profile, Support, Timings, VisibilityStorage,
@@ -74,6 +74,9 @@ pub struct Judged {
     pub quantum: f32,
     /// The profile the intervals are for.
     pub profile: Profile,
+    /// The colour target the case asks for (`camera.color_format`): how the judge turns a
+    /// pixel's linear colour bounds into the codes it may store.
+    pub color_format: ColorFormat,
     /// Per shadow-map texel, layer after layer, each top row first (as
     /// [`umbra_case::DepthMap`] holds them): the range of values a conformant implementation
     /// may store there ([`shadow_pass::Freedom`]). Empty when not kept.
@@ -101,6 +104,7 @@ pub fn explain(
             legal,
             quantum: lookup::quantum(&run.case().shadow, &run.light),
             profile,
+            color_format: run.case().camera.color_format,
             map,
         },
         trace,

@@ -84,6 +84,19 @@ pub struct LitImage {
     pub trace: String,
 }
 
+/// The lit pass's rasteriser: the camera's image in `conv`, culling by `camera.cull`, the
+/// near and far planes clipping.
+fn camera_raster(run: &Prepared, conv: Convention) -> Rasterizer {
+    let [width, height] = run.camera.size;
+    Rasterizer {
+        conv,
+        width,
+        height,
+        cull: run.case().camera.cull,
+        depth_clamp: false,
+    }
+}
+
 /// Renders the camera view of `run`, looking shadows up with `lookup`; with `judged` (the
 /// camera view's edge kinds and the profile), also what every pixel allows.
 pub fn render(
@@ -95,15 +108,8 @@ pub fn render(
 ) -> LitImage {
     let [w, h] = run.camera.size;
     let geo: &Geometry = &run.geometry;
-    let raster = Rasterizer {
-        conv,
-        width: w,
-        height: h,
-        cull: run.case().camera.cull,
-        depth_clamp: false,
-    };
     let tris = setup_all(
-        &raster,
+        &camera_raster(run, conv),
         run.camera.view_proj(conv),
         geo,
         judged.map(|j| j.0),
@@ -112,7 +118,8 @@ pub fn render(
     let surface_free = judged.map(|(_, profile)| surface_freedom(&tris, &nearest, w, geo, profile));
     let case = run.case();
     let eye = run.camera.eye;
-    let bg = background(case.camera.clear);
+    let format = case.camera.color_format;
+    let bg = background(case.camera.clear, format);
     let light = Vec3::from(case.light.radiance());
     // The judged lookup at a surface point: its value and what it allows.
     let judge = |pt: &Point, free: u8| judged_point(run, &tris, lookup, pt, free);
@@ -216,6 +223,7 @@ pub fn render(
                     }
                     let albedo = geo.albedo[geo.object[t] as usize];
                     shade_run(
+                        format,
                         &case.shading,
                         light,
                         albedo,

@@ -7,20 +7,36 @@
 //! background is the case's clear colour (`camera.clear`, black by default), opaque.
 
 use glam::Vec3;
-use umbra_case::format::{Shading, ShadingModel};
+use umbra_case::format::{ColorFormat, Shading, ShadingModel};
 use umbra_case::math::powf;
 
 use crate::rounding::unorm8;
 use crate::surface::Surfaces;
 
-/// The background colour of `clear` (`camera.clear`) as every backend stores it, rounded to
-/// the nearest code (the judge allows either neighbour of a value halfway).
-pub fn background(clear: [f32; 3]) -> [u8; 4] {
-    [unorm8(clear[0]), unorm8(clear[1]), unorm8(clear[2]), 255]
+/// The background colour of `clear` (`camera.clear`) as every backend stores it in a
+/// `format` target, rounded to the nearest code (the judge allows either neighbour of a
+/// value halfway).
+pub fn background(clear: [f32; 3], format: ColorFormat) -> [u8; 4] {
+    store(format, Vec3::from(clear))
 }
 
-/// Shaded colour of a surface point, RGBA8.
+/// A linear colour as a `format` target stores it, opaque: clamped, encoded, rounded to the
+/// nearest code ((x.clamp(0, 1)·255).round() as u8 for `rgba8`, without libm's roundf,
+/// crate::rounding).
+#[inline]
+pub fn store(format: ColorFormat, c: Vec3) -> [u8; 4] {
+    [
+        unorm8(format.encode(c.x)),
+        unorm8(format.encode(c.y)),
+        unorm8(format.encode(c.z)),
+        255,
+    ]
+}
+
+/// Shaded colour of a surface point, RGBA8 as a `format` target stores it.
+#[allow(clippy::too_many_arguments)]
 pub fn shade(
+    format: ColorFormat,
     s: &Shading,
     light: Vec3,
     albedo: Vec3,
@@ -29,9 +45,10 @@ pub fn shade(
     to_eye: Vec3,
     visibility: f32,
 ) -> [u8; 4] {
-    let c = shade_linear(s, light, albedo, n, to_light, to_eye, visibility);
-    // (x.clamp(0, 1)·255).round() as u8, without libm's roundf (crate::rounding).
-    [unorm8(c.x), unorm8(c.y), unorm8(c.z), 255]
+    store(
+        format,
+        shade_linear(s, light, albedo, n, to_light, to_eye, visibility),
+    )
 }
 
 /// [`shade`] for every pixel of a run of one object (`albedo`): the normals, light and eye
@@ -39,7 +56,9 @@ pub fn shade(
 /// The same operations as [`shade_linear`] in the same order, in passes over the run (the
 /// vector parts, then each `powf`, then the colours) so that the compiler vectorises all but
 /// the library call.
+#[allow(clippy::too_many_arguments)]
 pub fn shade_run(
+    format: ColorFormat,
     s: &Shading,
     light: Vec3,
     albedo: Vec3,
@@ -74,12 +93,7 @@ pub fn shade_run(
             for (k, (&[_, diffuse, spec], &v)) in scratch.iter().zip(vis).enumerate() {
                 let kept = s.dimming + (1.0 - s.dimming) * v;
                 let c = (s.ambient + kept * diffuse * light) * albedo + light * (v * spec);
-                out[4 * k..4 * k + 4].copy_from_slice(&[
-                    unorm8(c.x),
-                    unorm8(c.y),
-                    unorm8(c.z),
-                    255,
-                ]);
+                out[4 * k..4 * k + 4].copy_from_slice(&store(format, c));
             }
         }
         ShadingModel::Classic => {
@@ -93,12 +107,7 @@ pub fn shade_run(
                     surfaces.eye_dir(k),
                     vis[k],
                 );
-                out[4 * k..4 * k + 4].copy_from_slice(&[
-                    unorm8(c.x),
-                    unorm8(c.y),
-                    unorm8(c.z),
-                    255,
-                ]);
+                out[4 * k..4 * k + 4].copy_from_slice(&store(format, c));
             }
         }
     }
@@ -192,7 +201,7 @@ mod tests {
     use super::*;
 
     /// A run's colours are [`shade`]'s, pixel by pixel, bit for bit, for both models, lit and
-    /// back-facing pixels, and visibilities 0, 1 and between.
+    /// back-facing pixels, visibilities 0, 1 and between, and both colour targets.
     #[test]
     fn a_run_is_shaded_as_its_pixels_are() {
         let mut next = crate::test_rng::uniform(0x853c_49e6_748f_ea9b);
@@ -229,9 +238,25 @@ mod tests {
                     vis.push([0.0, 1.0, next()][k % 3]);
                 }
                 let mut out = vec![0u8; 4 * len];
-                shade_run(&s, light, albedo, &run, &vis, &mut out, &mut Vec::new());
+                // Linear in half the draws, sRGB in the rest.
+                let format = if next() < 0.5 {
+                    ColorFormat::Rgba8
+                } else {
+                    ColorFormat::Srgb8Alpha8
+                };
+                shade_run(
+                    format,
+                    &s,
+                    light,
+                    albedo,
+                    &run,
+                    &vis,
+                    &mut out,
+                    &mut Vec::new(),
+                );
                 for k in 0..len {
                     let want = shade(
+                        format,
                         &s,
                         light,
                         albedo,

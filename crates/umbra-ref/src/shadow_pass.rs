@@ -424,7 +424,9 @@ fn stored_values(conv: Convention, shadow: &Shadow, tris: &[Tri], packed: bool) 
 }
 
 /// One span's fragments through the offset, the clamp to the depth range, the format's
-/// `store` and the depth test (LESS forward, GREATER reversed) against `texels`.
+/// `store` and the depth test (LESS forward, GREATER reversed) against `texels`. It is the
+/// inclusive functions' run too (`shadow.depth_func` LEQUAL, GEQUAL): they differ only where
+/// the stored value equals the texel's, and replace it by itself.
 #[inline(always)]
 fn depth_test_run(
     texels: &mut [f32],

@@ -208,7 +208,8 @@ fn faults() -> impl Iterator<Item = Option<Fault>> {
             .into_iter()
             // Faults that act on the passes' state, not on any source (orientations, the
             // mipmapped sampler's levels, the shadow pass's depth clamp, the layer it draws
-            // a cascade into, the lit pass's clear colour and culling), leave the sources as they were.
+            // a cascade into, the lit pass's clear colour, culling and colour target, the
+            // shadow pass's depth function), leave the sources as they were.
             .filter(|f| {
                 !matches!(
                     f,
@@ -220,6 +221,8 @@ fn faults() -> impl Iterator<Item = Option<Fault>> {
                         | Fault::LayerShift
                         | Fault::ClearIgnored
                         | Fault::LitCullFlipped
+                        | Fault::DepthFuncSwapped
+                        | Fault::SrgbIgnored
                 )
             })
             .map(Some),

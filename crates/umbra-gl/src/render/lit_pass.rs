@@ -4,12 +4,13 @@
 //! read back right after its draw.
 
 use umbra_case::fault::Fault;
-use umbra_case::format::{DepthFormat, Filter, MipFilter, Outside};
+use umbra_case::format::{ColorFormat, DepthFormat, Filter, MipFilter, Outside};
 use umbra_case::technique::CompareOp;
 use umbra_case::{BackendError, LightKind, LookupMatrices, Technique};
 
 use super::shadow_pass::es2_depth;
 use super::{Renderer, Resources, RunPlan, flip_rows, gl_err, set_cull, status_name};
+use crate::api::Api;
 use crate::record::Readback;
 use crate::shaders;
 
@@ -194,32 +195,33 @@ impl Renderer {
         self.check("lit pass uniforms")
     }
 
-    /// One draw of the lit pass into its framebuffer (GL: colour and visibility as two
-    /// targets; GLES 2: pass 0 colour, pass 1 visibility) and the readback of its outputs,
-    /// rows flipped to top first.
-    fn draw_lit(
+    /// The lit pass's camera-sized outputs on the bound framebuffer: colour and visibility
+    /// (GL 3.3 and GLES 3: attachments 0 and 1; GLES 2: one per `pass`, colour first). The
+    /// colour output is SRGB8_ALPHA8 (GLES 2: EXT_sRGB's SRGB_ALPHA_EXT) for an sRGB target
+    /// (`camera.color_format`), RGBA8 otherwise; visibility is always RGBA8.
+    fn lit_outputs(
         &self,
         p: &RunPlan,
-        program: glow::Program,
-        map: glow::Texture,
-        res: &mut Resources,
+        srgb: bool,
         pass: usize,
-    ) -> Result<Vec<Vec<u8>>, BackendError> {
+        res: &mut Resources,
+    ) -> Result<(), BackendError> {
         let gl = &self.g();
-        let es2 = p.es2;
-        let [w, h] = p.run.camera.size;
+        let (es2, [w, h]) = (p.es2, p.run.camera.size);
         let outputs = if es2 { 1 } else { 2 };
-        let mut images = Vec::new();
-        // SAFETY: objects of the current context; completeness is checked before drawing.
+        // SAFETY: objects of the current context, attached to its bound framebuffer.
         unsafe {
-            let fbo = gl.create_framebuffer().map_err(|e| gl_err("lit pass", e))?;
-            res.framebuffers.push(fbo);
-            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
             for a in 0..outputs {
                 let t = gl.create_texture().map_err(|e| gl_err("lit pass", e))?;
                 res.textures.push(t);
                 gl.bind_texture(glow::TEXTURE_2D, Some(t));
-                let internal = if es2 { glow::RGBA } else { glow::RGBA8 };
+                let colour = a + pass as u32 == 0;
+                let (internal, format) = match (es2, srgb && colour) {
+                    (true, true) => (glow::SRGB_ALPHA, glow::SRGB_ALPHA),
+                    (true, false) => (glow::RGBA, glow::RGBA),
+                    (false, true) => (glow::SRGB8_ALPHA8, glow::RGBA),
+                    (false, false) => (glow::RGBA8, glow::RGBA),
+                };
                 gl.tex_image_2d(
                     glow::TEXTURE_2D,
                     0,
@@ -227,7 +229,7 @@ impl Renderer {
                     w as i32,
                     h as i32,
                     0,
-                    glow::RGBA,
+                    format,
                     glow::UNSIGNED_BYTE,
                     glow::PixelUnpackData::Slice(None),
                 );
@@ -244,6 +246,33 @@ impl Renderer {
                     0,
                 );
             }
+        }
+        Ok(())
+    }
+
+    /// One draw of the lit pass into its framebuffer (GL: colour and visibility as two
+    /// targets; GLES 2: pass 0 colour, pass 1 visibility) and the readback of its outputs,
+    /// rows flipped to top first.
+    fn draw_lit(
+        &self,
+        p: &RunPlan,
+        program: glow::Program,
+        map: glow::Texture,
+        res: &mut Resources,
+        pass: usize,
+    ) -> Result<Vec<Vec<u8>>, BackendError> {
+        let gl = &self.g();
+        let es2 = p.es2;
+        let [w, h] = p.run.camera.size;
+        let outputs = if es2 { 1 } else { 2 };
+        let srgb = Fault::colour_format(p.fault, &p.run.case().camera) == ColorFormat::Srgb8Alpha8;
+        let mut images = Vec::new();
+        // SAFETY: objects of the current context; completeness is checked before drawing.
+        unsafe {
+            let fbo = gl.create_framebuffer().map_err(|e| gl_err("lit pass", e))?;
+            res.framebuffers.push(fbo);
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+            self.lit_outputs(p, srgb, pass, res)?;
             if p.is(Fault::WrongTextureUnit) {
                 // glActiveTexture(GL_TEXTURE0 + 1) while the sampler uniform says 0.
                 gl.active_texture(glow::TEXTURE0);
@@ -286,6 +315,13 @@ impl Renderer {
             gl.front_face(glow::CCW);
             set_cull(gl, Fault::lit_cull(p.fault, &p.run.case().camera));
             gl.viewport(0, 0, w as i32, h as i32);
+            // Desktop GL encodes (and converts the clear colour) only with FRAMEBUFFER_SRGB
+            // enabled (GL 4.6 §17.3.7); GLES 3 and EXT_sRGB always do. It is disabled again
+            // before the readback, so that no version's ReadPixels decodes.
+            let framebuffer_srgb = srgb && p.api == Api::Gl33;
+            if framebuffer_srgb {
+                gl.enable(glow::FRAMEBUFFER_SRGB);
+            }
             gl.enable(glow::DEPTH_TEST);
             gl.depth_func(glow::LESS);
             gl.depth_mask(true);
@@ -308,6 +344,9 @@ impl Renderer {
                 gl.clear(glow::DEPTH_BUFFER_BIT);
             }
             gl.draw_arrays(glow::TRIANGLES, 0, p.count);
+            if framebuffer_srgb {
+                gl.disable(glow::FRAMEBUFFER_SRGB);
+            }
             self.check("lit pass")?;
             for a in 0..outputs {
                 if !es2 {

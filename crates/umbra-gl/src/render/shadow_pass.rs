@@ -6,7 +6,7 @@
 
 use umbra_case::BackendError;
 use umbra_case::fault::Fault;
-use umbra_case::format::{Attachments, DepthFormat, DepthOrder, Mipmaps};
+use umbra_case::format::{Attachments, DepthFormat, DepthFunc, Mipmaps};
 
 use super::{FRESH_MAP_SAMPLER, Renderer, Resources, RunPlan, gl_err, set_cull, status_name};
 use crate::shaders;
@@ -67,7 +67,7 @@ impl Renderer {
             gl.color_mask(true, true, true, true);
         }
         if let Some(program) = programs.average {
-            self.average_levels(program, map, p.s, p.levels, res)?;
+            self.average_levels(program, map, p, res)?;
         }
         Ok(map)
     }
@@ -208,11 +208,7 @@ impl Renderer {
         unsafe {
             gl.use_program(Some(program));
             gl.enable(glow::DEPTH_TEST);
-            gl.depth_func(if s.depth_order == DepthOrder::Forward {
-                glow::LESS
-            } else {
-                glow::GREATER
-            });
+            gl.depth_func(gl_depth_func(Fault::depth_func(p.fault, s)));
             gl.depth_mask(true);
             gl.front_face(glow::CCW);
             // GL_DEPTH_CLAMP (ARB_depth_clamp; EXT_depth_clamp's enum has the same value):
@@ -370,10 +366,10 @@ impl Renderer {
         &self,
         program: glow::Program,
         map: glow::Texture,
-        s: &umbra_case::format::Shadow,
-        levels: u32,
+        p: &RunPlan,
         res: &mut Resources,
     ) -> Result<(), BackendError> {
+        let (s, levels) = (p.s, p.levels);
         let gl = &self.g();
         // SAFETY: objects of the current context; the framebuffer's completeness is checked
         // before each draw.
@@ -425,11 +421,7 @@ impl Renderer {
             }
             gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_BASE_LEVEL, 0);
             gl.tex_parameter_i32(glow::TEXTURE_2D, glow::TEXTURE_MAX_LEVEL, levels as i32 - 1);
-            gl.depth_func(if s.depth_order == DepthOrder::Forward {
-                glow::LESS
-            } else {
-                glow::GREATER
-            });
+            gl.depth_func(gl_depth_func(Fault::depth_func(p.fault, s)));
         }
         self.check("mip levels")
     }
@@ -487,5 +479,15 @@ pub(super) fn es2_depth(f: DepthFormat) -> u32 {
     match f {
         DepthFormat::Depth16 => glow::DEPTH_COMPONENT16,
         _ => glow::DEPTH_COMPONENT24,
+    }
+}
+
+/// glDepthFunc's enum for the shadow pass's depth test.
+fn gl_depth_func(f: DepthFunc) -> u32 {
+    match f {
+        DepthFunc::Less => glow::LESS,
+        DepthFunc::LessEqual => glow::LEQUAL,
+        DepthFunc::Greater => glow::GREATER,
+        DepthFunc::GreaterEqual => glow::GEQUAL,
     }
 }

@@ -75,7 +75,9 @@ fn applies_to(fault: Fault, b: &Descriptor) -> bool {
 /// Whether case `c` exercises `fault` on a backend with (`es2`) or without GLES 2's technique
 /// ([`Descriptor::gles2_technique`]) at all: only such points are run for it.
 pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
-    use umbra_case::format::{Compare, DepthFormat, Filter, Light, Outside, ShadingModel};
+    use umbra_case::format::{
+        ColorFormat, Compare, DepthFormat, Filter, Light, Outside, ShadingModel,
+    };
     let s = &c.shadow;
     match fault {
         // GLES 2 compares by hand whatever the case says.
@@ -111,6 +113,8 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
         Fault::LightColourIgnored => c.light.radiance() != [1.0; 3],
         Fault::ClearIgnored => c.camera.clear != [0.0; 3],
         Fault::LitCullFlipped => !c.camera.cull.is_none(),
+        Fault::DepthFuncSwapped => s.depth_test().inclusive(),
+        Fault::SrgbIgnored => c.camera.color_format == ColorFormat::Srgb8Alpha8,
         Fault::Scaled { param, .. } => {
             let b = &s.bias;
             match param {
@@ -158,6 +162,8 @@ pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
         Fault::BlendIgnored => &["blend"],
         Fault::LightColourIgnored | Fault::ClearIgnored => &["tinted"],
         Fault::LitCullFlipped => &["lit-cull"],
+        Fault::DepthFuncSwapped => &["depth-func"],
+        Fault::SrgbIgnored => &["srgb"],
         Fault::Oriented { face: Some(_), .. } => &["point-faces"],
         Fault::Scaled { param, .. } if param.in_texels() => {
             &["contact", "filters-magnified", "guard-magnified"]
@@ -191,6 +197,11 @@ pub struct Hunt {
     pub caught: Vec<(String, String)>,
     /// Points that exercise the fault on the backend (the most that could catch it).
     pub exercising: usize,
+    /// Points the backend skipped (it cannot run them: a driver without the extension),
+    /// not counted as tried; the first skip's reason.
+    pub skipped: usize,
+    /// See `skipped`.
+    pub skip_reason: Option<String>,
     /// Why nothing was run or caught, when so.
     pub note: Option<String>,
     /// The worker refused the Mesa build asked for (`--mesa`): the self-test cannot stand.
@@ -198,6 +209,12 @@ pub struct Hunt {
 }
 
 impl Hunt {
+    /// Whether the backend ran none of the points it was given: every one a skip (an sRGB
+    /// target on a GLES 2 driver without EXT_sRGB), so the pair says nothing either way.
+    pub fn unrunnable(&self) -> bool {
+        self.tried == 0 && self.skipped > 0
+    }
+
     /// The checks that caught it, each with how many points.
     pub fn by_check(&self) -> BTreeMap<String, usize> {
         let mut m = BTreeMap::new();
@@ -491,6 +508,13 @@ fn faults_of(results: &[(String, Fault, Hunt)]) -> Vec<Fault> {
 /// One line per fault × backend.
 fn line(fault: Fault, backend: &str, h: &Hunt) -> String {
     let head = format!("{:<20} {:<18}", fault.name(), backend);
+    if h.unrunnable() {
+        return format!(
+            "{head} not run: every one of its {} points is a skip on this driver ({})",
+            h.skipped,
+            h.skip_reason.as_deref().unwrap_or("no reason given")
+        );
+    }
     if h.caught.is_empty() {
         return format!(
             "{head} MISSED: {} ({} points tried)",
@@ -551,6 +575,9 @@ impl Hunt {
 /// The per-fault table and the closing line; the outcome (nothing run, or a Mesa build
 /// refused, is could not run: the lines above say so).
 fn summary(results: &[(String, Fault, Hunt)]) -> Outcome {
+    let (unrunnable, runnable): (Vec<_>, Vec<_>) = results.iter().partition(|r| r.2.unrunnable());
+    let results: Vec<(String, Fault, Hunt)> = runnable.into_iter().cloned().collect();
+    let results = &results[..];
     println!(
         "\nper fault: subtlety, backends caught / applicable, fewest catching points on a backend"
     );
@@ -595,6 +622,14 @@ fn summary(results: &[(String, Fault, Hunt)]) -> Outcome {
             "  by fewer than {MIN_POINTS} points, as it must be: {} on {b}: only {} points exercise it",
             f.name(),
             h.exercising
+        );
+    }
+    for (b, f, h) in &unrunnable {
+        println!(
+            "  not run, and not counted: {} on {b}: its {} points are skips on this driver ({})",
+            f.name(),
+            h.skipped,
+            h.skip_reason.as_deref().unwrap_or("no reason given")
         );
     }
     println!(
@@ -646,6 +681,8 @@ pub(crate) enum Seen {
     Caught(String),
     /// It passed (or failed only as expected).
     Passed,
+    /// The backend cannot run the point (a skip, with its reason): not a try.
+    Skipped(String),
     /// No worker could be started for the point (after a crash: it did not run): stop.
     Gone,
 }
@@ -735,6 +772,9 @@ impl Faulted {
                     Seen::Passed
                 }
             }
+            Reply::Report(r) if r.outcome == crate::harness::worker::RunVerdict::Skip => {
+                Seen::Skipped(r.reason)
+            }
             Reply::Report(r) => {
                 if self.verbose {
                     println!("  {} {name}: {} {}", self.fault.name(), r.outcome, r.reason);
@@ -786,6 +826,11 @@ fn hunt(
         match faulted.run(file, *index, point) {
             Seen::Caught(checks) => h.caught.push((point.id(), checks)),
             Seen::Passed => {}
+            Seen::Skipped(reason) => {
+                h.tried -= 1;
+                h.skipped += 1;
+                h.skip_reason.get_or_insert(reason);
+            }
             Seen::Gone => {
                 h.tried -= 1;
                 h.note = Some("the worker could not be restarted after a crash".into());
@@ -935,6 +980,8 @@ mod tests {
             Fault::LightColourIgnored,
             Fault::ClearIgnored,
             Fault::LitCullFlipped,
+            Fault::DepthFuncSwapped,
+            Fault::SrgbIgnored,
         ] {
             assert!(
                 points.iter().any(|p| aimed_at(f, &p.case)),

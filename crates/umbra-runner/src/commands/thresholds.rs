@@ -116,7 +116,7 @@ fn sweep(backend: &str, param: Param, sign: f64, points: &[Point], how: &How) ->
                     hit = Some((i, point.id(), checks));
                     break;
                 }
-                Seen::Passed => {}
+                Seen::Passed | Seen::Skipped(_) => {}
                 // No worker: this magnitude was not measured, nor can a smaller one be.
                 Seen::Gone => break,
             }

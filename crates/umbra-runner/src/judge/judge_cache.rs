@@ -58,6 +58,7 @@ use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+use umbra_case::format::ColorFormat;
 use umbra_case::{ClipDepth, Frame, Prepared, Profile};
 use umbra_ref::truth::{Class, Truth, ground_truth};
 use umbra_ref::{Judged, PixelLegal};
@@ -275,7 +276,7 @@ pub fn judged(prepared: &Prepared, profile: Profile) -> Judged {
         "judged",
         key(prepared, &profile.name()),
         write_judged,
-        |bytes, k| read_judged(bytes, k, profile),
+        |bytes, k| read_judged(bytes, k, profile, prepared.case().camera.color_format),
         || {
             let mut j = umbra_ref::render_judged(prepared, ClipDepth::MinusOneToOne, profile);
             // Only the GL 3.3 backends read their shadow map back; keep its ranges for them
@@ -681,14 +682,20 @@ fn write_judged(j: &Judged, key: u64) -> Vec<u8> {
     pack(&sealed(out))
 }
 
-fn read_judged(bytes: &[u8], key: u64, profile: Profile) -> Result<Judged, String> {
+/// A judged entry; `profile` and `color_format` are the key's case's (not stored).
+fn read_judged(
+    bytes: &[u8],
+    key: u64,
+    profile: Profile,
+    color_format: ColorFormat,
+) -> Result<Judged, String> {
     let inflated = unpack(bytes)?;
     let mut r = Reader {
         bytes: unsealed(&inflated)?,
         at: 0,
     };
     let dims = r.header(JUDGED_MAGIC, key)?;
-    parse_judged(r, dims, profile)
+    parse_judged(r, dims, profile, color_format)
         .ok_or_else(|| "has a valid checksum but not the judged render's layout".to_string())
 }
 
@@ -696,6 +703,7 @@ fn parse_judged(
     mut r: Reader,
     (width, height, n): (u32, u32, usize),
     profile: Profile,
+    color_format: ColorFormat,
 ) -> Option<Judged> {
     let quantum = r.f32()?;
     let color = r.take(n * 4)?.to_vec();
@@ -740,6 +748,7 @@ fn parse_judged(
         legal,
         quantum,
         profile,
+        color_format,
         map,
     })
 }
@@ -873,7 +882,7 @@ mod tests {
             "packed {} bytes of {inflated}",
             bytes.len()
         );
-        let back = read_judged(&bytes, kj, profile).expect("judged");
+        let back = read_judged(&bytes, kj, profile, ColorFormat::Rgba8).expect("judged");
         assert_eq!(back.frame.color, judged.frame.color);
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&back.frame.visibility), bits(&judged.frame.visibility));
@@ -882,8 +891,8 @@ mod tests {
         assert_eq!(back.quantum.to_bits(), judged.quantum.to_bits());
         assert_eq!(back.map, judged.map);
         // Another key (another case or profile) is refused, and so is a truncated file.
-        assert!(read_judged(&bytes, kj ^ 1, profile).is_err());
-        assert!(read_judged(&bytes[..bytes.len() - 1], kj, profile).is_err());
+        assert!(read_judged(&bytes, kj ^ 1, profile, ColorFormat::Rgba8).is_err());
+        assert!(read_judged(&bytes[..bytes.len() - 1], kj, profile, ColorFormat::Rgba8).is_err());
         assert!(read_truth(&write_truth(&truth, kt)[1..], kt).is_err());
     }
 

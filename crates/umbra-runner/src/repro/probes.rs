@@ -82,6 +82,8 @@ pub struct Probes {
     pub eps: f32,
     /// The discrete filter's step (0: continuous).
     pub quantum: f32,
+    /// An sRGB colour target (`camera.color_format`): the colour test encodes its bounds.
+    pub srgb: bool,
     /// Frame and map sizes.
     pub frame: [u32; 2],
     /// Map size.
@@ -176,6 +178,7 @@ pub fn select(basis: &Judged, frame: &Frame, pixels: &[PixelJudgement]) -> Probe
         texels_total,
         eps: frame.visibility_storage.tolerance(),
         quantum: basis.quantum,
+        srgb: basis.color_format == umbra_case::format::ColorFormat::Srgb8Alpha8,
         frame: [frame.width, frame.height],
         map,
     }
@@ -206,6 +209,12 @@ impl Probes {
             c,
             "/* A discrete filter's step (NEAREST: 1, PCF n: 1/n^2; 0: continuous). */\nstatic const float QUANTUM = {};",
             hex_f32(self.quantum)
+        );
+        let _ = writeln!(
+            c,
+            "/* The colour target is sRGB (1) or linear RGBA8 (0); an sRGB encoding may lie\n * within SRGB_TOL of the exact transfer function (umbra_case::colour). */\n#define SRGB_TARGET {}\nstatic const float SRGB_TOL = {};",
+            i32::from(self.srgb),
+            hex_f32(umbra_case::colour::SRGB_ENCODE_TOLERANCE)
         );
         c.push_str(PIXEL_STRUCT);
         let _ = writeln!(
@@ -327,8 +336,19 @@ static int value_ok(float v, float lo, float hi)
 
 static float clamp01(float x) { return x < 0.0f ? 0.0f : x > 1.0f ? 1.0f : x; }
 
+/* umbra_case::colour::srgb_encode: the sRGB transfer function of a clamped linear value, in
+ * double, rounded once to float (the C library's pow may differ from umbra's musl port in
+ * its last bit, far below SRGB_TOL). */
+static float srgb_encode(float x)
+{
+    double c = clamp01(x);
+    double e = c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;
+    return (float)(e < 0.0 ? 0.0 : e > 1.0 ? 1.0 : e);
+}
+
 /* umbra_compare::reference::colour_ok: each channel within the codes the shading of
- * [v - eps, v + eps], widened by its arithmetic freedom, rounds to either way. */
+ * [v - eps, v + eps], widened by its arithmetic freedom (and encoded for an sRGB target),
+ * rounds to either way. */
 static int colour_ok(const unsigned char *rgb, float v, const struct pixel_probe *p)
 {
     float v0 = clamp01(v - EPS), v1 = clamp01(v + EPS);
@@ -340,6 +360,12 @@ static int colour_ok(const unsigned char *rgb, float v, const struct pixel_probe
         float b = p->c0[c] + pb;
         float lo = clamp01((a < b ? a : b) - p->ctol);
         float hi = clamp01((a > b ? a : b) + p->ctol);
+        if (SRGB_TARGET) { /* umbra_case::format::ColorFormat::encoded_bounds */
+            lo = srgb_encode(lo) - SRGB_TOL;
+            hi = srgb_encode(hi) + SRGB_TOL;
+            lo = lo < 0.0f ? 0.0f : lo;
+            hi = hi > 1.0f ? 1.0f : hi;
+        }
         float code = (float)rgb[c];
         if (!(lo * 255.0f < code + 1.0f && hi * 255.0f > code - 1.0f)) return 0;
     }

@@ -3,7 +3,7 @@
 //! compares by hand), its targets, and the recorded pass with its timestamps.
 
 use umbra_case::fault::Fault;
-use umbra_case::format::{Filter, MipFilter, Outside};
+use umbra_case::format::{ColorFormat, Filter, MipFilter, Outside};
 use umbra_case::technique::CompareOp;
 use umbra_case::{LightKind, LookupMatrices, Technique};
 
@@ -95,9 +95,7 @@ impl Gpu {
         })
         .collect::<Vec<_>>();
         let targets = [
-            Some(wgpu::ColorTargetState::from(
-                wgpu::TextureFormat::Rgba8Unorm,
-            )),
+            Some(wgpu::ColorTargetState::from(colour_format(p))),
             Some(wgpu::ColorTargetState::from(self.vis_format)),
             Some(wgpu::ColorTargetState::from(wgpu::TextureFormat::R32Uint)),
         ];
@@ -243,7 +241,8 @@ impl Gpu {
         }
     }
 
-    /// The camera-sized targets: colour, visibility, face id, and a Depth32Float depth.
+    /// The camera-sized targets: colour (Rgba8Unorm, or Rgba8UnormSrgb for an sRGB target),
+    /// visibility, face id, and a Depth32Float depth.
     pub(super) fn lit_targets(&self, p: &RunPlan) -> LitTargets {
         let [w, h] = p.run.camera.size;
         let target = |format, label| {
@@ -262,7 +261,7 @@ impl Gpu {
                 view_formats: &[],
             })
         };
-        let color = target(wgpu::TextureFormat::Rgba8Unorm, "colour");
+        let color = target(colour_format(p), "colour");
         let vis = target(self.vis_format, "visibility");
         let face = target(wgpu::TextureFormat::R32Uint, "face");
         let depth = target(wgpu::TextureFormat::Depth32Float, "camera depth");
@@ -385,5 +384,15 @@ impl Gpu {
             border_color: border,
             ..Default::default()
         })
+    }
+}
+
+/// The lit pass's colour target (`camera.color_format`): Rgba8Unorm, or Rgba8UnormSrgb, whose
+/// writes and clear value Vulkan (and wgpu's GL backend) encode; its copy to a buffer is the
+/// stored bytes.
+fn colour_format(p: &RunPlan) -> wgpu::TextureFormat {
+    match Fault::colour_format(p.fault, &p.run.case().camera) {
+        ColorFormat::Rgba8 => wgpu::TextureFormat::Rgba8Unorm,
+        ColorFormat::Srgb8Alpha8 => wgpu::TextureFormat::Rgba8UnormSrgb,
     }
 }

@@ -4,7 +4,7 @@
 //! per face and drawn level, and averaged mip levels after them.
 
 use umbra_case::fault::Fault;
-use umbra_case::format::{Attachments, DepthOrder, Mipmaps};
+use umbra_case::format::{Attachments, DepthFunc, Mipmaps};
 
 use super::{Encoding, RunPlan, STRIDE, cull_mode, uniform_buffer, uniform_entry};
 use crate::render::Gpu;
@@ -120,11 +120,9 @@ impl Gpu {
                 depth_stencil: Some(wgpu::DepthStencilState {
                     format: p.format,
                     depth_write_enabled: Some(true),
-                    depth_compare: Some(if s.depth_order == DepthOrder::Forward {
-                        wgpu::CompareFunction::Less
-                    } else {
-                        wgpu::CompareFunction::Greater
-                    }),
+                    depth_compare: Some(compare_function(umbra_case::fault::Fault::depth_func(
+                        p.fault, s,
+                    ))),
                     stencil: Default::default(),
                     bias,
                 }),
@@ -406,4 +404,14 @@ fn face_matrix(p: &RunPlan, k: u32, lw: u32, lh: u32) -> glam::Mat4 {
         m = p.conv.cube_face_render_flip() * m;
     }
     m
+}
+
+/// wgpu's compare function for the shadow pass's depth test.
+fn compare_function(f: DepthFunc) -> wgpu::CompareFunction {
+    match f {
+        DepthFunc::Less => wgpu::CompareFunction::Less,
+        DepthFunc::LessEqual => wgpu::CompareFunction::LessEqual,
+        DepthFunc::Greater => wgpu::CompareFunction::Greater,
+        DepthFunc::GreaterEqual => wgpu::CompareFunction::GreaterEqual,
+    }
 }
