@@ -467,6 +467,48 @@ pub fn judge_pair(a: &Frame, ja: &Judged, b: &Frame, jb: &Judged) -> RefAgreemen
 mod colour_tests {
     use super::*;
 
+    /// An sRGB target's codes are the encoded colour's (linear mid-grey 0.5 is code 188,
+    /// 187.5 exactly, so either neighbour), never the linear code; a linear target's are
+    /// the linear ones. The encoding's 0.6-code freedom reaches one code further at most.
+    #[test]
+    fn an_srgb_target_is_held_to_the_encoded_codes() {
+        let grey = umbra_ref::PixelLegal {
+            lo: 1.0,
+            hi: 1.0,
+            flags: 0,
+            c0: [0.5; 3],
+            c1: [0.5; 3],
+            ctol: 0.0,
+        };
+        let ok = |code: u8, format| colour_ok(&[code; 3], 1.0, 0.0, &grey, format);
+        let srgb: Vec<u8> = (0..=255)
+            .filter(|&c| ok(c, ColorFormat::Srgb8Alpha8))
+            .collect();
+        let linear: Vec<u8> = (0..=255).filter(|&c| ok(c, ColorFormat::Rgba8)).collect();
+        assert_eq!(linear, vec![127, 128]);
+        assert!(srgb.contains(&187) && srgb.contains(&188), "{srgb:?}");
+        assert!(srgb.iter().all(|c| (186..=189).contains(c)), "{srgb:?}");
+        // The dark end: linear 0.002 is on the linear segment, 12.92 · 0.002 · 255 = 6.6.
+        let dark = umbra_ref::PixelLegal {
+            c0: [0.002; 3],
+            c1: [0.002; 3],
+            ..grey
+        };
+        let ok = |code: u8| colour_ok(&[code; 3], 1.0, 0.0, &dark, ColorFormat::Srgb8Alpha8);
+        assert!(ok(6) && ok(7) && !ok(1) && !ok(9));
+    }
+
+    /// Desktop GL and GLES 2 may leave an sRGB clear unencoded (GL 3.3 §4.2.3), GLES 3 and
+    /// Vulkan may not.
+    #[test]
+    fn only_gl_and_gles2_may_clear_an_srgb_target_unencoded() {
+        use umbra_case::Profile;
+        assert!(Profile::GL.srgb_clear_may_be_unencoded());
+        assert!(Profile::GLES2.srgb_clear_may_be_unencoded());
+        assert!(!Profile::GLES3.srgb_clear_may_be_unencoded());
+        assert!(!Profile::VULKAN.srgb_clear_may_be_unencoded());
+    }
+
     /// The comparison form of the colour test is the rounded form, for every code and a
     /// spread of bounds (the ends, just inside and outside each code, NaN).
     #[test]
