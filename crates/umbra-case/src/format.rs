@@ -271,14 +271,6 @@ impl ColorFormat {
     pub fn is_rgba8(&self) -> bool {
         *self == ColorFormat::Rgba8
     }
-
-    /// The name the case format uses.
-    pub fn name(self) -> &'static str {
-        match self {
-            ColorFormat::Rgba8 => "rgba8",
-            ColorFormat::Srgb8Alpha8 => "srgb8_alpha8",
-        }
-    }
 }
 
 /// The one light, written as `{ "spot": { ... } }`.
