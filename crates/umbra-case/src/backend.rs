@@ -95,8 +95,11 @@ pub struct Needs {
     /// Depth clamp in the shadow pass (GL 3.2 core / EXT_depth_clamp on GLES, Vulkan's
     /// depthClamp feature, wgpu's DEPTH_CLIP_CONTROL).
     pub depth_clamp: bool,
-    /// The layers of a cascade array (0: no array).
+    /// The layers of a 2D array map: a cascaded light's cascades, or several lights' maps in
+    /// one array (`shadow.placement` `array`); 0: no array.
     pub array_layers: u32,
+    /// Lights, each a lit pass and a map (1, or `lights`' count).
+    pub lights: u32,
     /// The shadow map's larger side (each cube face's, for a point light).
     pub map_size: u32,
     /// The camera image's larger side.
@@ -111,7 +114,10 @@ impl Needs {
     pub fn of(case: &Case) -> Self {
         let s = &case.shadow;
         Needs {
-            cube_map: matches!(case.light, Light::Point(_)),
+            cube_map: case
+                .all_lights()
+                .iter()
+                .any(|l| matches!(l, Light::Point(_))),
             format: s.format,
             compare: s.compare,
             filter: s.filter,
@@ -122,9 +128,13 @@ impl Needs {
             mipmaps: s.mipmaps,
             depth_clamp: s.depth_clamp,
             array_layers: match &case.light {
+                _ if !case.lights.is_empty() && s.placement == crate::format::Placement::Array => {
+                    case.lights.len() as u32
+                }
                 Light::Directional(d) => d.cascades.as_ref().map_or(0, |c| c.count),
                 _ => 0,
             },
+            lights: case.all_lights().len() as u32,
             map_size: s.size[0].max(s.size[1]),
             image_size: case.camera.size[0].max(case.camera.size[1]),
             srgb_target: case.camera.color_format == crate::format::ColorFormat::Srgb8Alpha8,

@@ -48,7 +48,39 @@ pub fn srgb_encode(x: f32) -> f32 {
     e.clamp(0.0, 1.0) as f32
 }
 
+/// The sRGB transfer function's inverse (EOTF) of an encoded value, exact to f64 and rounded
+/// once to f32: c ≤ 0.04045 → c / 12.92, else ((c + 0.055) / 1.055)^2.4; clamped to [0, 1].
+pub fn srgb_decode(x: f32) -> f32 {
+    let c = f64::from(x.clamp(0.0, 1.0));
+    let l = if c <= 0.040_45 {
+        c / 12.92
+    } else {
+        pow((c + 0.055) / 1.055, 2.4)
+    };
+    l.clamp(0.0, 1.0) as f32
+}
+
 impl ColorFormat {
+    /// The linear values a blend may read back from a target holding a channel whose
+    /// linear value lay in [`lo`, `hi`]: the codes it may have been stored as
+    /// ([`ColorFormat::encoded_bounds`], either neighbour), each read as its value (GL 4.6
+    /// §17.3.6.1, Vulkan "Blend Operations": a blend reads the destination as a float, and an
+    /// sRGB one decoded to linear). The decoding is held to the same 0.6 of a code as the
+    /// encoding (no spec bounds it either). What several lights' passes added by blending
+    /// start from after the first ([`crate::format::Case::lights`]).
+    pub fn stored_linear_range(self, lo: f32, hi: f32) -> (f32, f32) {
+        let (elo, ehi) = self.encoded_bounds(lo.clamp(0.0, 1.0), hi.clamp(0.0, 1.0));
+        let code_lo = (elo * 255.0).floor().max(0.0);
+        let code_hi = (ehi * 255.0).ceil().min(255.0);
+        match self {
+            ColorFormat::Rgba8 => (code_lo / 255.0, code_hi / 255.0),
+            ColorFormat::Srgb8Alpha8 => (
+                srgb_decode(code_lo / 255.0 - SRGB_ENCODE_TOLERANCE),
+                srgb_decode(code_hi / 255.0 + SRGB_ENCODE_TOLERANCE),
+            ),
+        }
+    }
+
     /// The [0, 1] value a linear channel value `x` is stored as before the conversion to 8
     /// bits: `x` itself for `rgba8` (bit for bit: the conversion clamps), its sRGB encoding
     /// for `srgb8_alpha8`.
@@ -77,6 +109,27 @@ impl ColorFormat {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Decoding inverts encoding (within f32 rounding), and a blend's read-back range holds
+    /// the value it came from.
+    #[test]
+    fn decoding_inverts_encoding_and_the_read_back_range_holds_the_value() {
+        for k in 0..=1000 {
+            let x = k as f32 / 1000.0;
+            assert!((srgb_decode(srgb_encode(x)) - x).abs() < 1e-5, "{x}");
+            for f in [ColorFormat::Rgba8, ColorFormat::Srgb8Alpha8] {
+                let (lo, hi) = f.stored_linear_range(x, x);
+                assert!(lo <= x && x <= hi, "{f:?} {x}: [{lo}, {hi}]");
+                // A few codes wide: either neighbour, and for sRGB the encoding's and the
+                // decoding's freedom on each side.
+                let codes = if f.is_rgba8() { 1.0 } else { 3.0 + 2.0 * 0.6 };
+                assert!(
+                    f.encode(hi) - f.encode(lo) <= (codes + 1e-3) / 255.0,
+                    "{f:?} {x}: [{lo}, {hi}]"
+                );
+            }
+        }
+    }
 
     /// The two pieces meet (within float rounding) and the function is monotonic.
     #[test]

@@ -307,6 +307,13 @@ pub enum Fault {
     /// GL_FRAMEBUFFER_SRGB left disabled, the classic; a driver that drops the encoding):
     /// colours are stored unencoded, darker in every mid-tone.
     SrgbIgnored,
+    /// With several lights, each light's lit pass reads the next light's map (light k that
+    /// of light k + 1, the last the first's): a texture unit or array layer indexed by the
+    /// wrong light, the mix-up of two lights' maps.
+    LightSwap,
+    /// With several lights in one 2D array, every light's lit pass reads layer 0 (a layer
+    /// index that never reaches the shader or the sampler's coordinate).
+    ArrayLayerZero,
     /// One face of the map is drawn with a wrong orientation: cube face `face` (0–5 in the
     /// GL order +x, −x, +y, −y, +z, −z), or the 2D map when `face` is `None`.
     Oriented {
@@ -331,7 +338,7 @@ impl Fault {
     /// three stand for them here (a wrong handedness on the +x face, the one the
     /// four-fold symmetric point-light cases could not see; a wrong up vector on the −y face;
     /// a transposed 2D map), and `umbra selftest --fault` or `--orientations` runs any.
-    pub const ALL: [Fault; 41] = [
+    pub const ALL: [Fault; 43] = [
         Fault::CompareFlipped,
         Fault::NoDivide,
         Fault::NoGuard,
@@ -370,6 +377,8 @@ impl Fault {
         Fault::LitCullFlipped,
         Fault::DepthFuncSwapped,
         Fault::SrgbIgnored,
+        Fault::LightSwap,
+        Fault::ArrayLayerZero,
         Fault::Oriented {
             face: Some(0),
             orientation: Orientation::MirrorX,
@@ -435,6 +444,8 @@ impl Fault {
             Fault::LitCullFlipped => "lit-cull-flipped",
             Fault::DepthFuncSwapped => "depth-func-swapped",
             Fault::SrgbIgnored => "srgb-ignored",
+            Fault::LightSwap => "light-swap",
+            Fault::ArrayLayerZero => "array-layer-zero",
             Fault::Oriented { face, orientation } => {
                 return match face {
                     Some(f) => format!("face{f}-{}", orientation.name()),
@@ -619,6 +630,17 @@ impl Fault {
                 Some((orientation.clip(), orientation.mirrors()))
             }
             _ => None,
+        }
+    }
+
+    /// Whose map light `k` of `lights` reads in its lit pass: its own; the next light's under
+    /// LightSwap; the first's under ArrayLayerZero where the maps are one array's layers
+    /// (`array`).
+    pub fn map_of_light(fault: Option<Fault>, k: usize, lights: usize, array: bool) -> usize {
+        match fault {
+            Some(Fault::LightSwap) => (k + 1) % lights,
+            Some(Fault::ArrayLayerZero) if array => 0,
+            _ => k,
         }
     }
 

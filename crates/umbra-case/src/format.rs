@@ -28,8 +28,15 @@ pub struct Case {
     pub scene: Scene,
     /// The viewer. Required.
     pub camera: Camera,
-    /// The one light. Required.
+    /// The light: required, unless `lights` is given (then the loader fills it in with the
+    /// first of them).
     pub light: Light,
+    /// Several lights, each written as `light` is, 2 to [`MAX_LIGHTS`] (a case gives `light` for
+    /// one, or `lights`; written back, a case holds both, `light` equal to `lights[0]`).
+    /// Every light has its own map, placed by `shadow.placement`; the lit pass adds their
+    /// contributions (the `dimmed` model only). Default: none (the one `light`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lights: Vec<Light>,
     /// The shadow-mapping technique. Default: every field's default.
     #[serde(default)]
     pub shadow: Shadow,
@@ -565,6 +572,39 @@ pub struct Shadow {
     /// Default: none (one level).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mipmaps: Option<Mipmaps>,
+    /// Where several lights' maps live (`lights`): `separate` textures or one 2D `array`.
+    /// Default `separate`; read only with `lights`.
+    #[serde(default, skip_serializing_if = "Placement::is_separate")]
+    pub placement: Placement,
+}
+
+/// The most lights a case may have (`lights`).
+pub const MAX_LIGHTS: usize = 4;
+
+/// Where several lights' shadow maps live.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Placement {
+    /// One texture per light, each bound to its own unit (the only way on GLES 2).
+    #[default]
+    Separate,
+    /// One 2D array texture, light k's map in layer k, drawn into by layer and sampled with
+    /// an array (compare) sampler at layer k (spot and directional lights).
+    Array,
+}
+
+impl Placement {
+    fn is_separate(&self) -> bool {
+        *self == Placement::Separate
+    }
+
+    /// Name as a case writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Placement::Separate => "separate",
+            Placement::Array => "array",
+        }
+    }
 }
 
 /// A mipmapped shadow map (docs/catalogue.md §12): level k is max(1, ⌊size / 2ᵏ⌋) texels a side,
@@ -1045,6 +1085,30 @@ pub enum InteriorError {
     NoFalseShadow,
 }
 
+impl Case {
+    /// Every light of the case: `lights`, or the one `light`.
+    pub fn all_lights(&self) -> &[Light] {
+        if self.lights.is_empty() {
+            std::slice::from_ref(&self.light)
+        } else {
+            &self.lights
+        }
+    }
+
+    /// The case as light `k` alone lights it: `light` = light `k`, no `lights`, and for every
+    /// light but the first no ambient term (the first light's pass adds it once: the lit
+    /// pass's contributions add up to the case's colour).
+    pub fn for_light(&self, k: usize) -> Case {
+        let mut c = self.clone();
+        c.light = self.all_lights()[k].clone();
+        c.lights = Vec::new();
+        if k > 0 {
+            c.shading.ambient = 0.0;
+        }
+        c
+    }
+}
+
 impl Shadow {
     /// The shadow pass's depth test: `depth_func`, or the strict one of `depth_order`.
     pub fn depth_test(&self) -> DepthFunc {
@@ -1070,6 +1134,7 @@ impl Default for Shadow {
             depth_order: DepthOrder::default(),
             depth_func: None,
             mipmaps: None,
+            placement: Placement::Separate,
         }
     }
 }

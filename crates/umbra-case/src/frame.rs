@@ -27,9 +27,41 @@ pub struct Frame {
     pub visibility_storage: VisibilityStorage,
     /// Where the time went.
     pub timings: Timings,
+    /// A case with several lights: what each light after the first wrote (its visibility,
+    /// its map); `visibility` and `shadow_map` above are the first light's. Empty otherwise.
+    pub more_lights: Vec<LightPlane>,
+}
+
+/// One light's own outputs in a frame of several lights.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightPlane {
+    /// The light's shadow term per pixel, as [`Frame::visibility`].
+    pub visibility: Vec<f32>,
+    /// The light's map as stored, where the backend reads it back.
+    pub shadow_map: Option<DepthMap>,
 }
 
 impl Frame {
+    /// How many lights wrote the frame.
+    pub fn light_count(&self) -> usize {
+        1 + self.more_lights.len()
+    }
+
+    /// The frame as light `k` alone shows it: its visibility and map in place of the first
+    /// light's (the colour stays the sum of all lights); light 0 is the frame itself.
+    pub fn for_light(&self, k: usize) -> Frame {
+        let mut f = Frame {
+            more_lights: Vec::new(),
+            ..self.clone()
+        };
+        if k > 0 {
+            let plane = &self.more_lights[k - 1];
+            f.visibility = plane.visibility.clone();
+            f.shadow_map = plane.shadow_map.clone();
+        }
+        f
+    }
+
     /// Whether pixel `i` (row-major, top row first) shows a surface: its surface id where the
     /// frame has them (so that a NaN visibility on a covered pixel is seen as what it is),
     /// else a visibility that is a number.

@@ -119,6 +119,7 @@ impl Gen {
             scene,
             camera,
             light,
+            lights: Vec::new(),
             shadow,
             shading,
             sweep: BTreeMap::new(),
@@ -250,8 +251,51 @@ impl Gen {
         if self.rng.chance(0.2) {
             case.camera.color_format = ColorFormat::Srgb8Alpha8;
         }
+        self.more_lights(&mut case);
         case.about = about(&case);
         case
+    }
+
+    /// Several lights in a seventh of the cases (drawn last too), where the format allows
+    /// them: dimmed shading, no sweep (its paths name `light`), no cascades. One or two more
+    /// lights of any kind (a point light only on a square map), tinted and dimmer, so that
+    /// sums saturate less often; their maps in one 2D array in half the cases that have no
+    /// point light and no mip levels.
+    fn more_lights(&mut self, case: &mut Case) {
+        let cascaded = matches!(&case.light, Light::Directional(d) if d.cascades.is_some());
+        if !self.rng.chance(0.15)
+            || case.shading.model != ShadingModel::Dimmed
+            || !case.sweep.is_empty()
+            || cascaded
+        {
+            return;
+        }
+        let square = case.shadow.size[0] == case.shadow.size[1];
+        let mut lights = vec![case.light.clone()];
+        for _ in 0..self.rng.int(1, 2) {
+            let mut light = self.light();
+            // A point light's cube map needs square faces and has no mip levels.
+            while matches!(light, Light::Point(_)) && (!square || case.shadow.mipmaps.is_some()) {
+                light = self.light();
+            }
+            let color = [
+                self.rng.range(0.3, 1.0, 2),
+                self.rng.range(0.3, 1.0, 2),
+                self.rng.range(0.3, 1.0, 2),
+            ];
+            let intensity = self.rng.range(0.3, 0.8, 2);
+            match &mut light {
+                Light::Directional(d) => (d.color, d.intensity) = (color, intensity),
+                Light::Spot(l) => (l.color, l.intensity) = (color, intensity),
+                Light::Point(l) => (l.color, l.intensity) = (color, intensity),
+            }
+            lights.push(light);
+        }
+        let points = lights.iter().any(|l| matches!(l, Light::Point(_)));
+        if !points && case.shadow.mipmaps.is_none() && self.rng.chance(0.5) {
+            case.shadow.placement = Placement::Array;
+        }
+        case.lights = lights;
     }
 
     fn scene(&mut self) -> Scene {
@@ -641,6 +685,7 @@ impl Gen {
             // Drawn at the end of the case (`case`), after every earlier field.
             depth_func: None,
             mipmaps: None,
+            placement: Placement::Separate,
         }
     }
 
@@ -799,6 +844,11 @@ fn about(c: &Case) -> String {
             ""
         } else {
             ", srgb target"
+        }
+        + &if c.lights.is_empty() {
+            String::new()
+        } else {
+            format!(", {} lights, {} maps", c.lights.len(), s.placement.name())
         }
 }
 

@@ -42,8 +42,33 @@ pub(crate) fn compact(v: &Value) -> String {
     }
 }
 
-/// Deserialises a case from JSON, naming the path of the first type error.
+/// Deserialises a case from JSON, naming the path of the first type error. A case that gives
+/// `lights` and no `light` has `light` filled in with the first of them; one that gives both
+/// (as a case written back does) must give the same first light.
 pub(crate) fn parse_value(value: &Value, file: &Path, context: &str) -> Result<Case, CaseError> {
+    let filled;
+    let value = match value.get("lights").and_then(Value::as_array) {
+        Some(lights) if value.get("light").is_none() && !lights.is_empty() => {
+            let mut v = value.clone();
+            v["light"] = lights[0].clone();
+            filled = v;
+            &filled
+        }
+        _ => value,
+    };
+    let case = deserialize(value, file, context)?;
+    if !case.lights.is_empty() && case.light != case.lights[0] {
+        return Err(CaseError::new(
+            file,
+            "light",
+            format!("{context}both `light` and `lights` are given, and `light` is not `lights[0]`"),
+            "give `light` for one light or `lights` for several, not both",
+        ));
+    }
+    Ok(case)
+}
+
+fn deserialize(value: &Value, file: &Path, context: &str) -> Result<Case, CaseError> {
     serde_path_to_error::deserialize::<_, Case>(value).map_err(|e| {
         let path = e.path().to_string();
         let path = if path == "." { String::new() } else { path };

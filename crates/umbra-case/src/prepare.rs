@@ -23,6 +23,21 @@ pub struct Prepared {
     pub camera: CameraSetup,
     /// Its light.
     pub light: LightSetup,
+    /// A light's run of a case with several lights ([`Prepared::for_light`]): which light
+    /// of how many, and whether their maps are one 2D array's layers (the light's in layer
+    /// `light`). `None` for a case's own run.
+    pub of_lights: Option<OfLights>,
+}
+
+/// Which light of several a run is ([`Prepared::of_lights`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct OfLights {
+    /// The light's index in `lights`.
+    pub light: usize,
+    /// How many lights the case has.
+    pub lights: usize,
+    /// The maps are one 2D array's layers (`shadow.placement` `array`).
+    pub array: bool,
 }
 
 impl Prepared {
@@ -56,11 +71,38 @@ impl Prepared {
             geometry,
             camera,
             light,
+            of_lights: None,
         }
     }
 
     /// The case.
     pub fn case(&self) -> &crate::format::Case {
         &self.point.case
+    }
+
+    /// How many lights the case has (`lights`, or the one `light`).
+    pub fn light_count(&self) -> usize {
+        self.case().all_lights().len()
+    }
+
+    /// Light `k`'s run: the case as that light alone lights it ([`crate::format::Case::for_light`]:
+    /// no ambient term but the first light's), the same triangles. Every backend and the
+    /// reference render a case with several lights as these runs, one lit pass each, the
+    /// passes' colours added; each run's visibility is judged as a one-light case's is.
+    pub fn for_light(&self, k: usize) -> Prepared {
+        let point = CasePoint {
+            case: self.point.case.for_light(k),
+            ..self.point.clone()
+        };
+        let lights = self.light_count();
+        let array = self.case().shadow.placement == crate::format::Placement::Array;
+        Prepared {
+            of_lights: (lights > 1).then_some(OfLights {
+                light: k,
+                lights,
+                array,
+            }),
+            ..Self::with_geometry(point, Arc::clone(&self.geometry))
+        }
     }
 }

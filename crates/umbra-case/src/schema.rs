@@ -63,6 +63,19 @@ pub const EXEMPLARS: &[&str] = &[
         "camera":{"eye":[0,1,1],"target":[0,0,0]},
         "light":{"directional":{"azimuth_deg":0,"elevation_deg":45,
                  "cascades":{"count":3,"split":"practical","lambda":0.5,"at":[0.2,0.5,0.8],"distance":5,"blend":0.1}}}}"#,
+    // Several lights, one of each kind, every field written; `light` is the first of them.
+    r#"{"name":"f","about":"f","scene":{"objects":[{"plane":{"point":[0,0,0],"half_extent":1}}]},
+        "camera":{"eye":[0,1,1],"target":[0,0,0]},
+        "light":{"spot":{"position":[0,1,0],"target":[0,0,0],"up":[0,0,1],"fov_y_deg":60,"near":0.1,"far":10,
+                 "color":[0.5,1,0.5],"intensity":0.5}},
+        "lights":[
+          {"spot":{"position":[0,1,0],"target":[0,0,0],"up":[0,0,1],"fov_y_deg":60,"near":0.1,"far":10,
+                   "color":[0.5,1,0.5],"intensity":0.5}},
+          {"directional":{"position":[0,1,0],"azimuth_deg":0,"elevation_deg":45,"distance":10,"target":[0,0,0],
+                 "up":[0,1,0],"ortho":{"left":-1,"right":1,"bottom":-1,"top":1,"near":0.1,"far":10},"fit":"scene",
+                 "color":[1,0.5,0.5],"intensity":2}},
+          {"point":{"position":[0,1,0],"near":0.1,"far":10,"color":[1,1,0.5],"intensity":3}}],
+        "shadow":{"placement":"array"}}"#,
 ];
 
 /// The exemplars as JSON with every default filled in, as a case point's JSON is.

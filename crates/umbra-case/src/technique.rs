@@ -36,6 +36,9 @@ pub struct Technique {
     pub cascade_beyond: bool,
     /// A cascaded light's blend band (0: none).
     pub cascade_blend: f32,
+    /// A light of several whose maps are one 2D array's layers: the layer its lit pass reads
+    /// (its own, unless a self-test fault mixes them up: [`Fault::map_of_light`]).
+    pub layer: Option<usize>,
     /// The case's filter.
     pub filter: Filter,
     /// Who compares: the sampler or the shader (see [`Technique::with_manual_compare`]).
@@ -193,6 +196,10 @@ impl Technique {
                 .map_or(0, |_| run.light.views.len()),
             cascade_beyond: run.light.cascading.as_ref().is_some_and(|c| c.lit_beyond),
             cascade_blend: run.light.cascading.as_ref().map_or(0.0, |c| c.blend),
+            layer: run
+                .of_lights
+                .filter(|o| o.array)
+                .map(|o| Fault::map_of_light(fault, o.light, o.lights, true)),
             filter: s.filter,
             compare: s.compare,
             clamp_reference: s.compare == Compare::Hardware && s.format.is_fixed(),
@@ -298,15 +305,21 @@ impl Technique {
         }
     }
 
-    /// The map is a 2D array, one layer per cascade.
+    /// The map is a 2D array: one layer per cascade, or one per light (the lit pass reads
+    /// layer `f` + [`Technique::layer_base`]).
     pub fn layered(&self) -> bool {
-        self.cascades > 0
+        self.cascades > 0 || self.layer.is_some()
+    }
+
+    /// The first layer the lit pass reads: a light's layer among several, 0 for cascades.
+    pub fn layer_base(&self) -> usize {
+        self.layer.unwrap_or(0)
     }
 
     /// How the cascade is picked and blended, for a cascaded light (BlendIgnored drops the
     /// band).
     pub fn cascade_select(&self) -> Option<CascadeSelect> {
-        self.layered().then_some(CascadeSelect {
+        (self.cascades > 0).then_some(CascadeSelect {
             count: self.cascades,
             by_distance: self.cascade_by_distance(),
             beyond: self.cascade_beyond,

@@ -206,7 +206,11 @@ impl Validator<'_> {
         }
         self.scene(&c.scene);
         self.camera(&c.camera);
-        self.light(&c.light, &c.shadow, &c.camera);
+        if c.lights.is_empty() {
+            self.light(&c.light, &c.shadow, &c.camera);
+        } else {
+            self.lights(c);
+        }
         self.shadow(&c.shadow);
         self.shading(&c.shading);
         self.twins(&c.expect.twins);
@@ -222,6 +226,63 @@ impl Validator<'_> {
                     ),
                 );
             }
+        }
+    }
+
+    /// `lights`: 2 to MAX_LIGHTS, each checked as `light` is (its errors under
+    /// `lights[k]`), and what several lights cannot have yet, each with its fix.
+    fn lights(&mut self, c: &Case) {
+        let n = c.lights.len();
+        if !(2..=MAX_LIGHTS).contains(&n) {
+            self.err(
+                "lights",
+                format!("{n} lights; a case with `lights` has 2 to {MAX_LIGHTS}"),
+                "write one light as `light`, or remove lights (each is one lit pass and one map)",
+            );
+        }
+        for (k, l) in c.lights.iter().enumerate() {
+            let mut one = Validator {
+                file: self.file,
+                errors: Vec::new(),
+            };
+            one.light(l, &c.shadow, &c.camera);
+            for mut e in one.errors {
+                if let Some(rest) = e.path.strip_prefix("light") {
+                    e.path = format!("lights[{k}]{rest}");
+                }
+                self.errors.push(e);
+            }
+            let cascaded = matches!(l, Light::Directional(d) if d.cascades.is_some());
+            if cascaded {
+                self.err(
+                    format!("lights[{k}].directional.cascades"),
+                    "cascades are modelled for a case's one light, not for one of several",
+                    "remove the cascades, or make the cascaded light the case's only `light`",
+                );
+            }
+            if c.shadow.placement == Placement::Array && matches!(l, Light::Point(_)) {
+                self.err(
+                    "shadow.placement",
+                    format!(
+                        "lights[{k}] is a point light, whose cube map has no layer of a 2D array"
+                    ),
+                    "use \"separate\" (a cube map per point light), or spot and directional lights",
+                );
+            }
+        }
+        if c.shading.model != ShadingModel::Dimmed {
+            self.err(
+                "shading.model",
+                "the classic model's one shadowed factor has no meaning with several shadows",
+                "use \"dimmed\" (each light's diffuse and specular terms dimmed by its own shadow)",
+            );
+        }
+        if c.shadow.placement == Placement::Array && c.shadow.mipmaps.is_some() {
+            self.err(
+                "shadow.mipmaps",
+                "an array's layers have no mip levels here (as for cascades)",
+                "remove shadow.mipmaps, or use \"placement\": \"separate\"",
+            );
         }
     }
 

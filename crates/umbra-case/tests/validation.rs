@@ -802,3 +802,73 @@ fn a_depth_function_that_keeps_the_farther_surface_is_refused_with_the_fix() {
     let unknown = set(base(), "/shadow/depth_func", json!("lequal"));
     assert_error(unknown, "shadow.depth_func", "unknown variant");
 }
+
+/// `base()` lit by `lights` instead of its one `light`.
+fn with_lights(lights: Value) -> Value {
+    let mut doc = base();
+    doc.as_object_mut().expect("object").remove("light");
+    set(doc, "/lights", lights)
+}
+
+#[test]
+fn several_lights_fill_in_light_and_are_refused_with_the_fix_where_not_modelled() {
+    let spot = json!({ "spot": { "position": [3, 10, 3], "target": [0, 0, 0], "fov_y_deg": 60 } });
+    let sun = json!({ "directional": { "azimuth_deg": 30, "elevation_deg": 50, "fit": "scene" } });
+    let lamp = json!({ "point": { "position": [0, 3, 0], "near": 0.2, "far": 30 } });
+    let doc = with_lights(json!([spot, sun]));
+    let points = load_str(&doc.to_string(), Path::new(FILE)).expect("valid");
+    let case = &points[0].case;
+    assert_eq!(case.all_lights().len(), 2);
+    assert_eq!(case.light, case.lights[0], "light is the first of lights");
+    // Light 1's run: that light alone, no ambient term (the first light's pass adds it).
+    let one = case.for_light(1);
+    assert_eq!(one.light, case.lights[1]);
+    assert!(one.lights.is_empty() && one.shading.ambient == 0.0);
+    assert_eq!(case.for_light(0).shading.ambient, case.shading.ambient);
+    // Written back, the case holds both, and reads back the same.
+    let written = serde_json::to_string(case).expect("json");
+    let again = load_str(&written, Path::new(FILE)).expect("reads back");
+    assert_eq!(&again[0].case, case);
+    // Both given and different: which one is meant?
+    let both = set(doc.clone(), "/light", sun.clone());
+    assert_error(both, "light", "`light` is not `lights[0]`");
+    assert_error(with_lights(json!([spot])), "lights", "2 to 4");
+    assert_error(
+        with_lights(json!([spot, sun, spot, sun, spot])),
+        "lights",
+        "2 to 4",
+    );
+    // A light's own error is named under its index.
+    let bad = with_lights(
+        json!([spot, { "spot": { "position": [3, 10, 3], "target": [3, 10, 3], "fov_y_deg": 60 } }]),
+    );
+    assert!(
+        errors(&bad)
+            .0
+            .iter()
+            .any(|e| e.path.starts_with("lights[1].spot"))
+    );
+    let array = set(
+        with_lights(json!([spot, lamp])),
+        "/shadow/placement",
+        json!("array"),
+    );
+    assert_error(array, "shadow.placement", "point light");
+    let classic = set(doc.clone(), "/shading", json!({ "model": "classic" }));
+    assert_error(classic, "shading.model", "several shadows");
+    let cascaded = json!({ "directional": { "azimuth_deg": 30, "elevation_deg": 50,
+        "cascades": { "count": 2, "split": "uniform" } } });
+    assert_error(
+        with_lights(json!([spot, cascaded])),
+        "lights[1].directional.cascades",
+        "one of several",
+    );
+    let mip = set(doc, "/shadow/placement", json!("array"));
+    let mip = set(mip, "/shadow/mipmaps", json!({ "levels": 2 }));
+    assert_error(mip, "shadow.mipmaps", "no mip levels");
+    assert_error(
+        set(base(), "/shadow/placement", json!("layered")),
+        "shadow.placement",
+        "unknown variant",
+    );
+}

@@ -104,6 +104,33 @@ pub struct TruthError {
     pub verdicts: Vec<PixelVerdict>,
 }
 
+/// Judges every light of `frame` against its own truth (`truths`, light by light: the one
+/// light's truth, or each of [`umbra_case::Prepared::for_light`]'s): the counts add up over
+/// the lights (a pixel lit by two lights is judged twice, once per light's shadow), the
+/// verdicts are the first light's.
+pub fn truth_error_lights(frame: &Frame, truths: &[Truth]) -> TruthError {
+    let mut e = truth_error(&frame.for_light(0), &truths[0]);
+    for (k, t) in truths.iter().enumerate().skip(1) {
+        let o = truth_error(&frame.for_light(k), t);
+        for (a, b) in [
+            (&mut e.all, o.all),
+            (&mut e.away_from_edges, o.away_from_edges),
+        ] {
+            a.judged += b.judged;
+            a.false_shadow += b.false_shadow;
+            a.false_light += b.false_light;
+        }
+        e.edge_pixels += o.edge_pixels;
+        e.background += o.background;
+        e.faces_away += o.faces_away;
+        e.outside += o.outside;
+        e.silhouette += o.silhouette;
+        e.truth_shadowed += o.truth_shadowed;
+        e.frame_shadowed += o.frame_shadowed;
+    }
+    e
+}
+
 /// Judges `frame` against `truth` (same size).
 ///
 /// Silhouettes: where the frame carries face ids, a pixel whose face differs from the truth's
@@ -305,6 +332,7 @@ mod tests {
     fn frame(vis: Vec<f32>, w: u32) -> Frame {
         let h = vis.len() as u32 / w;
         Frame {
+            more_lights: Vec::new(),
             width: w,
             height: h,
             color: vec![0; vis.len() * 4],

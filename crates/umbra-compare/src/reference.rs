@@ -93,6 +93,37 @@ pub struct RefAgreement {
 }
 
 impl RefAgreement {
+    /// Adds `o`'s counts (another light's judgement of the same frame): the smaller margin.
+    pub fn absorb(&mut self, o: &RefAgreement) {
+        self.compared += o.compared;
+        self.differ += o.differ;
+        self.legal_tie += o.legal_tie;
+        self.legal_coverage += o.legal_coverage;
+        self.legal_texel += o.legal_texel;
+        self.legal_filter += o.legal_filter;
+        self.legal_seam += o.legal_seam;
+        self.legal_position += o.legal_position;
+        self.legal_surface += o.legal_surface;
+        self.legal_lod += o.legal_lod;
+        self.blind += o.blind;
+        for (a, b) in self.blind_by.iter_mut().zip(o.blind_by) {
+            *a += b;
+        }
+        self.value_checked += o.value_checked;
+        self.value_margin = match (self.value_margin, o.value_margin) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        self.colour_checked += o.colour_checked;
+        self.illegal_value += o.illegal_value;
+        self.illegal_nan += o.illegal_nan;
+        self.illegal_coverage += o.illegal_coverage;
+        self.illegal_colour += o.illegal_colour;
+        self.map_checked += o.map_checked;
+        self.illegal_map += o.illegal_map;
+        self.illegal += o.illegal;
+    }
+
     /// The legal classes, as every message states them.
     pub fn legal_summary(&self) -> String {
         format!(
@@ -155,6 +186,20 @@ pub enum PixelJudgement {
     Illegal,
 }
 
+impl PixelJudgement {
+    /// How bad a judgement is, for the worst of a pixel's lights: illegal, then a legal
+    /// difference, blind, agreement, not compared.
+    pub fn rank(self) -> u8 {
+        match self {
+            PixelJudgement::NotCompared => 0,
+            PixelJudgement::Agrees => 1,
+            PixelJudgement::Blind => 2,
+            PixelJudgement::LegalDifference => 3,
+            PixelJudgement::Illegal => 4,
+        }
+    }
+}
+
 /// The names of [`RefAgreement::blind_by`]'s entries.
 pub const REASONS: [&str; 8] = [
     "depth tie",
@@ -211,7 +256,73 @@ pub fn value_ok(v: f32, lo: f32, hi: f32, quantum: f32, eps: f32) -> bool {
 
 /// Judges `frame` against the judged reference `basis` (same size, the backend's profile).
 /// Returns the counts and each pixel's judgement.
+///
+/// A case with several lights: each light's visibility and map are judged against that
+/// light's run ([`Judged::for_light`]) as a one-light frame's are, the counts added up over
+/// the lights (a pixel is compared once per light); a pixel's judgement is the worst of its
+/// lights'. Its colour, the sum of the lights' passes, is checked once against all of them
+/// ([`colour_ok_lights`]); the background against the clear colour, once.
 pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement>) {
+    if basis.light_count() == 1 && frame.light_count() == 1 {
+        return judge_light(basis, frame, true);
+    }
+    let lights = basis.light_count();
+    let frames: Vec<Frame> = (0..lights).map(|k| light_frame(frame, k)).collect();
+    let (mut r, mut px) = judge_light(basis, &frames[0], false);
+    for (k, f) in frames.iter().enumerate().skip(1) {
+        let (rk, pk) = judge_light(basis.for_light(k), f, false);
+        r.absorb(&rk);
+        for (a, b) in px.iter_mut().zip(pk) {
+            if b.rank() > a.rank() {
+                *a = b;
+            }
+        }
+    }
+    let eps = frame.visibility_storage.tolerance();
+    for (i, j) in px.iter_mut().enumerate() {
+        // As for one light: a colour is checked where both frames show the same surface.
+        let same_surface = match (&basis.frame.surface, &frame.surface) {
+            (Some(a), Some(b)) => a[i] == b[i],
+            _ => true,
+        };
+        if !frame.covered(i) || !basis.frame.covered(i) || !same_surface {
+            continue;
+        }
+        let lights: Vec<(f32, &umbra_ref::PixelLegal)> = frames
+            .iter()
+            .enumerate()
+            .map(|(k, f)| (f.visibility[i], &basis.for_light(k).legal[i]))
+            .collect();
+        if lights.iter().any(|(v, _)| v.is_nan()) {
+            continue;
+        }
+        r.colour_checked += 1;
+        let rgb = &frame.color[i * 4..i * 4 + 3];
+        if !colour_ok_lights(rgb, &lights, eps, basis.color_format) {
+            r.illegal_colour += 1;
+            if *j != PixelJudgement::Illegal {
+                r.illegal += 1;
+                *j = PixelJudgement::Illegal;
+            }
+        }
+    }
+    (r, px)
+}
+
+/// Light `k` of `frame` as a one-light frame; a light the frame lacks (a backend that wrote
+/// fewer planes than the case has lights) reads NaN everywhere, which the judge finds illegal.
+fn light_frame(frame: &Frame, k: usize) -> Frame {
+    if k < frame.light_count() {
+        return frame.for_light(k);
+    }
+    let mut f = frame.for_light(0);
+    f.visibility = vec![f32::NAN; f.visibility.len()];
+    f.shadow_map = None;
+    f
+}
+
+/// [`judge`] for one light: with `colour`, its colour (covered pixels and background) too.
+fn judge_light(basis: &Judged, frame: &Frame, colour: bool) -> (RefAgreement, Vec<PixelJudgement>) {
     let reference = &basis.frame;
     assert_eq!(
         (reference.width, reference.height),
@@ -228,6 +339,9 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
     #[allow(clippy::needless_range_loop)]
     for i in 0..n {
         let (ref_cov, b_cov) = (reference.covered(i), frame.covered(i));
+        if !ref_cov && !b_cov && !colour {
+            continue;
+        }
         if !ref_cov && !b_cov {
             // The background: the clear colour (`camera.clear`), the only thing a backend
             // writes there (a clear value converted as any colour is: either code of a value
@@ -310,6 +424,9 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
                 (false, false) => PixelJudgement::Agrees,
             };
         }
+        if !colour {
+            continue;
+        }
         r.colour_checked += 1;
         if !colour_ok(
             &frame.color[i * 4..i * 4 + 3],
@@ -325,7 +442,7 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
             }
         }
     }
-    if let Some(map) = map_failures(basis, frame) {
+    if let Some(map) = light_map_failures(basis, frame) {
         r.map_checked = basis.map.len() as u64;
         r.illegal_map = map.total;
     }
@@ -334,8 +451,28 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
 
 /// The shadow-map texels of `frame` outside the ranges a conformant implementation may store
 /// (each within one f32 spacing), side = above; `None` where the map is not checked (the
-/// backend reads none back, or the basis kept no ranges).
+/// backend reads none back, or the basis kept no ranges). Several lights: every light's map
+/// against its own run's ranges, light after light (a texel's index counts on from the
+/// previous lights' texels); `None` if any light's map is not checked.
 pub fn map_failures(basis: &Judged, frame: &Frame) -> Option<Failed> {
+    if basis.light_count() == 1 && frame.light_count() == 1 {
+        return light_map_failures(basis, frame);
+    }
+    let mut all = Failed::default();
+    let mut offset = 0;
+    for k in 0..basis.light_count() {
+        let light = basis.for_light(k);
+        let failed = light_map_failures(light, &light_frame(frame, k))?;
+        all.total += failed.total - failed.entries.len() as u64;
+        for e in failed.entries {
+            all.push(offset + (e >> 1) as usize, e & 1 == 1);
+        }
+        offset += light.map.len();
+    }
+    Some(all)
+}
+
+fn light_map_failures(basis: &Judged, frame: &Frame) -> Option<Failed> {
     let map = frame.shadow_map.as_ref()?;
     if map.values.len() != basis.map.len() || basis.map.is_empty() {
         return None;
@@ -390,6 +527,38 @@ pub fn colour_ok(
     })
 }
 
+/// [`colour_ok`] for a colour that is the sum of several lights' passes (`lights`: each
+/// light's visibility as the backend wrote it and its run's [`umbra_ref::PixelLegal`], whose
+/// `c0`/`c1` hold that light's terms, the ambient term in the first light's only). Per
+/// channel, an interval carried pass by pass: each light adds its range at its own
+/// visibility (± `eps`) widened by its shading freedom; between passes the sum is what the
+/// target stored and a blend (ONE, ONE) reads back ([`ColorFormat::stored_linear_range`]:
+/// either neighbouring code, decoded to linear on an sRGB target), and clamped to [0, 1] as
+/// a fixed-point target clamps the blend's result; the last pass's sum is stored as
+/// [`colour_ok`] stores one. Every term is ≥ 0.
+pub fn colour_ok_lights(
+    rgb: &[u8],
+    lights: &[(f32, &umbra_ref::PixelLegal)],
+    eps: f32,
+    format: ColorFormat,
+) -> bool {
+    (0..3).all(|c| {
+        let (mut lo, mut hi) = (0.0f32, 0.0f32);
+        for (k, (v, l)) in lights.iter().enumerate() {
+            if k > 0 {
+                (lo, hi) = format.stored_linear_range(lo, hi);
+            }
+            let (v0, v1) = ((v - eps).clamp(0.0, 1.0), (v + eps).clamp(0.0, 1.0));
+            let at = |v: f32| l.c0[c] + (l.c1[c] - l.c0[c]) * v;
+            let (a, b) = (at(v0), at(v1));
+            lo += a.min(b) - l.ctol;
+            hi += a.max(b) + l.ctol;
+        }
+        let (lo, hi) = format.encoded_bounds(lo.clamp(0.0, 1.0), hi.clamp(0.0, 1.0));
+        within_codes(lo, hi, rgb[c])
+    })
+}
+
 /// ⌊lo·255⌋ ≤ code ≤ ⌈hi·255⌉, without libm's floor and ceil (a call each at baseline
 /// x86-64): for an integer c, ⌊x⌋ ≤ c ⟺ x < c + 1 and c ≤ ⌈y⌉ ⟺ y > c − 1, and NaN fails
 /// both as it fails the rounded forms.
@@ -400,22 +569,50 @@ fn within_codes(lo: f32, hi: f32, code: u8) -> bool {
 }
 
 /// Per pixel: whether the shadow answer may legally differ from the reference's there (its
-/// interval straddles 0.5, or another surface may show): the golden check's tolerance.
+/// interval straddles 0.5, or another surface may show; with several lights, for any of
+/// them): the golden check's tolerance.
 pub fn free_pixels(basis: &Judged) -> Vec<bool> {
-    basis
-        .legal
-        .iter()
-        .map(|l| l.flags & ambiguity::SURFACE != 0 || (l.lo < 0.5 && l.hi >= 0.5))
-        .collect()
+    let mut free: Vec<bool> = basis.legal.iter().map(free).collect();
+    for other in &basis.others {
+        for (f, l) in free.iter_mut().zip(&other.legal) {
+            *f |= self::free(l);
+        }
+    }
+    free
+}
+
+fn free(l: &umbra_ref::PixelLegal) -> bool {
+    l.flags & ambiguity::SURFACE != 0 || (l.lo < 0.5 && l.hi >= 0.5)
 }
 
 /// Two backend frames against each other: wherever their surfaces or lit/shadowed answers
 /// differ, the judged renders of both frames' profiles (`ja` for `a`, `jb` for `b`) must allow
 /// the answer to be free there (its interval straddles 0.5, or another surface may show).
 /// Counts as [`judge`] does; the legal classes follow `ja`'s flags.
+/// Several lights: light by light, each against its own runs' freedom, the counts added.
 pub fn judge_pair(a: &Frame, ja: &Judged, b: &Frame, jb: &Judged) -> RefAgreement {
+    let mut r = pair_light(a, &ja.legal, b, &jb.legal);
+    for k in 1..ja.light_count().min(jb.light_count()) {
+        let (ak, bk) = (light_frame(a, k), light_frame(b, k));
+        r.absorb(&pair_light(
+            &ak,
+            &ja.for_light(k).legal,
+            &bk,
+            &jb.for_light(k).legal,
+        ));
+    }
+    r
+}
+
+fn pair_light(
+    a: &Frame,
+    ja: &[umbra_ref::PixelLegal],
+    b: &Frame,
+    jb: &[umbra_ref::PixelLegal],
+) -> RefAgreement {
     let n = (a.width * a.height) as usize;
-    let (fa, fb) = (free_pixels(ja), free_pixels(jb));
+    let fa: Vec<bool> = ja.iter().map(free).collect();
+    let fb: Vec<bool> = jb.iter().map(free).collect();
     let mut r = RefAgreement::default();
     for i in 0..n {
         if !a.covered(i) && !b.covered(i) {
@@ -442,7 +639,7 @@ pub fn judge_pair(a: &Frame, ja: &Judged, b: &Frame, jb: &Judged) -> RefAgreemen
             }
             continue;
         }
-        let f = ja.legal[i].flags | jb.legal[i].flags;
+        let f = ja[i].flags | jb[i].flags;
         let class = if !same_surface || f & ambiguity::SURFACE != 0 {
             &mut r.legal_surface
         } else if f & ambiguity::DEPTH_TIE != 0 {
@@ -496,6 +693,52 @@ mod colour_tests {
         };
         let ok = |code: u8| colour_ok(&[code; 3], 1.0, 0.0, &dark, ColorFormat::Srgb8Alpha8);
         assert!(ok(6) && ok(7) && !ok(1) && !ok(9));
+    }
+
+    /// Two lights' passes added: the sum of their shadings at the visibilities written,
+    /// each pass after the first its stored code; a pass whose colour never arrived (or a
+    /// light's shading at another visibility) is caught. On an sRGB target the sum is taken
+    /// in linear light, not of the codes.
+    #[test]
+    fn several_lights_are_held_to_the_sum_of_their_passes() {
+        // Light 0: ambient 0.1, lit adds 0.3 (linear); light 1: lit adds 0.2.
+        let l0 = umbra_ref::PixelLegal {
+            lo: 0.0,
+            hi: 1.0,
+            flags: 0,
+            c0: [0.1; 3],
+            c1: [0.4; 3],
+            ctol: 0.0,
+        };
+        let l1 = umbra_ref::PixelLegal {
+            c0: [0.0; 3],
+            c1: [0.2; 3],
+            ..l0
+        };
+        let ok = |code: u8, v1: f32, format| {
+            colour_ok_lights(&[code; 3], &[(1.0, &l0), (v1, &l1)], 0.0, format)
+        };
+        let linear: Vec<u8> = (0..=255)
+            .filter(|&c| ok(c, 1.0, ColorFormat::Rgba8))
+            .collect();
+        // 0.6 · 255 = 153: light 0's stored 0.4 (102) read back, 0.2 (51) added.
+        assert!(linear.contains(&153) && linear.iter().all(|c| (152..=154).contains(c)));
+        assert!(
+            !ok(102, 1.0, ColorFormat::Rgba8),
+            "light 1's pass is missing"
+        );
+        assert!(
+            ok(102, 0.0, ColorFormat::Rgba8),
+            "light 1 in shadow adds nothing"
+        );
+        // sRGB: encode(0.6) · 255 = 203.1, not the sum of the codes (170 + 124).
+        let srgb: Vec<u8> = (0..=255)
+            .filter(|&c| ok(c, 1.0, ColorFormat::Srgb8Alpha8))
+            .collect();
+        assert!(
+            srgb.contains(&203) && srgb.iter().all(|c| (200..=206).contains(c)),
+            "{srgb:?}"
+        );
     }
 
     /// Desktop GL and GLES 2 may leave an sRGB clear unencoded (GL 3.3 §4.2.3), GLES 3 and

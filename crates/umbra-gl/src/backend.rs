@@ -177,6 +177,10 @@ impl Backend for GlBackend {
         }
         match api {
             // GLES 2 has no array textures; separate textures per cascade are not built yet.
+            Api::Gles2 if needs.array_layers > 0 && needs.lights > 1 => Support::Unsupported(
+                "several lights' maps in one 2D array (shadow.placement \"array\") need array textures (GL 3.0, GLES 3.0), which GLES 2 lacks; GLES 2 runs the \"separate\" placement"
+                    .into(),
+            ),
             Api::Gles2 if needs.array_layers > 0 => Support::Unsupported(
                 "cascades are drawn into a 2D array texture (GL 3.0, GLES 3.0), which GLES 2 lacks; umbra's GLES 2 placement in separate textures is not built yet"
                     .into(),

@@ -782,6 +782,20 @@ impl<'a> Gl<'a> {
         });
         unsafe { self.raw.depth_func(f) }
     }
+    /// glBlendFunc: umbra blends only (GL_ONE, GL_ONE), written as such.
+    pub unsafe fn blend_func(&self, src: u32, dst: u32) {
+        log!(self, |r| {
+            let name = |v: u32| {
+                if v == glow::ONE {
+                    "GL_ONE".to_string()
+                } else {
+                    format!("0x{v:04X}")
+                }
+            };
+            r.call("glBlendFunc", &[name(src), name(dst)]);
+        });
+        unsafe { self.raw.blend_func(src, dst) }
+    }
     pub unsafe fn depth_mask(&self, m: bool) {
         log!(self, |r| r.call("glDepthMask", &[c_bool(m)]));
         unsafe { self.raw.depth_mask(m) }
@@ -1082,6 +1096,7 @@ const SIGNATURES: &[(&str, &str, &str)] = &[
     ("glDeleteVertexArrays", "void", "GLsizei, const GLuint *"),
     ("glDepthFunc", "void", "GLenum"),
     ("glDepthMask", "void", "GLboolean"),
+    ("glBlendFunc", "void", "GLenum, GLenum"),
     ("glDetachShader", "void", "GLuint, GLuint"),
     ("glDisable", "void", "GLenum"),
     ("glDrawArrays", "void", "GLenum, GLint, GLsizei"),
@@ -1247,6 +1262,8 @@ const ENUMS: &[(u32, &str)] = &[
     (glow::LESS, "GL_LESS"),
     (glow::GREATER, "GL_GREATER"),
     (glow::ALWAYS, "GL_ALWAYS"),
+    (glow::EQUAL, "GL_EQUAL"),
+    (glow::BLEND, "GL_BLEND"),
     (glow::DEPTH_COMPONENT, "GL_DEPTH_COMPONENT"),
     (glow::DEPTH_COMPONENT16, "GL_DEPTH_COMPONENT16"),
     (glow::DEPTH_COMPONENT24, "GL_DEPTH_COMPONENT24"),

@@ -391,6 +391,9 @@ impl Renderer {
         start: Instant,
         reuse: Option<glow::Texture>,
     ) -> Result<Frame, BackendError> {
+        if run.light_count() > 1 {
+            return self.render_lights(run, res, start);
+        }
         let p = RunPlan::new(run, self.api);
         self.check("before the run")?;
         self.upload(&p, res)?;
@@ -432,6 +435,7 @@ impl Renderer {
         let [w, h] = run.camera.size;
         let (visibility, surface) = readback::decode_visibility(&vis);
         Ok(Frame {
+            more_lights: Vec::new(),
             width: w,
             height: h,
             color,
@@ -447,6 +451,115 @@ impl Renderer {
                 total: start.elapsed(),
                 clock: Some(clock),
             },
+        })
+    }
+
+    /// A case with several lights, as engines' forward renderers with a pass per light do
+    /// (Unity's forward-add, Doom 3's interactions): every light's shadow pass into its own
+    /// map (`separate`) or its layer of one 2D array (`array`), then every light's lit pass
+    /// over the first's depth, added into its colour ([`Renderer::add_light`]), each pass's
+    /// visibility read back on its own. Stages are timed over all lights.
+    fn render_lights(
+        &mut self,
+        run: &Prepared,
+        res: &mut Resources,
+        start: Instant,
+    ) -> Result<Frame, BackendError> {
+        let runs: Vec<Prepared> = (0..run.light_count()).map(|k| run.for_light(k)).collect();
+        let mut plans: Vec<RunPlan> = runs.iter().map(|r| RunPlan::new(r, self.api)).collect();
+        self.check("before the run")?;
+        self.upload(&plans[0], res)?;
+        if self.caps.timer_queries {
+            res.timer = Some(Timer::new(&self.g())?);
+        }
+        let timer = res.timer.clone();
+        let shadow_start = Instant::now();
+        if let Some(t) = &timer {
+            t.begin(&self.g(), 0);
+        }
+        crate::inject::gl_error(&self.g(), run.case());
+        let mut maps = Vec::new();
+        let mut stored = Vec::new();
+        for (k, p) in plans.iter_mut().enumerate() {
+            if k > 0 && p.layered {
+                p.array_map = maps.first().copied();
+            }
+            let p = &*p;
+            let programs = self.shadow_programs(p)?;
+            let map = self.shadow_map(p, &programs, res, None)?;
+            // Every light's map is the run's, deleted with it.
+            res.textures.extend(res.shadow_map.take());
+            stored.push(if p.api == Api::Gl33 {
+                Some(self.read_map(p, map)?)
+            } else {
+                None
+            });
+            maps.push(map);
+        }
+        let shadow_wall = self.end_stage(timer.as_ref(), shadow_start);
+        let lit_start = Instant::now();
+        if let Some(t) = &timer {
+            t.begin(&self.g(), 1);
+        }
+        let mut planes = Vec::new();
+        let mut target = None;
+        for (k, p) in plans.iter().enumerate() {
+            let (technique, program) = self.lit_program(p)?;
+            let array = p.layered;
+            // The map light k reads: its own, unless the self-test mixes the lights up (in an
+            // array, the layer is the shader's: Technique::layer; separate maps are swapped
+            // only between lights whose maps have the same target, which a unit can hold).
+            let other = Fault::map_of_light(p.fault, k, maps.len(), false);
+            let read = if array || plans[other].target != p.target {
+                maps[k]
+            } else {
+                maps[other]
+            };
+            if k == 0 {
+                let first = res.framebuffers.len();
+                // Its colour is read once every light has been added.
+                let (_, vis) = self.lit_pass(p, &technique, program, read, res)?;
+                target = Some(res.framebuffers[first]);
+                planes.push(vis);
+            } else {
+                let fbo = target.expect("the first light's target");
+                planes.push(self.add_light(p, &technique, program, read, fbo, res)?);
+            }
+        }
+        let color = self.read_colour(&plans[0], target.expect("a lit pass"))?;
+        let lit_wall = self.end_stage(timer.as_ref(), lit_start);
+        let gl = &self.g();
+        let (shadow_pass, lit_pass, clock) = match timer.as_ref().map(|t| t.read(gl)) {
+            Some((a, b)) if a <= shadow_wall && b <= lit_wall => (a, b, Clock::Gpu),
+            _ => (shadow_wall, lit_wall, Clock::CpuWall),
+        };
+        self.check("timer queries")?;
+        let [w, h] = run.camera.size;
+        let mut decoded = planes.iter().map(|v| readback::decode_visibility(v));
+        let (visibility, surface) = decoded.next().expect("the first light");
+        let more_lights = decoded
+            .zip(stored.iter().skip(1))
+            .map(|((visibility, _), map)| umbra_case::LightPlane {
+                visibility,
+                shadow_map: map.clone(),
+            })
+            .collect();
+        Ok(Frame {
+            width: w,
+            height: h,
+            color,
+            visibility,
+            surface: Some(surface),
+            shadow_map: stored.swap_remove(0),
+            visibility_storage: VisibilityStorage::Unorm8,
+            timings: Timings {
+                shadow_pass,
+                lit_pass,
+                readback: Duration::ZERO,
+                total: start.elapsed(),
+                clock: Some(clock),
+            },
+            more_lights,
         })
     }
 
@@ -502,8 +615,15 @@ struct RunPlan<'a> {
     conv: Convention,
     /// A cube map (point light).
     cube: bool,
-    /// A 2D array, one layer per cascade.
+    /// A 2D array: one layer per cascade, or the lights' maps in one array's layers.
     layered: bool,
+    /// The array's layer of face 0: the light's among several (`shadow.placement` `array`),
+    /// else 0.
+    layer_base: usize,
+    /// The array's layers: the faces, or the lights sharing it.
+    array_layers: usize,
+    /// The array the lights share, once the first light's pass has allocated it.
+    array_map: Option<glow::Texture>,
     es2: bool,
     /// A deliberate mistake, only under `cargo xtask selftest`.
     fault: Option<Fault>,
@@ -526,7 +646,8 @@ impl<'a> RunPlan<'a> {
         let s = &run.case().shadow;
         let fault = Fault::active();
         let cube = run.light.is_cube();
-        let layered = run.light.cascading.is_some();
+        let array = run.of_lights.filter(|o| o.array);
+        let layered = run.light.cascading.is_some() || array.is_some();
         let levels = s.mipmaps.map_or(1, |m| m.levels);
         RunPlan {
             run,
@@ -535,6 +656,9 @@ impl<'a> RunPlan<'a> {
             conv: Convention::GL.with_order(s.depth_order),
             cube,
             layered,
+            layer_base: array.map_or(0, |o| o.light),
+            array_layers: array.map_or(run.light.views.len(), |o| o.lights),
+            array_map: None,
             es2: api == Api::Gles2,
             fault,
             bias: fault.map_or_else(|| s.bias.clone(), |f| f.bias(&s.bias)),
@@ -584,7 +708,7 @@ impl<'a> RunPlan<'a> {
                     glow::DEPTH_ATTACHMENT,
                     Some(map),
                     level as i32,
-                    k as i32,
+                    (self.layer_base + k) as i32,
                 );
             } else {
                 gl.framebuffer_texture_2d(

@@ -177,7 +177,7 @@ pub fn lit_fragment(api: Api, t: &Technique) -> String {
 /// GLSL in one API's flavour, for one technique's map.
 struct Glsl {
     api: Api,
-    /// The map is a 2D array (cascades).
+    /// The map is a 2D array (cascades, or several lights' maps).
     layered: bool,
 }
 
@@ -212,6 +212,8 @@ impl Dialect for Glsl {
                 );
             }
             s.push_str("uniform vec4 u_view_row;\nuniform float u_split[8];\n");
+            // The layer of face f is f + LAYER: a cascade's, or a light's among several.
+            let _ = writeln!(s, "const int LAYER = {};", t.layer_base());
         }
         let _ = writeln!(s, "uniform {sampler} u_map;");
         if !es2 {
@@ -284,9 +286,9 @@ impl Dialect for Glsl {
         let read = match (cube, self.api == Api::Gles2, wrong_component) {
             _ if self.layered => {
                 if wrong_component {
-                    "texelFetch(u_map, ivec3(int(i), int(j), f), 0).g"
+                    "texelFetch(u_map, ivec3(int(i), int(j), f + LAYER), 0).g"
                 } else {
-                    "texelFetch(u_map, ivec3(int(i), int(j), f), 0).r"
+                    "texelFetch(u_map, ivec3(int(i), int(j), f + LAYER), 0).r"
                 }
             }
             (false, false, false) => "texelFetch(u_map, ivec2(int(i), int(j)), 0).r",
@@ -312,7 +314,7 @@ impl Dialect for Glsl {
                 op.symbol()
             ),
             (false, false) if self.layered => format!(
-                "{head} {{ return texture(u_map, vec4((vec2(i, j) + 0.5) / u_size, float(f), r)); }}\n"
+                "{head} {{ return texture(u_map, vec4((vec2(i, j) + 0.5) / u_size, float(f + LAYER), r)); }}\n"
             ),
             (false, true) => {
                 format!("{head} {{ return texture(u_map, vec4(texel_dir(f, i, j), r)); }}\n")
@@ -454,7 +456,7 @@ impl Dialect for Glsl {
 
     fn sample(&self) -> &'static str {
         if self.layered {
-            "  return texture(u_map, vec4(c.xy, float(f), r));\n"
+            "  return texture(u_map, vec4(c.xy, float(f + LAYER), r));\n"
         } else {
             "  return texture(u_map, vec3(c.xy, r));\n"
         }

@@ -49,7 +49,64 @@ pub fn convention(case: &Case, clip: ClipDepth) -> Convention {
 
 /// Renders both passes of `run` in clip convention `clip`.
 pub fn render(run: &Prepared, clip: ClipDepth) -> Frame {
-    render_inner(run, clip, None, None, None).0
+    each_light(run, |one| render_inner(one, clip, None, None, None).0)
+}
+
+/// A case with several lights as every backend renders it: each light's run
+/// ([`Prepared::for_light`]) by `one`, the lights' colours added where a surface shows
+/// ([`add_lights`]); one light's frame as `one` renders it.
+fn each_light(run: &Prepared, one: impl Fn(&Prepared) -> Frame) -> Frame {
+    if run.light_count() == 1 {
+        return one(run);
+    }
+    add_lights(
+        (0..run.light_count())
+            .map(|k| one(&run.for_light(k)))
+            .collect(),
+        run.case().camera.color_format,
+    )
+}
+
+/// One frame from each light's (`frames`, the first light's first): the first light's
+/// visibility, map and background, the others' in [`Frame::more_lights`], and on covered pixels
+/// the colours added as a blend (ONE, ONE) into a `format` target adds each pass's colour to
+/// the stored one: codes added, saturating, on RGBA8; on an sRGB target both decoded, added
+/// in linear and encoded again. Each pass's colour is its own frame's stored code, a legal
+/// rendering of it (the judge allows each pass its rounding: `colour_ok_lights`).
+pub fn add_lights(frames: Vec<Frame>, format: ColorFormat) -> Frame {
+    let mut frames = frames.into_iter();
+    let mut first = frames.next().expect("at least one light");
+    for f in frames {
+        for (i, (dst, src)) in first
+            .color
+            .chunks_exact_mut(4)
+            .zip(f.color.chunks_exact(4))
+            .enumerate()
+        {
+            if f.covered(i) {
+                for c in 0..3 {
+                    dst[c] = match format {
+                        ColorFormat::Rgba8 => dst[c].saturating_add(src[c]),
+                        ColorFormat::Srgb8Alpha8 => {
+                            let linear =
+                                |code: u8| umbra_case::colour::srgb_decode(f32::from(code) / 255.0);
+                            rounding::unorm8(format.encode(linear(dst[c]) + linear(src[c])))
+                        }
+                    };
+                }
+            }
+        }
+        let t = &mut first.timings;
+        t.shadow_pass += f.timings.shadow_pass;
+        t.lit_pass += f.timings.lit_pass;
+        t.readback += f.timings.readback;
+        t.total += f.timings.total;
+        first.more_lights.push(umbra_case::LightPlane {
+            visibility: f.visibility,
+            shadow_map: f.shadow_map,
+        });
+    }
+    first
 }
 
 /// Renders like [`render`] with a geometric `fault` in the shadow pass (a face drawn with a
@@ -57,7 +114,9 @@ pub fn render(run: &Prepared, clip: ClipDepth) -> Frame {
 /// mistake would show, for the face/orientation test. The reference backend itself never
 /// reads `UMBRA_FAULT`.
 pub fn render_with_fault(run: &Prepared, clip: ClipDepth, fault: Fault) -> Frame {
-    render_inner(run, clip, None, None, Some(fault)).0
+    each_light(run, |one| {
+        render_inner(one, clip, None, None, Some(fault)).0
+    })
 }
 
 /// A judged reference render: the reference's frame and, per pixel (top row first), what a
@@ -81,6 +140,22 @@ pub struct Judged {
     /// [`umbra_case::DepthMap`] holds them): the range of values a conformant implementation
     /// may store there ([`shadow_pass::Freedom`]). Empty when not kept.
     pub map: Vec<(f32, f32)>,
+    /// A case with several lights: each light's after the first, judged as its own run
+    /// ([`Prepared::for_light`]); the fields above are the first light's, but for the frame,
+    /// whose colour is all lights' ([`add_lights`]). Empty for one light.
+    pub others: Vec<Judged>,
+}
+
+impl Judged {
+    /// How many lights the judged run has.
+    pub fn light_count(&self) -> usize {
+        1 + self.others.len()
+    }
+
+    /// Light `k`'s judged run (light 0: this one, with its frame).
+    pub fn for_light(&self, k: usize) -> &Judged {
+        if k == 0 { self } else { &self.others[k - 1] }
+    }
 }
 
 /// Renders like [`render`] and also computes what every pixel allows for `profile`.
@@ -97,6 +172,31 @@ pub fn explain(
     profile: Profile,
     pixel: Option<(u32, u32)>,
 ) -> (Judged, String) {
+    if run.light_count() > 1 {
+        let mut judged = Vec::new();
+        let mut traces = String::new();
+        for k in 0..run.light_count() {
+            let (j, trace) = explain(&run.for_light(k), clip, profile, pixel);
+            if !trace.is_empty() {
+                traces += &format!("light {k}:\n{trace}");
+            }
+            judged.push(j);
+        }
+        let frame = add_lights(
+            judged.iter().map(|j| j.frame.clone()).collect(),
+            run.case().camera.color_format,
+        );
+        let mut judged = judged.into_iter();
+        let first = judged.next().expect("two lights or more");
+        return (
+            Judged {
+                frame,
+                others: judged.collect(),
+                ..first
+            },
+            traces,
+        );
+    }
     let (frame, legal, map, trace) = render_inner(run, clip, Some(profile), pixel, None);
     (
         Judged {
@@ -106,6 +206,7 @@ pub fn explain(
             profile,
             color_format: run.case().camera.color_format,
             map,
+            others: Vec::new(),
         },
         trace,
     )
@@ -229,6 +330,7 @@ fn render_inner(
         }),
         visibility_storage: VisibilityStorage::Float32,
         timings: Timings::default(),
+        more_lights: Vec::new(),
     };
     let legal = top_first(lit.legal, w as usize, 1, flip);
     let end = Instant::now();

@@ -209,7 +209,8 @@ fn faults() -> impl Iterator<Item = Option<Fault>> {
             // Faults that act on the passes' state, not on any source (orientations, the
             // mipmapped sampler's levels, the shadow pass's depth clamp, the layer it draws
             // a cascade into, the lit pass's clear colour, culling and colour target, the
-            // shadow pass's depth function), leave the sources as they were.
+            // shadow pass's depth function, which light's map a lit pass reads), leave the
+            // sources as they were.
             .filter(|f| {
                 !matches!(
                     f,
@@ -223,6 +224,8 @@ fn faults() -> impl Iterator<Item = Option<Fault>> {
                         | Fault::LitCullFlipped
                         | Fault::DepthFuncSwapped
                         | Fault::SrgbIgnored
+                        | Fault::LightSwap
+                        | Fault::ArrayLayerZero
                 )
             })
             .map(Some),

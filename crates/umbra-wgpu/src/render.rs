@@ -111,6 +111,9 @@ impl Gpu {
     /// One run, in stages: upload, the shadow pass (submitted and waited for), the lit pass,
     /// readback, the frame.
     fn render_inner(&self, run: &Prepared) -> Result<Frame, BackendError> {
+        if run.light_count() > 1 {
+            return self.render_lights(run);
+        }
         let start = Instant::now();
         let p = RunPlan::new(run, self);
         let vbo = self.upload(&p);
@@ -135,7 +138,7 @@ impl Gpu {
         let shadow_wall = shadow_start.elapsed();
 
         let technique = Technique::new(run, p.fault);
-        let lit = self.lit_pipeline(&p, &technique);
+        let lit = self.lit_pipeline(&p, &technique, false);
         let bindings = self.lit_bindings(&p, &technique, &lit, &map);
         let targets = self.lit_targets(&p);
         let lit_start = Instant::now();
@@ -163,6 +166,7 @@ impl Gpu {
         drop(face_buffers);
         let [w, h] = run.camera.size;
         Ok(Frame {
+            more_lights: Vec::new(),
             width: w,
             height: h,
             color: out.color,
@@ -181,6 +185,109 @@ impl Gpu {
                 total,
                 clock: Some(clock),
             },
+        })
+    }
+
+    /// A case with several lights, as the GL backend renders one (`render_lights` there):
+    /// every light's shadow pass into its own map or its layer of one 2D array, then every
+    /// light's lit pass over the same targets, the later ones added into the colour
+    /// ([`Gpu::encode_added`]), each submitted and its visibility read back on its own. Times
+    /// are wall times (a light's passes would reuse the timestamp queries).
+    fn render_lights(&self, run: &Prepared) -> Result<Frame, BackendError> {
+        let start = Instant::now();
+        let runs: Vec<Prepared> = (0..run.light_count()).map(|k| run.for_light(k)).collect();
+        let plans: Vec<RunPlan> = runs.iter().map(|r| RunPlan::new(r, self)).collect();
+        let array = runs[0].of_lights.is_some_and(|o| o.array);
+        let vbo = self.upload(&plans[0]);
+        let maps: Vec<wgpu::Texture> = if array {
+            vec![self.create_map(&plans[0])]
+        } else {
+            plans.iter().map(|p| self.create_map(p)).collect()
+        };
+        let map_of = |k: usize| if array { &maps[0] } else { &maps[k] };
+        let shadow_start = Instant::now();
+        let mut enc = self.encoding("shadow", &vbo, None);
+        // What the recorded passes reference, kept until they are submitted.
+        let mut recorded = Vec::new();
+        for (k, p) in plans.iter().enumerate() {
+            let pipelines = self.shadow_pipelines(p);
+            let dummy_views = self.dummy_views(p);
+            let faces = self.encode_shadow(p, map_of(k), &pipelines, &dummy_views, &mut enc);
+            recorded.push((pipelines, dummy_views, faces));
+        }
+        self.queue.submit([enc.encoder.finish()]);
+        self.wait()?;
+        let shadow_wall = shadow_start.elapsed();
+        drop(recorded);
+        let targets = self.lit_targets(&plans[0]);
+        let mut lit_wall = std::time::Duration::ZERO;
+        let mut outputs = Vec::new();
+        for (k, p) in plans.iter().enumerate() {
+            let technique = Technique::new(&runs[k], p.fault);
+            let lit = self.lit_pipeline(p, &technique, k > 0);
+            // The map light k reads: its own, unless the self-test mixes the lights up (in
+            // an array the layer is the shader's, Technique::layer; separate maps are
+            // swapped only between lights of the same kind of map, which a binding can hold).
+            let other = Fault::map_of_light(p.fault, k, plans.len(), false);
+            let read = if array || plans[other].cube != p.cube {
+                map_of(k)
+            } else {
+                &maps[other]
+            };
+            let bindings = self.lit_bindings(p, &technique, &lit, read);
+            let lit_start = Instant::now();
+            let mut enc = self.encoding("lit", &vbo, None);
+            if k == 0 {
+                self.encode_lit(p, &lit, &bindings, &targets, &mut enc);
+            } else {
+                self.encode_added(p, &lit, &bindings, &targets, &mut enc);
+            }
+            self.queue.submit([enc.encoder.finish()]);
+            self.wait()?;
+            lit_wall += lit_start.elapsed();
+            outputs.push(self.read_outputs(p, &targets)?);
+        }
+        let mut stored = Vec::new();
+        for (k, p) in plans.iter().enumerate() {
+            stored.push(self.read_map(p, map_of(k))?);
+        }
+        let total = start.elapsed();
+        let [w, h] = run.camera.size;
+        let last = outputs.pop().expect("two lights or more");
+        let mut planes: Vec<(Vec<f32>, Option<umbra_case::DepthMap>)> = outputs
+            .into_iter()
+            .map(|o| o.visibility)
+            .chain([last.visibility])
+            .zip(stored)
+            .collect();
+        let (visibility, shadow_map) = planes.remove(0);
+        Ok(Frame {
+            width: w,
+            height: h,
+            // Every light added: the last pass's colour.
+            color: last.color,
+            visibility,
+            surface: Some(last.surface),
+            shadow_map,
+            visibility_storage: if self.vis_format == wgpu::TextureFormat::R32Float {
+                umbra_case::VisibilityStorage::Float32
+            } else {
+                umbra_case::VisibilityStorage::Unorm8
+            },
+            timings: umbra_case::Timings {
+                shadow_pass: shadow_wall,
+                lit_pass: lit_wall,
+                readback: total.saturating_sub(shadow_wall + lit_wall),
+                total,
+                clock: Some(umbra_case::Clock::CpuWall),
+            },
+            more_lights: planes
+                .into_iter()
+                .map(|(visibility, shadow_map)| umbra_case::LightPlane {
+                    visibility,
+                    shadow_map,
+                })
+                .collect(),
         })
     }
 
@@ -233,10 +340,15 @@ struct RunPlan<'a> {
     conv: Convention,
     /// A cube map (point light): six layers.
     cube: bool,
-    /// A cascade array: one layer per cascade.
+    /// A 2D array: one layer per cascade, or the lights' maps in one array's layers.
     layered: bool,
     /// Faces (layers) of the map.
     faces: u32,
+    /// The array's layer of face 0: the light's among several (`shadow.placement` `array`),
+    /// else 0.
+    layer_base: u32,
+    /// The array's layers: the faces, or the lights sharing it.
+    array_layers: u32,
     /// The map's format, and whether its depths can be copied back.
     format: wgpu::TextureFormat,
     copyable: bool,
@@ -262,14 +374,17 @@ impl<'a> RunPlan<'a> {
         .with_order(s.depth_order);
         let format = texture_format(s.format);
         let levels = s.mipmaps.map_or(1, |m| m.levels);
+        let array = run.of_lights.filter(|o| o.array);
         RunPlan {
             run,
             s,
             fault,
             conv,
             cube: run.light.is_cube(),
-            layered: run.light.cascading.is_some(),
+            layered: run.light.cascading.is_some() || array.is_some(),
             faces: run.light.views.len() as u32,
+            layer_base: array.map_or(0, |o| o.light as u32),
+            array_layers: array.map_or(run.light.views.len(), |o| o.lights) as u32,
             format,
             copyable: gpu.depth_copies && format != wgpu::TextureFormat::Depth24Plus,
             levels,

@@ -73,7 +73,7 @@ pub fn lit(t: &Technique) -> String {
 
 /// WGSL, in the zero-to-one convention, for one technique's map.
 struct Wgsl {
-    /// The map is a 2D array (cascades).
+    /// The map is a 2D array (cascades, or several lights' maps).
     layered: bool,
 }
 
@@ -87,6 +87,10 @@ impl Dialect for Wgsl {
             (true, true) => "texture_depth_2d_array",
         };
         let _ = writeln!(s, "@group(0) @binding(1) var map: {texture};");
+        if self.layered {
+            // The layer of face f is f + LAYER: a cascade's, or a light's among several.
+            let _ = writeln!(s, "const LAYER: i32 = {};", t.layer_base());
+        }
         if !t.manual() {
             s.push_str("@group(0) @binding(2) var samp: sampler_comparison;\n");
         }
@@ -142,7 +146,9 @@ impl Dialect for Wgsl {
             Outside::Repeat => "  i = i - u.size.x * floor(i / u.size.x);\n  j = j - u.size.y * floor(j / u.size.y);\n",
             Outside::Lit | Outside::ClampToEdge => "  i = clamp(i, 0.0, u.size.x - 1.0);\n  j = clamp(j, 0.0, u.size.y - 1.0);\n",
         });
-        if cube || self.layered {
+        if self.layered {
+            s.push_str("  return textureLoad(map, vec2<i32>(i32(i), i32(j)), f + LAYER, 0);\n}\n");
+        } else if cube {
             s.push_str("  return textureLoad(map, vec2<i32>(i32(i), i32(j)), f, 0);\n}\n");
         } else {
             s.push_str("  return textureLoad(map, vec2<i32>(i32(i), i32(j)), 0);\n}\n");
@@ -161,7 +167,7 @@ impl Dialect for Wgsl {
                 "{head} {{ return textureSampleCompareLevel(map, samp, texel_dir(f, i, j), r); }}\n"
             ),
             (false, false) if self.layered => format!(
-                "{head} {{ return textureSampleCompareLevel(map, samp, (vec2<f32>(i, j) + 0.5) / u.size.xy, f, r); }}\n"
+                "{head} {{ return textureSampleCompareLevel(map, samp, (vec2<f32>(i, j) + 0.5) / u.size.xy, f + LAYER, r); }}\n"
             ),
             (false, false) => format!(
                 "{head} {{ return textureSampleCompareLevel(map, samp, (vec2<f32>(i, j) + 0.5) / u.size.xy, r); }}\n"
@@ -312,7 +318,7 @@ impl Dialect for Wgsl {
 
     fn sample(&self) -> &'static str {
         if self.layered {
-            "  return textureSampleCompareLevel(map, samp, c.xy, f, r);\n"
+            "  return textureSampleCompareLevel(map, samp, c.xy, f + LAYER, r);\n"
         } else {
             "  return textureSampleCompareLevel(map, samp, c.xy, r);\n"
         }

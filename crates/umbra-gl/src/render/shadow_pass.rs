@@ -91,6 +91,10 @@ impl Renderer {
 
     /// The map's texture, every face and level allocated, with a fresh map's sampler state.
     fn map_storage(&self, p: &RunPlan, res: &mut Resources) -> Result<glow::Texture, BackendError> {
+        if let Some(map) = p.array_map {
+            // A later light's layer of the array the first light's pass allocated.
+            return Ok(map);
+        }
         let gl = &self.g();
         let (s, target, levels) = (p.s, p.target, p.levels);
         // SAFETY: objects of the current context.
@@ -111,7 +115,7 @@ impl Renderer {
                     internal,
                     s.size[0] as i32,
                     s.size[1] as i32,
-                    p.faces as i32,
+                    p.array_layers as i32,
                     0,
                     format,
                     ty,

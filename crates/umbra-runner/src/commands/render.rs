@@ -148,6 +148,10 @@ pub fn main(args: &RenderArgs) -> crate::exit::Outcome {
     Ok(Exit::pass_if(!failed))
 }
 
+fn value_ok_light(v: f32, l: &umbra_ref::PixelLegal, quantum: f32, eps: f32) -> bool {
+    umbra_compare::reference::value_ok(v, l.lo, l.hi, quantum, eps)
+}
+
 /// How many illegal pixels `render` lists.
 const LISTED: usize = 12;
 
@@ -183,7 +187,40 @@ fn explain_pixels(
         let l = basis.legal[i];
         let v = j.frame.visibility[i];
         let eps = j.frame.visibility_storage.tolerance();
-        if umbra_compare::reference::value_ok(v, l.lo, l.hi, basis.quantum, eps) {
+        let lights: Vec<(f32, umbra_ref::PixelLegal)> = (0..basis.light_count())
+            .filter(|&k| k < j.frame.light_count())
+            .map(|k| {
+                let b = basis.for_light(k);
+                (j.frame.for_light(k).visibility[i], b.legal[i])
+            })
+            .collect();
+        let all_legal = (0..lights.len()).all(|k| {
+            let (v, l) = lights[k];
+            value_ok_light(v, &l, basis.for_light(k).quantum, eps)
+        });
+        if lights.len() > 1 && all_legal {
+            // Every light's value legal, and a colour that is not the sum of their shadings.
+            let rgb = &j.frame.color[i * 4..i * 4 + 3];
+            let sum = |c: usize| {
+                lights
+                    .iter()
+                    .map(|(v, l)| l.c0[c] + (l.c1[c] - l.c0[c]) * v)
+                    .sum::<f32>()
+            };
+            let visibilities: Vec<f32> = lights.iter().map(|(v, _)| *v).collect();
+            let _ = writeln!(
+                s,
+                "    ({}, {}): the lights' visibilities {visibilities:?} are legal, but the colour {rgb:?} is not the sum of their shadings {:?} (×255: {:?}; each light's tolerance, and each pass after the first its stored code)",
+                i % w,
+                i / w,
+                [sum(0), sum(1), sum(2)],
+                [sum(0) * 255.0, sum(1) * 255.0, sum(2) * 255.0],
+            );
+            continue;
+        }
+        if umbra_compare::reference::value_ok(v, l.lo, l.hi, basis.quantum, eps)
+            && lights.len() == 1
+        {
             // A legal value with a colour that is not its shading (or another surface).
             let rgb = &j.frame.color[i * 4..i * 4 + 3];
             let shade = |c: usize| l.c0[c] + (l.c1[c] - l.c0[c]) * v;

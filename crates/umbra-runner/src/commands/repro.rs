@@ -114,6 +114,18 @@ fn target(args: &ReproArgs) -> Result<Target, Error> {
     std::fs::create_dir_all(&out)
         .map_err(|e| Error::new(format!("cannot create {}: {e}", out.display())))?;
     let (case_file, point) = find_point(args, &case_point).map_err(Error::new)?;
+    let several = umbra_case::load_file(&case_file)
+        .map(|points| points.iter().any(|p| !p.case.lights.is_empty()))
+        .unwrap_or(false);
+    if several {
+        // The standalone program's probes hold one visibility readback to one light's
+        // intervals; a frame of several lights reads one back per light.
+        return Err(Error::new(format!(
+            "{case_point}: a case with several lights (`lights`) has no standalone repro yet: \
+             its probes hold one light's visibility; make a case of the failing light alone \
+             (`light` = that entry of `lights`) and run umbra repro on it"
+        )));
+    }
     Ok(Target {
         run: run.clone(),
         backend,

@@ -76,7 +76,7 @@ fn applies_to(fault: Fault, b: &Descriptor) -> bool {
 /// ([`Descriptor::gles2_technique`]) at all: only such points are run for it.
 pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
     use umbra_case::format::{
-        ColorFormat, Compare, DepthFormat, Filter, Light, Outside, ShadingModel,
+        ColorFormat, Compare, DepthFormat, Filter, Light, Outside, Placement, ShadingModel,
     };
     let s = &c.shadow;
     match fault {
@@ -115,6 +115,8 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
         Fault::LitCullFlipped => !c.camera.cull.is_none(),
         Fault::DepthFuncSwapped => s.depth_test().inclusive(),
         Fault::SrgbIgnored => c.camera.color_format == ColorFormat::Srgb8Alpha8,
+        Fault::LightSwap => c.lights.len() > 1,
+        Fault::ArrayLayerZero => c.lights.len() > 1 && s.placement == Placement::Array,
         Fault::Scaled { param, .. } => {
             let b = &s.bias;
             match param {
@@ -164,6 +166,7 @@ pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
         Fault::LitCullFlipped => &["lit-cull"],
         Fault::DepthFuncSwapped => &["depth-func"],
         Fault::SrgbIgnored => &["srgb"],
+        Fault::LightSwap | Fault::ArrayLayerZero => &["two-lights"],
         Fault::Oriented { face: Some(_), .. } => &["point-faces"],
         Fault::Scaled { param, .. } if param.in_texels() => {
             &["contact", "filters-magnified", "guard-magnified"]
@@ -982,6 +985,8 @@ mod tests {
             Fault::LitCullFlipped,
             Fault::DepthFuncSwapped,
             Fault::SrgbIgnored,
+            Fault::LightSwap,
+            Fault::ArrayLayerZero,
         ] {
             assert!(
                 points.iter().any(|p| aimed_at(f, &p.case)),

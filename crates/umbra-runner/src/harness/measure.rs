@@ -104,7 +104,7 @@ pub fn measure(backend: &mut dyn Backend, point: CasePoint, repeat: u32) -> Meas
         "mixed"
     };
     let truth = crate::judge::judge_cache::truth(&prepared);
-    let error = umbra_compare::truth_error(&frame, &truth);
+    let error = crate::judge::judge_cache::truth_error(&prepared, &frame, &truth);
     let edges = umbra_compare::edges::edge_displacement(&frame, &truth);
     let aliasing = umbra_ref::truth::aliasing::perspective_aliasing(&prepared, &truth);
     Measurement::Done(Measured {

@@ -577,6 +577,7 @@ mod release_tests {
 
     fn frame(color: [u8; 4]) -> Frame {
         Frame {
+            more_lights: Vec::new(),
             width: 4,
             height: 2,
             color: color.repeat(8),

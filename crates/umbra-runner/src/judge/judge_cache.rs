@@ -200,6 +200,10 @@ pub fn prepare(root: &Path) -> PathBuf {
 
 /// The exact truth of `prepared`: from the cache when the process has one, else computed.
 pub fn truth(prepared: &Prepared) -> Truth {
+    if prepared.light_count() > 1 {
+        // The first light's: the same entry as its own run's.
+        return truth(&prepared.for_light(0));
+    }
     let dir = std::env::var_os(ENV).map(PathBuf::from);
     cached(
         dir.as_deref(),
@@ -209,6 +213,18 @@ pub fn truth(prepared: &Prepared) -> Truth {
         |bytes, k| read_truth(bytes, k).and_then(|t| sampled(prepared, t)),
         || ground_truth(prepared),
     )
+}
+
+/// `frame`'s error against the truth: each light's visibility against its own run's truth
+/// (`first`, the first light's, is [`truth`]'s; the others are read or computed here),
+/// [`umbra_compare::truth_error_lights`].
+pub fn truth_error(prepared: &Prepared, frame: &Frame, first: &Truth) -> umbra_compare::TruthError {
+    if prepared.light_count() == 1 {
+        return umbra_compare::truth_error(frame, first);
+    }
+    let mut truths = vec![first.clone()];
+    truths.extend((1..prepared.light_count()).map(|k| truth(&prepared.for_light(k))));
+    umbra_compare::truth_error_lights(frame, &truths)
 }
 
 /// `truth` if it is the exact truth at [`SAMPLE`] pixels spread over the frame, else why not.
@@ -269,6 +285,24 @@ pub fn basis(prepared: &Prepared, profile: Profile) -> Basis {
 /// The reference's judged render of `prepared` for `profile` (its effective profile), cached
 /// like [`basis`]'s.
 pub fn judged(prepared: &Prepared, profile: Profile) -> Judged {
+    if prepared.light_count() > 1 {
+        // Each light's run is its own entry: a case's lights share them with the one-light
+        // cases that are the same run, and the entry format stays one light's.
+        let each: Vec<Judged> = (0..prepared.light_count())
+            .map(|k| judged(&prepared.for_light(k), profile))
+            .collect();
+        let frame = umbra_ref::add_lights(
+            each.iter().map(|j| j.frame.clone()).collect(),
+            prepared.case().camera.color_format,
+        );
+        let mut each = each.into_iter();
+        let first = each.next().expect("two lights or more");
+        return Judged {
+            frame,
+            others: each.collect(),
+            ..first
+        };
+    }
     let profile = profile.effective_for(prepared.case());
     let dir = std::env::var_os(ENV).map(PathBuf::from);
     cached(
@@ -736,6 +770,7 @@ fn parse_judged(
     r.done()?;
     Some(Judged {
         frame: Frame {
+            more_lights: Vec::new(),
             width,
             height,
             color,
@@ -750,6 +785,7 @@ fn parse_judged(
         profile,
         color_format,
         map,
+        others: Vec::new(),
     })
 }
 

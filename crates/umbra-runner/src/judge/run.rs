@@ -113,7 +113,7 @@ pub fn run_point_as(
     // in a conformance run.
     let crate::judge::judge_cache::Basis { truth, judged } =
         crate::judge::judge_cache::basis(&prepared, profile);
-    let error = umbra_compare::truth_error(&frame, &truth);
+    let error = crate::judge::judge_cache::truth_error(&prepared, &frame, &truth);
     let mut problems = Vec::new();
     let mut failed = Vec::new();
     let is_ref = backend.id().0 == "ref";
@@ -418,8 +418,11 @@ fn run_twins(
             if matches!(plan.agree, TwinAgree::NoWorse | TwinAgree::Reported) {
                 // Cached like the case's own: the same twin on every backend is one truth.
                 let twin_truth = crate::judge::judge_cache::truth(&twin_prepared);
-                m.twin_interior_error =
-                    Some(interior(&umbra_compare::truth_error(&twin, &twin_truth)));
+                m.twin_interior_error = Some(interior(&crate::judge::judge_cache::truth_error(
+                    &twin_prepared,
+                    &twin,
+                    &twin_truth,
+                )));
             }
             let (pair, px) = umbra_compare::reference::judge(judged, &twin);
             m.pair = pair;

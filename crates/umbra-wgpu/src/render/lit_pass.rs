@@ -14,6 +14,9 @@ use crate::shaders;
 /// The lit pipeline and what its bind group is made against.
 pub(super) struct LitPipeline {
     pipeline: wgpu::RenderPipeline,
+    /// A later light of several ([`Gpu::encode_added`]): the same shaders drawing depth
+    /// alone first; `pipeline` then draws where the depth is equal, its colour blended.
+    depth_again: Option<wgpu::RenderPipeline>,
     layout: wgpu::BindGroupLayout,
     view_dimension: wgpu::TextureViewDimension,
 }
@@ -37,7 +40,15 @@ pub(super) struct LitTargets {
 impl Gpu {
     /// The lit pipeline for `technique`: its map binding is a cube, a 2D array (a cube read
     /// by hand) or 2D, and a compare sampler only when the hardware compares.
-    pub(super) fn lit_pipeline(&self, p: &RunPlan, technique: &Technique) -> LitPipeline {
+    ///
+    /// `added`: a later light of several, added into the first's colour (the pipeline that
+    /// draws depth again, and the one that blends where it is equal).
+    pub(super) fn lit_pipeline(
+        &self,
+        p: &RunPlan,
+        technique: &Technique,
+        added: bool,
+    ) -> LitPipeline {
         let d = &self.device;
         let manual = technique.manual();
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -94,49 +105,84 @@ impl Gpu {
             shader_location: i as u32,
         })
         .collect::<Vec<_>>();
-        let targets = [
-            Some(wgpu::ColorTargetState::from(colour_format(p))),
-            Some(wgpu::ColorTargetState::from(self.vis_format)),
-            Some(wgpu::ColorTargetState::from(wgpu::TextureFormat::R32Uint)),
-        ];
-        let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("lit"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: STRIDE,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &attributes,
-                })],
-            },
-            // `camera.cull`, counter-clockwise front as in the shadow pass.
-            primitive: wgpu::PrimitiveState {
-                front_face: wgpu::FrontFace::Ccw,
-                cull_mode: cull_mode(Fault::lit_cull(p.fault, &p.run.case().camera)),
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
+        // An added light blends (ONE, ONE) into the colour; its visibility and face ids are
+        // written as the first light's are.
+        let add = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let target = |format, blend, writes| {
+            Some(wgpu::ColorTargetState {
+                format,
+                blend,
+                write_mask: writes,
+            })
+        };
+        let targets = |blend, writes| {
+            [
+                target(colour_format(p), blend, writes),
+                target(self.vis_format, None, writes),
+                target(wgpu::TextureFormat::R32Uint, None, writes),
+            ]
+        };
+        let drawn = targets(
+            added.then_some(wgpu::BlendState {
+                color: add,
+                alpha: add,
             }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+            wgpu::ColorWrites::ALL,
+        );
+        let depth_only = targets(None, wgpu::ColorWrites::empty());
+        let make = |targets: &[Option<wgpu::ColorTargetState>], compare, writes| {
+            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("lit"),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: STRIDE,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &attributes,
+                    })],
+                },
+                // `camera.cull`, counter-clockwise front as in the shadow pass.
+                primitive: wgpu::PrimitiveState {
+                    front_face: wgpu::FrontFace::Ccw,
+                    cull_mode: cull_mode(Fault::lit_cull(p.fault, &p.run.case().camera)),
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: wgpu::TextureFormat::Depth32Float,
+                    depth_write_enabled: Some(writes),
+                    depth_compare: Some(compare),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs"),
+                    compilation_options: Default::default(),
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let (pipeline, depth_again) = if added {
+            (
+                make(&drawn, wgpu::CompareFunction::Equal, false),
+                Some(make(&depth_only, wgpu::CompareFunction::Less, true)),
+            )
+        } else {
+            (make(&drawn, wgpu::CompareFunction::Less, true), None)
+        };
         LitPipeline {
             pipeline,
+            depth_again,
             layout,
             view_dimension,
         }
@@ -331,6 +377,60 @@ impl Gpu {
         pass.set_pipeline(&lit.pipeline);
         pass.set_bind_group(0, &bindings.group, &[]);
         pass.set_vertex_buffer(0, vbo.slice(..));
+        pass.draw(0..p.count, 0..1);
+    }
+
+    /// Records a later light's lit pass over the first light's `targets`: the depth cleared
+    /// and drawn again by this light's shaders with colour writes off, then the colour drawn
+    /// where the depth is equal, blended into the stored colour, the visibility target
+    /// cleared to 0 and written (the GL backend's `add_light` says why the depth is drawn
+    /// again).
+    pub(super) fn encode_added(
+        &self,
+        p: &RunPlan,
+        lit: &LitPipeline,
+        bindings: &LitBindings,
+        targets: &LitTargets,
+        enc: &mut Encoding,
+    ) {
+        let vbo = enc.vbo;
+        let attach = |i: usize, load| {
+            Some(wgpu::RenderPassColorAttachment {
+                view: &targets.views[i],
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
+        let mut pass = enc.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("lit pass (added light)"),
+            color_attachments: &[
+                attach(0, wgpu::LoadOp::Load),
+                attach(1, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)),
+                attach(2, wgpu::LoadOp::Load),
+            ],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &targets.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(0, &bindings.group, &[]);
+        pass.set_vertex_buffer(0, vbo.slice(..));
+        if let Some(depth) = &lit.depth_again {
+            pass.set_pipeline(depth);
+            pass.draw(0..p.count, 0..1);
+        }
+        pass.set_pipeline(&lit.pipeline);
         pass.draw(0..p.count, 0..1);
     }
 

@@ -86,7 +86,7 @@ impl Gpu {
                 bpp,
                 mw,
                 mh,
-                layer,
+                p.layer_base + layer,
                 wgpu::TextureAspect::DepthOnly,
             )?;
             let layer_values: Vec<f32> = if bpp == 2 {

@@ -33,13 +33,14 @@ impl Gpu {
     /// the one-layer array, a path of its own.
     pub(super) fn create_map(&self, p: &RunPlan) -> wgpu::Texture {
         let [mw, mh] = p.s.size;
-        let gl_guesses_2d = p.layered && p.faces == 1 && self.info.backend == wgpu::Backend::Gl;
+        let gl_guesses_2d =
+            p.layered && p.array_layers == 1 && self.info.backend == wgpu::Backend::Gl;
         self.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("shadow map"),
             size: wgpu::Extent3d {
                 width: mw,
                 height: mh,
-                depth_or_array_layers: if gl_guesses_2d { 2 } else { p.faces },
+                depth_or_array_layers: if gl_guesses_2d { 2 } else { p.array_layers },
             },
             mip_level_count: p.levels,
             sample_count: 1,
@@ -225,7 +226,7 @@ impl Gpu {
             });
             let view = map.create_view(&wgpu::TextureViewDescriptor {
                 dimension: Some(wgpu::TextureViewDimension::D2),
-                base_array_layer: k,
+                base_array_layer: p.layer_base + k,
                 array_layer_count: Some(1),
                 base_mip_level: level,
                 mip_level_count: Some(1),
