@@ -72,8 +72,11 @@ pub struct DriverInfo {
 /// scene needs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Needs {
-    /// A cube depth map (point light).
+    /// A cube depth map (a point light among the case's lights).
     pub cube_map: bool,
+    /// A 2D depth map (a spot or directional light among the case's lights): what a
+    /// clamp-to-border wrap applies to (a cube map clamps to its edges).
+    pub flat_map: bool,
     /// The depth format.
     pub format: DepthFormat,
     /// Hardware or manual compare.
@@ -118,6 +121,10 @@ impl Needs {
                 .all_lights()
                 .iter()
                 .any(|l| matches!(l, Light::Point(_))),
+            flat_map: case
+                .all_lights()
+                .iter()
+                .any(|l| !matches!(l, Light::Point(_))),
             format: s.format,
             compare: s.compare,
             filter: s.filter,

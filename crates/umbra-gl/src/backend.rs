@@ -135,10 +135,13 @@ impl Backend for GlBackend {
         // GLES 2 applies the offset (and its clamp) in the shader; the others need the
         // extension's entry point, loaded by name (glow does not carry it).
         let caps = &self.renderer.caps;
-        let (map_limit, map_name) = if needs.cube_map {
-            (caps.max_cube, "GL_MAX_CUBE_MAP_TEXTURE_SIZE")
-        } else {
-            (caps.max_texture, "GL_MAX_TEXTURE_SIZE")
+        // Several lights may need both kinds of map: the smaller limit holds.
+        let (map_limit, map_name) = match (needs.cube_map, needs.flat_map) {
+            (true, true) if caps.max_texture < caps.max_cube => {
+                (caps.max_texture, "GL_MAX_TEXTURE_SIZE")
+            }
+            (true, _) => (caps.max_cube, "GL_MAX_CUBE_MAP_TEXTURE_SIZE"),
+            (false, _) => (caps.max_texture, "GL_MAX_TEXTURE_SIZE"),
         };
         if needs.map_size > map_limit {
             return Support::Unsupported(format!(
@@ -199,7 +202,7 @@ impl Backend for GlBackend {
             Api::Gles3
                 if needs.outside == Outside::Border
                     && needs.compare == Compare::Hardware
-                    && !needs.cube_map =>
+                    && needs.flat_map =>
             {
                 if caps.border_clamp {
                     Support::Supported

@@ -398,18 +398,7 @@ impl Renderer {
         self.check("before the run")?;
         self.upload(&p, res)?;
         let shadow_programs = self.shadow_programs(&p)?;
-        // The timer belongs to the run's resources: a stage that fails with its query open
-        // leaves it to `Resources::delete`, which ends it (a query left active makes every
-        // later glBeginQuery of the context fail).
-        if self.caps.timer_queries {
-            res.timer = Some(Timer::new(&self.g())?);
-        }
-        let timer = res.timer.clone();
-        let shadow_start = Instant::now();
-        if let Some(t) = &timer {
-            t.begin(&self.g(), 0);
-        }
-        crate::inject::gl_error(&self.g(), run.case());
+        let (timer, shadow_start) = self.begin_stages(run, res)?;
         let map = self.shadow_map(&p, &shadow_programs, res, reuse)?;
         let shadow_wall = self.end_stage(timer.as_ref(), shadow_start);
         let shadow_map = if p.api == Api::Gl33 && reuse.is_none() {
@@ -424,14 +413,8 @@ impl Renderer {
         }
         let (color, vis) = self.lit_pass(&p, &technique, lit_program, map, res)?;
         let lit_wall = self.end_stage(timer.as_ref(), lit_start);
-        let gl = &self.g();
-        // A GPU interval cannot exceed the wall time we waited for it (llvmpipe's first query
-        // of a context can return garbage): fall back to the CPU clock rather than report it.
-        let (shadow_pass, lit_pass, clock) = match timer.as_ref().map(|t| t.read(gl)) {
-            Some((a, b)) if a <= shadow_wall && b <= lit_wall => (a, b, Clock::Gpu),
-            _ => (shadow_wall, lit_wall, Clock::CpuWall),
-        };
-        self.check("timer queries")?;
+        let (shadow_pass, lit_pass, clock) =
+            self.stage_times(timer.as_ref(), shadow_wall, lit_wall)?;
         let [w, h] = run.camera.size;
         let (visibility, surface) = readback::decode_visibility(&vis);
         Ok(Frame {
@@ -469,15 +452,7 @@ impl Renderer {
         let mut plans: Vec<RunPlan> = runs.iter().map(|r| RunPlan::new(r, self.api)).collect();
         self.check("before the run")?;
         self.upload(&plans[0], res)?;
-        if self.caps.timer_queries {
-            res.timer = Some(Timer::new(&self.g())?);
-        }
-        let timer = res.timer.clone();
-        let shadow_start = Instant::now();
-        if let Some(t) = &timer {
-            t.begin(&self.g(), 0);
-        }
-        crate::inject::gl_error(&self.g(), run.case());
+        let (timer, shadow_start) = self.begin_stages(run, res)?;
         let mut maps = Vec::new();
         let mut stored = Vec::new();
         for (k, p) in plans.iter_mut().enumerate() {
@@ -528,12 +503,8 @@ impl Renderer {
         }
         let color = self.read_colour(&plans[0], target.expect("a lit pass"))?;
         let lit_wall = self.end_stage(timer.as_ref(), lit_start);
-        let gl = &self.g();
-        let (shadow_pass, lit_pass, clock) = match timer.as_ref().map(|t| t.read(gl)) {
-            Some((a, b)) if a <= shadow_wall && b <= lit_wall => (a, b, Clock::Gpu),
-            _ => (shadow_wall, lit_wall, Clock::CpuWall),
-        };
-        self.check("timer queries")?;
+        let (shadow_pass, lit_pass, clock) =
+            self.stage_times(timer.as_ref(), shadow_wall, lit_wall)?;
         let [w, h] = run.camera.size;
         let mut decoded = planes.iter().map(|v| readback::decode_visibility(v));
         let (visibility, surface) = decoded.next().expect("the first light");
@@ -561,6 +532,46 @@ impl Renderer {
             },
             more_lights,
         })
+    }
+
+    /// The stages' timer (where the context has timer queries), begun on the shadow pass,
+    /// and the shadow pass's start; the self-test's injected GL error comes right after.
+    ///
+    /// The timer belongs to the run's resources: a stage that fails with its query open
+    /// leaves it to `Resources::delete`, which ends it (a query left active makes every later
+    /// glBeginQuery of the context fail).
+    fn begin_stages(
+        &self,
+        run: &Prepared,
+        res: &mut Resources,
+    ) -> Result<(Option<Timer>, Instant), BackendError> {
+        if self.caps.timer_queries {
+            res.timer = Some(Timer::new(&self.g())?);
+        }
+        let timer = res.timer.clone();
+        let shadow_start = Instant::now();
+        if let Some(t) = &timer {
+            t.begin(&self.g(), 0);
+        }
+        crate::inject::gl_error(&self.g(), run.case());
+        Ok((timer, shadow_start))
+    }
+
+    /// The shadow and lit passes' times and their clock: the timer's, unless an interval
+    /// exceeds the wall time waited for it (llvmpipe's first query of a context can return
+    /// garbage), then the CPU clock's rather than report it.
+    fn stage_times(
+        &self,
+        timer: Option<&Timer>,
+        shadow_wall: Duration,
+        lit_wall: Duration,
+    ) -> Result<(Duration, Duration, Clock), BackendError> {
+        let times = match timer.map(|t| t.read(&self.g())) {
+            Some((a, b)) if a <= shadow_wall && b <= lit_wall => (a, b, Clock::Gpu),
+            _ => (shadow_wall, lit_wall, Clock::CpuWall),
+        };
+        self.check("timer queries")?;
+        Ok(times)
     }
 
     /// Ends a timed stage: its query, then glFinish for the CPU clock; the wall time.

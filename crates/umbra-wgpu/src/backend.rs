@@ -97,7 +97,7 @@ impl Backend for WgpuBackend {
         }
         if needs.outside == Outside::Border
             && needs.compare == Compare::Hardware
-            && !needs.cube_map
+            && needs.flat_map
             && !self
                 .gpu
                 .features

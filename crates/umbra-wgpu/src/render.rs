@@ -173,11 +173,7 @@ impl Gpu {
             visibility: out.visibility,
             surface: Some(out.surface),
             shadow_map,
-            visibility_storage: if self.vis_format == wgpu::TextureFormat::R32Float {
-                umbra_case::VisibilityStorage::Float32
-            } else {
-                umbra_case::VisibilityStorage::Unorm8
-            },
+            visibility_storage: self.visibility_storage(),
             timings: umbra_case::Timings {
                 shadow_pass,
                 lit_pass,
@@ -269,11 +265,7 @@ impl Gpu {
             visibility,
             surface: Some(last.surface),
             shadow_map,
-            visibility_storage: if self.vis_format == wgpu::TextureFormat::R32Float {
-                umbra_case::VisibilityStorage::Float32
-            } else {
-                umbra_case::VisibilityStorage::Unorm8
-            },
+            visibility_storage: self.visibility_storage(),
             timings: umbra_case::Timings {
                 shadow_pass: shadow_wall,
                 lit_pass: lit_wall,
@@ -289,6 +281,16 @@ impl Gpu {
                 })
                 .collect(),
         })
+    }
+
+    /// How the visibility target stores values: R32Float where the adapter renders to it,
+    /// else RGBA8.
+    fn visibility_storage(&self) -> umbra_case::VisibilityStorage {
+        if self.vis_format == wgpu::TextureFormat::R32Float {
+            umbra_case::VisibilityStorage::Float32
+        } else {
+            umbra_case::VisibilityStorage::Unorm8
+        }
     }
 
     /// A command encoder for one stage, with what its passes draw with.
