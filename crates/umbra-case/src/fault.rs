@@ -634,11 +634,19 @@ impl Fault {
     }
 
     /// Whose map light `k` of `lights` reads in its lit pass: its own; the next light's under
-    /// LightSwap; the first's under ArrayLayerZero where the maps are one array's layers
-    /// (`array`).
-    pub fn map_of_light(fault: Option<Fault>, k: usize, lights: usize, array: bool) -> usize {
+    /// LightSwap, where that map is of the same kind (`cube(j)`: light j's map is a cube map;
+    /// a 2D map cannot be bound where a cube map is sampled, nor the reverse: that is an API
+    /// error, not a frame to judge); the first's under ArrayLayerZero where the maps are one
+    /// array's layers (`array`).
+    pub fn map_of_light(
+        fault: Option<Fault>,
+        k: usize,
+        lights: usize,
+        array: bool,
+        cube: impl Fn(usize) -> bool,
+    ) -> usize {
         match fault {
-            Some(Fault::LightSwap) => (k + 1) % lights,
+            Some(Fault::LightSwap) if cube((k + 1) % lights) == cube(k) => (k + 1) % lights,
             Some(Fault::ArrayLayerZero) if array => 0,
             _ => k,
         }

@@ -199,7 +199,7 @@ impl Technique {
             layer: run
                 .of_lights
                 .filter(|o| o.array)
-                .map(|o| Fault::map_of_light(fault, o.light, o.lights, true)),
+                .map(|o| Fault::map_of_light(fault, o.light, o.lights, true, |_| false)),
             filter: s.filter,
             compare: s.compare,
             clamp_reference: s.compare == Compare::Hardware && s.format.is_fixed(),

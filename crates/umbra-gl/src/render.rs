@@ -482,13 +482,11 @@ impl Renderer {
             let (technique, program) = self.lit_program(p)?;
             let array = p.layered;
             // The map light k reads: its own, unless the self-test mixes the lights up (in an
-            // array, the layer is the shader's: Technique::layer; separate maps are swapped
-            // only between lights whose maps have the same target, which a unit can hold).
-            let other = Fault::map_of_light(p.fault, k, maps.len(), false);
-            let read = if array || plans[other].target != p.target {
+            // array, the layer is the shader's: Technique::layer).
+            let read = if array {
                 maps[k]
             } else {
-                maps[other]
+                maps[Fault::map_of_light(p.fault, k, maps.len(), false, |j| plans[j].cube)]
             };
             if k == 0 {
                 let first = res.framebuffers.len();

@@ -222,13 +222,11 @@ impl Gpu {
             let technique = Technique::new(&runs[k], p.fault);
             let lit = self.lit_pipeline(p, &technique, k > 0);
             // The map light k reads: its own, unless the self-test mixes the lights up (in
-            // an array the layer is the shader's, Technique::layer; separate maps are
-            // swapped only between lights of the same kind of map, which a binding can hold).
-            let other = Fault::map_of_light(p.fault, k, plans.len(), false);
-            let read = if array || plans[other].cube != p.cube {
+            // an array the layer is the shader's, Technique::layer).
+            let read = if array {
                 map_of(k)
             } else {
-                &maps[other]
+                &maps[Fault::map_of_light(p.fault, k, plans.len(), false, |j| plans[j].cube)]
             };
             let bindings = self.lit_bindings(p, &technique, &lit, read);
             let lit_start = Instant::now();
