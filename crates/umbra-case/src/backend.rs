@@ -101,6 +101,9 @@ pub struct Needs {
     /// The layers of a 2D array map: a cascaded light's cascades, or several lights' maps in
     /// one array (`shadow.placement` `array`); 0: no array.
     pub array_layers: u32,
+    /// Cubes of a cube-map array: several point lights' maps in one (`shadow.placement`
+    /// `cube_array`); 0: none.
+    pub cube_array: u32,
     /// Lights, each a lit pass and a map (1, or `lights`' count).
     pub lights: u32,
     /// The shadow map's larger side (each cube face's, for a point light).
@@ -140,6 +143,11 @@ impl Needs {
                 }
                 Light::Directional(d) => d.cascades.as_ref().map_or(0, |c| c.count),
                 _ => 0,
+            },
+            cube_array: if s.placement == crate::format::Placement::CubeArray {
+                case.lights.len() as u32
+            } else {
+                0
             },
             lights: case.all_lights().len() as u32,
             map_size: s.size[0].max(s.size[1]),

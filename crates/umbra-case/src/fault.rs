@@ -311,8 +311,9 @@ pub enum Fault {
     /// of light k + 1, the last the first's): a texture unit or array layer indexed by the
     /// wrong light, the mix-up of two lights' maps.
     LightSwap,
-    /// With several lights in one 2D array, every light's lit pass reads layer 0 (a layer
-    /// index that never reaches the shader or the sampler's coordinate).
+    /// With several lights in one array (2D, or a cube-map array), every light's lit pass
+    /// reads layer (cube) 0 (a layer index that never reaches the shader or the sampler's
+    /// coordinate).
     ArrayLayerZero,
     /// One face of the map is drawn with a wrong orientation: cube face `face` (0–5 in the
     /// GL order +x, −x, +y, −y, +z, −z), or the 2D map when `face` is `None`.

@@ -572,8 +572,9 @@ pub struct Shadow {
     /// Default: none (one level).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mipmaps: Option<Mipmaps>,
-    /// Where several lights' maps live (`lights`): `separate` textures or one 2D `array`.
-    /// Default `separate`; read only with `lights`.
+    /// Where several lights' maps live (`lights`): `separate` textures, one 2D `array` (spot
+    /// and directional lights) or one `cube_array` (point lights). Default `separate`; read
+    /// only with `lights`.
     #[serde(default, skip_serializing_if = "Placement::is_separate")]
     pub placement: Placement,
 }
@@ -591,6 +592,10 @@ pub enum Placement {
     /// One 2D array texture, light k's map in layer k, drawn into by layer and sampled with
     /// an array (compare) sampler at layer k (spot and directional lights).
     Array,
+    /// One cube-map array texture, point light k's six faces in layer-faces 6k to 6k + 5,
+    /// drawn into by layer-face and sampled with a cube-array (compare) sampler at cube k
+    /// (ARB_texture_cube_map_array, GL 4.0, GLES 3.2; wgpu's CUBE_ARRAY_TEXTURES).
+    CubeArray,
 }
 
 impl Placement {
@@ -603,6 +608,7 @@ impl Placement {
         match self {
             Placement::Separate => "separate",
             Placement::Array => "array",
+            Placement::CubeArray => "cube_array",
         }
     }
 }

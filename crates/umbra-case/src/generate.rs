@@ -291,9 +291,14 @@ impl Gen {
             }
             lights.push(light);
         }
-        let points = lights.iter().any(|l| matches!(l, Light::Point(_)));
-        if !points && case.shadow.mipmaps.is_none() && self.rng.chance(0.5) {
+        let points = lights
+            .iter()
+            .filter(|l| matches!(l, Light::Point(_)))
+            .count();
+        if points == 0 && case.shadow.mipmaps.is_none() && self.rng.chance(0.5) {
             case.shadow.placement = Placement::Array;
+        } else if points == lights.len() && case.shadow.mipmaps.is_none() && self.rng.chance(0.5) {
+            case.shadow.placement = Placement::CubeArray;
         }
         case.lights = lights;
     }

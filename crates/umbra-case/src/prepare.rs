@@ -36,7 +36,8 @@ pub struct OfLights {
     pub light: usize,
     /// How many lights the case has.
     pub lights: usize,
-    /// The maps are one 2D array's layers (`shadow.placement` `array`).
+    /// The maps are one array's layers (`shadow.placement` `array`, or `cube_array`
+    /// whose layers are cubes).
     pub array: bool,
 }
 
@@ -95,7 +96,7 @@ impl Prepared {
             ..self.point.clone()
         };
         let lights = self.light_count();
-        let array = self.case().shadow.placement == crate::format::Placement::Array;
+        let array = self.case().shadow.placement != crate::format::Placement::Separate;
         Prepared {
             of_lights: (lights > 1).then_some(OfLights {
                 light: k,

@@ -36,7 +36,8 @@ pub struct Technique {
     pub cascade_beyond: bool,
     /// A cascaded light's blend band (0: none).
     pub cascade_blend: f32,
-    /// A light of several whose maps are one 2D array's layers: the layer its lit pass reads
+    /// A light of several whose maps are one array's layers (2D, or a cube-map array's cubes):
+    /// the layer (cube) its lit pass reads
     /// (its own, unless a self-test fault mixes them up: [`Fault::map_of_light`]).
     pub layer: Option<usize>,
     /// The case's filter.
@@ -305,10 +306,22 @@ impl Technique {
         }
     }
 
-    /// The map is a 2D array: one layer per cascade, or one per light (the lit pass reads
-    /// layer `f` + [`Technique::layer_base`]).
+    /// The map is an array: one layer per cascade, or one per light (the lit pass reads
+    /// layer `f` + [`Technique::layer_base`], or cube `layer_base` of a cube-map array).
     pub fn layered(&self) -> bool {
         self.cascades > 0 || self.layer.is_some()
+    }
+
+    /// The map is a cube-map array (several point lights' cubes, `shadow.placement`
+    /// `cube_array`): the lit pass reads cube [`Technique::layer_base`], layer-faces
+    /// 6 · base + f.
+    pub fn cube_array(&self) -> bool {
+        self.cube && self.layer.is_some()
+    }
+
+    /// The map is a 2D array: one layer per cascade, or one per spot or directional light.
+    pub fn flat_array(&self) -> bool {
+        self.layered() && !self.cube
     }
 
     /// The first layer the lit pass reads: a light's layer among several, 0 for cascades.

@@ -260,13 +260,20 @@ impl Validator<'_> {
                     "remove the cascades, or make the cascaded light the case's only `light`",
                 );
             }
+            if c.shadow.placement == Placement::CubeArray && !matches!(l, Light::Point(_)) {
+                self.err(
+                    "shadow.placement",
+                    format!("lights[{k}] is not a point light, and has no cube in a cube array"),
+                    "use \"array\" (spot and directional lights) or \"separate\", or make every light a point light",
+                );
+            }
             if c.shadow.placement == Placement::Array && matches!(l, Light::Point(_)) {
                 self.err(
                     "shadow.placement",
                     format!(
                         "lights[{k}] is a point light, whose cube map has no layer of a 2D array"
                     ),
-                    "use \"separate\" (a cube map per point light), or spot and directional lights",
+                    "use \"cube_array\" (every light a point light) or \"separate\" (a cube map per point light), or spot and directional lights",
                 );
             }
         }
@@ -277,7 +284,7 @@ impl Validator<'_> {
                 "use \"dimmed\" (each light's diffuse and specular terms dimmed by its own shadow)",
             );
         }
-        if c.shadow.placement == Placement::Array && c.shadow.mipmaps.is_some() {
+        if c.shadow.placement != Placement::Separate && c.shadow.mipmaps.is_some() {
             self.err(
                 "shadow.mipmaps",
                 "an array's layers have no mip levels here (as for cascades)",

@@ -854,6 +854,19 @@ fn several_lights_fill_in_light_and_are_refused_with_the_fix_where_not_modelled(
         json!("array"),
     );
     assert_error(array, "shadow.placement", "point light");
+    // A cube-map array holds point lights' cubes only.
+    let cubes = set(
+        with_lights(json!([lamp, spot])),
+        "/shadow/placement",
+        json!("cube_array"),
+    );
+    assert_error(cubes, "shadow.placement", "no cube in a cube array");
+    let cubes = set(
+        with_lights(json!([lamp, lamp])),
+        "/shadow/placement",
+        json!("cube_array"),
+    );
+    load_str(&cubes.to_string(), Path::new(FILE)).expect("two point lights in a cube array");
     let classic = set(doc.clone(), "/shading", json!({ "model": "classic" }));
     assert_error(classic, "shading.model", "several shadows");
     let cascaded = json!({ "directional": { "azimuth_deg": 30, "elevation_deg": 50,

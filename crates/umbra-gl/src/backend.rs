@@ -169,6 +169,15 @@ impl Backend for GlBackend {
         if needs.depth_clamp && !caps.depth_clamp {
             return Support::Unsupported("depth clamp (shadow.depth_clamp) needs GL_DEPTH_CLAMP: core in GL 3.2, GL_EXT_depth_clamp on GLES, which this driver does not advertise".into());
         }
+        if needs.cube_array > 0 && api == Api::Gles3 {
+            return Support::Unsupported("point lights' maps in one cube-map array (shadow.placement \"cube_array\") need samplerCubeArrayShadow, which GLES gives from ESSL 3.10 on (GL_EXT_texture_cube_map_array, core in GLES 3.2); umbra's GLES 3 path writes ESSL 3.00 (#version 300 es), where Mesa refuses the extension; \"separate\" runs a cube map per light".into());
+        }
+        if needs.cube_array > 0 && api == Api::Gl33 && !caps.cube_map_array {
+            return Support::Unsupported(format!(
+                "point lights' maps in one cube-map array (shadow.placement \"cube_array\") need {} (core in GL 4.0 and GLES 3.2), which this driver does not advertise in this context; \"separate\" runs a cube map per light",
+                crate::shaders::cube_array_extension(api)
+            ));
+        }
         if needs.srgb_target && !caps.srgb_target {
             return Support::Unsupported("an sRGB colour target (camera.color_format srgb8_alpha8) needs GL_EXT_sRGB on GLES 2 (core in GLES 3.0 and GL 3.0), which this driver does not advertise".into());
         }
@@ -180,6 +189,10 @@ impl Backend for GlBackend {
         }
         match api {
             // GLES 2 has no array textures; separate textures per cascade are not built yet.
+            Api::Gles2 if needs.cube_array > 0 => Support::Unsupported(
+                "several point lights' maps in one cube-map array (shadow.placement \"cube_array\") need array textures (GL 4.0, GLES 3.2), which GLES 2 lacks; GLES 2 runs the \"separate\" placement"
+                    .into(),
+            ),
             Api::Gles2 if needs.array_layers > 0 && needs.lights > 1 => Support::Unsupported(
                 "several lights' maps in one 2D array (shadow.placement \"array\") need array textures (GL 3.0, GLES 3.0), which GLES 2 lacks; GLES 2 runs the \"separate\" placement"
                     .into(),

@@ -41,6 +41,12 @@ pub struct Caps {
     /// `shadow.depth_clamp` enables GL_DEPTH_CLAMP in the shadow pass; without it such a case
     /// is a skip that names the extension.
     pub depth_clamp: bool,
+    /// Cube-map arrays (`shadow.placement` `cube_array`): GL_ARB_texture_cube_map_array on
+    /// GL 3.3 (core in GL 4.0), the extension the lit shader enables; without it such a case
+    /// is a skip that names it. GLES 3.0 never: GL_EXT/OES_texture_cube_map_array are
+    /// written against ESSL 3.10, and Mesa refuses them in umbra's `#version 300 es` shaders
+    /// even where the context (GLES 3.2) advertises them.
+    pub cube_map_array: bool,
     /// sRGB colour targets (`camera.color_format` `srgb8_alpha8`): SRGB8_ALPHA8 is
     /// colour-renderable in GL 3.0 and GLES 3.0 core; GLES 2 needs GL_EXT_sRGB (SRGB_ALPHA_EXT).
     pub srgb_target: bool,
@@ -93,6 +99,7 @@ impl Caps {
             seamless_cube_always: api == Api::Gles3,
             depth_clamp: api == Api::Gl33 || has("GL_EXT_depth_clamp"),
             srgb_target: api != Api::Gles2 || has("GL_EXT_sRGB"),
+            cube_map_array: api == Api::Gl33 && has(crate::shaders::cube_array_extension(api)),
             extensions,
         }
     }

@@ -624,12 +624,14 @@ struct RunPlan<'a> {
     conv: Convention,
     /// A cube map (point light).
     cube: bool,
-    /// A 2D array: one layer per cascade, or the lights' maps in one array's layers.
+    /// An array: a 2D array with one layer per cascade or the lights' maps in its layers, or
+    /// (with `cube`) a cube-map array with the point lights' cubes.
     layered: bool,
-    /// The array's layer of face 0: the light's among several (`shadow.placement` `array`),
-    /// else 0.
+    /// The light's layer among several (`shadow.placement` `array`; its cube in a
+    /// `cube_array`, whose face f is layer-face 6 · base + f), else 0.
     layer_base: usize,
-    /// The array's layers: the faces, or the lights sharing it.
+    /// The array's layers: the faces, or the lights sharing it (six layer-faces each in a
+    /// cube-map array).
     array_layers: usize,
     /// The array the lights share, once the first light's pass has allocated it.
     array_map: Option<glow::Texture>,
@@ -640,7 +642,7 @@ struct RunPlan<'a> {
     bias: umbra_case::format::Bias,
     /// Faces (views) of the light.
     faces: usize,
-    /// TEXTURE_2D, TEXTURE_CUBE_MAP or TEXTURE_2D_ARRAY.
+    /// TEXTURE_2D, TEXTURE_CUBE_MAP, TEXTURE_2D_ARRAY or TEXTURE_CUBE_MAP_ARRAY.
     target: u32,
     /// Vertices drawn.
     count: i32,
@@ -666,13 +668,17 @@ impl<'a> RunPlan<'a> {
             cube,
             layered,
             layer_base: array.map_or(0, |o| o.light),
-            array_layers: array.map_or(run.light.views.len(), |o| o.lights),
+            array_layers: array.map_or(run.light.views.len(), |o| {
+                o.lights * if cube { 6 } else { 1 }
+            }),
             array_map: None,
             es2: api == Api::Gles2,
             fault,
             bias: fault.map_or_else(|| s.bias.clone(), |f| f.bias(&s.bias)),
             faces: run.light.views.len(),
-            target: if cube {
+            target: if cube && layered {
+                glow::TEXTURE_CUBE_MAP_ARRAY
+            } else if cube {
                 glow::TEXTURE_CUBE_MAP
             } else if layered {
                 glow::TEXTURE_2D_ARRAY
@@ -694,9 +700,11 @@ impl<'a> RunPlan<'a> {
     }
 
     /// The texture target of each face: the six cube faces in GL's order, TEXTURE_2D, or
-    /// none for an array's layers (allocated at once, attached by layer).
+    /// the array's target for its layers (allocated at once, attached by layer).
     fn face_targets(&self) -> Vec<u32> {
-        if self.cube {
+        if self.cube && self.layered {
+            vec![glow::TEXTURE_CUBE_MAP_ARRAY; 6]
+        } else if self.cube {
             (0..6)
                 .map(|k| glow::TEXTURE_CUBE_MAP_POSITIVE_X + k)
                 .collect()
@@ -704,6 +712,15 @@ impl<'a> RunPlan<'a> {
             vec![glow::TEXTURE_2D_ARRAY; self.faces]
         } else {
             vec![glow::TEXTURE_2D]
+        }
+    }
+
+    /// The array layer (layer-face of a cube-map array) face `k` of the run's light lives in.
+    fn layer_of(&self, k: usize) -> usize {
+        if self.cube {
+            6 * self.layer_base + k
+        } else {
+            self.layer_base + k
         }
     }
 
@@ -717,7 +734,7 @@ impl<'a> RunPlan<'a> {
                     glow::DEPTH_ATTACHMENT,
                     Some(map),
                     level as i32,
-                    (self.layer_base + k) as i32,
+                    self.layer_of(k) as i32,
                 );
             } else {
                 gl.framebuffer_texture_2d(

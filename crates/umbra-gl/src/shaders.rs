@@ -56,6 +56,14 @@ fn header(api: Api, fragment: bool) -> String {
     s
 }
 
+/// The extension that gives GLSL its cube-map array samplers on `api` (GLES 2 has none).
+pub fn cube_array_extension(api: Api) -> &'static str {
+    match api {
+        Api::Gles3 | Api::Gles2 => "GL_EXT_texture_cube_map_array",
+        Api::Gl33 => "GL_ARB_texture_cube_map_array",
+    }
+}
+
 /// Vertex shader of the shadow pass: position only.
 pub fn shadow_vertex(api: Api) -> String {
     let mut s = header(api, false);
@@ -166,25 +174,46 @@ pub fn lit_fragment(api: Api, t: &Technique) -> String {
         api != Api::Gles2 || t.manual(),
         "GLES 2 compares in the shader: pass Api::technique's technique"
     );
-    let layered = t.layered();
     debug_assert!(
-        api != Api::Gles2 || !layered,
+        api != Api::Gles2 || !t.layered(),
         "GLES 2 has no array textures: the backend skips cascades"
     );
-    lit_shader::lit_fragment(&Glsl { api, layered }, t)
+    let glsl = Glsl {
+        api,
+        layered: t.flat_array(),
+        cube_array: t.cube_array(),
+    };
+    lit_shader::lit_fragment(&glsl, t)
 }
 
 /// GLSL in one API's flavour, for one technique's map.
 struct Glsl {
     api: Api,
-    /// The map is a 2D array (cascades, or several lights' maps).
+    /// The map is a 2D array (cascades, or several spot or directional lights' maps).
     layered: bool,
+    /// The map is a cube-map array (several point lights' maps): cube LAYER is the light's.
+    cube_array: bool,
 }
 
 impl Dialect for Glsl {
     fn declarations(&self, t: &Technique) -> String {
         let es2 = self.api == Api::Gles2;
         let mut s = header(self.api, true);
+        if self.cube_array {
+            // Right after #version: a cube-map array is an extension of GL 3.3 (core in GL
+            // 4.0); the backend probes it before it runs the case (GLES 3.0's ESSL 3.00 has
+            // none: Caps::cube_map_array).
+            let (version, rest) = s.split_once('\n').expect("a #version line");
+            s = format!(
+                "{version}\n#extension {} : require\n{rest}",
+                cube_array_extension(self.api)
+            );
+            if self.api == Api::Gles3 {
+                s.push_str(
+                    "precision highp samplerCubeArray;\nprecision highp samplerCubeArrayShadow;\n",
+                );
+            }
+        }
         let faces = if t.cube { 6 } else { t.cascades.max(1) };
         let _ = writeln!(
             s,
@@ -198,6 +227,8 @@ impl Dialect for Glsl {
         s.push_str("uniform float u_constant;\nuniform float u_slope_scale;\nuniform float u_slope_max;\nuniform float u_normal_offset;\nuniform float u_ndl_scale;\nuniform float u_ndl_min;\n");
         s.push_str("uniform float u_output;\n"); // GLES 2: 0 colour, 1 visibility + face
         let sampler = match (t.cube, self.layered, t.manual()) {
+            (true, _, false) if self.cube_array => "samplerCubeArrayShadow",
+            (true, _, true) if self.cube_array => "samplerCubeArray",
             (false, false, false) => "sampler2DShadow",
             (true, _, false) => "samplerCubeShadow",
             (false, true, false) => "sampler2DArrayShadow",
@@ -205,14 +236,15 @@ impl Dialect for Glsl {
             (true, _, true) => "samplerCube",
             (false, true, true) => "sampler2DArray",
         };
-        if self.layered {
-            if self.api == Api::Gles3 {
+        if self.layered || self.cube_array {
+            if self.api == Api::Gles3 && self.layered {
                 s.push_str(
                     "precision highp sampler2DArray;\nprecision highp sampler2DArrayShadow;\n",
                 );
             }
             s.push_str("uniform vec4 u_view_row;\nuniform float u_split[8];\n");
-            // The layer of face f is f + LAYER: a cascade's, or a light's among several.
+            // The layer of face f is f + LAYER: a cascade's, or a light's among several (the
+            // cube LAYER of a cube-map array).
             let _ = writeln!(s, "const int LAYER = {};", t.layer_base());
         }
         let _ = writeln!(s, "uniform {sampler} u_map;");
@@ -297,6 +329,12 @@ impl Dialect for Glsl {
             (false, true, true) => {
                 "unpack_depth(texture2D(u_map, (vec2(i, j) + 0.5) / u_size).gbar)"
             }
+            (true, false, false) if self.cube_array => {
+                "texture(u_map, vec4(texel_dir(f, i, j), float(LAYER))).r"
+            }
+            (true, false, true) if self.cube_array => {
+                "texture(u_map, vec4(texel_dir(f, i, j), float(LAYER))).g"
+            }
             (true, false, false) => "texture(u_map, texel_dir(f, i, j)).r",
             (true, false, true) => "texture(u_map, texel_dir(f, i, j)).g",
             (true, true, false) => "unpack_depth(textureCube(u_map, texel_dir(f, i, j)))",
@@ -315,6 +353,9 @@ impl Dialect for Glsl {
             ),
             (false, false) if self.layered => format!(
                 "{head} {{ return texture(u_map, vec4((vec2(i, j) + 0.5) / u_size, float(f + LAYER), r)); }}\n"
+            ),
+            (false, true) if self.cube_array => format!(
+                "{head} {{ return texture(u_map, vec4(texel_dir(f, i, j), float(LAYER)), r); }}\n"
             ),
             (false, true) => {
                 format!("{head} {{ return texture(u_map, vec4(texel_dir(f, i, j), r)); }}\n")
@@ -447,7 +488,11 @@ impl Dialect for Glsl {
     }
 
     fn sample_cube(&self) -> &'static str {
-        "  return texture(u_map, vec4(p - u_light_pos, r));\n"
+        if self.cube_array {
+            "  return texture(u_map, vec4(p - u_light_pos, float(LAYER)), r);\n"
+        } else {
+            "  return texture(u_map, vec4(p - u_light_pos, r));\n"
+        }
     }
 
     fn sample_projective(&self) -> &'static str {

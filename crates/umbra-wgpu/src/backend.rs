@@ -54,6 +54,9 @@ impl Backend for WgpuBackend {
                 extensions.push(name.into());
             }
         }
+        if self.gpu.cube_arrays {
+            extensions.push("CUBE_ARRAY_TEXTURES".into());
+        }
         DriverInfo {
             vendor: format!("{:#06x}", i.vendor),
             renderer: i.name.clone(),
@@ -115,6 +118,9 @@ impl Backend for WgpuBackend {
                 .contains(wgpu::Features::DEPTH_CLIP_CONTROL)
         {
             return Support::Unsupported("depth clamp (shadow.depth_clamp) is wgpu's unclipped_depth, which needs the DEPTH_CLIP_CONTROL feature (Vulkan's depthClamp, GL_ARB/EXT_depth_clamp on its GL backend), and this adapter lacks it".into());
+        }
+        if needs.cube_array > 0 && needs.compare == Compare::Hardware && !self.gpu.cube_arrays {
+            return Support::Unsupported("point lights' maps in one cube-map array (shadow.placement \"cube_array\") are sampled through a cube-array view, which needs wgpu's CUBE_ARRAY_TEXTURES downlevel capability (Vulkan's imageCubeArray; GL 4.0 or GLES 3.2 on its GL backend), and this adapter lacks it; \"separate\" runs a cube map per light".into());
         }
         if needs.fractional_offset_units {
             return Support::Unsupported("wgpu's depth bias constant (DepthBiasState::constant) is an integer, and this case's polygon_offset units is not a whole number".into());

@@ -239,6 +239,7 @@ pub fn open(target: &Target) -> Result<Gpu, Unavailable> {
     let downlevel = adapter.get_downlevel_capabilities().flags;
     let depth_copies = downlevel.contains(wgpu::DownlevelFlags::DEPTH_TEXTURE_AND_BUFFER_COPIES);
     let depth_bias_clamp = downlevel.contains(wgpu::DownlevelFlags::DEPTH_BIAS_CLAMP);
+    let cube_arrays = downlevel.contains(wgpu::DownlevelFlags::CUBE_ARRAY_TEXTURES);
     Ok(Gpu {
         device,
         queue,
@@ -248,6 +249,7 @@ pub fn open(target: &Target) -> Result<Gpu, Unavailable> {
         vis_format,
         depth_copies,
         depth_bias_clamp,
+        cube_arrays,
     })
 }
 

@@ -44,6 +44,9 @@ pub struct Gpu {
     /// Whether a depth bias clamp is allowed (DownlevelFlags::DEPTH_BIAS_CLAMP; wgpu's GL
     /// backend has no glPolygonOffsetClamp path).
     pub depth_bias_clamp: bool,
+    /// Whether cube-array views can be made (DownlevelFlags::CUBE_ARRAY_TEXTURES: Vulkan's
+    /// imageCubeArray feature; GL 4.0 or GLES 3.2 on wgpu's GL backend).
+    pub cube_arrays: bool,
 }
 
 /// wgpu's cull mode for `cull`: the shadow pass's `shadow.cull`, the lit pass's `camera.cull`.
@@ -340,14 +343,15 @@ struct RunPlan<'a> {
     conv: Convention,
     /// A cube map (point light): six layers.
     cube: bool,
-    /// A 2D array: one layer per cascade, or the lights' maps in one array's layers.
+    /// An array: one layer per cascade, or the lights' maps in one array's layers (with
+    /// `cube`, a cube-map array: six layers per point light).
     layered: bool,
     /// Faces (layers) of the map.
     faces: u32,
-    /// The array's layer of face 0: the light's among several (`shadow.placement` `array`),
-    /// else 0.
+    /// The array's layer of face 0: the light's among several (`shadow.placement` `array`;
+    /// 6 · its cube in a `cube_array`), else 0.
     layer_base: u32,
-    /// The array's layers: the faces, or the lights sharing it.
+    /// The array's layers: the faces, or the lights sharing it (six each in a cube array).
     array_layers: u32,
     /// The map's format, and whether its depths can be copied back.
     format: wgpu::TextureFormat,
@@ -375,16 +379,19 @@ impl<'a> RunPlan<'a> {
         let format = texture_format(s.format);
         let levels = s.mipmaps.map_or(1, |m| m.levels);
         let array = run.of_lights.filter(|o| o.array);
+        let cube = run.light.is_cube();
+        // A cube's faces are six layers; a cube-map array's cube k starts at layer 6k.
+        let per_light = if cube { 6 } else { 1 };
         RunPlan {
             run,
             s,
             fault,
             conv,
-            cube: run.light.is_cube(),
+            cube,
             layered: run.light.cascading.is_some() || array.is_some(),
             faces: run.light.views.len() as u32,
-            layer_base: array.map_or(0, |o| o.light as u32),
-            array_layers: array.map_or(run.light.views.len(), |o| o.lights) as u32,
+            layer_base: array.map_or(0, |o| o.light * per_light) as u32,
+            array_layers: array.map_or(run.light.views.len(), |o| o.lights * per_light) as u32,
             format,
             copyable: gpu.depth_copies && format != wgpu::TextureFormat::Depth24Plus,
             levels,

@@ -65,7 +65,8 @@ pub const AVERAGE: &str = "@group(0) @binding(0) var src: texture_depth_2d;
 pub fn lit(t: &Technique) -> String {
     lit_shader::lit_fragment(
         &Wgsl {
-            layered: t.layered(),
+            layered: t.flat_array(),
+            cube_array: t.cube_array(),
         },
         t,
     )
@@ -73,22 +74,27 @@ pub fn lit(t: &Technique) -> String {
 
 /// WGSL, in the zero-to-one convention, for one technique's map.
 struct Wgsl {
-    /// The map is a 2D array (cascades, or several lights' maps).
+    /// The map is a 2D array (cascades, or several spot or directional lights' maps).
     layered: bool,
+    /// The map is a cube-map array (several point lights' maps): cube LAYER is the light's,
+    /// its faces layers 6 · LAYER + f of the 2D-array view a manual compare reads.
+    cube_array: bool,
 }
 
 impl Dialect for Wgsl {
     fn declarations(&self, t: &Technique) -> String {
         let mut s = String::from(UNIFORMS);
         let texture = match (t.cube, t.manual()) {
+            (true, false) if self.cube_array => "texture_depth_cube_array",
             _ if self.layered => "texture_depth_2d_array",
             (false, _) => "texture_depth_2d",
             (true, false) => "texture_depth_cube",
             (true, true) => "texture_depth_2d_array",
         };
         let _ = writeln!(s, "@group(0) @binding(1) var map: {texture};");
-        if self.layered {
-            // The layer of face f is f + LAYER: a cascade's, or a light's among several.
+        if self.layered || self.cube_array {
+            // The layer of face f is f + LAYER: a cascade's, or a light's among several (the
+            // cube LAYER of a cube-map array).
             let _ = writeln!(s, "const LAYER: i32 = {};", t.layer_base());
         }
         if !t.manual() {
@@ -148,6 +154,10 @@ impl Dialect for Wgsl {
         });
         if self.layered {
             s.push_str("  return textureLoad(map, vec2<i32>(i32(i), i32(j)), f + LAYER, 0);\n}\n");
+        } else if cube && self.cube_array {
+            s.push_str(
+                "  return textureLoad(map, vec2<i32>(i32(i), i32(j)), 6 * LAYER + f, 0);\n}\n",
+            );
         } else if cube {
             s.push_str("  return textureLoad(map, vec2<i32>(i32(i), i32(j)), f, 0);\n}\n");
         } else {
@@ -162,6 +172,9 @@ impl Dialect for Wgsl {
             (true, _) => format!(
                 "{head} {{ return select(0.0, 1.0, r {} fetch(f, i, j)); }}\n",
                 op.symbol()
+            ),
+            (false, true) if self.cube_array => format!(
+                "{head} {{ return textureSampleCompareLevel(map, samp, texel_dir(f, i, j), LAYER, r); }}\n"
             ),
             (false, true) => format!(
                 "{head} {{ return textureSampleCompareLevel(map, samp, texel_dir(f, i, j), r); }}\n"
@@ -308,7 +321,11 @@ impl Dialect for Wgsl {
     }
 
     fn sample_cube(&self) -> &'static str {
-        "  return textureSampleCompareLevel(map, samp, p - u.light_pos.xyz, r);\n"
+        if self.cube_array {
+            "  return textureSampleCompareLevel(map, samp, p - u.light_pos.xyz, LAYER, r);\n"
+        } else {
+            "  return textureSampleCompareLevel(map, samp, p - u.light_pos.xyz, r);\n"
+        }
     }
 
     /// WGSL has no projective compare: c is already divided, so the ordinary one.

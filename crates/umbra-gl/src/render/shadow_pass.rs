@@ -434,7 +434,8 @@ impl Renderer {
 /// Face `k`'s view-projection at a `lw` × `lh` level, with the self-test's geometric faults
 /// (a shift in texels, a wrong orientation) applied.
 fn face_matrix(p: &RunPlan, k: usize, lw: u32, lh: u32) -> glam::Mat4 {
-    let drawn = Fault::drawn_view(p.fault, k, p.faces, p.layered);
+    // A layer shift moves a cascade's map; a cube's faces are the face faults' to move.
+    let drawn = Fault::drawn_view(p.fault, k, p.faces, p.layered && !p.cube);
     let mut m = p.run.light.views[drawn].view_proj(p.conv);
     let [sx, sy] = p.fault.map_or([0.0; 2], |f| f.shadow_shift_texels());
     if sx != 0.0 || sy != 0.0 {

@@ -116,7 +116,7 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
         Fault::DepthFuncSwapped => s.depth_test().inclusive(),
         Fault::SrgbIgnored => c.camera.color_format == ColorFormat::Srgb8Alpha8,
         Fault::LightSwap => c.lights.len() > 1,
-        Fault::ArrayLayerZero => c.lights.len() > 1 && s.placement == Placement::Array,
+        Fault::ArrayLayerZero => c.lights.len() > 1 && s.placement != Placement::Separate,
         Fault::Scaled { param, .. } => {
             let b = &s.bias;
             match param {
@@ -166,7 +166,7 @@ pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
         Fault::LitCullFlipped => &["lit-cull"],
         Fault::DepthFuncSwapped => &["depth-func"],
         Fault::SrgbIgnored => &["srgb"],
-        Fault::LightSwap | Fault::ArrayLayerZero => &["two-lights"],
+        Fault::LightSwap | Fault::ArrayLayerZero => &["two-lights", "two-points"],
         Fault::Oriented { face: Some(_), .. } => &["point-faces"],
         Fault::Scaled { param, .. } if param.in_texels() => {
             &["contact", "filters-magnified", "guard-magnified"]

@@ -38,8 +38,8 @@ pub(super) struct LitTargets {
 }
 
 impl Gpu {
-    /// The lit pipeline for `technique`: its map binding is a cube, a 2D array (a cube read
-    /// by hand) or 2D, and a compare sampler only when the hardware compares.
+    /// The lit pipeline for `technique`: its map binding is a cube or a cube array, a 2D
+    /// array (cascades, several lights, a cube or cube array read by hand) or 2D, and a compare sampler only when the hardware compares.
     ///
     /// `added`: a later light of several, added into the first's colour (the pipeline that
     /// draws depth again, and the one that blends where it is equal).
@@ -56,6 +56,7 @@ impl Gpu {
             source: wgpu::ShaderSource::Wgsl(shaders::lit(technique).into()),
         });
         let view_dimension = match (p.cube, manual) {
+            (true, false) if p.layered => wgpu::TextureViewDimension::CubeArray,
             _ if p.layered => wgpu::TextureViewDimension::D2Array,
             (false, _) => wgpu::TextureViewDimension::D2,
             (true, false) => wgpu::TextureViewDimension::Cube,

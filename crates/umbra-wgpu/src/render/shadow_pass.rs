@@ -382,7 +382,8 @@ impl Gpu {
 /// Face `k`'s view-projection at a `lw` × `lh` level, with the self-test's geometric faults
 /// and, on a cube, the convention's face flip.
 fn face_matrix(p: &RunPlan, k: u32, lw: u32, lh: u32) -> glam::Mat4 {
-    let drawn = Fault::drawn_view(p.fault, k as usize, p.faces as usize, p.layered);
+    // A layer shift moves a cascade's map; a cube's faces are the face faults' to move.
+    let drawn = Fault::drawn_view(p.fault, k as usize, p.faces as usize, p.layered && !p.cube);
     let mut m = p.run.light.views[drawn].view_proj(p.conv);
     // A face drawn with a wrong orientation (the self-test's Oriented fault), before the
     // convention's flip so that it moves the content as on GL.
