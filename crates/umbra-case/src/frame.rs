@@ -39,6 +39,10 @@ pub struct LightPlane {
     pub visibility: Vec<f32>,
     /// The light's map as stored, where the backend reads it back.
     pub shadow_map: Option<DepthMap>,
+    /// The surface id per pixel as the light's own pass drew it (as [`Frame::surface`]):
+    /// a later light's pass redraws the depth, and on an exact tie of two surfaces may show
+    /// the other one (soak-43-398), so each light's answer is judged on its own surface.
+    pub surface: Option<Vec<u32>>,
 }
 
 impl Frame {
@@ -58,6 +62,9 @@ impl Frame {
             let plane = &self.more_lights[k - 1];
             f.visibility = plane.visibility.clone();
             f.shadow_map = plane.shadow_map.clone();
+            if plane.surface.is_some() {
+                f.surface = plane.surface.clone();
+            }
         }
         f
     }

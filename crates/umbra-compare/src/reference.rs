@@ -280,11 +280,14 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
     }
     let eps = frame.visibility_storage.tolerance();
     for (i, j) in px.iter_mut().enumerate() {
-        // As for one light: a colour is checked where both frames show the same surface.
-        let same_surface = match (&basis.frame.surface, &frame.surface) {
-            (Some(a), Some(b)) => a[i] == b[i],
-            _ => true,
-        };
+        // As for one light: a colour is checked where both frames show the same surface, in
+        // every light's pass (a later pass may show the other surface of an exact tie).
+        let same_surface = frames
+            .iter()
+            .all(|f| match (&basis.frame.surface, &f.surface) {
+                (Some(a), Some(b)) => a[i] == b[i],
+                _ => true,
+            });
         if !frame.covered(i) || !basis.frame.covered(i) || !same_surface {
             continue;
         }

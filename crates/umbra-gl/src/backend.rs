@@ -188,17 +188,14 @@ impl Backend for GlBackend {
             return Support::Unsupported("the GLES 2 path needs OES_standard_derivatives and EXT_frag_depth to apply the polygon offset to packed depth".into());
         }
         match api {
-            // GLES 2 has no array textures; separate textures per cascade are not built yet.
+            // GLES 2 has no array textures: it draws cascades into a texture each, and several
+            // lights into separate textures only.
             Api::Gles2 if needs.cube_array > 0 => Support::Unsupported(
                 "several point lights' maps in one cube-map array (shadow.placement \"cube_array\") need array textures (GL 4.0, GLES 3.2), which GLES 2 lacks; GLES 2 runs the \"separate\" placement"
                     .into(),
             ),
             Api::Gles2 if needs.array_layers > 0 && needs.lights > 1 => Support::Unsupported(
                 "several lights' maps in one 2D array (shadow.placement \"array\") need array textures (GL 3.0, GLES 3.0), which GLES 2 lacks; GLES 2 runs the \"separate\" placement"
-                    .into(),
-            ),
-            Api::Gles2 if needs.array_layers > 0 => Support::Unsupported(
-                "cascades are drawn into a 2D array texture (GL 3.0, GLES 3.0), which GLES 2 lacks; umbra's GLES 2 placement in separate textures is not built yet"
                     .into(),
             ),
             // OES_depth_texture (issue 1) gives GLES 2 no compare sampler, and its path keeps

@@ -50,6 +50,7 @@ pub struct Renderer {
     pub api: Api,
     /// What the driver can do, probed once.
     pub caps: Caps,
+    /// Compiled programs by source, at most [`PROGRAM_CACHE`] of them.
     programs: HashMap<(String, String), glow::Program>,
     debug: Arc<Mutex<Vec<String>>>,
     /// The shadow map of the last run rendered by [`Renderer::render`], kept for its twins
@@ -65,6 +66,10 @@ struct KeptMap {
     case: umbra_case::Case,
     texture: glow::Texture,
 }
+
+/// The most compiled programs a renderer keeps between runs: the catalogue's techniques on
+/// one backend (a few dozen) stay cached; a soak's one-off programs are dropped in bulk.
+const PROGRAM_CACHE: usize = 32;
 
 /// A new shadow map's sampler state (the lit pass sets its own; a kept map is reset to this).
 const FRESH_MAP_SAMPLER: [(u32, u32); 4] = [
@@ -162,15 +167,20 @@ impl Renderer {
         Gl::new(&self.ctx.gl, self.recorder.as_ref())
     }
 
+    /// Deletes every cached program.
+    fn drop_programs(&mut self) {
+        for (_, p) in self.programs.drain() {
+            // SAFETY: a program of this context, in use by no pending draw.
+            unsafe { self.ctx.gl.delete_program(p) };
+        }
+    }
+
     /// Renders `run` as [`Renderer::render`] does, recording every GL call as C
     /// ([`crate::record`]). Cached programs are dropped first, so that the recording compiles
     /// its own; the run has no twin, so no map is reused.
     pub fn render_recorded(&mut self, run: &Prepared) -> Result<(Frame, Recording), BackendError> {
         self.release_kept();
-        for (_, p) in self.programs.drain() {
-            // SAFETY: a program of this context, in use by no pending draw.
-            unsafe { self.ctx.gl.delete_program(p) };
-        }
+        self.drop_programs();
         self.recorder = Some(std::cell::RefCell::new(Recorder::default()));
         let out = self.render_run(run, None);
         self.release_kept();
@@ -315,6 +325,12 @@ impl Renderer {
         };
         if twin_of.is_none() {
             self.release_kept();
+            // A case's constants are in its lit shader (a light's colour among several), so
+            // generated cases each compile their own: unbounded, the cache held every one, and
+            // a soak's zink worker grew past its memory budget (soak-43-978: 5.6 GiB).
+            if self.programs.len() >= PROGRAM_CACHE {
+                self.drop_programs();
+            }
         }
         let mut res = Resources::default();
         let out = self.render_with(run, &mut res, start, reuse);
@@ -508,9 +524,10 @@ impl Renderer {
         let (visibility, surface) = decoded.next().expect("the first light");
         let more_lights = decoded
             .zip(stored.iter().skip(1))
-            .map(|((visibility, _), map)| umbra_case::LightPlane {
+            .map(|((visibility, surface), map)| umbra_case::LightPlane {
                 visibility,
                 shadow_map: map.clone(),
+                surface: Some(surface),
             })
             .collect();
         Ok(Frame {
@@ -636,6 +653,9 @@ struct RunPlan<'a> {
     /// The array the lights share, once the first light's pass has allocated it.
     array_map: Option<glow::Texture>,
     es2: bool,
+    /// GLES 2's cascades: no array textures, so each cascade is a 2D texture of its own
+    /// ([`Resources::layer_maps`]), bound to unit k and read as `u_map` (k = 0) or `u_mapk`.
+    separate_layers: bool,
     /// A deliberate mistake, only under `cargo xtask selftest`.
     fault: Option<Fault>,
     /// The case's bias as the (faulted) backend applies it.
@@ -673,6 +693,7 @@ impl<'a> RunPlan<'a> {
             }),
             array_map: None,
             es2: api == Api::Gles2,
+            separate_layers: api == Api::Gles2 && layered && !cube,
             fault,
             bias: fault.map_or_else(|| s.bias.clone(), |f| f.bias(&s.bias)),
             faces: run.light.views.len(),
@@ -680,7 +701,8 @@ impl<'a> RunPlan<'a> {
                 glow::TEXTURE_CUBE_MAP_ARRAY
             } else if cube {
                 glow::TEXTURE_CUBE_MAP
-            } else if layered {
+            } else if layered && api != Api::Gles2 {
+                // GLES 2's cascades are 2D textures of their own (separate_layers).
                 glow::TEXTURE_2D_ARRAY
             } else {
                 glow::TEXTURE_2D
@@ -704,6 +726,8 @@ impl<'a> RunPlan<'a> {
     fn face_targets(&self) -> Vec<u32> {
         if self.cube && self.layered {
             vec![glow::TEXTURE_CUBE_MAP_ARRAY; 6]
+        } else if self.separate_layers {
+            vec![glow::TEXTURE_2D; self.faces]
         } else if self.cube {
             (0..6)
                 .map(|k| glow::TEXTURE_CUBE_MAP_POSITIVE_X + k)
@@ -756,6 +780,9 @@ struct Resources {
     timer: Option<Timer>,
     /// The run's shadow map (taken out when it is kept for the run's twins).
     shadow_map: Option<glow::Texture>,
+    /// GLES 2's cascades, a 2D texture each, in cascade order (also in `textures`, and
+    /// never kept for a twin); empty otherwise.
+    layer_maps: Vec<glow::Texture>,
     buffers: Vec<glow::Buffer>,
     vaos: Vec<glow::VertexArray>,
     textures: Vec<glow::Texture>,

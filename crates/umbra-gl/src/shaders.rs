@@ -175,8 +175,8 @@ pub fn lit_fragment(api: Api, t: &Technique) -> String {
         "GLES 2 compares in the shader: pass Api::technique's technique"
     );
     debug_assert!(
-        api != Api::Gles2 || !t.layered(),
-        "GLES 2 has no array textures: the backend skips cascades"
+        api != Api::Gles2 || t.layer.is_none(),
+        "GLES 2 has no array textures: the backend skips several lights in one array"
     );
     let glsl = Glsl {
         api,
@@ -184,6 +184,22 @@ pub fn lit_fragment(api: Api, t: &Technique) -> String {
         cube_array: t.cube_array(),
     };
     lit_shader::lit_fragment(&glsl, t)
+}
+
+/// GLES 2's cascades, `faces` of them: no array textures in GLSL ES 1.00, so cascade 0 is
+/// `u_map` and cascade k a sampler `u_mapk` of its own, chosen by an if-chain (a sampler
+/// array may only be indexed by a constant there).
+fn layer_samplers(faces: usize) -> String {
+    let mut s = String::new();
+    for k in 1..faces {
+        let _ = writeln!(s, "uniform sampler2D u_map{k};");
+    }
+    s.push_str("vec4 layer_texel(int f, vec2 uv) {\n");
+    for k in 1..faces {
+        let _ = writeln!(s, "  if (f == {k}) return texture2D(u_map{k}, uv);");
+    }
+    s.push_str("  return texture2D(u_map, uv);\n}\n");
+    s
 }
 
 /// GLSL in one API's flavour, for one technique's map.
@@ -227,6 +243,8 @@ impl Dialect for Glsl {
         s.push_str("uniform float u_constant;\nuniform float u_slope_scale;\nuniform float u_slope_max;\nuniform float u_normal_offset;\nuniform float u_ndl_scale;\nuniform float u_ndl_min;\n");
         s.push_str("uniform float u_output;\n"); // GLES 2: 0 colour, 1 visibility + face
         let sampler = match (t.cube, self.layered, t.manual()) {
+            // GLES 2's cascades: a 2D texture each (Glsl::layer_samplers).
+            (false, true, _) if es2 => "sampler2D",
             (true, _, false) if self.cube_array => "samplerCubeArrayShadow",
             (true, _, true) if self.cube_array => "samplerCubeArray",
             (false, false, false) => "sampler2DShadow",
@@ -248,6 +266,9 @@ impl Dialect for Glsl {
             let _ = writeln!(s, "const int LAYER = {};", t.layer_base());
         }
         let _ = writeln!(s, "uniform {sampler} u_map;");
+        if es2 && self.layered {
+            s.push_str(&layer_samplers(faces));
+        }
         if !es2 {
             s.push_str(
                 "layout(location = 0) out vec4 o_color;\nlayout(location = 1) out vec4 o_vis;\n",
@@ -316,6 +337,12 @@ impl Dialect for Glsl {
         });
         // Never `.z`: a core depth read returns (d, 0, 0, 1); GLES 2 unpacks RGBA8.
         let read = match (cube, self.api == Api::Gles2, wrong_component) {
+            (_, true, false) if self.layered => {
+                "unpack_depth(layer_texel(f, (vec2(i, j) + 0.5) / u_size))"
+            }
+            (_, true, true) if self.layered => {
+                "unpack_depth(layer_texel(f, (vec2(i, j) + 0.5) / u_size).gbar)"
+            }
             _ if self.layered => {
                 if wrong_component {
                     "texelFetch(u_map, ivec3(int(i), int(j), f + LAYER), 0).g"

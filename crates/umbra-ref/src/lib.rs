@@ -104,6 +104,7 @@ pub fn add_lights(frames: Vec<Frame>, format: ColorFormat) -> Frame {
         first.more_lights.push(umbra_case::LightPlane {
             visibility: f.visibility,
             shadow_map: f.shadow_map,
+            surface: f.surface,
         });
     }
     first

@@ -251,20 +251,22 @@ impl Gpu {
         let total = start.elapsed();
         let [w, h] = run.camera.size;
         let last = outputs.pop().expect("two lights or more");
-        let mut planes: Vec<(Vec<f32>, Option<umbra_case::DepthMap>)> = outputs
+        let color = last.color.clone();
+        let mut planes: Vec<(Vec<f32>, Vec<u32>, Option<umbra_case::DepthMap>)> = outputs
             .into_iter()
-            .map(|o| o.visibility)
-            .chain([last.visibility])
+            .chain([last])
             .zip(stored)
+            .map(|(o, map)| (o.visibility, o.surface, map))
             .collect();
-        let (visibility, shadow_map) = planes.remove(0);
+        // The first light's pass: its visibility and the surface it drew.
+        let (visibility, surface, shadow_map) = planes.remove(0);
         Ok(Frame {
             width: w,
             height: h,
             // Every light added: the last pass's colour.
-            color: last.color,
+            color,
             visibility,
-            surface: Some(last.surface),
+            surface: Some(surface),
             shadow_map,
             visibility_storage: self.visibility_storage(),
             timings: umbra_case::Timings {
@@ -276,9 +278,10 @@ impl Gpu {
             },
             more_lights: planes
                 .into_iter()
-                .map(|(visibility, shadow_map)| umbra_case::LightPlane {
+                .map(|(visibility, surface, shadow_map)| umbra_case::LightPlane {
                     visibility,
                     shadow_map,
+                    surface: Some(surface),
                 })
                 .collect(),
         })

@@ -38,7 +38,11 @@ impl Renderer {
         res: &mut Resources,
     ) -> Result<(Vec<u8>, Vec<u8>), BackendError> {
         self.map_sampler(p, technique, map)?;
+        for &layer in res.layer_maps.iter().skip(1) {
+            self.map_sampler(p, technique, layer)?;
+        }
         self.lit_uniforms(p, program, map)?;
+        self.bind_layers(program, &res.layer_maps)?;
         let mut images = Vec::new();
         for pass in 0..if p.es2 { 2 } else { 1 } {
             images.extend(self.draw_lit(p, program, map, res, pass)?);
@@ -46,6 +50,27 @@ impl Renderer {
         let vis = images.pop().unwrap_or_default();
         let color = images.pop().unwrap_or_default();
         Ok((color, vis))
+    }
+
+    /// GLES 2's cascades after the first (which is the map, on unit 0): cascade k's texture
+    /// on unit k, read as `u_mapk` (GLSL ES 1.00 has no array textures).
+    fn bind_layers(
+        &self,
+        program: glow::Program,
+        layers: &[glow::Texture],
+    ) -> Result<(), BackendError> {
+        let gl = &self.g();
+        // SAFETY: textures and a program of the current context, the program in use.
+        unsafe {
+            for (k, &t) in layers.iter().enumerate().skip(1) {
+                gl.active_texture(glow::TEXTURE0 + k as u32);
+                gl.bind_texture(glow::TEXTURE_2D, Some(t));
+                let loc = gl.get_uniform_location(program, &format!("u_map{k}"));
+                gl.uniform_1_i32(loc.as_ref(), k as i32);
+            }
+            gl.active_texture(glow::TEXTURE0);
+        }
+        self.check("cascade textures")
     }
 
     /// The map's sampler state for the technique: filters (MIPMAP ones on a mip chain),

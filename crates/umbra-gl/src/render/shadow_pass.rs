@@ -21,6 +21,8 @@ pub(super) struct ShadowPrograms {
 struct Target {
     depth_rb: Option<glow::Renderbuffer>,
     dummy: Option<glow::Texture>,
+    /// GLES 2's cascade textures, drawn face by face in place of the map's face.
+    layers: Vec<glow::Texture>,
 }
 
 impl Renderer {
@@ -95,6 +97,9 @@ impl Renderer {
             // A later light's layer of the array the first light's pass allocated.
             return Ok(map);
         }
+        if p.separate_layers {
+            return self.layer_textures(p, res);
+        }
         let gl = &self.g();
         let (s, target, levels) = (p.s, p.target, p.levels);
         // SAFETY: objects of the current context.
@@ -154,6 +159,44 @@ impl Renderer {
         Ok(map)
     }
 
+    /// GLES 2's cascades: no array textures, so a 2D RGBA8 texture per cascade (one level:
+    /// validation refuses levels on cascades), each with a fresh map's sampler state, all in
+    /// [`Resources::layer_maps`]; the first is returned as the run's map. None is kept for a
+    /// twin (a twin draws its own).
+    fn layer_textures(
+        &self,
+        p: &RunPlan,
+        res: &mut Resources,
+    ) -> Result<glow::Texture, BackendError> {
+        let gl = &self.g();
+        let [w, h] = p.s.size;
+        for _ in 0..p.faces {
+            // SAFETY: objects of the current context.
+            unsafe {
+                let t = gl.create_texture().map_err(|e| gl_err("shadow map", e))?;
+                res.textures.push(t);
+                res.layer_maps.push(t);
+                gl.bind_texture(glow::TEXTURE_2D, Some(t));
+                gl.tex_image_2d(
+                    glow::TEXTURE_2D,
+                    0,
+                    glow::RGBA as i32,
+                    w as i32,
+                    h as i32,
+                    0,
+                    glow::RGBA,
+                    glow::UNSIGNED_BYTE,
+                    glow::PixelUnpackData::Slice(None),
+                );
+                for (param, v) in FRESH_MAP_SAMPLER {
+                    gl.tex_parameter_i32(glow::TEXTURE_2D, param, v as i32);
+                }
+            }
+        }
+        self.check("shadow map storage")?;
+        Ok(res.layer_maps[0])
+    }
+
     /// The pass's framebuffer, bound, with GLES 2's depth renderbuffer and the dummy colour
     /// texture of `with_color` (the map itself is attached per face and level).
     fn shadow_target(&self, p: &RunPlan, res: &mut Resources) -> Result<Target, BackendError> {
@@ -199,7 +242,11 @@ impl Renderer {
                 );
                 dummy = Some(c);
             }
-            Ok(Target { depth_rb, dummy })
+            Ok(Target {
+                depth_rb,
+                dummy,
+                layers: res.layer_maps.clone(),
+            })
         }
     }
 
@@ -298,7 +345,7 @@ impl Renderer {
                         glow::FRAMEBUFFER,
                         glow::COLOR_ATTACHMENT0,
                         ft,
-                        Some(map),
+                        Some(t.layers.get(k).copied().unwrap_or(map)),
                         0,
                     );
                     gl.framebuffer_renderbuffer(

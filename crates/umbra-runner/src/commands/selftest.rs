@@ -58,8 +58,6 @@ fn applies_to(fault: Fault, b: &Descriptor) -> bool {
         // The GLES 2 path has no float depth, and is the only one that clamps in the shader.
         Fault::ClampFloat => !b.gles2_technique(),
         Fault::NoClamp => b.gles2_technique(),
-        // GLES 2 has no array textures (it skips every cascaded case).
-        Fault::LayerShift | Fault::CascadeByDistance | Fault::BlendIgnored => !b.gles2_technique(),
         // GLES 2 has no mipmapped compare (it skips every mipmapped case).
         Fault::MipBaseOnly | Fault::MipLevelCoarse => !b.gles2_technique(),
         // A manual LINEAR filter; wgpu's GL backend has no manual compare.
