@@ -645,8 +645,9 @@ struct RunPlan<'a> {
     /// An array: a 2D array with one layer per cascade or the lights' maps in its layers, or
     /// (with `cube`) a cube-map array with the point lights' cubes.
     layered: bool,
-    /// The light's layer among several (`shadow.placement` `array`; its cube in a
-    /// `cube_array`, whose face f is layer-face 6 · base + f), else 0.
+    /// The array's layer of face 0: the first of the light's among several (light k's faces
+    /// are layers k · faces to k · faces + faces − 1: one per spot or directional light, six
+    /// per point light in a `cube_array`), else 0.
     layer_base: usize,
     /// The array's layers: the faces, or the lights sharing it (six layer-faces each in a
     /// cube-map array).
@@ -688,10 +689,8 @@ impl<'a> RunPlan<'a> {
             conv: Convention::GL.with_order(s.depth_order),
             cube,
             layered,
-            layer_base: array.map_or(0, |o| o.light),
-            array_layers: array.map_or(run.light.views.len(), |o| {
-                o.lights * if cube { 6 } else { 1 }
-            }),
+            layer_base: array.map_or(0, |o| o.light * run.light.views.len()),
+            array_layers: array.map_or(1, |o| o.lights) * run.light.views.len(),
             array_map: None,
             es2: api == Api::Gles2,
             separate_layers: api == Api::Gles2 && layered && !cube,
@@ -740,15 +739,6 @@ impl<'a> RunPlan<'a> {
         }
     }
 
-    /// The array layer (layer-face of a cube-map array) face `k` of the run's light lives in.
-    fn layer_of(&self, k: usize) -> usize {
-        if self.cube {
-            6 * self.layer_base + k
-        } else {
-            self.layer_base + k
-        }
-    }
-
     /// Attaches face `k` (target `ft`) of `map` at `level` as the bound framebuffer's depth.
     fn attach_depth(&self, gl: &Gl, ft: u32, k: usize, map: glow::Texture, level: u32) {
         // SAFETY: attaching a texture of the current context to its bound framebuffer.
@@ -759,7 +749,7 @@ impl<'a> RunPlan<'a> {
                     glow::DEPTH_ATTACHMENT,
                     Some(map),
                     level as i32,
-                    self.layer_of(k) as i32,
+                    (self.layer_base + k) as i32,
                 );
             } else {
                 gl.framebuffer_texture_2d(

@@ -250,8 +250,8 @@ impl Gpu {
         }
         let total = start.elapsed();
         let [w, h] = run.camera.size;
-        let last = outputs.pop().expect("two lights or more");
-        let color = last.color.clone();
+        let mut last = outputs.pop().expect("two lights or more");
+        let color = std::mem::take(&mut last.color);
         let mut planes: Vec<(Vec<f32>, Vec<u32>, Option<umbra_case::DepthMap>)> = outputs
             .into_iter()
             .chain([last])
@@ -383,8 +383,8 @@ impl<'a> RunPlan<'a> {
         let levels = s.mipmaps.map_or(1, |m| m.levels);
         let array = run.of_lights.filter(|o| o.array);
         let cube = run.light.is_cube();
-        // A cube's faces are six layers; a cube-map array's cube k starts at layer 6k.
-        let per_light = if cube { 6 } else { 1 };
+        // Light k's faces (six for a cube) start at layer k · faces of the lights' array.
+        let faces = run.light.views.len();
         RunPlan {
             run,
             s,
@@ -392,9 +392,9 @@ impl<'a> RunPlan<'a> {
             conv,
             cube,
             layered: run.light.cascading.is_some() || array.is_some(),
-            faces: run.light.views.len() as u32,
-            layer_base: array.map_or(0, |o| o.light * per_light) as u32,
-            array_layers: array.map_or(run.light.views.len(), |o| o.lights * per_light) as u32,
+            faces: faces as u32,
+            layer_base: array.map_or(0, |o| o.light * faces) as u32,
+            array_layers: (array.map_or(1, |o| o.lights) * faces) as u32,
             format,
             copyable: gpu.depth_copies && format != wgpu::TextureFormat::Depth24Plus,
             levels,
