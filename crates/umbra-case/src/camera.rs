@@ -3,7 +3,7 @@
 
 use glam::{Mat4, Vec3};
 
-use crate::conventions::Convention;
+use crate::conventions::{Convention, look_at};
 
 /// The camera of a case.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,6 +23,18 @@ pub struct CameraSetup {
 }
 
 impl CameraSetup {
+    /// The set-up of a validated case's camera.
+    pub fn new(c: &crate::format::Camera) -> Self {
+        CameraSetup {
+            eye: Vec3::from(c.eye),
+            view: look_at(Vec3::from(c.eye), Vec3::from(c.target), Vec3::from(c.up)),
+            fov_y: c.fov_y_deg.to_radians(),
+            near: c.near,
+            far: c.far,
+            size: c.size,
+        }
+    }
+
     /// P · V under `conv` (the camera pass always uses forward depth).
     pub fn view_proj(&self, conv: Convention) -> Mat4 {
         let conv = conv.with_order(crate::format::DepthOrder::Forward);

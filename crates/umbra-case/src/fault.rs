@@ -290,6 +290,14 @@ pub enum Fault {
     /// The lit pass switches cascades hard where the case asks for a blend band (a blend
     /// weight that never leaves 0).
     BlendIgnored,
+    /// The lit pass takes the blend band as a share of the cascade's range where the case
+    /// asks for a share of its far bound (Unity's and Godot's formula in a port of Bevy's
+    /// `blend_of: far`): the band is narrower, so part of it switches hard.
+    BandOfRange,
+    /// The lit pass leaves out the texel-scaled normal offset and the offset towards the
+    /// light (`normal_offset_texels`, `light_offset`: a port that keeps only a world normal
+    /// offset and a depth constant): the unbiased receivers shadow themselves.
+    WorldOffsetsDropped,
     /// The lit pass shades with a white light of intensity 1 whatever the case's light
     /// colour and intensity (a colour uniform that never reaches the shader).
     LightColourIgnored,
@@ -339,7 +347,7 @@ impl Fault {
     /// three stand for them here (a wrong handedness on the +x face, the one the
     /// four-fold symmetric point-light cases could not see; a wrong up vector on the −y face;
     /// a transposed 2D map), and `umbra selftest --fault` or `--orientations` runs any.
-    pub const ALL: [Fault; 43] = [
+    pub const ALL: [Fault; 45] = [
         Fault::CompareFlipped,
         Fault::NoDivide,
         Fault::NoGuard,
@@ -373,6 +381,8 @@ impl Fault {
         Fault::LayerShift,
         Fault::CascadeByDistance,
         Fault::BlendIgnored,
+        Fault::BandOfRange,
+        Fault::WorldOffsetsDropped,
         Fault::LightColourIgnored,
         Fault::ClearIgnored,
         Fault::LitCullFlipped,
@@ -440,6 +450,8 @@ impl Fault {
             Fault::LayerShift => "layer-shift",
             Fault::CascadeByDistance => "cascade-by-distance",
             Fault::BlendIgnored => "blend-ignored",
+            Fault::BandOfRange => "band-of-range",
+            Fault::WorldOffsetsDropped => "world-offsets-dropped",
             Fault::LightColourIgnored => "light-colour-ignored",
             Fault::ClearIgnored => "clear-ignored",
             Fault::LitCullFlipped => "lit-cull-flipped",

@@ -375,7 +375,7 @@ pub struct Directional {
 /// Unity's cascade splits and Godot's `split_1..3` give them). Each slice's map is fitted in x
 /// and y to the light-view bounding box of the slice's eight corners (widened by 0.5 % a
 /// side), and in depth to the whole scene so that every caster between a receiver and the
-/// light is drawn.
+/// light is drawn; or, with `fit: stable`, as [`CascadeFit::Stable`] says.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Cascades {
@@ -400,6 +400,55 @@ pub struct Cascades {
     /// In [0, 0.5]; default 0 (a hard switch).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub blend: f32,
+    /// What `blend` is a share of: `range` (default; the cascade's own depth range) or `far`
+    /// (the cascade's far bound, Bevy's `overlap_proportion`: the band is the last
+    /// `blend`·s_{k+1} of cascade k). With `far`, each band must stay within half its
+    /// cascade's range.
+    #[serde(default, skip_serializing_if = "BlendOf::is_range")]
+    pub blend_of: BlendOf,
+    /// How each cascade's map is fitted to its slice: `box` (default, above) or `stable`.
+    #[serde(default, skip_serializing_if = "CascadeFit::is_box")]
+    pub fit: CascadeFit,
+}
+
+/// What a cascade's blend band is a share of ([`Cascades::blend_of`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BlendOf {
+    /// The cascade's depth range, s_{k+1} − s_k (Unity's, Godot's).
+    #[default]
+    Range,
+    /// The cascade's far bound s_{k+1} (Bevy's `cascades_overlap_proportion`).
+    Far,
+}
+
+impl BlendOf {
+    fn is_range(&self) -> bool {
+        *self == BlendOf::Range
+    }
+}
+
+/// How a cascade's map is fitted to its slice ([`Cascades::fit`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CascadeFit {
+    /// The light-view bounding box of the slice's corners in x and y (widened by 0.5 % a
+    /// side), the whole scene in depth.
+    #[default]
+    Box,
+    /// The "stable" fit (Valient, ShaderX6; Bevy's `calculate_cascade`): a square whose side
+    /// is the longer of the slice's body and far-plane diagonals rounded up to a whole scene
+    /// unit, so that it does not change as the camera turns; its centre floored to a whole
+    /// texel of the light's view, so that it does not shimmer as the camera moves; in depth,
+    /// only the slice's corners (casters nearer the light are clipped away unless
+    /// `shadow.depth_clamp` pancakes them, as Bevy's `unclipped_depth` does).
+    Stable,
+}
+
+impl CascadeFit {
+    fn is_box(&self) -> bool {
+        *self == CascadeFit::Box
+    }
 }
 
 fn is_zero(x: &f32) -> bool {
@@ -736,6 +785,17 @@ pub struct Bias {
     /// World-space distance the lookup point moves along the surface normal. Default 0.
     #[serde(default)]
     pub normal_offset: f32,
+    /// A directional light's normal offset in texels of the map the point is looked up in:
+    /// the point moves along the normal by this many times the world size of one texel of
+    /// that map (of its cascade, for a cascaded light), after the cascade is chosen (Bevy's
+    /// `shadow_normal_bias` × the cascade's `texel_size`). Default 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub normal_offset_texels: f32,
+    /// A directional light's world-space distance the lookup point moves towards the light,
+    /// after the cascade is chosen (Bevy's `shadow_depth_bias` along `direction_to_light`):
+    /// in each map's depth units it is this distance over that map's depth range. Default 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub light_offset: f32,
 }
 
 /// Shader slope-scaled bias.

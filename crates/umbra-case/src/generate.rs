@@ -160,48 +160,7 @@ impl Gen {
         }
         // Cascades, drawn after everything else for the same reason, on a directional light
         // whose map has no levels.
-        if let Light::Directional(d) = &mut case.light {
-            if case.shadow.mipmaps.is_none() && self.rng.chance(0.2) {
-                let split = self.rng.pick(&[
-                    SplitScheme::Uniform,
-                    SplitScheme::Logarithmic,
-                    SplitScheme::Practical,
-                    SplitScheme::Fractions,
-                ]);
-                let count = self.rng.int(1, 4);
-                let at = (split == SplitScheme::Fractions).then(|| {
-                    (1..count)
-                        .map(|k| {
-                            let jitter = self.rng.range(-0.3, 0.3, 2);
-                            round((f64::from(k) + f64::from(jitter)) / f64::from(count), 3)
-                        })
-                        .collect()
-                });
-                let lambda = (split == SplitScheme::Practical).then(|| self.rng.range(0.0, 1.0, 2));
-                let (near, far) = (case.camera.near, case.camera.far);
-                let distance = self.rng.chance(0.3).then(|| {
-                    round(
-                        f64::from(near + (far - near) * self.rng.range(0.3, 0.9, 2)),
-                        2,
-                    )
-                });
-                let blend = if self.rng.chance(0.3) {
-                    self.rng.range(0.05, 0.3, 2)
-                } else {
-                    0.0
-                };
-                d.cascades = Some(Cascades {
-                    count,
-                    split,
-                    lambda,
-                    at,
-                    distance,
-                    blend,
-                });
-                d.ortho = None;
-                d.fit = None;
-            }
-        }
+        self.cascades(&mut case);
         // The light's colour and intensity and the clear colour, drawn last for the same
         // reason: a tinted light in a quarter of the cases (an intensity above 1 in a third
         // of those, where lit colours saturate), a clear colour in a fifth.
@@ -694,6 +653,77 @@ impl Gen {
         }
     }
 
+    /// A directional light's cascades (a fifth of those whose map has no levels), with
+    /// Bevy's forms in some: drawn after everything else, so that only cascaded cases'
+    /// streams move when they change.
+    fn cascades(&mut self, case: &mut Case) {
+        if let Light::Directional(d) = &mut case.light {
+            if case.shadow.mipmaps.is_none() && self.rng.chance(0.2) {
+                let split = self.rng.pick(&[
+                    SplitScheme::Uniform,
+                    SplitScheme::Logarithmic,
+                    SplitScheme::Practical,
+                    SplitScheme::Fractions,
+                ]);
+                let count = self.rng.int(1, 4);
+                let at = (split == SplitScheme::Fractions).then(|| {
+                    (1..count)
+                        .map(|k| {
+                            let jitter = self.rng.range(-0.3, 0.3, 2);
+                            round((f64::from(k) + f64::from(jitter)) / f64::from(count), 3)
+                        })
+                        .collect()
+                });
+                let lambda = (split == SplitScheme::Practical).then(|| self.rng.range(0.0, 1.0, 2));
+                let (near, far) = (case.camera.near, case.camera.far);
+                let distance = self.rng.chance(0.3).then(|| {
+                    round(
+                        f64::from(near + (far - near) * self.rng.range(0.3, 0.9, 2)),
+                        2,
+                    )
+                });
+                let blend = if self.rng.chance(0.3) {
+                    self.rng.range(0.05, 0.3, 2)
+                } else {
+                    0.0
+                };
+                let mut c = Cascades {
+                    count,
+                    split,
+                    lambda,
+                    at,
+                    distance,
+                    blend,
+                    blend_of: BlendOf::Range,
+                    fit: CascadeFit::Box,
+                };
+                // Bevy's forms, drawn after the rest of the cascade (only cascaded cases'
+                // streams move): a band of the far bound where every band stays within half
+                // its range, the stable fit, and the world and texel offsets.
+                if blend > 0.0 && self.rng.chance(0.5) {
+                    let splits = crate::light::cascade_splits(&c, near, far);
+                    let fits = splits
+                        .windows(2)
+                        .take(splits.len().saturating_sub(2))
+                        .all(|w| blend * w[1] <= 0.5 * (w[1] - w[0]));
+                    if fits {
+                        c.blend_of = BlendOf::Far;
+                    }
+                }
+                if self.rng.chance(0.4) {
+                    c.fit = CascadeFit::Stable;
+                }
+                if self.rng.chance(0.3) {
+                    case.shadow.bias.normal_offset_texels = self.rng.range(0.5, 3.0, 2);
+                    case.shadow.bias.light_offset = self.rng.log_range(1e-3, 5e-2);
+                }
+                d.cascades = Some(c);
+                d.ortho = None;
+                d.fit = None;
+            }
+        }
+    }
+
     /// No bias at all (a quarter of the cases: acne is what a model's ties must hold), or one
     /// to three of the forms, each drawn over the range programs use.
     fn bias(&mut self) -> Bias {
@@ -878,6 +908,12 @@ pub fn bias_forms(b: &Bias) -> String {
     if b.normal_offset != 0.0 {
         f.push("normal_offset");
     }
+    if b.normal_offset_texels != 0.0 {
+        f.push("normal_offset_texels");
+    }
+    if b.light_offset != 0.0 {
+        f.push("light_offset");
+    }
     if f.is_empty() {
         "no".into()
     } else {
@@ -937,6 +973,12 @@ mod tests {
                         if c.distance.is_some() {
                             seen.insert("cascade distance".into());
                         }
+                        if c.blend_of == BlendOf::Far {
+                            seen.insert("cascade band of the far bound".into());
+                        }
+                        if c.fit == CascadeFit::Stable {
+                            seen.insert("cascade stable fit".into());
+                        }
                     }
                 }
                 seen.insert(format!(
@@ -984,13 +1026,13 @@ mod tests {
             }
         }
         // 4 formats, 3 filters, 2 compares, 3 culls, 2 orders, 2 attachments, 4 outside,
-        // 2 guards, 2 depth orders, 2 depth clamps, 7 bias entries, 4 split schemes, a
-        // cascade blend and distance, 3 lights, 2 shadings, a tinted light, one above 1, a
+        // 2 guards, 2 depth orders, 2 depth clamps, 9 bias entries, 4 split schemes, a
+        // cascade blend, distance, band of the far bound and stable fit, 3 lights, 2 shadings, a tinted light, one above 1, a
         // clear colour, 3 lit-pass culls, strict and inclusive depth functions, 2 colour
         // targets, 4 objects, sweep, offset.
         assert_eq!(
             seen.len(),
-            4 + 3 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 7 + 4 + 2 + 3 + 2 + 3 + 3 + 2 + 2 + 4 + 2,
+            4 + 3 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 9 + 4 + 4 + 3 + 2 + 3 + 3 + 2 + 2 + 4 + 2,
             "{seen:?}"
         );
     }

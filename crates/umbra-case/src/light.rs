@@ -16,7 +16,7 @@ use glam::{DVec3, Mat4, Vec3, Vec4};
 
 use crate::camera::CameraSetup;
 use crate::conventions::{Convention, look_at};
-use crate::format::{Cascades, Fit, Light};
+use crate::format::{BlendOf, CascadeFit, Cascades, Fit, Light};
 use crate::scene::Geometry;
 
 /// The unit direction *towards* a light at `azimuth_deg` (from +z towards +x) and
@@ -135,8 +135,10 @@ pub struct Cascading {
     /// s_0 (the camera's near plane) to s_N (the shadow distance); cascade k covers
     /// [s_k, s_{k+1}].
     pub splits: Vec<f32>,
-    /// The blend band's share of a cascade's range (0: none).
+    /// The blend band's share of a cascade's range or far bound (0: none).
     pub blend: f32,
+    /// What `blend` is a share of.
+    pub blend_of: BlendOf,
     /// Receivers beyond s_N read lit (a shadow distance was given).
     pub lit_beyond: bool,
 }
@@ -162,15 +164,35 @@ impl Cascading {
         self.lit_beyond && d > self.end()
     }
 
+    /// The width of cascade k's blend band in f32 as the lit shaders compute it: b·w with
+    /// w = s_{k+1} − s_k (`range`) or w = s_{k+1} (`far`).
+    pub fn band(&self, k: usize) -> f32 {
+        let (lo, hi) = (self.splits[k], self.splits[k + 1]);
+        match self.blend_of {
+            BlendOf::Range => self.blend * (hi - lo),
+            BlendOf::Far => self.blend * hi,
+        }
+    }
+
+    /// [`Cascading::band`] in f64.
+    pub fn band_f64(&self, k: usize) -> f64 {
+        let (lo, hi) = (f64::from(self.splits[k]), f64::from(self.splits[k + 1]));
+        let b = f64::from(self.blend);
+        match self.blend_of {
+            BlendOf::Range => b * (hi - lo),
+            BlendOf::Far => b * hi,
+        }
+    }
+
     /// The weight of cascade k + 1 at view depth `d` in cascade k's blend band, in f32 as
-    /// the lit shaders compute it: t = (d − (s_{k+1} − b·w)) / (b·w), w = s_{k+1} − s_k,
+    /// the lit shaders compute it: t = (d − (s_{k+1} − band)) / band ([`Cascading::band`]),
     /// clamped to 1; `None` outside the band, without a band, or in the last cascade.
     pub fn blend_weight(&self, k: usize, d: f32) -> Option<f32> {
         if self.blend <= 0.0 || k + 2 >= self.splits.len() {
             return None;
         }
-        let (lo, hi) = (self.splits[k], self.splits[k + 1]);
-        let band = self.blend * (hi - lo);
+        let hi = self.splits[k + 1];
+        let band = self.band(k);
         let t = (d - (hi - band)) / band;
         (t > 0.0).then_some(t.min(1.0))
     }
@@ -181,8 +203,8 @@ impl Cascading {
         if self.blend <= 0.0 || k + 2 >= self.splits.len() {
             return None;
         }
-        let (lo, hi) = (f64::from(self.splits[k]), f64::from(self.splits[k + 1]));
-        let band = f64::from(self.blend) * (hi - lo);
+        let hi = f64::from(self.splits[k + 1]);
+        let band = self.band_f64(k);
         let t = |x: f64| ((x - (hi - band)) / band).clamp(0.0, 1.0);
         let (a, b) = (t(d - reach), t(d + reach));
         (b > 0.0).then_some((a, b))
@@ -261,6 +283,25 @@ pub const CUBE_FACES: [(Vec3, Vec3); 6] = [
 ];
 
 impl LightSetup {
+    /// Per face, the world distance `shadow.bias.normal_offset_texels` moves the lookup point
+    /// along the normal: that many times the world width of one texel of the face's
+    /// orthographic map, (right − left) / width, in f32 (Bevy's `shadow_normal_bias ×
+    /// texel_size`, which it multiplies in that order); 0 for a perspective face (the field
+    /// is refused with spot and point lights).
+    pub fn face_offsets(&self, texels: f32, map_size: [u32; 2]) -> Vec<f32> {
+        (0..self.views.len())
+            .map(|f| self.face_offset(f, texels, map_size))
+            .collect()
+    }
+
+    /// [`LightSetup::face_offsets`] of face `face`.
+    pub fn face_offset(&self, face: usize, texels: f32, map_size: [u32; 2]) -> f32 {
+        match self.views[face].projection {
+            Projection::Ortho { bounds } => texels * ((bounds[1] - bounds[0]) / map_size[0] as f32),
+            Projection::Perspective { .. } => 0.0,
+        }
+    }
+
     /// The light of a validated case, with a `map_size` map, fitted to `geometry` if asked
     /// (and, for cascades, to the slices of `camera`'s view).
     pub fn new(
@@ -289,7 +330,7 @@ impl LightSetup {
                     position: eye,
                 };
                 if let Some(c) = &d.cascades {
-                    return cascaded(kind, view, c, geometry, camera);
+                    return cascaded(kind, view, c, geometry, camera, map_size);
                 }
                 let bounds = match (&d.ortho, d.fit) {
                     (Some(o), _) => [o.left, o.right, o.bottom, o.top, o.near, o.far],
@@ -443,70 +484,108 @@ pub fn cube_coords_on(d: glam::DVec3, f: usize) -> (f64, f64) {
 }
 
 /// A cascaded directional light: one orthographic face per slice of the camera's view
-/// depths, fitted in x and y to the slice's corners (widened by 0.5 % of their extent a
-/// side; a slice after a blend band starts where the band does) and in depth to the scene
-/// (every caster of the slice's receivers is drawn).
+/// depths (a slice after a blend band starts where the band does), fitted as `c.fit` says
+/// ([`CascadeFit`]): the box of the slice's corners in x and y (widened by 0.5 % of their
+/// extent a side) and the scene in depth (every caster of the slice's receivers is drawn),
+/// or the stable square of [`stable_bounds`].
 fn cascaded(
     kind: LightKind,
     view: Mat4,
     c: &Cascades,
     geometry: &Geometry,
     camera: &CameraSetup,
+    map_size: [u32; 2],
 ) -> LightSetup {
     let splits = cascade_splits(c, camera.near, camera.far);
     let scene = fit_bounds(view, geometry);
     let to_light = view.as_dmat4() * camera.view.as_dmat4().inverse();
     let tan_y = crate::math::tan(0.5 * f64::from(camera.fov_y));
     let tan_x = tan_y * f64::from(camera.size[0]) / f64::from(camera.size[1]);
+    let cascading = Cascading {
+        depth_row: -camera.view.row(2),
+        splits: splits.clone(),
+        blend: c.blend,
+        blend_of: c.blend_of,
+        lit_beyond: c.distance.is_some(),
+    };
     // With a blend band, cascade k + 1 is fitted from where cascade k's band starts (as
     // Bevy's cascade overlap does), so that the band's receivers lie in both maps.
     let starts: Vec<f64> = (0..splits.len() - 1)
         .map(|k| match k {
             0 => f64::from(splits[0]),
-            _ => {
-                let (a, b) = (f64::from(splits[k - 1]), f64::from(splits[k]));
-                b - f64::from(c.blend) * (b - a)
-            }
+            _ => f64::from(splits[k]) - cascading.band_f64(k - 1),
         })
         .collect();
     let views = splits
         .windows(2)
         .zip(&starts)
         .map(|(s, start)| {
+            // The slice's corners in camera view space, near then far, each as Bevy orders
+            // them: bottom-right, top-right, top-left, bottom-left.
+            let corners: Vec<DVec3> = [*start, f64::from(s[1])]
+                .iter()
+                .flat_map(|&d| {
+                    [(1.0, -1.0), (1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0)]
+                        .map(|(a, b)| DVec3::new(a * tan_x * d, b * tan_y * d, -d))
+                })
+                .collect();
             let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-            for d in [*start, f64::from(s[1])] {
-                for (a, b) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)] {
-                    let q = to_light.transform_point3(DVec3::new(a * tan_x * d, b * tan_y * d, -d));
-                    lo = lo.min(q);
-                    hi = hi.max(q);
-                }
+            for q in &corners {
+                let q = to_light.transform_point3(*q);
+                lo = lo.min(q);
+                hi = hi.max(q);
             }
-            let m = 0.005 * (hi - lo);
-            let bounds = [
-                (lo.x - m.x) as f32,
-                (hi.x + m.x) as f32,
-                (lo.y - m.y) as f32,
-                (hi.y + m.y) as f32,
-                scene[4],
-                scene[5],
-            ];
+            let bounds = match c.fit {
+                CascadeFit::Box => {
+                    let m = 0.005 * (hi - lo);
+                    [
+                        (lo.x - m.x) as f32,
+                        (hi.x + m.x) as f32,
+                        (lo.y - m.y) as f32,
+                        (hi.y + m.y) as f32,
+                        scene[4],
+                        scene[5],
+                    ]
+                }
+                CascadeFit::Stable => stable_bounds(&corners, lo, hi, map_size),
+            };
             LightView {
                 view,
                 projection: Projection::Ortho { bounds },
             }
         })
         .collect();
-    let r = camera.view.row(2);
     LightSetup {
         kind,
         views,
-        cascading: Some(Cascading {
-            depth_row: -r,
-            splits,
-            blend: c.blend,
-            lit_beyond: c.distance.is_some(),
-        }),
+        cascading: Some(cascading),
     }
+}
+
+/// Bevy's stable cascade (`calculate_cascade` in bevy_pbr's `light/mod.rs`): the square's
+/// side is the longer of the body diagonal (near bottom-right to far top-left) and the far
+/// plane's diagonal of the slice's `corners`, rounded up to a whole unit; one texel is that
+/// over the map's size; the centre of the corners' light-view box `lo`..`hi` is floored to a
+/// whole texel; in depth the bounds are the corners' own (light view looks down −z: near =
+/// −max z, far = −min z). Bevy rounds in f32 where this does in f64: the side differs only
+/// where a diagonal lies within an f32 rounding of a whole unit.
+fn stable_bounds(corners: &[DVec3], lo: DVec3, hi: DVec3, map_size: [u32; 2]) -> [f32; 6] {
+    let side = (corners[0] - corners[6])
+        .length()
+        .max((corners[4] - corners[6]).length())
+        .ceil();
+    let texel = [side / f64::from(map_size[0]), side / f64::from(map_size[1])];
+    let cx = (0.5 * (lo.x + hi.x) / texel[0]).floor() * texel[0];
+    let cy = (0.5 * (lo.y + hi.y) / texel[1]).floor() * texel[1];
+    let half = 0.5 * side;
+    [
+        (cx - half) as f32,
+        (cx + half) as f32,
+        (cy - half) as f32,
+        (cy + half) as f32,
+        -hi.z as f32,
+        -lo.z as f32,
+    ]
 }
 
 fn fit_bounds(view: Mat4, geometry: &Geometry) -> [f32; 6] {
@@ -542,6 +621,8 @@ mod tests {
             at: None,
             distance: None,
             blend: 0.0,
+            blend_of: Default::default(),
+            fit: Default::default(),
         };
         cascade_splits(&c, 1.0, 16.0)
     }
@@ -565,6 +646,8 @@ mod tests {
             at: Some(vec![0.1, 0.2, 0.5]),
             distance: Some(11.0),
             blend: 0.0,
+            blend_of: Default::default(),
+            fit: Default::default(),
         };
         assert_eq!(cascade_splits(&c, 1.0, 16.0), [1.0, 2.0, 3.0, 6.0, 11.0]);
         let p = splits(SplitScheme::Practical, Some(0.5));
@@ -580,6 +663,7 @@ mod tests {
             depth_row: Vec4::new(0.0, 0.0, -1.0, 0.0),
             splits: vec![1.0, 2.0, 4.0],
             blend: 0.25,
+            blend_of: BlendOf::Range,
             lit_beyond: true,
         };
         // The band is the last quarter of [1, 2]: from 1.75.
@@ -595,5 +679,65 @@ mod tests {
         assert_eq!(c.cascades_near(0.5, 0.0), [0]);
         assert_eq!(c.cascades_near(9.0, 0.0), [1]);
         assert_eq!(c.depth(Vec3::new(5.0, 1.0, -3.0)), 3.0);
+    }
+
+    /// Bevy's band is a share of the far bound: 0.2 of cascade 0's far bound 10 starts it
+    /// at 8, whatever the near bound.
+    #[test]
+    fn a_band_of_the_far_bound_is_that_share_of_it() {
+        let c = Cascading {
+            depth_row: Vec4::new(0.0, 0.0, -1.0, 0.0),
+            splits: vec![0.1, 10.0, 24.0, 60.0],
+            blend: 0.25,
+            blend_of: BlendOf::Far,
+            lit_beyond: true,
+        };
+        assert_eq!(c.band(0), 2.5);
+        assert_eq!(c.band(1), 6.0);
+        assert_eq!(c.blend_weight(0, 7.5), None);
+        assert_eq!(c.blend_weight(0, 8.75), Some(0.5));
+        assert_eq!(c.blend_range(1, 21.0, 0.0), Some((0.5, 0.5)));
+    }
+
+    /// The stable fit is a square of a whole number of units, centred on a whole texel, and
+    /// its side is the same for a camera turned about its eye (the slice's diagonals do not
+    /// depend on where the camera looks).
+    #[test]
+    fn the_stable_fit_is_a_whole_square_on_a_whole_texel() {
+        use crate::format::{CascadeFit, Case};
+        let sides = |target: &str| {
+            let case: Case = serde_json::from_str(&format!(
+                r#"{{"name": "t", "about": "t", "scene": {{"objects": [{{"plane": {{"point": [0, 0, 0], "half_extent": 50}}}}]}},
+                "camera": {{"eye": [0, 2, 4], "target": {target}, "fov_y_deg": 45, "near": 0.1, "far": 200, "size": [240, 160]}},
+                "light": {{"directional": {{"azimuth_deg": 30, "elevation_deg": 35, "distance": 300,
+                  "cascades": {{"count": 3, "split": "logarithmic", "distance": 100, "blend": 0.2, "blend_of": "far", "fit": "stable"}}}}}},
+                "shadow": {{"size": [1024, 1024]}}}}"#
+            ))
+            .expect("a case");
+            let Light::Directional(d) = &case.light else {
+                panic!("directional");
+            };
+            assert_eq!(d.cascades.as_ref().map(|c| c.fit), Some(CascadeFit::Stable));
+            let camera = CameraSetup::new(&case.camera);
+            let geometry = crate::scene::tessellate(&case.scene);
+            let light = LightSetup::new(&case.light, case.shadow.size, &geometry, &camera);
+            let mut sides = Vec::new();
+            for v in &light.views {
+                let Projection::Ortho { bounds } = v.projection else {
+                    panic!("ortho");
+                };
+                let side = bounds[1] - bounds[0];
+                assert_eq!(side, side.round(), "a whole number of units: {bounds:?}");
+                assert_eq!(bounds[3] - bounds[2], side, "a square: {bounds:?}");
+                let texel = side / 1024.0;
+                let centre = 0.5 * (bounds[0] + bounds[1]);
+                assert_eq!(centre / texel, (centre / texel).round(), "on a whole texel");
+                sides.push(side);
+            }
+            sides
+        };
+        let ahead = sides("[0, 1, -40]");
+        assert!(ahead.windows(2).all(|w| w[0] < w[1]), "{ahead:?}");
+        assert_eq!(sides("[25, -3, -30]"), ahead, "turned, the same squares");
     }
 }

@@ -49,9 +49,9 @@ pub trait Dialect {
     fn constant(&self, name: &str, value: &str) -> String;
     /// `to_light(p)`: the unit vector from `p` towards the light.
     fn to_light(&self, directional: bool) -> &'static str;
-    /// Accessors for the `faces` light and texture matrices, where the language cannot index
-    /// them directly.
-    fn face_matrices(&self, faces: usize) -> String;
+    /// Accessors for the `faces` light and texture matrices (and, with `offsets`, the faces'
+    /// normal offsets in world units), where the language cannot index them directly.
+    fn face_matrices(&self, faces: usize, offsets: bool) -> String;
     /// `cube_face(d)` and `texel_dir(f, i, j)` (the GL cube-map face table and its inverse).
     fn cube_helpers(&self) -> &'static str;
     /// Decoding of depth stored in colour, where the map is not a depth texture.
@@ -69,8 +69,12 @@ pub trait Dialect {
     /// `f`: the face (`cube_face` of the direction from the light, or 0).
     fn face(&self, cube: bool) -> &'static str;
     /// Opens `lookup(p, n, f)`, a layered map's lookup in layer `f` of the already offset
-    /// point `p`.
-    fn layer_lookup_start(&self) -> &'static str;
+    /// point `p`, moved further by `extra` ([`Dialect::world_offsets`]) where it is not empty.
+    fn layer_lookup_start(&self, extra: &str) -> String;
+    /// What face `f`'s lookup adds to the point after the face is chosen: the texel-scaled
+    /// normal offset of that face and the offset towards the light (in that order, as Bevy's
+    /// `frag_position + normal_offset + depth_offset` does), each term with its leading ` + `.
+    fn world_offsets(&self, f: &str) -> String;
     /// `visibility(p, n)` of a cascaded light: moves `p` by `offset` along `n`, takes its
     /// view depth d (the camera view matrix's third row, negated), reads lit beyond the
     /// shadow distance, picks the cascade `f` (a depth on a split goes to the nearer one, as
@@ -138,7 +142,7 @@ pub fn lit_fragment(d: &impl Dialect, t: &Technique) -> String {
     s += &d.constant("TOWARD_FAR", if forward { "1.0" } else { "-1.0" });
     s += &d.constant("CLEAR", if forward { "1.0" } else { "0.0" });
     s += d.to_light(t.directional);
-    s += &d.face_matrices(if t.cube { 6 } else { t.cascades.max(1) });
+    s += &d.face_matrices(if t.cube { 6 } else { t.cascades.max(1) }, t.world_offsets);
     if t.cube {
         s += d.cube_helpers();
     }
@@ -175,10 +179,16 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
         k => format!("({k} * {offset})"),
     };
     let cascades = t.cascade_select();
-    if cascades.is_some() {
-        *s += d.layer_lookup_start();
+    let face = if cascades.is_some() { "f" } else { "0" };
+    let extra = if t.world_offsets {
+        d.world_offsets(face)
     } else {
-        *s += &d.lookup_start(&offset);
+        String::new()
+    };
+    if cascades.is_some() {
+        *s += &d.layer_lookup_start(&extra);
+    } else {
+        *s += &d.lookup_start(&format!("{offset}{extra}"));
         *s += d.face(t.cube);
     }
     let c = t.coordinate();

@@ -3,10 +3,7 @@
 
 use std::sync::Arc;
 
-use glam::Vec3;
-
 pub use crate::camera::CameraSetup;
-use crate::conventions::look_at;
 use crate::light::LightSetup;
 use crate::point::CasePoint;
 use crate::scene::{Geometry, tessellate};
@@ -52,15 +49,7 @@ impl Prepared {
 
     /// Sets up a point whose (offset-free) scene was already tessellated.
     fn with_geometry(point: CasePoint, geometry: Arc<Geometry>) -> Self {
-        let c = &point.case.camera;
-        let camera = CameraSetup {
-            eye: Vec3::from(c.eye),
-            view: look_at(Vec3::from(c.eye), Vec3::from(c.target), Vec3::from(c.up)),
-            fov_y: c.fov_y_deg.to_radians(),
-            near: c.near,
-            far: c.far,
-            size: c.size,
-        };
+        let camera = CameraSetup::new(&point.case.camera);
         let light = LightSetup::new(
             &point.case.light,
             point.case.shadow.size,

@@ -147,7 +147,9 @@ pub enum Deviation {
     /// in float, each triangle evaluating the shared edge in its own sequence and truncating
     /// it (sp_setup.c, subtriangle: `left = (int)(sx + y*dxdy)`), and clips every triangle
     /// that crosses the viewport into a fan (no guard band), so a centre exactly on such an
-    /// edge can fall out of both.
+    /// edge can fall out of both. The fan starts at a vertex of the clipper's choosing, so
+    /// the model frees every chord of the viewport-clipped polygon
+    /// (`umbra_ref::raster::Rasterizer::viewport_chords`; soak-42-364).
     EdgeHoles,
     /// Seamless cube LINEAR reading the wrong texels across a face edge: any answer for a
     /// footprint that crosses an edge. softpipe's img_filter_cube_linear keeps pointers into

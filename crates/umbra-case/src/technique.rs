@@ -17,7 +17,7 @@
 
 use crate::fault::{Fault, Param};
 use crate::format::{
-    BeyondFar, BiasMatrix, Compare, DepthOrder, Filter, LightVector, Outside, Shading,
+    BeyondFar, BiasMatrix, BlendOf, Compare, DepthOrder, Filter, LightVector, Outside, Shading,
 };
 use crate::light::LightKind;
 use crate::prepare::Prepared;
@@ -36,6 +36,11 @@ pub struct Technique {
     pub cascade_beyond: bool,
     /// A cascaded light's blend band (0: none).
     pub cascade_blend: f32,
+    /// What the band is a share of.
+    pub cascade_blend_of: BlendOf,
+    /// The lookup point moves by the texel-scaled normal offset and towards the light after
+    /// the face is chosen (`shadow.bias.normal_offset_texels`, `light_offset`).
+    pub world_offsets: bool,
     /// A light of several whose maps are one array's layers (2D, or a cube-map array's cubes):
     /// the layer (cube) its lit pass reads
     /// (its own, unless a self-test fault mixes them up: [`Fault::map_of_light`]).
@@ -84,8 +89,10 @@ pub struct CascadeSelect {
     pub by_distance: bool,
     /// Lit beyond the last split (a shadow distance).
     pub beyond: bool,
-    /// The blend band's share of a cascade's range (0: none).
+    /// The blend band's share of a cascade's range or far bound (0: none).
     pub blend: f32,
+    /// What the band is a share of.
+    pub blend_of: BlendOf,
 }
 
 impl CascadeSelect {
@@ -93,6 +100,15 @@ impl CascadeSelect {
     pub fn blend_literal(&self) -> Option<String> {
         // Nine decimals, as every float the lit shaders are written with.
         (self.blend > 0.0 && self.count > 1).then(|| format!("{:.9}", self.blend))
+    }
+
+    /// What the band's share multiplies, in the shaders' names: the cascade's range
+    /// `hi - lo` or its far bound `hi` (`umbra_case::light::Cascading::band`).
+    pub fn band_of(&self) -> &'static str {
+        match self.blend_of {
+            BlendOf::Range => "(hi - lo)",
+            BlendOf::Far => "hi",
+        }
     }
 }
 
@@ -197,6 +213,16 @@ impl Technique {
                 .map_or(0, |_| run.light.views.len()),
             cascade_beyond: run.light.cascading.as_ref().is_some_and(|c| c.lit_beyond),
             cascade_blend: run.light.cascading.as_ref().map_or(0.0, |c| c.blend),
+            cascade_blend_of: match fault {
+                Some(Fault::BandOfRange) => BlendOf::Range,
+                _ => run
+                    .light
+                    .cascading
+                    .as_ref()
+                    .map_or(BlendOf::Range, |c| c.blend_of),
+            },
+            world_offsets: (s.bias.normal_offset_texels != 0.0 || s.bias.light_offset != 0.0)
+                && fault != Some(Fault::WorldOffsetsDropped),
             layer: run
                 .of_lights
                 .filter(|o| o.array)
@@ -341,6 +367,7 @@ impl Technique {
             } else {
                 self.cascade_blend
             },
+            blend_of: self.cascade_blend_of,
         })
     }
 

@@ -212,6 +212,7 @@ impl Validator<'_> {
             self.lights(c);
         }
         self.shadow(&c.shadow);
+        self.light_bias(c);
         self.shading(&c.shading);
         self.twins(&c.expect.twins);
         if let Some(path) = &c.expect.error_falls_along {
@@ -660,6 +661,9 @@ impl Validator<'_> {
                 );
             }
         }
+        if c.blend_of == BlendOf::Far && (0.0..=0.5).contains(&c.blend) {
+            self.far_bands(&cp, c, camera);
+        }
         if !(0.0..=0.5).contains(&c.blend) {
             self.err(
                 format!("{cp}.blend"),
@@ -669,6 +673,29 @@ impl Validator<'_> {
                 ),
                 "use a value in [0, 0.5], e.g. 0.1",
             );
+        }
+    }
+
+    /// A band of the far bound must stay within half its cascade's range (as a band of the
+    /// range does), or the next cascade's fit would start before this one's.
+    fn far_bands(&mut self, cp: &str, c: &Cascades, camera: &Camera) {
+        let splits = crate::light::cascade_splits(c, camera.near, camera.far);
+        for k in 0..splits.len().saturating_sub(2) {
+            let (lo, hi) = (splits[k], splits[k + 1]);
+            if c.blend * hi > 0.5 * (hi - lo) {
+                self.err(
+                    format!("{cp}.blend"),
+                    format!(
+                        "with blend_of \"far\", cascade {k}'s band ({} of its far bound {hi}) is more than half its range [{lo}, {hi}]",
+                        c.blend
+                    ),
+                    format!(
+                        "use a blend of at most {:.4}, or blend_of \"range\"",
+                        0.5 * (hi - lo) / hi
+                    ),
+                );
+                return;
+            }
         }
     }
 
@@ -764,6 +791,31 @@ impl Validator<'_> {
             self.bias_distance("shadow.bias.n_dot_l.min", nl.min);
         }
         self.finite("shadow.bias.normal_offset", b.normal_offset);
+    }
+
+    /// `normal_offset_texels` and `light_offset` move the point by a directional light's
+    /// texel and towards its one direction: a spot or point light has neither.
+    fn light_bias(&mut self, c: &Case) {
+        let b = &c.shadow.bias;
+        for (field, x) in [
+            ("normal_offset_texels", b.normal_offset_texels),
+            ("light_offset", b.light_offset),
+        ] {
+            let path = format!("shadow.bias.{field}");
+            if !self.finite(&path, x) || x == 0.0 {
+                continue;
+            }
+            if c.all_lights()
+                .iter()
+                .any(|l| !matches!(l, Light::Directional(_)))
+            {
+                self.err(
+                    path,
+                    "only a directional light's map has one world size per texel and one direction to the light",
+                    "use normal_offset (world units) and constant (depth units) with spot and point lights",
+                );
+            }
+        }
     }
 
     fn mipmaps(&mut self, s: &Shadow, m: Mipmaps) {

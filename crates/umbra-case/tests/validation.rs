@@ -885,3 +885,41 @@ fn several_lights_fill_in_light_and_are_refused_with_the_fix_where_not_modelled(
         "unknown variant",
     );
 }
+
+/// Bevy's forms: a band of the far bound must stay within half each cascade's range, and
+/// the texel and world offsets belong to directional lights only.
+#[test]
+fn bevy_forms_validate_and_name_their_fields() {
+    // Uniform splits of [0.1, 100]: cascade 0 is [0.1, 33.4], cascade 1 [33.4, 66.7]. A band
+    // of 0.2 of each far bound (6.7, 13.3) is within half each range (16.7); one of 0.45 is
+    // for cascade 0 (15.0) but not for cascade 1 (30.0).
+    let ok = cascaded(
+        json!({ "count": 3, "split": "uniform", "blend": 0.2, "blend_of": "far", "fit": "stable" }),
+    );
+    let r = load_str(&ok.to_string(), Path::new("c.json"));
+    assert!(r.is_ok(), "{r:?}");
+    assert_error(
+        cascaded(json!({ "count": 3, "split": "uniform", "blend": 0.45, "blend_of": "far" })),
+        "light.directional.cascades.blend",
+        "more than half its range",
+    );
+    let with_offsets = |doc: Value| {
+        set(
+            doc,
+            "/shadow/bias",
+            json!({ "normal_offset_texels": 1.8, "light_offset": 0.02 }),
+        )
+    };
+    let r = load_str(
+        &with_offsets(cascaded(json!({ "count": 2 }))).to_string(),
+        Path::new("c.json"),
+    );
+    assert!(r.is_ok(), "{r:?}");
+    for field in ["normal_offset_texels", "light_offset"] {
+        assert_error(
+            with_offsets(base()),
+            &format!("shadow.bias.{field}"),
+            "only a directional light's map",
+        );
+    }
+}

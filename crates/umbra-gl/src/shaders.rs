@@ -242,6 +242,12 @@ impl Dialect for Glsl {
         s.push_str("uniform vec3 u_light_pos;\nuniform vec3 u_towards;\nuniform vec3 u_eye;\nuniform vec2 u_size;\n");
         s.push_str("uniform float u_constant;\nuniform float u_slope_scale;\nuniform float u_slope_max;\nuniform float u_normal_offset;\nuniform float u_ndl_scale;\nuniform float u_ndl_min;\n");
         s.push_str("uniform float u_output;\n"); // GLES 2: 0 colour, 1 visibility + face
+        if t.world_offsets {
+            let _ = writeln!(
+                s,
+                "uniform float u_face_offset[{faces}];\nuniform float u_light_offset;"
+            );
+        }
         let sampler = match (t.cube, self.layered, t.manual()) {
             // GLES 2's cascades: a 2D texture each (Glsl::layer_samplers).
             (false, true, _) if es2 => "sampler2D",
@@ -290,16 +296,20 @@ impl Dialect for Glsl {
     }
 
     /// An if-chain: GLSL ES 1.00 only promises constant indexing in fragments.
-    fn face_matrices(&self, faces: usize) -> String {
-        let mut s = String::from("mat4 light_m(int f) {\n");
-        for f in 0..faces {
-            let _ = writeln!(s, "  if (f == {f}) return u_light[{f}];");
+    fn face_matrices(&self, faces: usize, offsets: bool) -> String {
+        let mut s = String::new();
+        let mut accessor = |ty: &str, name: &str, array: &str| {
+            let _ = writeln!(s, "{ty} {name}(int f) {{");
+            for f in 0..faces {
+                let _ = writeln!(s, "  if (f == {f}) return {array}[{f}];");
+            }
+            let _ = writeln!(s, "  return {array}[0];\n}}");
+        };
+        accessor("mat4", "light_m", "u_light");
+        accessor("mat4", "tex_m", "u_tex");
+        if offsets {
+            accessor("float", "face_offset", "u_face_offset");
         }
-        s.push_str("  return u_light[0];\n}\nmat4 tex_m(int f) {\n");
-        for f in 0..faces {
-            let _ = writeln!(s, "  if (f == {f}) return u_tex[{f}];");
-        }
-        s.push_str("  return u_tex[0];\n}\n");
         s
     }
 
@@ -417,8 +427,16 @@ impl Dialect for Glsl {
         }
     }
 
-    fn layer_lookup_start(&self) -> &'static str {
-        "float lookup(vec3 p, vec3 n, int f) {\n"
+    fn layer_lookup_start(&self, extra: &str) -> String {
+        let mut s = String::from("float lookup(vec3 p, vec3 n, int f) {\n");
+        if !extra.is_empty() {
+            let _ = writeln!(s, "  p = p{extra};");
+        }
+        s
+    }
+
+    fn world_offsets(&self, f: &str) -> String {
+        format!(" + n * face_offset({f}) + u_towards * u_light_offset")
     }
 
     /// An if-chain on constant indices (GLSL ES's rule for uniform arrays in fragments).
@@ -445,8 +463,9 @@ impl Dialect for Glsl {
         if let Some(b) = c.blend_literal() {
             let _ = write!(
                 s,
-                "  float band = {b} * (hi - lo);\n  float t = (d - (hi - band)) / band;\n\
+                "  float band = {b} * {};\n  float t = (d - (hi - band)) / band;\n\
                    if (f < {} && t > 0.0) v = mix(v, lookup(p, n, f + 1), min(t, 1.0));\n",
+                c.band_of(),
                 n - 1
             );
         }

@@ -561,18 +561,13 @@ impl Lookup<'_> {
             return;
         }
         // Step 1 and 3 of every point ([`Lookup::probe`] on the only face).
-        let (m, order, conv, offset) = (
-            &self.matrices[0],
-            s.bias_matrix,
-            self.conv,
-            s.bias.normal_offset,
-        );
+        let (m, order, conv) = (&self.matrices[0], s.bias_matrix, self.conv);
         scratch.clear();
         scratch.extend((0..out.len()).map(|k| {
             m.coord(
                 conv,
                 order,
-                surfaces.position(k) + surfaces.normal(k) * offset,
+                self.moved(surfaces.position(k), surfaces.normal(k), 0),
             )
         }));
         // Step 6's bias: the slope and N·L terms are exactly 0 without their settings.
@@ -622,8 +617,7 @@ impl Lookup<'_> {
     /// points is judged as a whole.
     pub fn judged(&self, p: Vec3, n: Vec3, snap: [Vec3; 2]) -> (f32, Legal) {
         let vis = self.visibility(p, n);
-        let d = position_freedom(p, self.reach)
-            + self.shadow.bias.normal_offset.abs() * 16.0 * f32::EPSILON;
+        let d = position_freedom(p, self.reach) + self.offsets_reach() * 16.0 * f32::EPSILON;
         let arithmetic = [Vec3::X * d, Vec3::Y * d, Vec3::Z * d];
         let here = self.legal_at(p, n, &arithmetic);
         let [sx, sy] = snap;
@@ -679,6 +673,41 @@ impl Lookup<'_> {
         out
     }
 
+    /// Step 1 in the lit shaders' f32 order: the point face `face`'s lookup transforms, `p`
+    /// moved by the normal offset (before the face is chosen), then by the face's
+    /// texel-scaled normal offset and towards a directional light
+    /// (`shadow.bias.normal_offset_texels`, `light_offset`; `umbra_case::lit_shader`'s
+    /// `world_offsets`): ((p + n·o) + n·o_f) + l·L.
+    fn moved(&self, p: Vec3, n: Vec3, face: usize) -> Vec3 {
+        let b = &self.shadow.bias;
+        let q = p + n * b.normal_offset;
+        if b.normal_offset_texels == 0.0 && b.light_offset == 0.0 {
+            return q;
+        }
+        let towards = match self.light.kind {
+            LightKind::Directional { towards, .. } => towards,
+            LightKind::Spot { .. } | LightKind::Point { .. } => Vec3::ZERO,
+        };
+        let o_f = self
+            .light
+            .face_offset(face, b.normal_offset_texels, self.shadow.size);
+        q + n * o_f + towards * b.light_offset
+    }
+
+    /// The largest distance the offsets of [`Lookup::moved`] move a point, on any face: what
+    /// the shader's rounding (or fusing) of those steps is relative to.
+    fn offsets_reach(&self) -> f32 {
+        let b = &self.shadow.bias;
+        let faces = (0..self.light.views.len())
+            .map(|f| {
+                self.light
+                    .face_offset(f, b.normal_offset_texels, self.shadow.size)
+                    .abs()
+            })
+            .fold(0.0, f32::max);
+        b.normal_offset.abs() + faces + b.light_offset.abs()
+    }
+
     /// The face, the coordinate and the reference value before any clamp, at `p` (before the
     /// normal offset) with normal `n`.
     fn probe(&self, p: Vec3, n: Vec3) -> (usize, ShadowCoord, f32) {
@@ -690,7 +719,7 @@ impl Lookup<'_> {
     /// [`Lookup::probe`] in the projection of face `face`, whichever face the point is on.
     fn probe_on(&self, p: Vec3, n: Vec3, face: usize) -> (ShadowCoord, f32) {
         let s = self.shadow;
-        let p = p + n * s.bias.normal_offset;
+        let p = self.moved(p, n, face);
         let c = self.matrices[face].coord(self.conv, s.bias_matrix, p);
         let bias = s.bias.constant + self.slope_bias(p, n) + self.n_dot_l_bias(p, n);
         (c, c.depth - self.conv.toward_far() * bias)
@@ -931,7 +960,7 @@ impl Lookup<'_> {
             // d − (…) and the division (2.5 ulp in GLSL and WGSL): within 8u·(hi + band) of
             // depth, which widens t's range beside d's own reach.
             let hi = f64::from(c.splits[f + 1]);
-            let band = f64::from(c.blend) * (hi - f64::from(c.splits[f]));
+            let band = c.band_f64(f);
             let t_reach = reach + 8.0 * U * (hi.abs() + band);
             if let Some((t0, t1)) = c.blend_range(f, d, t_reach) {
                 let next = self.legal_on(p, n, moves, f + 1);
@@ -1126,7 +1155,7 @@ impl Lookup<'_> {
     /// matrix it goes through on `face` (texture matrix, or light matrix when the bias matrix
     /// comes after the divide): what the error bounds below are computed from.
     fn lookup_point(&self, p: Vec3, n: Vec3, face: usize) -> (Vec3, glam::DVec4, glam::DMat4) {
-        let q = p + n * self.shadow.bias.normal_offset;
+        let q = self.moved(p, n, face);
         (q, q.as_dvec3().extend(1.0), self.wide[face])
     }
 

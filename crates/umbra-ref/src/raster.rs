@@ -96,6 +96,29 @@ pub struct Tri {
     pub snap: f64,
 }
 
+/// A line between two vertices of a clipped polygon, in window coordinates (1/256 px, raster
+/// rows): where another clipper's fan may put a diagonal ([`Rasterizer::viewport_chords`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Chord {
+    /// One end.
+    pub from: [i64; 2],
+    /// The other end.
+    pub to: [i64; 2],
+}
+
+impl Chord {
+    /// Whether the centre of pixel (x, y) lies within `delta_px` of this chord's line,
+    /// measured as [`Tri::near_internal`] measures a diagonal (inside the convex polygon the
+    /// line is the chord).
+    pub fn near(&self, x: i32, y: i32, delta_px: f64) -> bool {
+        let (px, py) = (i64::from(x) * ONE + HALF, i64::from(y) * ONE + HALF);
+        let (dx, dy) = (self.to[0] - self.from[0], self.to[1] - self.from[1]);
+        let e = dx * (py - self.from[1]) - dy * (px - self.from[0]);
+        let tol = delta_px * ONE as f64 * (dx.abs() + dy.abs()) as f64;
+        (e as f64).abs() <= tol
+    }
+}
+
 /// How far another implementation's vertex window coordinates may lie from ours, per axis, in
 /// pixels: GL 4.6 §14.5 and Vulkan "Rasterization" require only 4 sub-pixel bits (and fix no
 /// rounding mode, so up to one 1/16 grid step), ours snap to 8 bits (1/512 by rounding), and
@@ -523,6 +546,34 @@ impl Rasterizer {
     /// across the source edge from corner j to corner j + 1 ([`EdgeKind::Open`] everywhere
     /// when no judge needs it); edges made by clipping are open, fan diagonals internal.
     pub fn setup(&self, clip: [Vec4; 3], source: u32, edges: [EdgeKind; 3], out: &mut Vec<Tri>) {
+        let Some((poly, tags)) = self.clip_polygon(clip, edges, GUARD) else {
+            return;
+        };
+        let n = poly.len();
+        for k in 1..n - 1 {
+            // Fan triangle (0, k, k+1); its edge opposite corner i runs between the other two.
+            let kinds = [
+                tags[k],
+                if k + 1 == n - 1 {
+                    tags[n - 1]
+                } else {
+                    EdgeKind::Internal
+                },
+                if k == 1 { tags[0] } else { EdgeKind::Internal },
+            ];
+            self.setup_clipped([poly[0], poly[k], poly[k + 1]], source, kinds, out);
+        }
+    }
+
+    /// The source triangle `clip` clipped by the depth planes (or, under depth clamp,
+    /// w ≥ [`CLAMP_W_MIN`]) and by x, y = ±`guard`·w, with what lies across each of the
+    /// polygon's edges (from vertex i to vertex i + 1); `None` when nothing is left.
+    fn clip_polygon(
+        &self,
+        clip: [Vec4; 3],
+        edges: [EdgeKind; 3],
+        guard: f32,
+    ) -> Option<(Vec<ClipVertex>, Vec<EdgeKind>)> {
         let zmin = self.conv.clip_z_min_over_w();
         // Plane (p, c): p · (x, y, z, w) + c ≥ 0. Depth clamp trades the near and far planes
         // for w ≥ CLAMP_W_MIN.
@@ -537,10 +588,10 @@ impl Rasterizer {
             &near_far
         };
         let planes = depth_planes.iter().copied().chain([
-            (Vec4::new(-1.0, 0.0, 0.0, GUARD), 0.0),
-            (Vec4::new(1.0, 0.0, 0.0, GUARD), 0.0),
-            (Vec4::new(0.0, -1.0, 0.0, GUARD), 0.0),
-            (Vec4::new(0.0, 1.0, 0.0, GUARD), 0.0),
+            (Vec4::new(-1.0, 0.0, 0.0, guard), 0.0),
+            (Vec4::new(1.0, 0.0, 0.0, guard), 0.0),
+            (Vec4::new(0.0, -1.0, 0.0, guard), 0.0),
+            (Vec4::new(0.0, 1.0, 0.0, guard), 0.0),
         ]);
         let mut poly: Vec<ClipVertex> = vec![
             ClipVertex {
@@ -557,7 +608,7 @@ impl Rasterizer {
             },
         ];
         if clip.iter().any(|c| !c.is_finite()) {
-            return;
+            return None;
         }
         // What lies across the polygon's edge from vertex i to vertex i + 1.
         let mut tags = edges.to_vec();
@@ -599,23 +650,48 @@ impl Rasterizer {
             poly = next;
             tags = next_tags;
             if poly.len() < 3 {
-                return;
+                return None;
             }
         }
-        let n = poly.len();
-        for k in 1..n - 1 {
-            // Fan triangle (0, k, k+1); its edge opposite corner i runs between the other two.
-            let kinds = [
-                tags[k],
-                if k + 1 == n - 1 {
-                    tags[n - 1]
-                } else {
-                    EdgeKind::Internal
-                },
-                if k == 1 { tags[0] } else { EdgeKind::Internal },
-            ];
-            self.setup_clipped([poly[0], poly[k], poly[k + 1]], source, kinds, out);
+        Some((poly, tags))
+    }
+
+    /// Under the edge-holes deviation: the chords (lines between two vertices that are not
+    /// neighbours) of the polygon a rasterizer *without* a guard band makes of the source
+    /// triangle `clip`, clipped at the viewport (x, y = ±w) and the depth planes. Such a
+    /// clipper fans the polygon from a vertex of its own choosing (Mesa's draw module:
+    /// `draw_pipe_clip.c`, from the polygon's first vertex after its plane order), so any
+    /// chord may be a fan diagonal; umbra's own clipper, with its guard band, puts its
+    /// diagonals elsewhere (soak-42-364: softpipe's holes on the viewport's anti-diagonal).
+    pub fn viewport_chords(&self, clip: [Vec4; 3]) -> Vec<Chord> {
+        let Some((poly, _)) = self.clip_polygon(clip, [EdgeKind::Open; 3], 1.0) else {
+            return Vec::new();
+        };
+        if poly.len() < 4 || poly.iter().any(|v| v.clip.w <= 0.0) {
+            return Vec::new();
         }
+        let at: Vec<[i64; 2]> = poly
+            .iter()
+            .map(|v| {
+                let c = v.clip;
+                let (wx, wy) = self
+                    .conv
+                    .window_xy(c.x / c.w, c.y / c.w, self.width, self.height);
+                [wx, wy].map(|w| (f64::from(w) * ONE as f64).round() as i64)
+            })
+            .collect();
+        let n = at.len();
+        let mut out = Vec::new();
+        for i in 0..n {
+            // Skip the neighbours and, for vertex 0, the chord to n − 1 (its neighbour too).
+            for j in i + 2..n - usize::from(i == 0) {
+                out.push(Chord {
+                    from: at[i],
+                    to: at[j],
+                });
+            }
+        }
+        out
     }
 
     fn setup_clipped(
@@ -936,5 +1012,33 @@ mod tests {
             assert!(t.z.iter().all(|z| (-1e-6..=1.0).contains(z)), "{:?}", t.z);
             assert_eq!(t.source, 7);
         }
+    }
+
+    /// A triangle over the whole viewport is, clipped at the viewport, its square: the chords
+    /// a clipper without a guard band may fan along are both diagonals, whichever corner it
+    /// starts from (soak-42-364: softpipe's holes on the anti-diagonal), and a centre off
+    /// them is on none.
+    #[test]
+    fn a_viewport_covering_triangle_has_both_diagonals_as_chords() {
+        let r = Rasterizer {
+            conv: Convention::GL,
+            width: 8,
+            height: 8,
+            cull: Cull::None,
+            depth_clamp: false,
+        };
+        let clip = [[-5.0, -1.0], [5.0, -1.0], [0.0, 9.0]].map(|p| Vec4::new(p[0], p[1], 0.0, 1.0));
+        let chords = r.viewport_chords(clip);
+        assert_eq!(chords.len(), 2, "{chords:?}");
+        let on = |x: i32, y: i32| chords.iter().filter(|c| c.near(x, y, 1.0 / 64.0)).count();
+        for k in 0..8 {
+            assert_eq!(on(k, k), 1, "main diagonal at {k}");
+            assert_eq!(on(k, 7 - k), 1, "anti-diagonal at {k}");
+        }
+        assert_eq!(on(0, 3), 0);
+        // Inside the viewport nothing is clipped: a triangle has no chord.
+        let small =
+            [[-0.5, -0.5], [0.5, -0.5], [0.0, 0.5]].map(|p| Vec4::new(p[0], p[1], 0.0, 1.0));
+        assert!(r.viewport_chords(small).is_empty());
     }
 }

@@ -16,7 +16,7 @@ use umbra_case::format::{DepthFormat, Shadow};
 use umbra_case::{Convention, Geometry, Profile};
 
 use crate::bands::for_each_band;
-use crate::raster::{Coverage, EdgeKind, Rasterizer, Tri};
+use crate::raster::{Chord, Coverage, EdgeKind, Rasterizer, Tri};
 
 pub use crate::raster::SNAP_PX;
 
@@ -271,6 +271,16 @@ pub fn render_face(
     }
     let freedom = Freedom::new(conv, shadow, profile);
     let holes = profile.deviations.has(umbra_case::Deviation::EdgeHoles);
+    let chords = if holes {
+        hole_chords(&raster, light, geo)
+    } else {
+        Vec::new()
+    };
+    let on_chord = |source: u32, x: i32, y: i32| {
+        chords
+            .get(source as usize)
+            .is_some_and(|c| c.iter().any(|c| c.near(x, y, HOLE_PX)))
+    };
     let forward = conv.toward_far() > 0.0;
     let clear = f64::from(conv.clear_depth());
     // Per texel: the nearest possible value, the farthest possible over the certain
@@ -312,7 +322,10 @@ pub fn render_face(
                     // clip fan's diagonal, only may be covered.
                     let coverage = match coverage {
                         Coverage::Pair(_) if holes => Coverage::Maybe,
-                        Coverage::Certain if holes && t.near_internal(e, HOLE_PX) => {
+                        Coverage::Certain
+                            if holes
+                                && (t.near_internal(e, HOLE_PX) || on_chord(t.source, x, y)) =>
+                        {
                             Coverage::Maybe
                         }
                         c => c,
@@ -372,6 +385,16 @@ pub fn render_face(
         hi,
         maybe,
     }
+}
+
+/// Under [`umbra_case::Deviation::EdgeHoles`], per source triangle of `geo` seen through
+/// `light`: where a clipper without a guard band may put its fan's diagonals
+/// ([`Rasterizer::viewport_chords`]), besides the ones umbra's own clipper puts there.
+fn hole_chords(raster: &Rasterizer, light: glam::Mat4, geo: &Geometry) -> Vec<Vec<Chord>> {
+    geo.triangles
+        .iter()
+        .map(|t| raster.viewport_chords(t.map(|k| light * geo.positions[k as usize].extend(1.0))))
+        .collect()
 }
 
 /// The shadow pass's stored values: every triangle of `tris` through the polygon offset, the

@@ -473,7 +473,7 @@ fn uniform_buffer(
             );
         }
     }
-    for k in 0..8 {
+    for k in 0..10 {
         data.extend_from_slice(&vectors.get(k).copied().unwrap_or([0.0; 4]));
     }
     let buf = d.create_buffer(&wgpu::BufferDescriptor {

@@ -25,10 +25,10 @@ use umbra_case::technique::{CompareOp, Coordinate, CoordinateStep};
 /// The uniform block shared by both passes (std140-compatible layout, 16-byte vectors).
 /// `view_row` and `split` serve cascades: the view depth d = view_row · (p, 1) and the split
 /// depths s_0 … s_7 in two vectors.
-pub const UNIFORMS: &str = "struct U {\n  view_proj: mat4x4<f32>,\n  light: array<mat4x4<f32>, 6>,\n  tex: array<mat4x4<f32>, 6>,\n  light_pos: vec4<f32>,\n  towards: vec4<f32>,\n  eye: vec4<f32>,\n  size: vec4<f32>,\n  bias: vec4<f32>,\n  view_row: vec4<f32>,\n  split: array<vec4<f32>, 2>,\n}\n@group(0) @binding(0) var<uniform> u: U;\n";
+pub const UNIFORMS: &str = "struct U {\n  view_proj: mat4x4<f32>,\n  light: array<mat4x4<f32>, 6>,\n  tex: array<mat4x4<f32>, 6>,\n  light_pos: vec4<f32>,\n  towards: vec4<f32>,\n  eye: vec4<f32>,\n  size: vec4<f32>,\n  bias: vec4<f32>,\n  view_row: vec4<f32>,\n  split: array<vec4<f32>, 2>,\n  offsets: array<vec4<f32>, 2>,\n}\n@group(0) @binding(0) var<uniform> u: U;\n";
 
-/// Size of [`UNIFORMS`] in bytes: 13 matrices and 8 vectors.
-pub const UNIFORM_SIZE: u64 = 13 * 64 + 8 * 16;
+/// Size of [`UNIFORMS`] in bytes: 13 matrices and 10 vectors.
+pub const UNIFORM_SIZE: u64 = 13 * 64 + 10 * 16;
 
 /// The shadow pass: position only; a constant colour for the `with_color` variant.
 pub fn shadow(with_color: bool) -> String {
@@ -122,7 +122,7 @@ impl Dialect for Wgsl {
     }
 
     /// WGSL indexes `u.light` and `u.tex` with `f` directly.
-    fn face_matrices(&self, _faces: usize) -> String {
+    fn face_matrices(&self, _faces: usize, _offsets: bool) -> String {
         String::new()
     }
 
@@ -214,8 +214,22 @@ impl Dialect for Wgsl {
         }
     }
 
-    fn layer_lookup_start(&self) -> &'static str {
-        "fn lookup(p: vec3<f32>, n: vec3<f32>, f: i32) -> f32 {\n"
+    /// WGSL's parameters are immutable: with `extra`, the parameter is `p_at` and `p` the
+    /// moved point.
+    fn layer_lookup_start(&self, extra: &str) -> String {
+        if extra.is_empty() {
+            "fn lookup(p: vec3<f32>, n: vec3<f32>, f: i32) -> f32 {\n".to_string()
+        } else {
+            format!(
+                "fn lookup(p_at: vec3<f32>, n: vec3<f32>, f: i32) -> f32 {{\n  let p = p_at{extra};\n"
+            )
+        }
+    }
+
+    /// The faces' offsets are `u.offsets` (four to a vector), the distance towards the light
+    /// `u.towards.w`.
+    fn world_offsets(&self, f: &str) -> String {
+        format!(" + n * u.offsets[{f} / 4][{f} % 4] + u.towards.xyz * u.towards.w")
     }
 
     fn cascaded_visibility(&self, offset: &str, c: &CascadeSelect) -> String {
@@ -250,8 +264,9 @@ impl Dialect for Wgsl {
         if let Some(b) = c.blend_literal() {
             let _ = write!(
                 s,
-                "  let band = {b} * (hi - lo);\n  let t = (d - (hi - band)) / band;\n\
+                "  let band = {b} * {};\n  let t = (d - (hi - band)) / band;\n\
                    if (f < {} && t > 0.0) {{ v = mix(v, lookup(p, n, f + 1), min(t, 1.0)); }}\n",
+                c.band_of(),
                 n - 1
             );
         }

@@ -204,6 +204,15 @@ impl Renderer {
             gl.uniform_1_f32(loc("u_ndl_scale").as_ref(), ndl_scale);
             gl.uniform_1_f32(loc("u_ndl_min").as_ref(), ndl_min);
             gl.uniform_1_f32(loc("u_normal_offset").as_ref(), bias.normal_offset);
+            // Present only with normal_offset_texels or light_offset (Technique::world_offsets).
+            let offsets = run.light.face_offsets(bias.normal_offset_texels, p.s.size);
+            gl.uniform_1_f32_slice(
+                loc("u_face_offset[0]")
+                    .or_else(|| loc("u_face_offset"))
+                    .as_ref(),
+                &offsets,
+            );
+            gl.uniform_1_f32(loc("u_light_offset").as_ref(), bias.light_offset);
             if let Some(c) = &run.light.cascading {
                 let [row, s0, s1] = c.uniforms();
                 gl.uniform_4_f32_slice(loc("u_view_row").as_ref(), &row);

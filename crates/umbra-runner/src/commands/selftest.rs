@@ -108,6 +108,12 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
         }
         Fault::BlendIgnored => matches!(&c.light, Light::Directional(d)
             if d.cascades.as_ref().is_some_and(|k| k.count > 1 && k.blend > 0.0)),
+        Fault::BandOfRange => matches!(&c.light, Light::Directional(d)
+            if d.cascades.as_ref().is_some_and(|k| k.count > 1 && k.blend > 0.0
+                && k.blend_of == umbra_case::format::BlendOf::Far)),
+        Fault::WorldOffsetsDropped => {
+            s.bias.normal_offset_texels != 0.0 || s.bias.light_offset != 0.0
+        }
         Fault::LightColourIgnored => c.light.radiance() != [1.0; 3],
         Fault::ClearIgnored => c.camera.clear != [0.0; 3],
         Fault::LitCullFlipped => !c.camera.cull.is_none(),
@@ -159,7 +165,8 @@ pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
         Fault::ClampIgnored => &["pancake", "near-crossing-clamped"],
         Fault::ClampForced => &["pancake", "near-crossing"],
         Fault::LayerShift | Fault::CascadeByDistance => &["street", "on-split", "blend"],
-        Fault::BlendIgnored => &["blend"],
+        Fault::BlendIgnored => &["blend", "bevy-forms"],
+        Fault::BandOfRange | Fault::WorldOffsetsDropped => &["bevy-forms"],
         Fault::LightColourIgnored | Fault::ClearIgnored => &["tinted"],
         Fault::LitCullFlipped => &["lit-cull"],
         Fault::DepthFuncSwapped => &["depth-func"],
@@ -978,6 +985,8 @@ mod tests {
             Fault::LayerShift,
             Fault::CascadeByDistance,
             Fault::BlendIgnored,
+            Fault::BandOfRange,
+            Fault::WorldOffsetsDropped,
             Fault::LightColourIgnored,
             Fault::ClearIgnored,
             Fault::LitCullFlipped,

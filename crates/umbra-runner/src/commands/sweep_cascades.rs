@@ -64,6 +64,8 @@ pub fn matrix(case: &umbra_case::Case) -> Option<Vec<Technique>> {
                 at: None,
                 distance,
                 blend: 0.0,
+                blend_of: Default::default(),
+                fit: Default::default(),
             });
             out.push(Technique {
                 size: case.shadow.size[0],

@@ -223,6 +223,13 @@ impl Gpu {
             .cascading
             .as_ref()
             .map_or([[0.0; 4]; 3], |c| c.uniforms());
+        let mut offsets = [0.0f32; 8];
+        for (o, f) in offsets
+            .iter_mut()
+            .zip(run.light.face_offsets(b.normal_offset_texels, p.s.size))
+        {
+            *o = f;
+        }
         let uniforms = uniform_buffer(
             &self.device,
             &self.queue,
@@ -231,13 +238,15 @@ impl Gpu {
             &tex,
             &[
                 [pos.x, pos.y, pos.z, 0.0],
-                [towards.x, towards.y, towards.z, 0.0],
+                [towards.x, towards.y, towards.z, b.light_offset],
                 [eye.x, eye.y, eye.z, 0.0],
                 [mw as f32, mh as f32, ndl_scale, ndl_min],
                 [b.constant, slope_scale, slope_max, b.normal_offset],
                 cascade[0],
                 cascade[1],
                 cascade[2],
+                [offsets[0], offsets[1], offsets[2], offsets[3]],
+                [offsets[4], offsets[5], offsets[6], offsets[7]],
             ],
         );
         // The mip faults: level 0 alone, or the levels from 1 on.
