@@ -114,9 +114,15 @@ impl Chord {
         let (px, py) = (i64::from(x) * ONE + HALF, i64::from(y) * ONE + HALF);
         let (dx, dy) = (self.to[0] - self.from[0], self.to[1] - self.from[1]);
         let e = dx * (py - self.from[1]) - dy * (px - self.from[0]);
-        let tol = delta_px * ONE as f64 * (dx.abs() + dy.abs()) as f64;
-        (e as f64).abs() <= tol
+        near_line(e, dx, dy, delta_px)
     }
+}
+
+/// Whether a centre with edge value `e` (of the line along (dx, dy), in 1/256 px) lies within
+/// `delta_px` of the line: E = length · distance and length ≤ |dx| + |dy|, so the test is
+/// generous by at most √2.
+fn near_line(e: i64, dx: i64, dy: i64, delta_px: f64) -> bool {
+    (e as f64).abs() <= delta_px * ONE as f64 * (dx.abs() + dy.abs()) as f64
 }
 
 /// How far another implementation's vertex window coordinates may lie from ours, per axis, in
@@ -465,8 +471,7 @@ impl Tri {
         (0..3).any(|i| {
             let (a, b) = ((i + 1) % 3, (i + 2) % 3);
             let (dx, dy) = (self.x[b] - self.x[a], self.y[b] - self.y[a]);
-            let tol = delta_px * ONE as f64 * (dx.abs() + dy.abs()) as f64;
-            self.edges[i] == EdgeKind::Internal && (e[i] as f64).abs() <= tol
+            self.edges[i] == EdgeKind::Internal && near_line(e[i], dx, dy, delta_px)
         })
     }
 
@@ -670,16 +675,7 @@ impl Rasterizer {
         if poly.len() < 4 || poly.iter().any(|v| v.clip.w <= 0.0) {
             return Vec::new();
         }
-        let at: Vec<[i64; 2]> = poly
-            .iter()
-            .map(|v| {
-                let c = v.clip;
-                let (wx, wy) = self
-                    .conv
-                    .window_xy(c.x / c.w, c.y / c.w, self.width, self.height);
-                [wx, wy].map(|w| (f64::from(w) * ONE as f64).round() as i64)
-            })
-            .collect();
+        let at: Vec<[i64; 2]> = poly.iter().map(|v| self.window_fixed(v.clip)).collect();
         let n = at.len();
         let mut out = Vec::new();
         for i in 0..n {
@@ -692,6 +688,14 @@ impl Rasterizer {
             }
         }
         out
+    }
+
+    /// A clip-space vertex (w > 0) in window coordinates, snapped to 1/256 px.
+    fn window_fixed(&self, c: Vec4) -> [i64; 2] {
+        let (wx, wy) = self
+            .conv
+            .window_xy(c.x / c.w, c.y / c.w, self.width, self.height);
+        [wx, wy].map(|w| (f64::from(w) * ONE as f64).round() as i64)
     }
 
     fn setup_clipped(
@@ -710,11 +714,7 @@ impl Rasterizer {
             if c.w <= 0.0 {
                 return;
             }
-            let (wx, wy) = self
-                .conv
-                .window_xy(c.x / c.w, c.y / c.w, self.width, self.height);
-            x[i] = (f64::from(wx) * ONE as f64).round() as i64;
-            y[i] = (f64::from(wy) * ONE as f64).round() as i64;
+            [x[i], y[i]] = self.window_fixed(c);
             z[i] = self.conv.window_depth(c.z / c.w);
             inv_w[i] = 1.0 / f64::from(c.w);
         }
