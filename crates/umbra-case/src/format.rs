@@ -744,6 +744,19 @@ pub enum Filter {
     Linear,
     /// `{ "pcf": N }`: N x N NEAREST compares averaged in the shader, N in 2..=15.
     Pcf(u32),
+    /// `"castano13"`: Castano's 13-tap filter of The Witness (Bevy's default directional and
+    /// spot filter, `ShadowFilteringMethod::Gaussian`): nine LINEAR compares placed and
+    /// weighted so that their sum, over 144, is a separable 6x6-texel tent (weights
+    /// 4 − 3s, 7, 1 + 3s per axis). 2D maps only (Bevy filters cube maps otherwise).
+    Castano13,
+}
+
+impl Filter {
+    /// Whether the sampler filters LINEAR where it compares (LINEAR itself, and each of
+    /// Castano's nine taps).
+    pub fn sampler_linear(self) -> bool {
+        matches!(self, Filter::Linear | Filter::Castano13)
+    }
 }
 
 /// Who does the depth comparison.

@@ -144,7 +144,7 @@ impl Gen {
         let s = &case.shadow;
         if !point
             && s.compare == Compare::Hardware
-            && !matches!(s.filter, Filter::Pcf(_))
+            && !matches!(s.filter, Filter::Pcf(_) | Filter::Castano13)
             && s.size.iter().all(|n| n.is_power_of_two())
             && self.rng.chance(0.3)
         {
@@ -233,8 +233,11 @@ impl Gen {
         let mut lights = vec![case.light.clone()];
         for _ in 0..self.rng.int(1, 2) {
             let mut light = self.light();
-            // A point light's cube map needs square faces and has no mip levels.
-            while matches!(light, Light::Point(_)) && (!square || case.shadow.mipmaps.is_some()) {
+            // A point light's cube map needs square faces, has no mip levels and no Castano
+            // filter.
+            let cube_fits =
+                square && case.shadow.mipmaps.is_none() && case.shadow.filter != Filter::Castano13;
+            while matches!(light, Light::Point(_)) && !cube_fits {
                 light = self.light();
             }
             let color = [
@@ -605,6 +608,8 @@ impl Gen {
         let filter = match self.rng.int(0, 9) {
             0..=3 => Filter::Nearest,
             4..=6 => Filter::Linear,
+            // Bevy's default on its directional and spot maps.
+            7 if !point => Filter::Castano13,
             _ => Filter::Pcf(self.rng.int(2, 5)),
         };
         Shadow {
@@ -1025,14 +1030,14 @@ mod tests {
                 }
             }
         }
-        // 4 formats, 3 filters, 2 compares, 3 culls, 2 orders, 2 attachments, 4 outside,
+        // 4 formats, 4 filters, 2 compares, 3 culls, 2 orders, 2 attachments, 4 outside,
         // 2 guards, 2 depth orders, 2 depth clamps, 9 bias entries, 4 split schemes, a
         // cascade blend, distance, band of the far bound and stable fit, 3 lights, 2 shadings, a tinted light, one above 1, a
         // clear colour, 3 lit-pass culls, strict and inclusive depth functions, 2 colour
         // targets, 4 objects, sweep, offset.
         assert_eq!(
             seen.len(),
-            4 + 3 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 9 + 4 + 4 + 3 + 2 + 3 + 3 + 2 + 2 + 4 + 2,
+            4 + 4 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 9 + 4 + 4 + 3 + 2 + 3 + 3 + 2 + 2 + 4 + 2,
             "{seen:?}"
         );
     }

@@ -62,6 +62,14 @@ pub trait Dialect {
     /// `tap(f, i, j, r)`: one compare of reference `r` at texel (i, j) of face f, by the
     /// shader with `op` (`manual`) or by the sampler.
     fn tap(&self, manual: bool, cube: bool, op: CompareOp) -> String;
+    /// `compare_at(f, uv, r)`: one bilinear compare of reference `r` at `uv` in face f, by
+    /// the sampler (a LINEAR compare sampler) or, `manual`, by the shader's four `tap`s with
+    /// bilinear weights ([`Taps::Castano13`]'s taps).
+    fn compare_at(&self, manual: bool) -> String;
+    /// Castano's 13-tap filter at `c.xy`, written as Bevy's
+    /// `sample_shadow_map_castano_thirteen` writes it (same operations, same order), each
+    /// of its nine taps a `compare_at`; returns the sum over 144.
+    fn castano(&self) -> &'static str;
     /// A uniform's name (with its component where the language packs it in a vector).
     fn uniform(&self, u: Uniform) -> &'static str;
     /// Opens `visibility(p, n)` and moves `p` by `offset` along `n`.
@@ -151,6 +159,9 @@ pub fn lit_fragment(d: &impl Dialect, t: &Technique) -> String {
         s += &d.fetch(t.cube, t.texel_wrap(), t.reads_wrong_component());
     }
     s += &d.tap(t.manual(), t.cube, t.compare_op());
+    if t.taps() == Taps::Castano13 {
+        s += &d.compare_at(t.manual());
+    }
     lookup(&mut s, d, t);
     shade(&mut s, d, t);
     s += d.main_start();
@@ -278,6 +289,7 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
             *s += "  return (1.0 - a.x) * (1.0 - a.y) * tap(f, i0.x, i0.y, r) + a.x * (1.0 - a.y) * tap(f, i0.x + 1.0, i0.y, r)\n\
                     + (1.0 - a.x) * a.y * tap(f, i0.x, i0.y + 1.0, r) + a.x * a.y * tap(f, i0.x + 1.0, i0.y + 1.0, r);\n";
         }
+        Taps::Castano13 => *s += d.castano(),
         Taps::Pcf {
             n,
             off_centre,

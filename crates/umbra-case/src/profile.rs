@@ -276,8 +276,8 @@ impl Profile {
     /// the packed path (umbra's own shader), and the bilinear reading only where GL's LINEAR
     /// rule would apply (in a cube map, only with the seams the profile judges by).
     pub fn effective_for(self, case: &crate::format::Case) -> Profile {
-        use crate::format::{Compare, Filter, Light};
-        let hardware_linear = case.shadow.filter == Filter::Linear
+        use crate::format::{Compare, Light};
+        let hardware_linear = case.shadow.filter.sampler_linear()
             && case.shadow.compare == Compare::Hardware
             && !self.packed_depth;
         let cube = matches!(case.light, Light::Point(_));

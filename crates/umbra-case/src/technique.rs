@@ -187,6 +187,9 @@ pub enum Taps {
         /// (the threshold sweep's filter-weights error; 0 = exact).
         weight_gain_ppm: i32,
     },
+    /// Castano's 13-tap filter: nine bilinear compares (the sampler's, or the shader's
+    /// four taps where it compares itself) weighted into a 6 × 6-texel tent.
+    Castano13,
     /// N × N nearest taps around c, averaged.
     Pcf {
         /// N.
@@ -409,7 +412,8 @@ impl Technique {
     /// form needs the coordinate untouched, so any fault samples c instead; an array has
     /// no projective compare (GLSL's textureProj takes no layer).
     pub fn taps(&self) -> Taps {
-        let sampler_filters = !self.manual() && !matches!(self.filter, Filter::Pcf(_));
+        let sampler_filters =
+            !self.manual() && !matches!(self.filter, Filter::Pcf(_) | Filter::Castano13);
         match self.filter {
             _ if sampler_filters && self.cube => Taps::HardwareCube,
             _ if sampler_filters && self.mipmapped => Taps::HardwareMipmapped,
@@ -432,6 +436,7 @@ impl Technique {
                     _ => 0,
                 },
             },
+            Filter::Castano13 => Taps::Castano13,
             Filter::Pcf(n) => Taps::Pcf {
                 n,
                 off_centre: self.is(Fault::PcfOffCentre),

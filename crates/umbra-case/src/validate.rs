@@ -816,6 +816,15 @@ impl Validator<'_> {
                 );
             }
         }
+        if c.shadow.filter == Filter::Castano13
+            && c.all_lights().iter().any(|l| matches!(l, Light::Point(_)))
+        {
+            self.err(
+                "shadow.filter",
+                "castano13 places its taps on a 2D map's texel grid; a point light's map is a cube",
+                "use \"linear\" or { \"pcf\": 3 } with point lights (Bevy filters cube maps another way)",
+            );
+        }
     }
 
     fn mipmaps(&mut self, s: &Shadow, m: Mipmaps) {
@@ -844,7 +853,7 @@ impl Validator<'_> {
                 "set \"compare\": \"hardware\" or remove shadow.mipmaps",
             );
         }
-        if matches!(s.filter, Filter::Pcf(_)) {
+        if matches!(s.filter, Filter::Pcf(_) | Filter::Castano13) {
             self.err(
                 "shadow.filter",
                 "a mipmapped map is filtered by the sampler: `nearest` or `linear` within a level",

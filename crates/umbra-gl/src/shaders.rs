@@ -403,6 +403,41 @@ impl Dialect for Glsl {
         }
     }
 
+    fn compare_at(&self, manual: bool) -> String {
+        let head = "float compare_at(int f, vec2 uv, float r)";
+        match manual {
+            true => format!(
+                "{head} {{\n  vec2 x = uv * u_size - 0.5;\n  vec2 i0 = floor(x);\n  vec2 a = x - i0;\n  \
+                   return (1.0 - a.x) * (1.0 - a.y) * tap(f, i0.x, i0.y, r) + a.x * (1.0 - a.y) * tap(f, i0.x + 1.0, i0.y, r)\n  \
+                   + (1.0 - a.x) * a.y * tap(f, i0.x, i0.y + 1.0, r) + a.x * a.y * tap(f, i0.x + 1.0, i0.y + 1.0, r);\n}}\n"
+            ),
+            false if self.layered => {
+                format!("{head} {{ return texture(u_map, vec4(uv, float(f + LAYER), r)); }}\n")
+            }
+            false => format!("{head} {{ return texture(u_map, vec3(uv, r)); }}\n"),
+        }
+    }
+
+    fn castano(&self) -> &'static str {
+        "  vec2 uv = c.xy * u_size;\n  vec2 base = floor(uv + 0.5);\n  vec2 st = uv + 0.5 - base;\n  \
+           vec2 inv = 1.0 / u_size;\n  base = (base - 0.5) * inv;\n  \
+           vec3 uw = vec3(4.0 - 3.0 * st.x, 7.0, 1.0 + 3.0 * st.x);\n  \
+           vec3 vw = vec3(4.0 - 3.0 * st.y, 7.0, 1.0 + 3.0 * st.y);\n  \
+           vec3 uo = vec3((3.0 - 2.0 * st.x) / uw.x - 2.0, (3.0 + st.x) / uw.y, st.x / uw.z + 2.0);\n  \
+           vec3 vo = vec3((3.0 - 2.0 * st.y) / vw.x - 2.0, (3.0 + st.y) / vw.y, st.y / vw.z + 2.0);\n  \
+           float sum = 0.0;\n  \
+           sum += uw.x * vw.x * compare_at(f, base + vec2(uo.x, vo.x) * inv, r);\n  \
+           sum += uw.y * vw.x * compare_at(f, base + vec2(uo.y, vo.x) * inv, r);\n  \
+           sum += uw.z * vw.x * compare_at(f, base + vec2(uo.z, vo.x) * inv, r);\n  \
+           sum += uw.x * vw.y * compare_at(f, base + vec2(uo.x, vo.y) * inv, r);\n  \
+           sum += uw.y * vw.y * compare_at(f, base + vec2(uo.y, vo.y) * inv, r);\n  \
+           sum += uw.z * vw.y * compare_at(f, base + vec2(uo.z, vo.y) * inv, r);\n  \
+           sum += uw.x * vw.z * compare_at(f, base + vec2(uo.x, vo.z) * inv, r);\n  \
+           sum += uw.y * vw.z * compare_at(f, base + vec2(uo.y, vo.z) * inv, r);\n  \
+           sum += uw.z * vw.z * compare_at(f, base + vec2(uo.z, vo.z) * inv, r);\n  \
+           return sum * (1.0 / 144.0);\n"
+    }
+
     fn uniform(&self, u: Uniform) -> &'static str {
         match u {
             Uniform::MapWidth => "u_size.x",

@@ -36,6 +36,7 @@
 //! itself may move by [`position_freedom`], over which the interval is the hull.
 
 use glam::{DVec2, Vec3};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use umbra_case::format::{
     BeyondFar, BiasMatrix, Compare, Filter, LightVector, MipFilter, Outside, Shadow,
 };
@@ -54,14 +55,23 @@ thread_local! {
 /// Runs `f` with this thread's lookups tracing every step, and returns its result and the
 /// trace (for `umbra render --explain`).
 pub fn explaining<T>(f: impl FnOnce() -> T) -> (T, String) {
+    EXPLAINING.fetch_add(1, Ordering::Relaxed);
     TRACE.with(|t| *t.borrow_mut() = Some(String::new()));
     let out = f();
     let trace = TRACE.with(|t| t.borrow_mut().take()).unwrap_or_default();
+    EXPLAINING.fetch_sub(1, Ordering::Relaxed);
     (out, trace)
 }
 
+/// How many threads are explaining: while none is, [`note`] returns at once instead of
+/// looking up its thread's trace (a tenth of a judged render's time in its texel loops).
+static EXPLAINING: AtomicUsize = AtomicUsize::new(0);
+
 /// Appends a line to the trace when this thread is explaining.
 fn note(line: impl FnOnce() -> String) {
+    if EXPLAINING.load(Ordering::Relaxed) == 0 {
+        return;
+    }
     TRACE.with(|t| {
         if let Some(s) = t.borrow_mut().as_mut() {
             s.push_str(&line());
@@ -167,7 +177,7 @@ pub fn quantum(shadow: &Shadow, light: &LightSetup) -> f32 {
     }
     match shadow.filter {
         Filter::Nearest => 1.0,
-        Filter::Linear => 0.0,
+        Filter::Linear | Filter::Castano13 => 0.0,
         Filter::Pcf(n) => 1.0 / (n * n) as f32,
     }
 }
@@ -799,17 +809,25 @@ impl Lookup<'_> {
                 0.0
             }
         };
+        let bilinear = |u: f32, v: f32| -> f32 {
+            let (x, y) = (u * fw - 0.5, v * fh - 0.5);
+            let (i0, j0) = (floor_f32(x), floor_f32(y));
+            let (a, b) = (x - i0, y - j0);
+            let (i0, j0) = (i0 as i64, j0 as i64);
+            (1.0 - a) * (1.0 - b) * tap(i0, j0)
+                + a * (1.0 - b) * tap(i0 + 1, j0)
+                + (1.0 - a) * b * tap(i0, j0 + 1)
+                + a * b * tap(i0 + 1, j0 + 1)
+        };
         match s.filter {
             Filter::Nearest => tap(floor_i64(u * fw), floor_i64(v * fh)),
-            Filter::Linear => {
-                let (x, y) = (u * fw - 0.5, v * fh - 0.5);
-                let (i0, j0) = (floor_f32(x), floor_f32(y));
-                let (a, b) = (x - i0, y - j0);
-                let (i0, j0) = (i0 as i64, j0 as i64);
-                (1.0 - a) * (1.0 - b) * tap(i0, j0)
-                    + a * (1.0 - b) * tap(i0 + 1, j0)
-                    + (1.0 - a) * b * tap(i0, j0 + 1)
-                    + a * b * tap(i0 + 1, j0 + 1)
+            Filter::Linear => bilinear(u, v),
+            Filter::Castano13 => {
+                let mut sum = 0.0;
+                for ((wu, wv), (ou, ov)) in castano_taps([u, v], [fw, fh]) {
+                    sum += wu * wv * bilinear(ou, ov);
+                }
+                sum * (1.0 / 144.0)
             }
             Filter::Pcf(k) => {
                 let half = (k as f32 - 1.0) * 0.5;
@@ -1095,37 +1113,21 @@ impl Lookup<'_> {
                 let (t, differ) = taps(u * fw, v * fh, (ex + sampler, ey + sampler));
                 legal(t.min(), t.max(), t.flags() | texel_flag(differ))
             }
-            Filter::Linear if self.hardware() => self.linear_hardware(&st, r, (ex, ey)),
+            Filter::Linear if self.hardware() => {
+                let x = (u * fw - 0.5, v * fh - 0.5);
+                self.linear_hardware(x, (ex, ey), |i, j| self.linear_tap(st.face, i, j, r))
+            }
             Filter::Linear => {
                 // The shader's own bilinear weights: exact but for the coordinate's
                 // arithmetic, which may also pick the next footprint.
-                let (x, y) = (
+                let x = (
                     f64::from(st.c.u * w as f32 - 0.5),
                     f64::from(st.c.v * h as f32 - 0.5),
                 );
-                let mut out: Option<Legal> = None;
-                let mut footprints = 0;
-                for i0 in span(x, ex) {
-                    for j0 in span(y, ey) {
-                        footprints += 1;
-                        let a = weight_range(x, ex, i0);
-                        let b = weight_range(y, ey, j0);
-                        let t = [
-                            self.possible(st.face, i0, j0, r, addressing),
-                            self.possible(st.face, i0 + 1, j0, r, addressing),
-                            self.possible(st.face, i0, j0 + 1, r, addressing),
-                            self.possible(st.face, i0 + 1, j0 + 1, r, addressing),
-                        ];
-                        let (lo, hi) = bilinear_range(&t, a, b);
-                        let flags = t.iter().fold(0, |f, t| f | t.flags());
-                        let l = legal(lo - 8.0 * U, hi + 8.0 * U, flags);
-                        out = Some(out.map_or(l, |o| o.hull(l)));
-                    }
-                }
-                let mut l = out.unwrap_or(Legal::LIT);
-                l.flags |= texel_flag(footprints > 1);
-                l
+                let tap = |i, j| self.possible(st.face, i, j, r, addressing);
+                Self::linear_shader(x, (ex, ey), tap)
             }
+            Filter::Castano13 => self.castano(&st, r, (ex, ey), addressing),
             Filter::Pcf(k) => {
                 let half = (k as f32 - 1.0) * 0.5;
                 let (mut lo, mut hi, mut flags) = (0.0, 0.0, 0);
@@ -1192,66 +1194,30 @@ impl Lookup<'_> {
 
     /// Hardware LINEAR: every footprint the sampler's coordinate precision allows, each tap
     /// possibly lit or shadowed, weighted as the profile's spec allows.
-    fn linear_hardware(&self, st: &Setup, r: (f64, f64), err: (f64, f64)) -> Legal {
-        let s = self.shadow;
-        let [w, h] = s.size;
-        let (fw, fh) = (f64::from(w), f64::from(h));
-        let (x, y) = (f64::from(st.c.u) * fw - 0.5, f64::from(st.c.v) * fh - 0.5);
-        let (ex, ey) = (SUBTEXEL + err.0, SUBTEXEL + err.1);
+    /// The shader's own bilinear compare at texel coordinates `(x, y)` (the first texel's
+    /// centre at 0), each within `err`: exact weights but for the coordinate's arithmetic,
+    /// which may also pick the next footprint.
+    fn linear_shader(
+        (x, y): (f64, f64),
+        (ex, ey): (f64, f64),
+        tap: impl Fn(i64, i64) -> Possible,
+    ) -> Legal {
         let mut out: Option<Legal> = None;
-        let (xs, ys) = (span(x, ex), span(y, ey));
-        let footprints = xs.clone().count() * ys.clone().count();
-        for i0 in xs {
-            for j0 in ys.clone() {
-                // The weights this footprint may use: the coordinate within 1/16 texel.
-                let (a, b) = (weight_range(x, ex, i0), weight_range(y, ey, j0));
-                let mut taps = [Possible::default(); 4];
-                let mut seam = false;
-                // Under the deviation, any footprint across a face edge reads anything.
-                let wrong_seams = self.cube()
-                    && self.profile.seamless_cube
-                    && self
-                        .profile
-                        .deviations
-                        .has(umbra_case::Deviation::CubeSeamTaps);
-                for (k, (di, dj)) in [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().enumerate() {
-                    match self.linear_tap(st.face, i0 + di, j0 + dj, r) {
-                        Some(t) => taps[k] = t,
-                        None => seam = true,
-                    }
-                    seam |= wrong_seams && !self.on_face(i0 + di, j0 + dj);
-                }
-                let l = if seam {
-                    // A cube corner on a seamless sampler: "implementations can do pretty much
-                    // anything" (dEQP's reading of the cube-map chapter).
-                    legal(0.0, 1.0, ambiguity::SEAM)
-                } else {
-                    let mut flags = taps.iter().fold(0, |f, t| f | t.flags());
-                    if taps
-                        .iter()
-                        .any(|t| (t.lit, t.shadow) != (taps[0].lit, taps[0].shadow))
-                    {
-                        flags |= ambiguity::FILTER;
-                    }
-                    // A GL driver whose card read bilinear filtering is held to it.
-                    let spec = if self.profile.calibration.bilinear {
-                        Spec::Vulkan
-                    } else {
-                        self.profile.spec
-                    };
-                    match spec {
-                        Spec::Gl => {
-                            // Any weighting of the four results, NEAREST included.
-                            let lo = taps.iter().map(|t| t.min()).fold(1.0, f64::min);
-                            let hi = taps.iter().map(|t| t.max()).fold(0.0, f64::max);
-                            legal(lo, hi, flags)
-                        }
-                        Spec::Vulkan => {
-                            let (lo, hi) = bilinear_range(&taps, a, b);
-                            legal(lo, hi, flags)
-                        }
-                    }
-                };
+        let mut footprints = 0;
+        for i0 in span(x, ex) {
+            for j0 in span(y, ey) {
+                footprints += 1;
+                let a = weight_range(x, ex, i0);
+                let b = weight_range(y, ey, j0);
+                let t = [
+                    tap(i0, j0),
+                    tap(i0 + 1, j0),
+                    tap(i0, j0 + 1),
+                    tap(i0 + 1, j0 + 1),
+                ];
+                let (lo, hi) = bilinear_range(&t, a, b);
+                let flags = t.iter().fold(0, |f, t| f | t.flags());
+                let l = legal(lo - 8.0 * U, hi + 8.0 * U, flags);
                 out = Some(out.map_or(l, |o| o.hull(l)));
             }
         }
@@ -1260,6 +1226,183 @@ impl Lookup<'_> {
             l.flags |= ambiguity::TEXEL_BOUNDARY;
         }
         l
+    }
+
+    /// Castano's filter ([`castano_taps`]): the weighted sum of what each of the nine
+    /// bilinear compares may return. Per axis, with the texel coordinate t = u · size
+    /// uncertain by `err`: every base floor(t + ½) an implementation may take (two where
+    /// t + ½ is within `err` of a whole number), s = t + ½ − base within `err` (and in
+    /// [0, 1], as that base makes it); each weight 4 − 3s, 7, 1 + 3s takes its range over
+    /// s, and each tap's offset moves by at most as much as s does (the offsets'
+    /// derivatives in s are 1/(4 − 3s)², 1/7 and 1/(1 + 3s)², all ≤ 1), plus the offset
+    /// arithmetic's own roundings. The sum over 144 takes the least weights with each tap's
+    /// least value and the greatest with its greatest (the values are never negative), and
+    /// 32 u for the f32 products and sums.
+    fn castano(&self, st: &Setup, r: (f64, f64), err: (f64, f64), addressing: Addressing) -> Legal {
+        let [w, h] = self.shadow.size;
+        let us = castano_axis(f64::from(st.c.u) * f64::from(w), err.0);
+        let vs = castano_axis(f64::from(st.c.v) * f64::from(h), err.1);
+        let mut out: Option<Legal> = None;
+        for CastanoAxis {
+            w: wu,
+            x: xu,
+            e: eu,
+        } in &us
+        {
+            for CastanoAxis {
+                w: wv,
+                x: xv,
+                e: ev,
+            } in &vs
+            {
+                let (wlo, whi) = (
+                    (0..9).map(|k| wu[k % 3].0 * wv[k / 3].0).sum::<f64>(),
+                    (0..9).map(|k| wu[k % 3].1 * wv[k / 3].1).sum::<f64>(),
+                );
+                // What each texel any tap may read answers, once for all nine taps.
+                let reach = |x: f64, e: f64| {
+                    (x - e - SUBTEXEL).floor() as i64..=(x + e + SUBTEXEL).floor() as i64 + 1
+                };
+                let (i0, j0) = (*reach(xu[0], *eu).start(), *reach(xv[0], *ev).start());
+                let (ni, nj) = (
+                    (reach(xu[2], *eu).end() - i0 + 1) as usize,
+                    (reach(xv[2], *ev).end() - j0 + 1) as usize,
+                );
+                let grid: Vec<Possible> = (0..ni * nj)
+                    .map(|k| {
+                        let (i, j) = (i0 + (k % ni) as i64, j0 + (k / ni) as i64);
+                        self.possible(st.face, i, j, r, addressing)
+                    })
+                    .collect();
+                let at = |i: i64, j: i64| grid[(j - j0) as usize * ni + (i - i0) as usize];
+                // The one definite answer of a block of the grid, if it has one.
+                let sure = |is: std::ops::RangeInclusive<i64>,
+                            js: std::ops::RangeInclusive<i64>| {
+                    let mut first: Option<Possible> = None;
+                    for j in js {
+                        for i in is.clone() {
+                            let t = at(i, j);
+                            if t.lit == t.shadow || first.is_some_and(|f| f != t) {
+                                return None;
+                            }
+                            first = Some(t);
+                        }
+                    }
+                    first
+                };
+                let all = (i0..=i0 + ni as i64 - 1, j0..=j0 + nj as i64 - 1);
+                if let Some(t) = sure(all.0, all.1) {
+                    // Every texel any tap may read answers alike: each tap returns it, and
+                    // the sum is it times the weights' sum (144 but for its roundings).
+                    let l = legal(
+                        t.min() * wlo / 144.0 - 32.0 * U,
+                        t.max() * whi / 144.0 + 32.0 * U,
+                        0,
+                    );
+                    out = Some(out.map_or(l, |o| o.hull(l)));
+                    continue;
+                }
+                let (mut lo, mut hi, mut flags) = (0.0, 0.0, 0);
+                for k in 0..9 {
+                    let (i, j) = (k % 3, k / 3);
+                    let x = (xu[i], xv[j]);
+                    let t = if let Some(t) = sure(reach(x.0, *eu), reach(x.1, *ev)) {
+                        // A tap whose texels all answer alike returns that answer.
+                        legal(t.min(), t.max(), 0)
+                    } else if self.hardware() {
+                        self.linear_hardware(x, (*eu, *ev), |i, j| Some(at(i, j)))
+                    } else {
+                        Self::linear_shader(x, (*eu, *ev), at)
+                    };
+                    lo += wu[i].0 * wv[j].0 * f64::from(t.lo);
+                    hi += wu[i].1 * wv[j].1 * f64::from(t.hi);
+                    flags |= t.flags;
+                }
+                let l = legal(lo / 144.0 - 32.0 * U, hi / 144.0 + 32.0 * U, flags);
+                out = Some(out.map_or(l, |o| o.hull(l)));
+            }
+        }
+        let mut l = out.unwrap_or(Legal::LIT);
+        if us.len() * vs.len() > 1 {
+            l.flags |= ambiguity::TEXEL_BOUNDARY;
+        }
+        l
+    }
+
+    /// The sampler's LINEAR compare at texel coordinates `(x, y)` (the first texel's centre
+    /// at 0), each within `err` and the sampler's 1/16 texel.
+    fn linear_hardware(
+        &self,
+        (x, y): (f64, f64),
+        err: (f64, f64),
+        tap: impl Fn(i64, i64) -> Option<Possible>,
+    ) -> Legal {
+        let (ex, ey) = (SUBTEXEL + err.0, SUBTEXEL + err.1);
+        let (xs, ys) = (span(x, ex), span(y, ey));
+        let footprints = xs.clone().count() * ys.clone().count();
+        // Under the deviation, any footprint across a face edge reads anything.
+        let wrong_seams = self.cube()
+            && self.profile.seamless_cube
+            && self
+                .profile
+                .deviations
+                .has(umbra_case::Deviation::CubeSeamTaps);
+        // A GL driver whose card read bilinear filtering is held to it.
+        let spec = if self.profile.calibration.bilinear {
+            Spec::Vulkan
+        } else {
+            self.profile.spec
+        };
+        // The hull of every footprint's interval, and their flags.
+        let (mut lo, mut hi, mut flags) = (f64::INFINITY, f64::NEG_INFINITY, 0);
+        for i0 in xs {
+            for j0 in ys.clone() {
+                let mut taps = [Possible::default(); 4];
+                let mut seam = false;
+                for (k, (di, dj)) in [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().enumerate() {
+                    match tap(i0 + di, j0 + dj) {
+                        Some(t) => taps[k] = t,
+                        None => seam = true,
+                    }
+                    seam |= wrong_seams && !self.on_face(i0 + di, j0 + dj);
+                }
+                if seam {
+                    // A cube corner on a seamless sampler: "implementations can do pretty much
+                    // anything" (dEQP's reading of the cube-map chapter).
+                    (lo, hi, flags) = (0.0, hi.max(1.0), flags | ambiguity::SEAM);
+                    continue;
+                }
+                flags |= taps.iter().fold(0, |f, t| f | t.flags());
+                let alike = taps
+                    .iter()
+                    .all(|t| (t.lit, t.shadow) == (taps[0].lit, taps[0].shadow));
+                if !alike {
+                    flags |= ambiguity::FILTER;
+                }
+                if lo <= 0.0 && hi >= 1.0 {
+                    // Already anything: the footprint adds only its flags.
+                    continue;
+                }
+                let (l, h) = match spec {
+                    // Four alike taps return their answer under any weights.
+                    _ if alike => (taps[0].min(), taps[0].max()),
+                    // Any weighting of the four results, NEAREST included.
+                    Spec::Gl => (
+                        taps.iter().map(|t| t.min()).fold(1.0, f64::min),
+                        taps.iter().map(|t| t.max()).fold(0.0, f64::max),
+                    ),
+                    // The weights this footprint may use: the coordinate within 1/16 texel.
+                    Spec::Vulkan => {
+                        bilinear_range(&taps, weight_range(x, ex, i0), weight_range(y, ey, j0))
+                    }
+                };
+                (lo, hi) = (lo.min(l), hi.max(h));
+            }
+        }
+        if footprints > 1 {
+            flags |= ambiguity::TEXEL_BOUNDARY;
+        }
+        legal(lo, hi, flags)
     }
 
     /// One LINEAR tap of the sampler: within the map (or its wrap), or on a cube, within the
@@ -1586,6 +1729,68 @@ enum Texel {
 }
 
 /// The integer parts coordinate `x` may take within `err`.
+/// Castano's nine taps at `uv` on a map of `size` texels, as Bevy's
+/// `sample_shadow_map_castano_thirteen` computes them in f32 (same operations, same order):
+/// each tap's weights along u and v (they sum to 12 along each axis) and its coordinate.
+pub fn castano_taps(uv: [f32; 2], size: [f32; 2]) -> [((f32, f32), (f32, f32)); 9] {
+    let axis = |x: f32, n: f32| {
+        let t = x * n;
+        let base = floor_f32(t + 0.5);
+        let s = t + 0.5 - base;
+        let inv = 1.0 / n;
+        let base = (base - 0.5) * inv;
+        let w = [4.0 - 3.0 * s, 7.0, 1.0 + 3.0 * s];
+        let o = [
+            (3.0 - 2.0 * s) / w[0] - 2.0,
+            (3.0 + s) / w[1],
+            s / w[2] + 2.0,
+        ];
+        (w, o.map(|o| base + o * inv))
+    };
+    let ((wu, ou), (wv, ov)) = (axis(uv[0], size[0]), axis(uv[1], size[1]));
+    // Bevy's order: u fastest, then v.
+    std::array::from_fn(|k| ((wu[k % 3], wv[k / 3]), (ou[k % 3], ov[k / 3])))
+}
+
+/// One axis of Castano's filter for one base texel the coordinate may take.
+struct CastanoAxis {
+    /// Each weight's range, 4 − 3s, 7 and 1 + 3s.
+    w: [(f64, f64); 3],
+    /// Each tap's sampler coordinate in texels (the first texel's centre at 0), ascending.
+    x: [f64; 3],
+    /// How far each tap's coordinate may be from `x`.
+    e: f64,
+}
+
+/// Every base texel floor(t + ½) an implementation may take for the texel coordinate
+/// t = u · size within `e`, with its weights and taps (see [`Lookup::castano`]).
+fn castano_axis(t: f64, e: f64) -> Vec<CastanoAxis> {
+    let e = e + 4.0 * ulp(t.abs() + 1.0);
+    let lo = (t + 0.5 - e).floor() as i64;
+    let hi = (t + 0.5 + e).floor() as i64;
+    (lo..=hi)
+        .map(|b| {
+            let s = (t + 0.5 - b as f64).clamp(0.0, 1.0);
+            let (s0, s1) = ((s - e).max(0.0), (s + e).min(1.0));
+            let o = [
+                (3.0 - 2.0 * s) / (4.0 - 3.0 * s) - 2.0,
+                (3.0 + s) / 7.0,
+                s / (1.0 + 3.0 * s) + 2.0,
+            ];
+            CastanoAxis {
+                w: [
+                    (4.0 - 3.0 * s1, 4.0 - 3.0 * s0),
+                    (7.0, 7.0),
+                    (1.0 + 3.0 * s0, 1.0 + 3.0 * s1),
+                ],
+                // The tap's centre is at base − ½ + o texels; the sampler's x is that − ½.
+                x: o.map(|o| b as f64 - 1.0 + o),
+                e: e + 8.0 * ulp(t.abs() + 4.0),
+            }
+        })
+        .collect()
+}
+
 fn span(x: f64, err: f64) -> std::ops::RangeInclusive<i64> {
     (x - err).floor() as i64..=(x + err).floor() as i64
 }
@@ -1666,6 +1871,73 @@ mod tests {
             }
         }
         assert!(checked > 50_000, "{checked}");
+    }
+
+    /// The same with Castano's filter on the generated cases that can have it (2D maps):
+    /// nine LINEAR taps whose places and weights move with the coordinate, and whose base
+    /// texel jumps at half-texels.
+    #[test]
+    fn the_interval_holds_for_castanos_taps() {
+        let mut rand = crate::test_rng::uniform(0x5EED_0C13);
+        let mut checked = 0;
+        for mut case in umbra_case::generate::cases(13, 24) {
+            if case
+                .all_lights()
+                .iter()
+                .any(|l| matches!(l, umbra_case::format::Light::Point(_)))
+                || case.shadow.mipmaps.is_some()
+            {
+                continue;
+            }
+            case.shadow.filter = Filter::Castano13;
+            let text = umbra_case::generate::to_json(&case);
+            let point = umbra_case::load_str(&text, std::path::Path::new("g.json"))
+                .expect("a 2D generated case takes castano13")
+                .swap_remove(0);
+            checked += region_checks(&umbra_case::Prepared::new(point), &mut rand, 120);
+        }
+        assert!(checked > 20_000, "{checked}");
+    }
+
+    /// Castano's taps as written are his filter: along each axis the weights sum to 12 (the
+    /// sum over 144 is a mean), and the filtered value of any map is continuous in the
+    /// coordinate, across the half-texels where the base texel jumps too (the judge's
+    /// reading of a coordinate within reach of one: either base, one filter).
+    #[test]
+    fn castanos_taps_are_one_continuous_filter() {
+        let mut rand = crate::test_rng::uniform(0xCA57);
+        let size = 16.0f32;
+        let map: Vec<f32> = (0..256).map(|_| f32::from(rand() < 0.5)).collect();
+        let at = |i: i64, j: i64| map[(j.rem_euclid(16) * 16 + i.rem_euclid(16)) as usize];
+        let bilinear = |u: f32, v: f32| {
+            let (x, y) = (u * size - 0.5, v * size - 0.5);
+            let (i, j) = (x.floor(), y.floor());
+            let (a, b) = (x - i, y - j);
+            let (i, j) = (i as i64, j as i64);
+            (1.0 - a) * (1.0 - b) * at(i, j)
+                + a * (1.0 - b) * at(i + 1, j)
+                + (1.0 - a) * b * at(i, j + 1)
+                + a * b * at(i + 1, j + 1)
+        };
+        let value = |u: f32, v: f32| {
+            let taps = castano_taps([u, v], [size, size]);
+            let w: f32 = taps.iter().map(|((a, b), _)| a * b).sum();
+            assert!((w - 144.0).abs() < 1e-4, "weights sum to {w}");
+            taps.iter()
+                .map(|((a, b), (x, y))| a * b * bilinear(*x, *y))
+                .sum::<f32>()
+                / 144.0
+        };
+        for k in 2..14 {
+            let v = (5.3 + rand()) / size;
+            // Either side of the half-texel where the base texel changes.
+            let u = (k as f32 - 0.5) / size;
+            let (below, above) = (value(u - 1e-4 / size, v), value(u + 1e-4 / size, v));
+            assert!(
+                (below - above).abs() < 1e-3,
+                "at texel {k}: {below} below and {above} above the jump"
+            );
+        }
     }
 
     /// Judges `tries` random surface points of `run` with snapping-like moves and checks the

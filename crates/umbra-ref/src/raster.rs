@@ -421,6 +421,25 @@ impl Tri {
                 tol[i] = (delta_px * ONE as f64 * (dx.abs() + dy.abs()) as f64).ceil() as i64;
             }
         }
+        // A fan's apex (a vertex between two internal edges) is a corner of the clipped
+        // polygon's outline, whose outline edges are the first and last fan triangles' and so
+        // not this one's: within the snapping's reach of it, the centre may lie outside the
+        // outline however far it is from this triangle's own open edges (soak-45-430: a
+        // ground plane's corner snapped onto a texel centre of a cube face, reported certain
+        // by the middle triangle of its fan).
+        let reach = (delta_px * ONE as f64).ceil() as i64;
+        let apexes: Vec<(i64, i64)> = (0..3)
+            .filter(|&k| {
+                self.edges[(k + 1) % 3] == EdgeKind::Internal
+                    && self.edges[(k + 2) % 3] == EdgeKind::Internal
+            })
+            .map(|k| (self.x[k], self.y[k]))
+            .collect();
+        let near_apex = |px: i64, py: i64| {
+            apexes
+                .iter()
+                .any(|&(ax, ay)| (px - ax).abs() <= reach && (py - ay).abs() <= reach)
+        };
         for y in y_start..y_end {
             let py = i64::from(y) * ONE + HALF;
             for x in bx0..=bx1 {
@@ -446,7 +465,7 @@ impl Tri {
                     // cover the centre between them (the vertex may lie on a silhouette,
                     // where the fan folds): only near one shared edge alone is a neighbour
                     // sure to cover what this triangle leaves.
-                    let c = if near_open || near > 1 {
+                    let c = if near_open || near > 1 || near_apex(px, py) {
                         Coverage::Maybe
                     } else if near == 1 {
                         Coverage::Pair(partner)
@@ -1012,6 +1031,42 @@ mod tests {
             assert!(t.z.iter().all(|z| (-1e-6..=1.0).contains(z)), "{:?}", t.z);
             assert_eq!(t.source, 7);
         }
+    }
+
+    /// A triangle clipped at both the near and the far plane is a pentagon, fanned from one
+    /// corner: the middle triangle's apex lies between two internal edges and is a corner of
+    /// the outline, so no centre within the snapping's reach of it is certain (soak-45-430).
+    #[test]
+    fn a_fan_apex_is_an_outline_corner() {
+        let r = Rasterizer {
+            conv: Convention::GL,
+            width: 64,
+            height: 64,
+            cull: Cull::None,
+            depth_clamp: false,
+        };
+        let clip = [
+            Vec4::new(-0.8, -0.8, -3.0, 1.0),
+            Vec4::new(0.8, -0.8, 3.0, 1.0),
+            Vec4::new(0.0, 0.8, 0.0, 1.0),
+        ];
+        let mut out = Vec::new();
+        r.setup(clip, 0, [EdgeKind::Open; 3], &mut out);
+        assert_eq!(out.len(), 3, "a pentagon's fan");
+        let middle = out
+            .iter()
+            .find(|t| t.edges[1] == EdgeKind::Internal && t.edges[2] == EdgeKind::Internal)
+            .expect("the middle triangle has two internal edges at its apex");
+        let (ax, ay) = (middle.x[0], middle.y[0]);
+        let mut near = 0;
+        middle.scan_near(0..64, 1.0, |x, y, _, coverage| {
+            let (px, py) = (i64::from(x) * ONE + HALF, i64::from(y) * ONE + HALF);
+            if (px - ax).abs() <= ONE && (py - ay).abs() <= ONE {
+                near += 1;
+                assert_eq!(coverage, Coverage::Maybe, "({x}, {y}) beside the apex");
+            }
+        });
+        assert!(near > 0, "no centre beside the apex was checked");
     }
 
     /// A triangle over the whole viewport is, clipped at the viewport, its square: the chords

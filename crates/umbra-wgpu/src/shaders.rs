@@ -188,6 +188,41 @@ impl Dialect for Wgsl {
         }
     }
 
+    fn compare_at(&self, manual: bool) -> String {
+        let head = "fn compare_at(f: i32, uv: vec2<f32>, r: f32) -> f32";
+        match manual {
+            true => format!(
+                "{head} {{\n  let x = uv * u.size.xy - 0.5;\n  let i0 = floor(x);\n  let a = x - i0;\n  \
+                   return (1.0 - a.x) * (1.0 - a.y) * tap(f, i0.x, i0.y, r) + a.x * (1.0 - a.y) * tap(f, i0.x + 1.0, i0.y, r)\n  \
+                   + (1.0 - a.x) * a.y * tap(f, i0.x, i0.y + 1.0, r) + a.x * a.y * tap(f, i0.x + 1.0, i0.y + 1.0, r);\n}}\n"
+            ),
+            false if self.layered => format!(
+                "{head} {{ return textureSampleCompareLevel(map, samp, uv, f + LAYER, r); }}\n"
+            ),
+            false => format!("{head} {{ return textureSampleCompareLevel(map, samp, uv, r); }}\n"),
+        }
+    }
+
+    fn castano(&self) -> &'static str {
+        "  let uv = c.xy * u.size.xy;\n  var base = floor(uv + 0.5);\n  let st = uv + 0.5 - base;\n  \
+           let inv = 1.0 / u.size.xy;\n  base = (base - 0.5) * inv;\n  \
+           let uw = vec3<f32>(4.0 - 3.0 * st.x, 7.0, 1.0 + 3.0 * st.x);\n  \
+           let vw = vec3<f32>(4.0 - 3.0 * st.y, 7.0, 1.0 + 3.0 * st.y);\n  \
+           let uo = vec3<f32>((3.0 - 2.0 * st.x) / uw.x - 2.0, (3.0 + st.x) / uw.y, st.x / uw.z + 2.0);\n  \
+           let vo = vec3<f32>((3.0 - 2.0 * st.y) / vw.x - 2.0, (3.0 + st.y) / vw.y, st.y / vw.z + 2.0);\n  \
+           var sum = 0.0;\n  \
+           sum += uw.x * vw.x * compare_at(f, base + vec2<f32>(uo.x, vo.x) * inv, r);\n  \
+           sum += uw.y * vw.x * compare_at(f, base + vec2<f32>(uo.y, vo.x) * inv, r);\n  \
+           sum += uw.z * vw.x * compare_at(f, base + vec2<f32>(uo.z, vo.x) * inv, r);\n  \
+           sum += uw.x * vw.y * compare_at(f, base + vec2<f32>(uo.x, vo.y) * inv, r);\n  \
+           sum += uw.y * vw.y * compare_at(f, base + vec2<f32>(uo.y, vo.y) * inv, r);\n  \
+           sum += uw.z * vw.y * compare_at(f, base + vec2<f32>(uo.z, vo.y) * inv, r);\n  \
+           sum += uw.x * vw.z * compare_at(f, base + vec2<f32>(uo.x, vo.z) * inv, r);\n  \
+           sum += uw.y * vw.z * compare_at(f, base + vec2<f32>(uo.y, vo.z) * inv, r);\n  \
+           sum += uw.z * vw.z * compare_at(f, base + vec2<f32>(uo.z, vo.z) * inv, r);\n  \
+           return sum * (1.0 / 144.0);\n"
+    }
+
     fn uniform(&self, u: Uniform) -> &'static str {
         match u {
             Uniform::MapWidth => "u.size.x",

@@ -4,7 +4,7 @@
 //! read back right after its draw.
 
 use umbra_case::fault::Fault;
-use umbra_case::format::{ColorFormat, DepthFormat, Filter, MipFilter, Outside};
+use umbra_case::format::{ColorFormat, DepthFormat, MipFilter, Outside};
 use umbra_case::technique::CompareOp;
 use umbra_case::{BackendError, LightKind, LookupMatrices, Technique};
 
@@ -87,7 +87,7 @@ impl Renderer {
         // SAFETY: a texture of the current context.
         unsafe {
             gl.bind_texture(target, Some(map));
-            let filter = if s.filter == Filter::Linear && !manual {
+            let filter = if s.filter.sampler_linear() && !manual {
                 glow::LINEAR
             } else {
                 glow::NEAREST

@@ -469,7 +469,7 @@ impl Gpu {
                 }),
             ),
         };
-        let f = if filter == Filter::Linear {
+        let f = if filter.sampler_linear() {
             wgpu::FilterMode::Linear
         } else {
             wgpu::FilterMode::Nearest
