@@ -104,16 +104,6 @@ impl Freedom {
         }
     }
 
-    /// How far another implementation's corners may lie from `t`'s where its depth plane is
-    /// concerned: the spec's snapping ([`SNAP_PX`]) and the transform, whatever sub-pixel
-    /// bits a card read. The card's probe reads where edges fall (coverage), not the plane
-    /// the depth is evaluated on; llvmpipe and zink on lavapipe, whose cards read 8 bits,
-    /// stored depths and offset slopes that only corners about 0.02 px away give
-    /// (soak-45-501, soak-42-467).
-    fn plane_reach(&self, t: &Tri) -> f64 {
-        SNAP_PX.max(t.snap) + t.xy_err
-    }
-
     /// The smallest and largest offset (a distance away from the light) for triangle `t`.
     fn offset(&self, t: &Tri) -> (f64, f64) {
         if self.factor == 0.0 && self.units == 0.0 {
@@ -121,7 +111,7 @@ impl Freedom {
         }
         let (dx, dy) = t.depth_slopes();
         let m_max = dx.abs().max(dy.abs());
-        let snap = (dx.abs() + dy.abs()) * 2.0 * self.plane_reach(t) / t.min_altitude().max(1e-9);
+        let snap = (dx.abs() + dy.abs()) * 2.0 * t.reach() / t.min_altitude().max(1e-9);
         let z = t.max_abs_z();
         let (m_lo, m_hi, r_lo, r_hi) = if self.packed {
             // umbra's GLES 2 shader: m = max(|dFdx z|, |dFdy z|), r = one step of the format.
@@ -183,7 +173,7 @@ impl Freedom {
         let norm = t.weight_norm(e);
         // The plane's snapping and its corners' transform ([`depth_error`]), carried to the
         // centre by the weights, and the interpolation's own roundings of z.
-        let err = (dx.abs() + dy.abs()) * self.plane_reach(t) * norm
+        let err = (dx.abs() + dy.abs()) * t.reach() * norm
             + t.depth_error_at(e)
             + 4.0 * f64::from(umbra_case::depth::f32_spacing(z as f32));
         let away = f64::from(self.conv.toward_far());
