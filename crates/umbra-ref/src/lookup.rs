@@ -47,6 +47,9 @@ use crate::rounding::{floor_f32, floor_i64};
 use crate::shadow_pass::DepthLayer;
 use crate::surface::Surfaces;
 
+mod grid;
+use grid::Grid;
+
 thread_local! {
     /// The trace of the lookup being explained on this thread (see [`explaining`]).
     static TRACE: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
@@ -1242,56 +1245,28 @@ impl Lookup<'_> {
         let [w, h] = self.shadow.size;
         let us = castano_axis(f64::from(st.c.u) * f64::from(w), err.0);
         let vs = castano_axis(f64::from(st.c.v) * f64::from(h), err.1);
+        // The texels a tap at x within e may read, and those of all three taps of an axis.
+        let reach = |x: f64, e: f64| {
+            (x - e - SUBTEXEL).floor() as i64..=(x + e + SUBTEXEL).floor() as i64 + 1
+        };
+        let taps = |a: &CastanoAxis| *reach(a.x[0], a.e).start()..=*reach(a.x[2], a.e).end();
+        let block = |axes: &[CastanoAxis]| {
+            let lo = axes.iter().map(|a| *taps(a).start()).min().unwrap_or(0);
+            let hi = axes.iter().map(|a| *taps(a).end()).max().unwrap_or(0);
+            lo..=hi
+        };
+        // What each texel any tap of any base may read answers, once for all.
+        let grid = Grid::new(block(&us), block(&vs), |i, j| {
+            self.possible(st.face, i, j, r, addressing)
+        });
         let mut out: Option<Legal> = None;
-        for CastanoAxis {
-            w: wu,
-            x: xu,
-            e: eu,
-        } in &us
-        {
-            for CastanoAxis {
-                w: wv,
-                x: xv,
-                e: ev,
-            } in &vs
-            {
+        for a in &us {
+            for b in &vs {
                 let (wlo, whi) = (
-                    (0..9).map(|k| wu[k % 3].0 * wv[k / 3].0).sum::<f64>(),
-                    (0..9).map(|k| wu[k % 3].1 * wv[k / 3].1).sum::<f64>(),
+                    (0..9).map(|k| a.w[k % 3].0 * b.w[k / 3].0).sum::<f64>(),
+                    (0..9).map(|k| a.w[k % 3].1 * b.w[k / 3].1).sum::<f64>(),
                 );
-                // What each texel any tap may read answers, once for all nine taps.
-                let reach = |x: f64, e: f64| {
-                    (x - e - SUBTEXEL).floor() as i64..=(x + e + SUBTEXEL).floor() as i64 + 1
-                };
-                let (i0, j0) = (*reach(xu[0], *eu).start(), *reach(xv[0], *ev).start());
-                let (ni, nj) = (
-                    (reach(xu[2], *eu).end() - i0 + 1) as usize,
-                    (reach(xv[2], *ev).end() - j0 + 1) as usize,
-                );
-                let grid: Vec<Possible> = (0..ni * nj)
-                    .map(|k| {
-                        let (i, j) = (i0 + (k % ni) as i64, j0 + (k / ni) as i64);
-                        self.possible(st.face, i, j, r, addressing)
-                    })
-                    .collect();
-                let at = |i: i64, j: i64| grid[(j - j0) as usize * ni + (i - i0) as usize];
-                // The one definite answer of a block of the grid, if it has one.
-                let sure = |is: std::ops::RangeInclusive<i64>,
-                            js: std::ops::RangeInclusive<i64>| {
-                    let mut first: Option<Possible> = None;
-                    for j in js {
-                        for i in is.clone() {
-                            let t = at(i, j);
-                            if t.lit == t.shadow || first.is_some_and(|f| f != t) {
-                                return None;
-                            }
-                            first = Some(t);
-                        }
-                    }
-                    first
-                };
-                let all = (i0..=i0 + ni as i64 - 1, j0..=j0 + nj as i64 - 1);
-                if let Some(t) = sure(all.0, all.1) {
+                if let Some(t) = grid.sure(&taps(a), &taps(b)) {
                     // Every texel any tap may read answers alike: each tap returns it, and
                     // the sum is it times the weights' sum (144 but for its roundings).
                     let l = legal(
@@ -1305,17 +1280,27 @@ impl Lookup<'_> {
                 let (mut lo, mut hi, mut flags) = (0.0, 0.0, 0);
                 for k in 0..9 {
                     let (i, j) = (k % 3, k / 3);
-                    let x = (xu[i], xv[j]);
-                    let t = if let Some(t) = sure(reach(x.0, *eu), reach(x.1, *ev)) {
+                    let x = (a.x[i], b.x[j]);
+                    let (is, js) = (reach(x.0, a.e), reach(x.1, b.e));
+                    let t = if let Some(t) = grid.sure(&is, &js) {
                         // A tap whose texels all answer alike returns that answer.
                         legal(t.min(), t.max(), 0)
+                    } else if a.e >= 2.0 || b.e >= 2.0 {
+                        // A tap moving two texels or more: its footprints cover the block
+                        // and their weights all of [0, 1] but at the block's edge columns,
+                        // so the hull of the block's answers, what a LINEAR compare under
+                        // GL's any weighting gives exactly, at a cost that does not grow
+                        // with the footprints (bevy-sun: 24 s of judging per frame to 7.5 s;
+                        // the cards' blind area 3.32 % to 3.41 %, the specs' unchanged).
+                        let (lo, hi, f) = grid.hull(&is, &js);
+                        legal(lo, hi, f | ambiguity::TEXEL_BOUNDARY)
                     } else if self.hardware() {
-                        self.linear_hardware(x, (*eu, *ev), |i, j| Some(at(i, j)))
+                        self.linear_hardware(x, (a.e, b.e), |i, j| Some(grid.at(i, j)))
                     } else {
-                        Self::linear_shader(x, (*eu, *ev), at)
+                        Self::linear_shader(x, (a.e, b.e), |i, j| grid.at(i, j))
                     };
-                    lo += wu[i].0 * wv[j].0 * f64::from(t.lo);
-                    hi += wu[i].1 * wv[j].1 * f64::from(t.hi);
+                    lo += a.w[i].0 * b.w[j].0 * f64::from(t.lo);
+                    hi += a.w[i].1 * b.w[j].1 * f64::from(t.hi);
                     flags |= t.flags;
                 }
                 let l = legal(lo / 144.0 - 32.0 * U, hi / 144.0 + 32.0 * U, flags);

@@ -58,6 +58,19 @@ pub struct DepthLayer {
 ///   (`shadow.depth_clamp`) both APIs clamp every format, after the offset.
 /// - **Storage**: fixed point may round to either neighbouring code
 ///   ([`DepthFormat::code_range`]); float stores the value.
+/// - **Clip fans under a card**: a card's sub-pixel reading narrows the snapping to the
+///   driver's grid, which holds for the triangles umbra sets up. A clipper without a guard
+///   band (Mesa's draw module where it clips at the viewport) fans a triangle crossing the
+///   viewport into pieces from a vertex of its own choosing
+///   ([`Rasterizer::viewport_chords`]); a piece along a chord can be a sliver a few hundredths
+///   of a pixel wide, and llvmpipe derives its plane and its offset slope in f32 from the
+///   piece's float corners (`lp_state_setup.c`), an error of about an ULP of z per sliver
+///   width in the gradient. soak-45-501 (no offset: five texels along a chord, 3.7–4.7·10⁻⁶
+///   above the plane every neighbour matches to 3·10⁻⁷) and soak-42-467 (one texel 0.01 px
+///   from a chord, the offset slope 3 % over the triangle's) are such slivers on gl33/llvmpipe.
+///   A piece covering a centre that lies farther than the spec's snapping from every chord is
+///   at least about that wide, so within [`SNAP_PX`] of a chord the card keeps the spec's
+///   snapping for the stored depth and the offset; coverage keeps the card's.
 ///
 /// The GLES 2 path ([`Profile::packed_depth`]) applies umbra's own offset formula in the
 /// shader (m from dFdx/dFdy: the differences of two f32 depths, ±2 ULP(z) per pixel; r fixed),
@@ -271,15 +284,18 @@ pub fn render_face(
     }
     let freedom = Freedom::new(conv, shadow, profile);
     let holes = profile.deviations.has(umbra_case::Deviation::EdgeHoles);
-    let chords = if holes {
+    // Where a card narrows the snapping, the pieces a clipper without a guard band fans a
+    // triangle into matter to depth too (module note, "Clip fans under a card").
+    let narrowed = snap < SNAP_PX;
+    let chords = if holes || narrowed {
         hole_chords(&raster, light, geo)
     } else {
         Vec::new()
     };
-    let on_chord = |source: u32, x: i32, y: i32| {
+    let on_chord = |source: u32, x: i32, y: i32, delta_px: f64| {
         chords
             .get(source as usize)
-            .is_some_and(|c| c.iter().any(|c| c.near(x, y, HOLE_PX)))
+            .is_some_and(|c| c.iter().any(|c| c.near(x, y, delta_px)))
     };
     let forward = conv.toward_far() > 0.0;
     let clear = f64::from(conv.clear_depth());
@@ -317,6 +333,16 @@ pub fn render_face(
                 std::collections::HashMap::new();
             for (_, t) in touching {
                 let offset = freedom.offset(t);
+                // The same triangle at the spec's snapping, for centres beside a chord.
+                let fanned =
+                    narrowed && chords.get(t.source as usize).is_some_and(|c| !c.is_empty());
+                let spec = fanned.then(|| {
+                    let wide = Tri {
+                        snap: SNAP_PX,
+                        ..*t
+                    };
+                    (wide, freedom.offset(&wide))
+                });
                 t.scan_near(rows.clone(), t.reach(), |x, y, e, coverage| {
                     // Holes on edges (the deviation): a shared edge's centres, and those on a
                     // clip fan's diagonal, only may be covered.
@@ -324,13 +350,19 @@ pub fn render_face(
                         Coverage::Pair(_) if holes => Coverage::Maybe,
                         Coverage::Certain
                             if holes
-                                && (t.near_internal(e, HOLE_PX) || on_chord(t.source, x, y)) =>
+                                && (t.near_internal(e, HOLE_PX)
+                                    || on_chord(t.source, x, y, HOLE_PX)) =>
                         {
                             Coverage::Maybe
                         }
                         c => c,
                     };
-                    let (lo, hi) = freedom.stored(t, e, offset);
+                    let (lo, hi) = match &spec {
+                        Some((wide, o)) if on_chord(t.source, x, y, SNAP_PX) => {
+                            freedom.stored(wide, e, *o)
+                        }
+                        _ => freedom.stored(t, e, offset),
+                    };
                     let (near, far) = if forward { (lo, hi) } else { (hi, lo) };
                     let i = (y - rows.start) as usize * w as usize + x as usize;
                     let a = &mut band[i];
@@ -761,5 +793,46 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// soak-42-467 reduced to its sphere: gl33/llvmpipe stores 0.9755897 in one texel of face
+    /// +z, 0.009 px from the diagonal two coplanar triangles share, where that triangle's fan
+    /// at the viewport's edge puts a sliver (llvmpipe's value, read back on Mesa 22.3.6). Its
+    /// card (max slope, 8 sub-pixel bits) held the texel to ≤ 0.97558814 before chords kept
+    /// the spec's depth snapping; the spec's judgement always allowed it.
+    #[test]
+    fn a_card_keeps_the_specs_depth_beside_a_clip_fans_chord() {
+        const CASE: &str = r#"{"name": "sphere", "about": "soak-42-467 reduced", "scene": {"objects": [{"sphere": {"center": [0.0, 0.0, 0.0], "radius": 1.22, "segments": 12, "color": [0.85, 0.85, 0.31], "transform": {"translate": [1.47, 1.22, 3.5], "rotate_deg": {"axis": [-0.4, -0.89, -0.47], "angle": -149.9}, "scale": 1.32}}}]},
+            "camera": {"eye": [-1.64, 16.96, -10.47], "target": [-1.27, 1.4, -1.2], "up": [0.0, 1.0, 0.0], "fov_y_deg": 59.0, "near": 0.76, "far": 92.0, "size": [200, 150]},
+            "light": {"point": {"position": [1.42, 6.22, -1.43], "near": 0.16, "far": 55.0}},
+            "shadow": {"size": [512, 512], "format": "depth32f", "filter": "linear", "bias": {"polygon_offset": [3.2, 6.0]}, "cull": "front", "depth_func": "less_equal"}}"#;
+        let point = umbra_case::load::load_str(CASE, std::path::Path::new("sphere.json"))
+            .expect("the case")
+            .remove(0);
+        let run = umbra_case::Prepared::new(point);
+        let clip = umbra_case::ClipDepth::MinusOneToOne;
+        let mut card = Profile::GL;
+        card.calibration.slope = Some(umbra_case::calibration::SlopeForm::Max);
+        card.calibration.subpixel_bits = Some(8);
+        let layers = crate::judged_layers(&run, clip, card);
+        // Face +z, column 305, row 5 from the top: raster row 506.
+        let k = 506 * 512 + 305;
+        let (lo, hi) = (layers[4].lo[k], layers[4].hi[k]);
+        let stored = 0.975_589_7f32;
+        assert!(
+            lo <= stored && stored <= hi,
+            "{stored} outside the card's [{lo}, {hi}]"
+        );
+        // Away from the chords the card still narrows: the texel two columns over.
+        let spec = crate::judged_layers(&run, clip, Profile::GL);
+        let k = 506 * 512 + 303;
+        assert!(
+            layers[4].hi[k] - layers[4].lo[k] < 0.5 * (spec[4].hi[k] - spec[4].lo[k]),
+            "card [{}, {}] against the spec's [{}, {}]",
+            layers[4].lo[k],
+            layers[4].hi[k],
+            spec[4].lo[k],
+            spec[4].hi[k]
+        );
     }
 }
