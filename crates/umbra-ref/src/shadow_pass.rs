@@ -283,32 +283,9 @@ pub fn render_face(
         t.snap = snap;
     }
     let freedom = Freedom::new(conv, shadow, profile);
-    let holes = profile.deviations.has(umbra_case::Deviation::EdgeHoles);
-    // Where a card narrows the snapping, the pieces a clipper without a guard band fans a
-    // triangle into matter to depth too (module note, "Clip fans under a card").
-    let narrowed = snap < SNAP_PX;
-    let chords = if holes || narrowed {
-        hole_chords(&raster, light, geo)
-    } else {
-        Vec::new()
-    };
-    let on_chord = |source: u32, x: i32, y: i32, delta_px: f64| {
-        chords
-            .get(source as usize)
-            .is_some_and(|c| c.iter().any(|c| c.near(x, y, delta_px)))
-    };
+    let fans = Fans::new(&raster, light, geo, profile, snap);
     let forward = conv.toward_far() > 0.0;
     let clear = f64::from(conv.clear_depth());
-    // Per texel: the nearest possible value, the farthest possible over the certain
-    // coverers and over shared-edge pairs (None = none yet), and whether the nearest comes
-    // from a triangle that is not certain to cover.
-    #[derive(Clone, Copy)]
-    struct Acc {
-        near: f64,
-        far_certain: Option<f64>,
-        far_pair: Option<f64>,
-        uncertain: bool,
-    }
     let start = Acc {
         near: clear,
         far_certain: None,
@@ -333,32 +310,11 @@ pub fn render_face(
                 std::collections::HashMap::new();
             for (_, t) in touching {
                 let offset = freedom.offset(t);
-                // The same triangle at the spec's snapping, for centres beside a chord.
-                let fanned =
-                    narrowed && chords.get(t.source as usize).is_some_and(|c| !c.is_empty());
-                let spec = fanned.then(|| {
-                    let wide = Tri {
-                        snap: SNAP_PX,
-                        ..*t
-                    };
-                    (wide, freedom.offset(&wide))
-                });
+                let spec = fans.at_spec_snapping(t, &freedom);
                 t.scan_near(rows.clone(), t.reach(), |x, y, e, coverage| {
-                    // Holes on edges (the deviation): a shared edge's centres, and those on a
-                    // clip fan's diagonal, only may be covered.
-                    let coverage = match coverage {
-                        Coverage::Pair(_) if holes => Coverage::Maybe,
-                        Coverage::Certain
-                            if holes
-                                && (t.near_internal(e, HOLE_PX)
-                                    || on_chord(t.source, x, y, HOLE_PX)) =>
-                        {
-                            Coverage::Maybe
-                        }
-                        c => c,
-                    };
+                    let coverage = fans.coverage(t, x, y, e, coverage);
                     let (lo, hi) = match &spec {
-                        Some((wide, o)) if on_chord(t.source, x, y, SNAP_PX) => {
+                        Some((wide, o)) if fans.near(t.source, x, y, SNAP_PX) => {
                             freedom.stored(wide, e, *o)
                         }
                         _ => freedom.stored(t, e, offset),
@@ -419,9 +375,90 @@ pub fn render_face(
     }
 }
 
-/// Under [`umbra_case::Deviation::EdgeHoles`], per source triangle of `geo` seen through
-/// `light`: where a clipper without a guard band may put its fan's diagonals
-/// ([`Rasterizer::viewport_chords`]), besides the ones umbra's own clipper puts there.
+/// Per texel while a face is judged: the nearest possible value, the farthest possible over
+/// the certain coverers and over shared-edge pairs (None = none yet), and whether the nearest
+/// comes from a triangle that is not certain to cover.
+#[derive(Clone, Copy)]
+struct Acc {
+    near: f64,
+    far_certain: Option<f64>,
+    far_pair: Option<f64>,
+    uncertain: bool,
+}
+
+/// Where a clipper without a guard band may fan each source triangle ([`hole_chords`]), for
+/// the two things that depend on it: the edge-holes deviation's coverage, and a card's depth
+/// beside a chord ([`Freedom`], "Clip fans under a card"). Empty when neither applies.
+struct Fans {
+    chords: Vec<Vec<Chord>>,
+    holes: bool,
+    narrowed: bool,
+}
+
+impl Fans {
+    fn new(
+        raster: &Rasterizer,
+        light: glam::Mat4,
+        geo: &Geometry,
+        profile: Profile,
+        snap: f64,
+    ) -> Fans {
+        let holes = profile.deviations.has(umbra_case::Deviation::EdgeHoles);
+        let narrowed = snap < SNAP_PX;
+        let chords = if holes || narrowed {
+            hole_chords(raster, light, geo)
+        } else {
+            Vec::new()
+        };
+        Fans {
+            chords,
+            holes,
+            narrowed,
+        }
+    }
+
+    /// Whether the centre of (x, y) lies within `delta_px` of a chord of triangle `source`.
+    fn near(&self, source: u32, x: i32, y: i32, delta_px: f64) -> bool {
+        self.chords
+            .get(source as usize)
+            .is_some_and(|c| c.iter().any(|c| c.near(x, y, delta_px)))
+    }
+
+    /// Triangle `t` at the spec's snapping and its offset range, where a card narrowed it and
+    /// a chord crosses it: what centres beside a chord are held to.
+    fn at_spec_snapping(&self, t: &Tri, freedom: &Freedom) -> Option<(Tri, (f64, f64))> {
+        let crossed = self
+            .chords
+            .get(t.source as usize)
+            .is_some_and(|c| !c.is_empty());
+        (self.narrowed && crossed).then(|| {
+            let wide = Tri {
+                snap: SNAP_PX,
+                ..*t
+            };
+            (wide, freedom.offset(&wide))
+        })
+    }
+
+    /// Holes on edges (the deviation): a shared edge's centres, and those on a clip fan's
+    /// diagonal, only may be covered.
+    fn coverage(&self, t: &Tri, x: i32, y: i32, e: [i64; 3], coverage: Coverage) -> Coverage {
+        match coverage {
+            Coverage::Pair(_) if self.holes => Coverage::Maybe,
+            Coverage::Certain
+                if self.holes
+                    && (t.near_internal(e, HOLE_PX) || self.near(t.source, x, y, HOLE_PX)) =>
+            {
+                Coverage::Maybe
+            }
+            c => c,
+        }
+    }
+}
+
+/// Per source triangle of `geo` seen through `light`: where a clipper without a guard band
+/// may put its fan's diagonals ([`Rasterizer::viewport_chords`]), besides the ones umbra's
+/// own clipper puts there.
 fn hole_chords(raster: &Rasterizer, light: glam::Mat4, geo: &Geometry) -> Vec<Vec<Chord>> {
     geo.triangles
         .iter()
