@@ -305,9 +305,9 @@ fn judged_point(
     let moves = [(px_ - p) * snap, (py_ - p) * snap];
     let normal_moves = ((nx - n).length() + (ny - n).length()) * snap;
     let (vis, l): (f32, Legal) = if lookup.mipmapped() {
-        lookup.judged_mip(p, n, moves, &neighbours(tri, geo, pt.x, pt.y))
+        lookup.judged_mip(p, n, moves, normal_moves, &neighbours(tri, geo, pt.x, pt.y))
     } else {
-        lookup.judged(p, n, moves)
+        lookup.judged(p, n, moves, normal_moves)
     };
     let (albedo, to_light, to_eye) = (pt.albedo, pt.to_light, pt.to_eye);
     let light = Vec3::from(case.light.radiance());
