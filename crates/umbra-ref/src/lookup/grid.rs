@@ -152,16 +152,10 @@ mod tests {
     /// Every sub-block's counted answer against a direct pass over its texels.
     #[test]
     fn sub_blocks_count_as_a_pass_over_them_does() {
-        let mut seed = 0x6121_d5e5_u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 33) as u32
-        };
+        let mut rand = crate::test_rng::uniform(0x6121_d5e5);
         let cells: Vec<Possible> = (0..7 * 5)
             .map(|_| {
-                let r = next() % 10;
+                let r = (rand() * 10.0) as u32;
                 Possible {
                     lit: r != 0,
                     shadow: r < 3,
