@@ -32,6 +32,7 @@
 //!   --good REV --bad REV`, `cargo xtask reduce CASE --point ID --backend ID`: the same set-up,
 //!   then `umbra drivers`, `umbra bisect`, `umbra reduce`.
 
+mod disk;
 mod fetch_mesa;
 mod gpu_bundle;
 mod mesa;
@@ -200,6 +201,7 @@ fn main() -> ExitCode {
 }
 
 fn test(extra: &[String]) -> i32 {
+    disk::warn_if_short(&workspace_root(), disk::TEST_PEAK_GIB, "`cargo xtask test`");
     mesa::ensure();
     mesa::ensure_test_tools();
     let mut cmd = cargo();
