@@ -201,7 +201,11 @@ fn main() -> ExitCode {
 }
 
 fn test(extra: &[String]) -> i32 {
-    disk::warn_if_short(&workspace_root(), disk::TEST_PEAK_GIB, "`cargo xtask test`");
+    disk::warn_if_short(
+        &workspace_root(),
+        disk::test_peak_gib(),
+        "`cargo xtask test`",
+    );
     mesa::ensure();
     mesa::ensure_test_tools();
     let mut cmd = cargo();

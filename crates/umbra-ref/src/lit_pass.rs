@@ -19,7 +19,7 @@ use rayon::prelude::*;
 use umbra_case::{Convention, Geometry, Prepared, Profile};
 
 use crate::bands::for_each_band;
-use crate::lookup::{Legal, Lookup, Neighbours, ambiguity, position_freedom};
+use crate::lookup::{Legal, Lookup, Neighbours, Turn, ambiguity, position_freedom};
 use crate::raster::{Coverage, EdgeKind, Rasterizer, Tri};
 use crate::shading::{background, shade_linear, shade_run, shade_tolerance};
 use crate::shadow_pass::setup_all;
@@ -303,11 +303,12 @@ fn judged_point(
     let (py_, ny) = interpolate(geo, t, tri.source_weights_at(x, y + 1.0));
     let snap = tri.reach() as f32;
     let moves = [(px_ - p) * snap, (py_ - p) * snap];
-    let normal_moves = ((nx - n).length() + (ny - n).length()) * snap;
+    let turn = Turn([(nx - n) * snap, (ny - n) * snap]);
+    let normal_moves = turn.reach();
     let (vis, l): (f32, Legal) = if lookup.mipmapped() {
-        lookup.judged_mip(p, n, moves, normal_moves, &neighbours(tri, geo, pt.x, pt.y))
+        lookup.judged_mip(p, n, moves, turn, &neighbours(tri, geo, pt.x, pt.y))
     } else {
-        lookup.judged(p, n, moves, normal_moves)
+        lookup.judged(p, n, moves, turn)
     };
     let (albedo, to_light, to_eye) = (pt.albedo, pt.to_light, pt.to_eye);
     let light = Vec3::from(case.light.radiance());

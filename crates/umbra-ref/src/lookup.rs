@@ -134,6 +134,31 @@ pub mod ambiguity {
     pub const LOD: u8 = 128;
 }
 
+/// How a smooth surface's interpolated normal turns across a judged region: the two
+/// world-space vectors it moves by when the camera's vertex snapping moves the surface under
+/// the pixel by the snapping's reach along screen x and y (as the region's `snap` moves the
+/// point). The turn frees two things: N·L, which the slope bias reads (its reach,
+/// [`Turn::reach`]), and the normal-offset point p + n·o, which moves by o·Δn
+/// ([`Turn::offset_moves`]). A flat face does not turn.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Turn(pub [Vec3; 2]);
+
+impl Turn {
+    /// No turn: a flat face, or a lookup judged at one point.
+    pub const NONE: Turn = Turn([Vec3::ZERO; 2]);
+
+    /// How far the normal may turn across the region: the sum of its moves' lengths.
+    pub fn reach(&self) -> f32 {
+        self.0[0].length() + self.0[1].length()
+    }
+
+    /// The moves of a point offset along the normal by up to `offset` (either sign): o·Δn
+    /// along each of the turn's two directions.
+    fn offset_moves(&self, offset: f32) -> [Vec3; 2] {
+        [self.0[0] * offset, self.0[1] * offset]
+    }
+}
+
 /// The values a conformant implementation may return for one lookup, before the target
 /// stores them: any v in [lo, hi] that is a multiple of the case's quantum
 /// ([`quantum`]), within the storage's tolerance.
@@ -532,7 +557,7 @@ impl Lookup<'_> {
         p: Vec3,
         n: Vec3,
         snap: [Vec3; 2],
-        turn: f32,
+        turn: Turn,
         nb: &Neighbours,
     ) -> (f32, Legal) {
         let vis = self.visibility_mip(p, n, nb);
@@ -635,19 +660,21 @@ impl Lookup<'_> {
     /// surface under the pixel by the snapping's reach along screen x and y (the point is then
     /// anywhere in the parallelogram they span). See [`Lookup::legal_at`] for how a region of
     /// points is judged as a whole.
-    pub fn judged(&self, p: Vec3, n: Vec3, snap: [Vec3; 2], turn: f32) -> (f32, Legal) {
+    pub fn judged(&self, p: Vec3, n: Vec3, snap: [Vec3; 2], turn: Turn) -> (f32, Legal) {
         let vis = self.visibility(p, n);
         let d = position_freedom(p, self.reach) + self.offsets_reach() * 16.0 * f32::EPSILON;
         let arithmetic = [Vec3::X * d, Vec3::Y * d, Vec3::Z * d];
         let here = self.legal_at(p, n, &arithmetic, 0.0);
         let [sx, sy] = snap;
-        let moved = [arithmetic[0], arithmetic[1], arithmetic[2], sx, sy];
+        let [tx, ty] = turn.offset_moves(self.normal_offsets_reach());
+        let moved = [arithmetic[0], arithmetic[1], arithmetic[2], sx, sy, tx, ty];
         note(|| {
             format!(
-                "lookup at p = {p}, n = {n}: value {vis}, legal {here:?} with the arithmetic freedom {d} per axis; with the snapping's moves {snap:?} too:"
+                "lookup at p = {p}, n = {n}: value {vis}, legal {here:?} with the arithmetic freedom {d} per axis; with the snapping's moves {snap:?} and the normal offset's turn {:?} too:",
+                [tx, ty]
             )
         });
-        let mut all = self.legal_at(p, n, &moved, turn);
+        let mut all = self.legal_at(p, n, &moved, turn.reach());
         if (all.lo, all.hi) != (here.lo, here.hi) {
             // The region judged as a whole decouples what varies together across it (the
             // weights, the texel, the reference value); its quarters, each judged the same
@@ -673,14 +700,16 @@ impl Lookup<'_> {
         n: Vec3,
         arithmetic: &[Vec3; 3],
         snap: [Vec3; 2],
-        turn: f32,
+        turn: Turn,
         depth: u32,
     ) -> Option<Legal> {
         let [sx, sy] = [snap[0] * 0.5, snap[1] * 0.5];
+        // Each quarter keeps the whole turn: its normals lie within it.
+        let [tx, ty] = turn.offset_moves(self.normal_offsets_reach());
         let mut out: Option<Legal> = None;
         for c in [p + sx + sy, p + sx - sy, p - sx + sy, p - sx - sy] {
-            let moves = [arithmetic[0], arithmetic[1], arithmetic[2], sx, sy];
-            let mut l = self.legal_at(c, n, &moves, turn);
+            let moves = [arithmetic[0], arithmetic[1], arithmetic[2], sx, sy, tx, ty];
+            let mut l = self.legal_at(c, n, &moves, turn.reach());
             if depth > 1 && l.lo < l.hi {
                 let centre = self.legal_at(c, n, arithmetic, 0.0);
                 if (centre.lo, centre.hi) != (l.lo, l.hi) {
@@ -718,6 +747,13 @@ impl Lookup<'_> {
     /// The largest distance the offsets of [`Lookup::moved`] move a point, on any face: what
     /// the shader's rounding (or fusing) of those steps is relative to.
     fn offsets_reach(&self) -> f32 {
+        self.normal_offsets_reach() + self.shadow.bias.light_offset.abs()
+    }
+
+    /// The largest distance a point moves along its normal in [`Lookup::moved`], on any
+    /// face: `normal_offset` and the face's texel-scaled one (what a turn of the normal
+    /// swings the offset point by, per unit of turn).
+    fn normal_offsets_reach(&self) -> f32 {
         let b = &self.shadow.bias;
         let faces = (0..self.light.views.len())
             .map(|f| {
@@ -726,7 +762,7 @@ impl Lookup<'_> {
                     .abs()
             })
             .fold(0.0, f32::max);
-        b.normal_offset.abs() + faces + b.light_offset.abs()
+        b.normal_offset.abs() + faces
     }
 
     /// The face, the coordinate and the reference value before any clamp, at `p` (before the
@@ -1974,7 +2010,7 @@ mod tests {
             let k = 0.002 + 0.02 * rand();
             let sx = (b - a).normalize_or_zero() * k;
             let sy = (c - a).normalize_or_zero() * k * rand();
-            let (_, legal) = lookup.judged(p, n, [sx, sy], 0.0);
+            let (_, legal) = lookup.judged(p, n, [sx, sy], Turn::NONE);
             for _ in 0..24 {
                 let q = p + sx * (2.0 * rand() - 1.0) + sy * (2.0 * rand() - 1.0);
                 let vis = lookup.visibility(q, n);
@@ -1997,6 +2033,24 @@ mod mip_tests {
     use super::*;
     use umbra_case::format::Mipmaps;
 
+    /// A one-point case's run, GL's convention and its judged map, for a [`Lookup`].
+    fn gl_run(
+        case: &str,
+    ) -> (
+        umbra_case::Prepared,
+        Convention,
+        Vec<crate::shadow_pass::DepthLayer>,
+    ) {
+        let point = umbra_case::load::load_str(case, std::path::Path::new("case.json"))
+            .expect("the case")
+            .remove(0);
+        let run = umbra_case::Prepared::new(point);
+        let clip = umbra_case::ClipDepth::MinusOneToOne;
+        let conv = crate::convention(run.case(), clip);
+        let layers = crate::judged_layers(&run, clip, Profile::GL);
+        (run, conv, layers)
+    }
+
     /// soak-47-845: at a smooth surface's terminator (N·L ≈ 0) the slope bias is its cap on
     /// one side and nothing on the other (c ≤ 0 reads no bias), and an interpolated normal
     /// is another point's where the camera's snapping moves the surface: lavapipe's lit pass
@@ -2009,13 +2063,7 @@ mod mip_tests {
             "camera": {"eye": [0, 8, 8], "target": [0, 0, 0], "fov_y_deg": 50, "near": 0.5, "far": 40, "size": [64, 48]},
             "light": {"directional": {"azimuth_deg": 30, "elevation_deg": 50, "distance": 20, "fit": "scene"}},
             "shadow": {"size": [256, 256], "format": "depth16", "bias": {"constant": 0.000239, "slope": {"scale": 0.000439, "max": 0.018}}}}"#;
-        let point = umbra_case::load::load_str(CASE, std::path::Path::new("terminator.json"))
-            .expect("the case")
-            .remove(0);
-        let run = umbra_case::Prepared::new(point);
-        let clip = umbra_case::ClipDepth::MinusOneToOne;
-        let conv = crate::convention(run.case(), clip);
-        let layers = crate::judged_layers(&run, clip, Profile::GL);
+        let (run, conv, layers) = gl_run(CASE);
         let lookup = Lookup::new(&run, conv, &layers, Profile::GL);
         let p = Vec3::new(0.3, 0.0, -0.2);
         let l = lookup.light.to_light(p);
@@ -2037,6 +2085,37 @@ mod mip_tests {
             lo < unbiased - 0.017 && hi >= unbiased - 1e-6,
             "with a turn: from the cap to none, [{lo}, {hi}] against {unbiased}"
         );
+    }
+
+    /// The normal-offset point p + n·o swings by o·Δn when the interpolated normal turns
+    /// under the camera's snapping: a point a driver reads shadowed with the turned normal
+    /// and lit with its own is sure-lit to the judge without the turn, and may be either
+    /// with it.
+    #[test]
+    fn a_turning_normal_swings_the_normal_offset_point() {
+        const CASE: &str = r#"{"name": "swing", "about": "the normal offset's turn",
+            "scene": {"objects": [{"plane": {"point": [0, 0, 0], "normal": [0, 1, 0], "half_extent": 6}},
+                                  {"box": {"center": [0, 1, 0], "size": [2, 2, 2]}}]},
+            "camera": {"eye": [0, 8, 8], "target": [0, 0, 0], "fov_y_deg": 50, "near": 0.5, "far": 40, "size": [64, 48]},
+            "light": {"directional": {"azimuth_deg": 30, "elevation_deg": 55, "distance": 20, "fit": "scene"}},
+            "shadow": {"size": [256, 256], "bias": {"constant": 0.0005, "normal_offset": 0.5}}}"#;
+        let (run, conv, layers) = gl_run(CASE);
+        let lookup = Lookup::new(&run, conv, &layers, Profile::GL);
+        let (n, turned) = (Vec3::Y, (Vec3::Y + Vec3::X * 0.1).normalize());
+        let turn = Turn([turned - n, Vec3::ZERO]);
+        let still = [Vec3::ZERO; 2];
+        let found = (0..2400)
+            .map(|i| -6.0 + i as f32 * 0.005)
+            .flat_map(|t| [Vec3::new(t, 0.0, 0.0), Vec3::new(0.0, 0.0, t)])
+            .find(|&p| {
+                lookup.visibility(p, n) == 1.0
+                    && lookup.visibility(p, turned) == 0.0
+                    && lookup.judged(p, n, still, Turn::NONE).1.lo == 1.0
+            });
+        let p = found.expect("a point the turn takes into the shadow");
+        let (_, l) = lookup.judged(p, n, still, turn);
+        assert_eq!(l.lo, 0.0, "at {p}: {l:?}");
+        assert_eq!(l.hi, 1.0, "at {p}: {l:?}");
     }
 
     fn points() -> Vec<umbra_case::CasePoint> {

@@ -94,6 +94,55 @@ fn a_faulted_point_reduces_to_a_quarter_and_still_fails_the_same_way() {
     }
 }
 
+/// Lights go one at a time, and the last two become a one-light case (`light` alone, no
+/// `lights`, no `shadow.placement`), which `umbra repro`'s program can carry: a fault that
+/// breaks every light's map needs only one of three. (A fault that needs two lights keeps
+/// two: `tests/repro.rs`, light-swap.)
+#[test]
+fn a_case_of_three_lights_reduces_to_the_one_light_its_failure_needs() {
+    let out = scratch("reduce-lights").join("reduced.json");
+    let o = umbra(
+        &[
+            "reduce",
+            "cases/lights/three-lights.json",
+            "--point",
+            "three-lights@shadow.filter=nearest",
+            "--backend",
+            "gl33/llvmpipe",
+            "-o",
+            out.to_str().unwrap_or_default(),
+        ],
+        Some("shadow-half-texel"),
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(t.contains("kept: removed light"), "{t}");
+    let reduced = std::fs::read_to_string(&out).expect("reduced case");
+    assert!(
+        !reduced.contains("\"lights\"") && !reduced.contains("placement"),
+        "{reduced}"
+    );
+    let points = umbra_case::load_file(&out).expect("the reduced case loads");
+    assert!(points[0].case.lights.is_empty(), "{reduced}");
+    // Still failing under the fault, still passing without it.
+    let file = out.to_str().unwrap_or_default();
+    for (fault, code) in [(Some("shadow-half-texel"), 1), (None, 0)] {
+        let dir = scratch("reduce-lights-render");
+        let o = umbra(
+            &[
+                "render",
+                file,
+                "--backend",
+                "gl33/llvmpipe",
+                "-o",
+                dir.to_str().unwrap_or_default(),
+            ],
+            fault,
+        );
+        assert_eq!(o.status.code(), Some(code), "{fault:?}: {}", text(&o));
+    }
+}
+
 #[test]
 fn a_point_that_passes_is_not_reduced() {
     let o = umbra(

@@ -179,6 +179,29 @@ fn a_mistake_in_umbras_own_calls_is_not_blamed_on_the_driver() {
     );
 }
 
+/// A failure that needs two lights (light-swap: one light's pass reads the other's map) keeps
+/// both through the reducer, and the repro is refused naming the reduced case: its program's
+/// probes hold one light's visibility.
+#[test]
+fn a_failure_that_needs_several_lights_is_refused_naming_its_reduced_case() {
+    let dir = scratch("repro-lights").join("bundle");
+    let o = umbra(
+        &[
+            "repro",
+            "gl33/llvmpipe/three-lights@shadow.filter=nearest",
+            "-o",
+            dir.to_str().unwrap_or_default(),
+        ],
+        Some("light-swap"),
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(t.contains("the failure needs 2 lights"), "{t}");
+    let points = umbra_case::load_file(&dir.join("case.json")).expect("the reduced case");
+    assert_eq!(points[0].case.lights.len(), 2, "{t}");
+    assert!(!dir.join("repro.c").exists(), "{t}");
+}
+
 #[test]
 fn a_bundle_is_never_written_over_another() {
     let dir = scratch("repro-twice");

@@ -13,8 +13,9 @@
 //! must stay a crash or hang. The changes, in order of what they save:
 //!
 //! 1. no sweep (the point's values are baked in) and no twins;
-//! 2. objects removed (halves first, then one at a time), sphere tessellation halved, inline
-//!    mesh triangles removed;
+//! 2. lights removed one at a time (the last two become a one-light case), objects removed
+//!    (halves first, then one at a time), sphere tessellation halved, inline mesh triangles
+//!    removed;
 //! 3. the camera's image and the shadow map halved (down to 16 pixels a side);
 //! 4. technique, shading and light fields back to their defaults, one at a time (filter,
 //!    bias terms, compare, attachments, cull, outside, ...);
@@ -187,6 +188,7 @@ impl Judge {
 pub fn main(args: &ReduceArgs) -> Outcome {
     let (point, backend) = target(args)?;
     let mut r = Reducer::start(args, &point, &backend)?;
+    r.lights();
     r.objects();
     r.tessellation();
     r.sizes();
@@ -369,7 +371,31 @@ impl Reducer {
         }
     }
 
-    /// Step 2: objects, halves first, then one at a time, until nothing more goes.
+    /// Step 2: lights, one at a time, while the rest still fails the same way. Two become
+    /// one as a one-light case (`light` alone, no `lights`, no `shadow.placement`, which says
+    /// where several lights' maps live), the case `umbra repro`'s program can carry; the
+    /// first light's ambient term stays with whichever light is left. Each light is a lit
+    /// pass and a map, so this saves the most of any step on a case of several.
+    fn lights(&mut self) {
+        loop {
+            let lights = self.case["lights"].as_array().cloned().unwrap_or_default();
+            if lights.len() < 2 {
+                return;
+            }
+            let n = lights.len();
+            let kept = (0..n).any(|k| {
+                let mut rest = lights.clone();
+                let gone = rest.remove(k);
+                let what = format!("removed light {k} of {n} ({})", describe_objects(&[gone]));
+                self.keep(without_lights(&self.case, rest), what)
+            });
+            if !kept {
+                return;
+            }
+        }
+    }
+
+    /// Step 2, continued: objects, halves first, then one at a time, until nothing more goes.
     fn objects(&mut self) {
         let count = |case: &Value| case["scene"]["objects"].as_array().map_or(0, Vec::len);
         loop {
@@ -643,6 +669,27 @@ fn size_line(s: &Size) -> String {
         "{} triangles, {} pixels, {} map texels",
         s.triangles, s.pixels, s.texels
     )
+}
+
+/// `case` lit by `rest` only: `lights` for two or more (a case written back holds `light`
+/// too, equal to the first), `light` alone for one.
+fn without_lights(case: &Value, rest: Vec<Value>) -> Value {
+    let mut cand = case.clone();
+    let Some(first) = rest.first().cloned() else {
+        return cand;
+    };
+    if let Some(obj) = cand.as_object_mut() {
+        obj.insert("light".into(), first);
+        if rest.len() == 1 {
+            obj.remove("lights");
+            if let Some(shadow) = obj.get_mut("shadow").and_then(Value::as_object_mut) {
+                shadow.remove("placement");
+            }
+        } else {
+            obj.insert("lights".into(), Value::Array(rest));
+        }
+    }
+    cand
 }
 
 fn describe_objects(objs: &[Value]) -> String {

@@ -2,7 +2,9 @@
 //! becomes a bundle a driver developer can use without umbra (see [`crate::repro`]):
 //!
 //! 1. the point is found under `--cases` (or `--case FILE`) and reduced by `umbra reduce`
-//!    (same failed checks, still passing on the reference) into `case.json`;
+//!    (same failed checks, still passing on the reference) into `case.json`; a case of several
+//!    lights becomes a one-light case when the failure needs only one, and is refused, naming
+//!    the reduced case, when it needs several;
 //! 2. in the driver's process, the reduced run is rendered judged and recorded, and
 //!    `repro.c`, the probes, the pictures and `facts.json` are written ([`crate::repro::emit`]);
 //! 3. `repro.c` is compiled with `cc` and run on the driver and on a conforming control
@@ -54,6 +56,7 @@ pub fn main(args: &ReproArgs) -> Outcome {
         t.point
     );
     let (reduced, summary) = reduce_step(args, &t)?;
+    one_light(&reduced)?;
     let facts = emit_step(args, &t, &reduced)?;
     let mut m = Measured::new(
         t.run.clone(),
@@ -114,18 +117,6 @@ fn target(args: &ReproArgs) -> Result<Target, Error> {
     std::fs::create_dir_all(&out)
         .map_err(|e| Error::new(format!("cannot create {}: {e}", out.display())))?;
     let (case_file, point) = find_point(args, &case_point).map_err(Error::new)?;
-    let several = umbra_case::load_file(&case_file)
-        .map(|points| points.iter().any(|p| !p.case.lights.is_empty()))
-        .unwrap_or(false);
-    if several {
-        // The standalone program's probes hold one visibility readback to one light's
-        // intervals; a frame of several lights reads one back per light.
-        return Err(Error::new(format!(
-            "{case_point}: a case with several lights (`lights`) has no standalone repro yet: \
-             its probes hold one light's visibility; make a case of the failing light alone \
-             (`light` = that entry of `lights`) and run umbra repro on it"
-        )));
-    }
     Ok(Target {
         run: run.clone(),
         backend,
@@ -186,6 +177,31 @@ fn reduce_step(args: &ReproArgs, t: &Target) -> Result<(PathBuf, String), Error>
         .to_string();
     println!("  reduced: {}", reduced.display());
     Ok((reduced, summary))
+}
+
+/// Refuses a reduced case that still has several lights: the standalone program's probes
+/// hold one visibility readback to one light's intervals, and the reducer keeps every light
+/// the failure needs (it drops them one at a time while the rest still fails).
+fn one_light(reduced: &Path) -> Result<(), Error> {
+    let lights = umbra_case::load_file(reduced)
+        .map(|points| {
+            points
+                .iter()
+                .map(|p| p.case.lights.len())
+                .max()
+                .unwrap_or(0)
+        })
+        .map_err(|e| Error::new(format!("the reduced case does not load: {e}")))?;
+    if lights > 1 {
+        return Err(Error::new(format!(
+            "the failure needs {lights} lights: without any one of them the reduced case no longer \
+             fails the same way (reduce.log), and a standalone program of several lights is not \
+             built yet (its probes hold one light's visibility). The reduced case is {}; \
+             `umbra render` on it shows each light's failures",
+            reduced.display()
+        )));
+    }
+    Ok(())
 }
 
 /// The driver-side half ([`crate::repro::emit`]) in the backend's own process; its facts.
