@@ -50,7 +50,7 @@ fn shortfall(free: u64, need_gib: u64, root: &Path, what: &str) -> Option<String
     (free < need_gib * gib).then(|| {
         format!(
             "warning: {:.1} GiB free under {}; {what} peaks at about {need_gib} GiB there. \
-             Free space (old `target/umbra/runs`, `cargo clean`) or expect \"No space left on device\" part-way",
+             Free space (`target/umbra`: its last runs and judge cache; `cargo clean`) or expect \"No space left on device\" part-way",
             free as f64 / gib as f64,
             root.display()
         )
