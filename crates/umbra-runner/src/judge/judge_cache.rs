@@ -39,13 +39,19 @@
 //! not (the reference's answer stays inside), which is why the checksum is keyed.
 //!
 //! Every entry is stored deflated ([`pack`]: `UMBZ1`, the inflated length (u64), then a raw
-//! deflate stream at flate2's fastest level): the judged renders are mostly runs of equal
-//! values (background, uniformly lit or shadowed floor, the map's cleared texels), and
-//! unpacked the catalogue's entries took 11 GB of one CI job's disk (2,324 judged entries,
-//! 6 GB of them the GL profile's map ranges) and filled it; packed they take a tenth.
-//! Inflated, formats are little-endian, each starting with a magic, width and height (u32)
-//! and a u64 key check (FNV-1a of the resolved case point, and of the profile's name for a
-//! judged render), and ending with a u64 checksum ([`checksum`]) of every byte before it:
+//! deflate stream at flate2's fastest level) and sealed after packing: the file ends with a
+//! u64 checksum ([`checksum`]) of every byte before it, so a change to any stored byte is
+//! found before anything is inflated. (Sealed inside the deflate stream, a damaged stream
+//! could inflate to the very bytes it held: a flipped bit in the dynamic Huffman header that
+//! gives an unused symbol a code after every used one changes nothing the inflater reads.
+//! The entry was then right and used without a word, and a test that damages one bit failed
+//! at random, as the secret changed the stream's tables: stop 54's CI.) The judged renders
+//! are mostly runs of equal values (background, uniformly lit or shadowed floor, the map's
+//! cleared texels), and unpacked the catalogue's entries took 11 GB of one CI job's disk
+//! (2,324 judged entries, 6 GB of them the GL profile's map ranges) and filled it; packed
+//! they take a tenth. Inflated, formats are little-endian, each starting with a magic, width
+//! and height (u32) and a u64 key check (FNV-1a of the resolved case point, and of the
+//! profile's name for a judged render):
 //! - `truth-KEY.bin` (`UMBT2`): per pixel the class (u8), the edge flag (u8), the face (u32).
 //!   The hit points are not kept (the judge does not read them).
 //! - `judged-KEY.bin` (`UMBJ5`): the quantum (f32), the reference's RGBA8 colour, its
@@ -523,7 +529,9 @@ fn unsealed(bytes: &[u8]) -> Result<&[u8], String> {
 const PACKED_MAGIC: &[u8; 5] = b"UMBZ1";
 
 /// The largest inflated entry [`unpack`] accepts: a judged render of a 4096 × 4096 frame
-/// with an 8192² map is about 1.3 GiB; a damaged length must not become an allocation.
+/// with an 8192² map is about 1.3 GiB; a wrong length (the checksum stands before it, so
+/// only an entry written by other code under this build's name) must not become an
+/// allocation.
 const MAX_INFLATED: u64 = 2 << 30;
 
 /// `bytes` deflated behind [`PACKED_MAGIC`] and their length. The fastest level: about a
@@ -540,8 +548,8 @@ fn pack(bytes: &[u8]) -> Vec<u8> {
     z.finish().unwrap_or_default()
 }
 
-/// What [`pack`] packed, or what is wrong with the file (its checksum, inside, is checked
-/// after this).
+/// What [`pack`] packed, or what is wrong with it (the file's checksum, around it, is
+/// checked before this).
 fn unpack(bytes: &[u8]) -> Result<Vec<u8>, String> {
     if bytes.is_empty() {
         return Err("is empty".into());
@@ -652,13 +660,13 @@ fn write_truth(t: &Truth, key: u64) -> Vec<u8> {
     t.face
         .iter()
         .for_each(|f| out.extend_from_slice(&f.to_le_bytes()));
-    pack(&sealed(out))
+    sealed(pack(&out))
 }
 
 fn read_truth(bytes: &[u8], key: u64) -> Result<Truth, String> {
-    let inflated = unpack(bytes)?;
+    let inflated = unpack(unsealed(bytes)?)?;
     let mut r = Reader {
-        bytes: unsealed(&inflated)?,
+        bytes: &inflated,
         at: 0,
     };
     let dims = r.header(TRUTH_MAGIC, key)?;
@@ -713,7 +721,7 @@ fn write_judged(j: &Judged, key: u64) -> Vec<u8> {
     for (lo, hi) in &j.map {
         put_f32s(&mut out, &[*lo, *hi]);
     }
-    pack(&sealed(out))
+    sealed(pack(&out))
 }
 
 /// A judged entry; `profile` and `color_format` are the key's case's (not stored).
@@ -723,9 +731,9 @@ fn read_judged(
     profile: Profile,
     color_format: ColorFormat,
 ) -> Result<Judged, String> {
-    let inflated = unpack(bytes)?;
+    let inflated = unpack(unsealed(bytes)?)?;
     let mut r = Reader {
-        bytes: unsealed(&inflated)?,
+        bytes: &inflated,
         at: 0,
     };
     let dims = r.header(JUDGED_MAGIC, key)?;
@@ -944,20 +952,29 @@ mod tests {
         let good = write_truth(&clean, kt);
         let mut flipped = good.clone();
         flipped[40] ^= 0x04;
-        // Damage inside the deflate stream is found by the inflater or, where it still
-        // inflates, by the checksum; both say "damaged".
-        let mut inner = unpack(&good).expect("packed");
-        inner[40] ^= 0x04;
+        let raw = unpack(unsealed(&good).expect("sealed")).expect("packed");
         for (bytes, why) in [
             (Vec::new(), "is empty"),
             (good[..good.len() / 2].to_vec(), "damaged"),
-            (flipped, "damaged"),
-            (pack(&inner), "fails its checksum"),
+            (flipped, "fails its checksum"),
             (good[..6].to_vec(), "truncated"),
-            (unpack(&good).expect("packed"), "not a packed entry"),
+            (raw.clone(), "fails its checksum"),
+            (sealed(raw), "not a packed entry"),
         ] {
             let err = read_truth(&bytes, kt).err().unwrap_or_default();
             assert!(err.contains(why), "{why}: {err}");
+        }
+        // Every single-bit change of the stored bytes is refused, wherever it falls: in the
+        // deflate stream's Huffman header too, where some flips inflate to the same bytes
+        // (the entry still right, but the damage unsaid; the checksum used to be inside).
+        for bit in 0..good.len() * 8 {
+            let mut b = good.clone();
+            b[bit / 8] ^= 1 << (bit % 8);
+            assert!(
+                read_truth(&b, kt).is_err_and(|e| e.contains("fails its checksum")),
+                "bit {bit} of {} bytes",
+                good.len()
+            );
         }
         // Damage that keeps a valid checksum (a hostile edit): every pixel "outside the
         // light", which once judged nothing and passed. The sample recomputes the truth.
