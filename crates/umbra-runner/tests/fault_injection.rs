@@ -337,7 +337,8 @@ fn a_killed_or_interrupted_run_leaves_the_previous_latest_intact() {
         let _ = child.wait();
         // Its workers die with it, the one hanging in fake/hang included (issue 36: they
         // lived on, parent PID 1, after every CI run).
-        let deadline = Instant::now() + Duration::from_secs(3);
+        // (A deadline, not a wait: they go within a watchdog tick, 100 ms, when nothing stalls.)
+        let deadline = Instant::now() + Duration::from_secs(10);
         while !workers_of(&cache).is_empty() && Instant::now() < deadline {
             std::thread::sleep(Duration::from_millis(50));
         }
@@ -357,13 +358,34 @@ fn a_killed_or_interrupted_run_leaves_the_previous_latest_intact() {
             "killed at {at} ms: the previous report changed"
         );
     }
-    // SIGTERM: an orderly stop, now, not after the hang's timeout.
+    // SIGTERM: an orderly stop, now, not after the hang's timeout. Sent once the reference's
+    // last run has printed its verdict (not after a fixed sleep, which a slow machine
+    // outlasts): its verdict must be among the partial results.
     let mut child = command(&long, &[])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .expect("spawn");
-    std::thread::sleep(Duration::from_millis(2500));
+    let stdout = child.stdout.take().expect("stdout");
+    let (seen, verdict) = std::sync::mpsc::channel();
+    let printed = std::thread::spawn(move || {
+        use std::io::BufRead as _;
+        let mut all = String::new();
+        for line in std::io::BufReader::new(stdout)
+            .lines()
+            .map_while(Result::ok)
+        {
+            if line.contains("Pass ref/square-occluder") {
+                let _ = seen.send(());
+            }
+            all += &line;
+            all.push('\n');
+        }
+        all
+    });
+    verdict
+        .recv_timeout(Duration::from_secs(120))
+        .expect("the reference's runs finish while fake/hang hangs");
     let t = Instant::now();
     let kill = Command::new("sh")
         .args(["-c", &format!("kill -TERM {}", child.id())])
@@ -373,7 +395,7 @@ fn a_killed_or_interrupted_run_leaves_the_previous_latest_intact() {
     let status = wait_for(&mut child, Duration::from_secs(20)).expect("stopped on SIGTERM");
     let o = child.wait_with_output().expect("output");
     let t_stop = t.elapsed();
-    let said = text(&o);
+    let said = printed.join().expect("stdout") + &text(&o);
     assert_eq!(status.code(), Some(130), "{said}");
     assert!(t_stop < Duration::from_secs(15), "took {t_stop:?}");
     assert!(

@@ -93,9 +93,13 @@ impl Progress {
 
     /// `[k/N] ########------ pass P fail F skip S · 1m02s, ETA 0m41s`.
     pub fn status_line(&self) -> String {
+        self.status_line_at(self.started.elapsed().as_secs_f64())
+    }
+
+    /// [`Progress::status_line`] `elapsed` seconds after the start.
+    fn status_line_at(&self, elapsed: f64) -> String {
         const WIDTH: usize = 24;
         let filled = (self.done * WIDTH).checked_div(self.total).unwrap_or(0);
-        let elapsed = self.started.elapsed().as_secs_f64();
         let eta = if self.done == 0 {
             f64::NAN
         } else {
@@ -135,10 +139,17 @@ mod tests {
         for s in ["Pass", "Fail", "Skip"] {
             p.finished(s, "");
         }
-        let l = p.status_line();
-        assert!(
-            l.starts_with("[3/4] ##################------ pass 1 fail 1 skip 1 · 0m00s, ETA 0m00s"),
+        // At a fixed time (the wall clock's would make the text depend on the machine's
+        // speed): 3 runs in 30 s leave one, 10 s.
+        let l = p.status_line_at(30.0);
+        assert_eq!(
+            l, "[3/4] ##################------ pass 1 fail 1 skip 1 · 0m30s, ETA 0m10s",
             "{l}"
+        );
+        assert!(
+            Progress::new(2)
+                .status_line_at(0.0)
+                .ends_with("0m00s, ETA ?")
         );
     }
 }

@@ -1112,7 +1112,7 @@ mod tests {
 
     #[test]
     fn expectations_select_drivers_by_version_and_renderer() {
-        let dir = std::env::temp_dir().join(format!("umbra-exp-{}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!("umbra-exp-select-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("temp dir");
         std::fs::write(
             dir.join("mesa.txt"),

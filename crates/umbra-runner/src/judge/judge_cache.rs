@@ -859,6 +859,17 @@ impl<'a> Reader<'a> {
 mod tests {
     use super::*;
 
+    /// Settles this process's [`SECRET`] before a test seals anything: it is set once, by the
+    /// first cache directory opened, and a test that sealed with the unset (zero) key while a
+    /// sibling test opened a directory would read its own entry back as damaged.
+    fn settled_secret() {
+        // One directory for every test process (its secret made once, by whichever wins the
+        // link), so that nothing is left behind per run.
+        let dir = std::env::temp_dir().join("umbra-test-secret");
+        std::fs::create_dir_all(&dir).expect("dir");
+        assert!(load_secret(&dir));
+    }
+
     #[test]
     fn a_locked_entry_is_waited_for_and_a_dead_holder_is_taken_over() {
         let dir = std::env::temp_dir().join(format!("umbra-lock-{}", std::process::id()));
@@ -900,6 +911,7 @@ mod tests {
 
     #[test]
     fn a_written_basis_reads_back_identical() {
+        settled_secret();
         let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../cases/basics/square-occluder.json");
         let point = umbra_case::load_file(&file).expect("case").remove(0);
@@ -944,6 +956,7 @@ mod tests {
     /// through a damaged cache is the clean one, bit for bit.
     #[test]
     fn a_damaged_entry_is_refused_and_recomputed_identical() {
+        settled_secret();
         let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../cases/basics/square-occluder.json");
         let prepared = Prepared::new(umbra_case::load_file(&file).expect("case").remove(0));
@@ -1018,9 +1031,7 @@ mod tests {
     /// checksum was used) fails its checksum.
     #[test]
     fn an_entry_resealed_without_the_cache_secret_is_refused() {
-        let dir = std::env::temp_dir().join(format!("umbra-secret-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("dir");
-        assert!(load_secret(&dir));
+        settled_secret();
         let body = b"UMBJ5 an entry whose intervals were widened".to_vec();
         assert!(unsealed(&sealed(body.clone())).is_ok());
         let mut forged = body.clone();
@@ -1034,7 +1045,6 @@ mod tests {
         };
         forged.extend_from_slice(&unkeyed.to_le_bytes());
         assert!(unsealed(&forged).is_err_and(|e| e.contains("checksum")));
-        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
