@@ -118,8 +118,10 @@ impl Worker {
     pub fn stderr(&mut self) -> String {
         if self.child.try_wait().is_ok_and(|s| s.is_some()) {
             // Dead: its stderr closes, and the reader reaches the end (bounded: a grandchild
-            // holding the pipe open must not hang the run).
-            self.log.wait_closed(Duration::from_millis(500));
+            // holding the pipe open must not hang the run; its bytes are in the pipe already,
+            // so the bound is only met by such a grandchild or by a reader thread stalled on a
+            // loaded machine).
+            self.log.wait_closed(Duration::from_secs(2));
         }
         self.log.text()
     }
@@ -148,7 +150,9 @@ impl Worker {
                     return match serde_json::from_str::<RunReport>(&line) {
                         Ok(mut r) => {
                             // The run's last stderr lines are in before its answer is used.
-                            self.log.wait_mark(self.marks, Duration::from_secs(1));
+                            // The worker wrote the mark before this answer: the wait ends as
+                            // soon as the reader thread runs; the bound is for a stalled one.
+                            self.log.wait_mark(self.marks, Duration::from_secs(10));
                             if let Some(why) = r.retired.clone() {
                                 // The run's stderr is the retiring worker's: kept past the swap.
                                 let said = self.log.text();
