@@ -301,6 +301,38 @@ fn workers_of(cache: &Path) -> Vec<u32> {
         .collect()
 }
 
+/// `umbra args` started, once its stdout has printed a line containing `line` (at most 120 s);
+/// with the thread that gathers all it prints.
+fn spawn_until(args: &[&str], line: &str) -> (Child, std::thread::JoinHandle<String>) {
+    let mut child = command(args, &[])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let stdout = child.stdout.take().expect("stdout");
+    let (seen, printed) = std::sync::mpsc::channel();
+    let wanted = line.to_string();
+    let all = std::thread::spawn(move || {
+        use std::io::BufRead as _;
+        let mut all = String::new();
+        for line in std::io::BufReader::new(stdout)
+            .lines()
+            .map_while(Result::ok)
+        {
+            if line.contains(&wanted) {
+                let _ = seen.send(());
+            }
+            all += &line;
+            all.push('\n');
+        }
+        all
+    });
+    printed
+        .recv_timeout(Duration::from_secs(120))
+        .unwrap_or_else(|_| panic!("umbra {args:?} never printed {line:?}"));
+    (child, all)
+}
+
 #[test]
 fn a_killed_or_interrupted_run_leaves_the_previous_latest_intact() {
     let (out, cache) = (scratch("fi-kill"), scratch("fi-kill-cache"));
@@ -361,31 +393,7 @@ fn a_killed_or_interrupted_run_leaves_the_previous_latest_intact() {
     // SIGTERM: an orderly stop, now, not after the hang's timeout. Sent once the reference's
     // last run has printed its verdict (not after a fixed sleep, which a slow machine
     // outlasts): its verdict must be among the partial results.
-    let mut child = command(&long, &[])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn");
-    let stdout = child.stdout.take().expect("stdout");
-    let (seen, verdict) = std::sync::mpsc::channel();
-    let printed = std::thread::spawn(move || {
-        use std::io::BufRead as _;
-        let mut all = String::new();
-        for line in std::io::BufReader::new(stdout)
-            .lines()
-            .map_while(Result::ok)
-        {
-            if line.contains("Pass ref/square-occluder") {
-                let _ = seen.send(());
-            }
-            all += &line;
-            all.push('\n');
-        }
-        all
-    });
-    verdict
-        .recv_timeout(Duration::from_secs(120))
-        .expect("the reference's runs finish while fake/hang hangs");
+    let (mut child, printed) = spawn_until(&long, "Pass ref/square-occluder");
     let t = Instant::now();
     let kill = Command::new("sh")
         .args(["-c", &format!("kill -TERM {}", child.id())])
