@@ -169,8 +169,11 @@ impl Backend for GlBackend {
         if needs.depth_clamp && !caps.depth_clamp {
             return Support::Unsupported("depth clamp (shadow.depth_clamp) needs GL_DEPTH_CLAMP: core in GL 3.2, GL_EXT_depth_clamp on GLES, which this driver does not advertise".into());
         }
-        if needs.cube_array > 0 && api == Api::Gles3 {
-            return Support::Unsupported("point lights' maps in one cube-map array (shadow.placement \"cube_array\") need samplerCubeArrayShadow, which GLES gives from ESSL 3.10 on (GL_EXT_texture_cube_map_array, core in GLES 3.2); umbra's GLES 3 path writes ESSL 3.00 (#version 300 es), where Mesa refuses the extension; \"separate\" runs a cube map per light".into());
+        if needs.cube_array > 0 && api == Api::Gles3 && !caps.cube_map_array {
+            let (major, minor) = caps.version;
+            return Support::Unsupported(format!(
+                "point lights' maps in one cube-map array (shadow.placement \"cube_array\") need samplerCubeArrayShadow, core in GLES 3.2 (ESSL 3.20, which umbra's lit program is then written in), and this driver's context is GLES {major}.{minor}; \"separate\" runs a cube map per light"
+            ));
         }
         if needs.cube_array > 0 && api == Api::Gl33 && !caps.cube_map_array {
             return Support::Unsupported(format!(

@@ -14,6 +14,9 @@ use crate::api::Api;
 pub struct Caps {
     /// The API flavour the context was made for.
     pub api: Api,
+    /// The context's version (major, minor): what the driver gave for the flavour's request,
+    /// often more (a GLES 3.0 request gets Mesa's highest GLES, 3.2 on llvmpipe).
+    pub version: (u32, u32),
     /// Every extension the context advertises.
     pub extensions: HashSet<String>,
     /// KHR_debug: the driver's error messages fail a run's stage.
@@ -42,10 +45,10 @@ pub struct Caps {
     /// is a skip that names the extension.
     pub depth_clamp: bool,
     /// Cube-map arrays (`shadow.placement` `cube_array`): GL_ARB_texture_cube_map_array on
-    /// GL 3.3 (core in GL 4.0), the extension the lit shader enables; without it such a case
-    /// is a skip that names it. GLES 3.0 never: GL_EXT/OES_texture_cube_map_array are
-    /// written against ESSL 3.10, and Mesa refuses them in umbra's `#version 300 es` shaders
-    /// even where the context (GLES 3.2) advertises them.
+    /// GL 3.3 (core in GL 4.0), the extension the lit shader enables; on GLES a 3.2 context,
+    /// where they are core and the lit program is written in ESSL 3.20 (the extensions
+    /// GL_EXT/OES_texture_cube_map_array are written against ESSL 3.10, and Mesa refuses them
+    /// in `#version 300 es`). Without it such a case is a skip that names what is missing.
     pub cube_map_array: bool,
     /// sRGB colour targets (`camera.color_format` `srgb8_alpha8`): SRGB8_ALPHA8 is
     /// colour-renderable in GL 3.0 and GLES 3.0 core; GLES 2 needs GL_EXT_sRGB (SRGB_ALPHA_EXT).
@@ -88,6 +91,7 @@ impl Caps {
                 .then(|| unsized_depth_bits(gl))
                 .flatten(),
             api,
+            version: (version.major, version.minor),
             debug_output: has("GL_KHR_debug"),
             timer_queries: api == Api::Gl33,
             offset_clamp,
@@ -99,7 +103,11 @@ impl Caps {
             seamless_cube_always: api == Api::Gles3,
             depth_clamp: api == Api::Gl33 || has("GL_EXT_depth_clamp"),
             srgb_target: api != Api::Gles2 || has("GL_EXT_sRGB"),
-            cube_map_array: api == Api::Gl33 && has(crate::shaders::cube_array_extension(api)),
+            cube_map_array: match api {
+                Api::Gl33 => has(crate::shaders::cube_array_extension(api)),
+                Api::Gles3 => (version.major, version.minor) >= (3, 2),
+                Api::Gles2 => false,
+            },
             extensions,
         }
     }

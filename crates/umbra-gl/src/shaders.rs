@@ -29,13 +29,22 @@ use umbra_case::technique::{CompareOp, Coordinate, CoordinateStep};
 use crate::api::Api;
 
 fn header(api: Api, fragment: bool) -> String {
+    header_for(api, fragment, false)
+}
+
+/// [`header`], for a lit program that reads a cube-map array when `cube_array`: on GLES that
+/// is ESSL 3.20's (`samplerCubeArrayShadow` is core in GLES 3.2; ESSL 3.00 has no way to it,
+/// and Mesa refuses GL_EXT_texture_cube_map_array there), and both stages of a program must
+/// share their `#version`. GL 3.3 enables GL_ARB_texture_cube_map_array instead
+/// ([`Glsl::declarations`]).
+fn header_for(api: Api, fragment: bool, cube_array: bool) -> String {
+    const ES_PRECISION: &str = "precision highp float;\nprecision highp int;\nprecision highp sampler2D;\n\
+         precision highp sampler2DShadow;\nprecision highp samplerCube;\nprecision highp samplerCubeShadow;\n";
     let mut s = String::new();
     match api {
         Api::Gl33 => s.push_str("#version 330 core\n"),
-        Api::Gles3 => s.push_str(
-            "#version 300 es\nprecision highp float;\nprecision highp int;\nprecision highp sampler2D;\n\
-             precision highp sampler2DShadow;\nprecision highp samplerCube;\nprecision highp samplerCubeShadow;\n",
-        ),
+        Api::Gles3 if cube_array => s.push_str(&format!("#version 320 es\n{ES_PRECISION}")),
+        Api::Gles3 => s.push_str(&format!("#version 300 es\n{ES_PRECISION}")),
         Api::Gles2 => s.push_str("#version 100\nprecision highp float;\n"),
     }
     if api == Api::Gles2 {
@@ -153,9 +162,10 @@ pub fn shadow_fragment(api: Api, with_color: bool) -> String {
     s
 }
 
-/// Vertex shader of the lit pass.
-pub fn lit_vertex(api: Api) -> String {
-    let mut s = header(api, false);
+/// Vertex shader of the lit pass, for the fragment shader of `t` (whose `#version` it
+/// shares).
+pub fn lit_vertex(api: Api, t: &Technique) -> String {
+    let mut s = header_for(api, false, t.cube_array());
     s.push_str(
         "IN vec3 a_pos;\nIN vec3 a_normal;\nIN vec3 a_albedo;\nIN float a_face;\n\
          uniform mat4 u_view_proj;\n\
@@ -214,21 +224,21 @@ struct Glsl {
 impl Dialect for Glsl {
     fn declarations(&self, t: &Technique) -> String {
         let es2 = self.api == Api::Gles2;
-        let mut s = header(self.api, true);
-        if self.cube_array {
+        let mut s = header_for(self.api, true, self.cube_array);
+        if self.cube_array && self.api == Api::Gl33 {
             // Right after #version: a cube-map array is an extension of GL 3.3 (core in GL
-            // 4.0); the backend probes it before it runs the case (GLES 3.0's ESSL 3.00 has
-            // none: Caps::cube_map_array).
+            // 4.0); the backend probes it before it runs the case (Caps::cube_map_array).
             let (version, rest) = s.split_once('\n').expect("a #version line");
             s = format!(
                 "{version}\n#extension {} : require\n{rest}",
                 cube_array_extension(self.api)
             );
-            if self.api == Api::Gles3 {
-                s.push_str(
-                    "precision highp samplerCubeArray;\nprecision highp samplerCubeArrayShadow;\n",
-                );
-            }
+        }
+        if self.cube_array && self.api == Api::Gles3 {
+            // ESSL 3.20 (header_for): core, and without a default precision.
+            s.push_str(
+                "precision highp samplerCubeArray;\nprecision highp samplerCubeArrayShadow;\n",
+            );
         }
         let faces = if t.cube { 6 } else { t.cascades.max(1) };
         let _ = writeln!(

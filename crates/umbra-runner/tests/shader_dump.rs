@@ -26,8 +26,15 @@ use umbra_case::format::{
 use umbra_case::{Case, Prepared, Technique};
 use umbra_gl::Api;
 
-/// Every source generated for `run` under `fault`, each behind a header line naming it.
+/// Every source generated for `run` under `fault`, each behind a header line naming it; for
+/// several lights, each light's run's (where the array placements show: a layer or a cube of
+/// the shared map, and on GLES 3 a cube-map array's ESSL 3.20).
 fn sources(run: &Prepared, fault: Option<Fault>) -> String {
+    if run.light_count() > 1 {
+        return (0..run.light_count())
+            .map(|k| format!("===== light {k}\n{}", sources(&run.for_light(k), fault)))
+            .collect();
+    }
     let with_color = run.case().shadow.attachments == Attachments::WithColor;
     let technique = Technique::new(run, fault);
     let mut out = String::new();
@@ -44,7 +51,7 @@ fn sources(run: &Prepared, fault: Option<Fault>) -> String {
             "===== {name} shadow.vert\n{}===== {name} shadow.frag\n{}===== {name} lit.vert\n{}===== {name} lit.frag\n{}",
             umbra_gl::shaders::shadow_vertex(api),
             umbra_gl::shaders::shadow_fragment(api, with_color),
-            umbra_gl::shaders::lit_vertex(api),
+            umbra_gl::shaders::lit_vertex(api, &api.technique(technique.clone())),
             umbra_gl::shaders::lit_fragment(api, &api.technique(technique.clone())),
         );
     }

@@ -22,7 +22,7 @@ impl Renderer {
     ) -> Result<(Technique, glow::Program), BackendError> {
         let technique = self.api.technique(Technique::new(p.run, p.fault));
         let program = self.program(
-            shaders::lit_vertex(self.api),
+            shaders::lit_vertex(self.api, &technique),
             shaders::lit_fragment(self.api, &technique),
         )?;
         Ok((technique, program))
