@@ -178,7 +178,7 @@ impl Backend for GlBackend {
         if needs.cube_array > 0 && api == Api::Gl33 && !caps.cube_map_array {
             return Support::Unsupported(format!(
                 "point lights' maps in one cube-map array (shadow.placement \"cube_array\") need {} (core in GL 4.0 and GLES 3.2), which this driver does not advertise in this context; \"separate\" runs a cube map per light",
-                crate::shaders::cube_array_extension(api)
+                crate::shaders::CUBE_ARRAY_EXTENSION
             ));
         }
         if needs.srgb_target && !caps.srgb_target {

@@ -104,7 +104,7 @@ impl Caps {
             depth_clamp: api == Api::Gl33 || has("GL_EXT_depth_clamp"),
             srgb_target: api != Api::Gles2 || has("GL_EXT_sRGB"),
             cube_map_array: match api {
-                Api::Gl33 => has(crate::shaders::cube_array_extension(api)),
+                Api::Gl33 => has(crate::shaders::CUBE_ARRAY_EXTENSION),
                 Api::Gles3 => (version.major, version.minor) >= (3, 2),
                 Api::Gles2 => false,
             },

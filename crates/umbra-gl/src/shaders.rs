@@ -65,13 +65,9 @@ fn header_for(api: Api, fragment: bool, cube_array: bool) -> String {
     s
 }
 
-/// The extension that gives GLSL its cube-map array samplers on `api` (GLES 2 has none).
-pub fn cube_array_extension(api: Api) -> &'static str {
-    match api {
-        Api::Gles3 | Api::Gles2 => "GL_EXT_texture_cube_map_array",
-        Api::Gl33 => "GL_ARB_texture_cube_map_array",
-    }
-}
+/// The extension that gives GL 3.3's GLSL its cube-map array samplers (core in GL 4.0). GLES
+/// needs none: its cube-array programs are ESSL 3.20, where they are core ([`header_for`]).
+pub const CUBE_ARRAY_EXTENSION: &str = "GL_ARB_texture_cube_map_array";
 
 /// Vertex shader of the shadow pass: position only.
 pub fn shadow_vertex(api: Api) -> String {
@@ -229,10 +225,7 @@ impl Dialect for Glsl {
             // Right after #version: a cube-map array is an extension of GL 3.3 (core in GL
             // 4.0); the backend probes it before it runs the case (Caps::cube_map_array).
             let (version, rest) = s.split_once('\n').expect("a #version line");
-            s = format!(
-                "{version}\n#extension {} : require\n{rest}",
-                cube_array_extension(self.api)
-            );
+            s = format!("{version}\n#extension {CUBE_ARRAY_EXTENSION} : require\n{rest}");
         }
         if self.cube_array && self.api == Api::Gles3 {
             // ESSL 3.20 (header_for): core, and without a default precision.
