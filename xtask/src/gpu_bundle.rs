@@ -62,6 +62,8 @@ fn bundle(out: Option<PathBuf>, profile: &str, root: &Path) -> Result<(), String
         ));
     }
     let out = out.unwrap_or_else(|| root.join("target").join("umbra").join("gpu-bundle"));
+    // Refused before the build: a directory umbra did not make is never replaced.
+    umbra_owned::fresh(&out, WHAT).map_err(|e| e.to_string())?;
     let started = std::time::Instant::now();
     println!("gpu-bundle: building umbra (cargo build --profile {profile})");
     let built = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
@@ -111,11 +113,14 @@ fn bundle(out: Option<PathBuf>, profile: &str, root: &Path) -> Result<(), String
     Ok(())
 }
 
-/// Writes the bundle of `binary` into `out` (replacing it): the binary, the checkout's cases
-/// and expectations, the script and the README.
+/// What made a bundle's directory, in its [`umbra_owned::MARKER`].
+const WHAT: &str = "cargo xtask gpu-bundle";
+
+/// Writes the bundle of `binary` into `out` (replacing it when umbra made it, refusing a
+/// directory that holds anything else): the binary, the checkout's cases and expectations,
+/// the script and the README.
 fn assemble(binary: &Path, out: &Path, root: &Path) -> Result<(), String> {
-    let _ = std::fs::remove_dir_all(out);
-    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    umbra_owned::fresh(out, WHAT).map_err(|e| e.to_string())?;
     let copy = |from: &Path, to: &Path| {
         std::fs::copy(from, to)
             .map(|_| ())

@@ -150,7 +150,12 @@ fn main() -> ExitCode {
         Ok(m) => m,
         Err(e) => {
             let _ = e.print();
-            return ExitCode::from(if e.use_stderr() { 2 } else { 0 });
+            // A usage error could not run: 125, as umbra's own (clap's default is 2).
+            return ExitCode::from(if e.use_stderr() {
+                COULD_NOT_RUN as u8
+            } else {
+                0
+            });
         }
     };
     let (name, sub) = m.subcommand().unwrap_or(("", &m));
@@ -197,7 +202,80 @@ fn main() -> ExitCode {
             umbra(&[cmd], &args)
         }
     };
-    ExitCode::from(code.clamp(0, 255) as u8)
+    // Every path above returns one of the four; anything else would be a bug here.
+    ExitCode::from(match code {
+        0 | 1 | 125 | 130 => code as u8,
+        _ => COULD_NOT_RUN as u8,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use std::os::unix::process::ExitStatusExt as _;
+    use std::process::ExitStatus;
+
+    /// A child's status in umbra's four codes: cargo test's 101 is a failed test (1), cargo
+    /// run's 101 (a build that failed, a panic) and any stray code or signal could not run
+    /// (125), SIGINT and SIGTERM an interrupt (130).
+    #[test]
+    fn a_childs_status_becomes_one_of_the_four() {
+        let code = |c: i32| ExitStatus::from_raw(c << 8);
+        let signal = ExitStatus::from_raw;
+        for (status, tests, want) in [
+            (code(0), false, 0),
+            (code(1), false, 1),
+            (code(125), false, 125),
+            (code(130), false, 130),
+            (code(101), true, 1),
+            (code(101), false, 125),
+            (code(2), false, 125),
+            (code(134), false, 125),
+            (signal(15), false, 130),
+            (signal(2), false, 130),
+            (signal(9), false, 125),
+        ] {
+            assert_eq!(super::four(status, "x", tests), want, "{status:?}");
+        }
+    }
+}
+
+/// Whether this process runs under CI: `CI` set to anything but empty, `0`, `false`, `no` or
+/// `off` (any case), as `umbra_runner::judge::golden::under_ci` reads it; `CI=True`
+/// (AppVeyor) once read as "not CI" and let goldens be blessed there.
+fn under_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| {
+        !matches!(
+            v.to_ascii_lowercase().as_str(),
+            "" | "0" | "false" | "no" | "off"
+        )
+    })
+}
+
+/// umbra's four exit codes (docs/ci.md#exit-codes): 0 as expected, 1 a regression, 125 could
+/// not run, 130 interrupted. xtask says nothing else, whatever its children said.
+const COULD_NOT_RUN: i32 = 125;
+
+/// What a child's exit status means in umbra's four codes. `cargo` (`test`) exits 101 when a
+/// test fails, which is a regression (1); for `cargo run` (every other command) 101 is a build
+/// that failed or a panic, which could not run. A child killed by SIGINT or SIGTERM was
+/// interrupted (130); any other signal or code could not run, and is said.
+fn four(status: std::process::ExitStatus, what: &str, failed_tests_are_101: bool) -> i32 {
+    use std::os::unix::process::ExitStatusExt;
+    match (status.code(), status.signal()) {
+        (Some(c @ (0 | 1 | 125 | 130)), _) => c,
+        (Some(101), _) if failed_tests_are_101 => 1,
+        (None, Some(2 | 15)) => 130,
+        (code, signal) => {
+            eprintln!(
+                "error: {what} ended with {}: could not run (exit 125)",
+                code.map_or_else(
+                    || format!("signal {}", signal.unwrap_or(0)),
+                    |c| format!("exit code {c}")
+                )
+            );
+            COULD_NOT_RUN
+        }
+    }
 }
 
 fn test(extra: &[String]) -> i32 {
@@ -236,11 +314,21 @@ const NEWEST_SUITE: &str = "sid";
 /// included): 0 when every run is as expected there. `UMBRA_SKIP_CURRENT_MESA=1` leaves it out
 /// and says so (a machine without the network); it is never skipped silently.
 fn current_mesa() -> i32 {
-    if std::env::var_os("UMBRA_SKIP_CURRENT_MESA").is_some() {
-        eprintln!(
-            "note: UMBRA_SKIP_CURRENT_MESA is set: the catalogue on {NEWEST_SUITE}'s Mesa was NOT run"
-        );
-        return 0;
+    // Read strictly: `=0` or an empty value from a CI matrix must not skip a gate.
+    match std::env::var("UMBRA_SKIP_CURRENT_MESA").as_deref() {
+        Err(_) | Ok("" | "0") => {}
+        Ok("1") => {
+            eprintln!(
+                "note: UMBRA_SKIP_CURRENT_MESA=1: the catalogue on {NEWEST_SUITE}'s Mesa was NOT run"
+            );
+            return 0;
+        }
+        Ok(v) => {
+            eprintln!(
+                "error: UMBRA_SKIP_CURRENT_MESA={v:?}: give 1 to leave the current-Mesa run out, or unset it"
+            );
+            return COULD_NOT_RUN;
+        }
     }
     let root = workspace_root();
     let code = fetch_mesa::main(NEWEST_SUITE, None, &root);
@@ -261,9 +349,9 @@ fn current_mesa() -> i32 {
 const CI_SOAK: [&str; 4] = ["--seed", "21", "--count", "60"];
 
 fn bless(args: &[String]) -> i32 {
-    if std::env::var("CI").is_ok_and(|v| v == "true" || v == "1") {
+    if under_ci() {
         eprintln!("error: CI=true: goldens change only through review, never in CI");
-        return 2;
+        return COULD_NOT_RUN;
     }
     mesa::ensure();
     let mut args = args.to_vec();
@@ -326,11 +414,13 @@ fn workspace_root() -> std::path::PathBuf {
 }
 
 fn status(mut cmd: Command) -> i32 {
+    let tests = cmd.get_args().next().is_some_and(|a| a == "test");
+    let what = cmd.get_program().to_string_lossy().into_owned();
     match cmd.status() {
-        Ok(s) => s.code().unwrap_or(125),
+        Ok(s) => four(s, &what, tests),
         Err(e) => {
             eprintln!("error: cannot run {cmd:?}: {e}");
-            125
+            COULD_NOT_RUN
         }
     }
 }

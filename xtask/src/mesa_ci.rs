@@ -249,7 +249,11 @@ fn run_suite(o: &Options, out: &Path) -> i32 {
         }
     };
     let results = out.join("results");
-    let _ = std::fs::remove_dir_all(&results);
+    // deqp-runner's results replace the last run's, and only those umbra made.
+    if let Err(e) = umbra_owned::fresh(&results, "cargo xtask mesa-ci --run") {
+        eprintln!("error: {e}");
+        return 125;
+    }
     let mut cmd = Command::new(&runner);
     cmd.arg("suite")
         .arg("--suite")

@@ -20,7 +20,7 @@ pub type V3 = [f32; 3];
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Case {
-    /// Identifier: lower-case letters, digits, `-` and `_`. Required.
+    /// Identifier: lower-case letters, digits, `-` and `_`, beginning with a letter or a digit. Required.
     pub name: String,
     /// One sentence: what the case checks and why. Required.
     pub about: String,
@@ -1123,7 +1123,7 @@ impl Default for Expect {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Twin {
-    /// Identifier shown in reports: lower-case letters, digits, `-`, `_`. Required.
+    /// Identifier shown in reports: lower-case letters, digits, `-`, `_`, beginning with a letter or a digit. Required.
     pub name: String,
     /// Dotted JSON path to the value it takes in the twin. Required, at least one.
     pub set: BTreeMap<String, serde_json::Value>,

@@ -39,9 +39,12 @@ pub fn validate(case: &Case, file: &Path) -> Result<(), CaseErrors> {
     }
 }
 
-/// Names of cases and twins: lower-case letters, digits, `-` and `_` (they name files).
+/// Names of cases and twins: lower-case letters, digits, `-` and `_` (they name files), and
+/// beginning with a letter or a digit: a name that begins with `-` reads as an option on
+/// every command line it is passed on (`umbra render … --point -rf`, `umbra repro
+/// gl33/llvmpipe/-rf`), so its own reproduce command would not run.
 fn identifier(name: &str) -> bool {
-    !name.is_empty()
+    name.starts_with(|c: char| c.is_ascii_lowercase() || c.is_ascii_digit())
         && name
             .chars()
             .all(|ch| ch.is_ascii_lowercase() || ch.is_ascii_digit() || ch == '-' || ch == '_')
@@ -194,7 +197,7 @@ impl Validator<'_> {
             self.err(
                 "name",
                 format!("{:?} is not a valid case name", c.name),
-                "use lower-case letters, digits, '-' and '_' (it names files and report rows)",
+                "use lower-case letters, digits, '-' and '_', beginning with a letter or a digit (it names files and report rows, and is passed on command lines)",
             );
         }
         if c.about.trim().is_empty() {
@@ -302,7 +305,7 @@ impl Validator<'_> {
                 self.err(
                     format!("{p}.name"),
                     format!("{:?} is not a valid twin name", t.name),
-                    "use lower-case letters, digits, '-' and '_'",
+                    "use lower-case letters, digits, '-' and '_', beginning with a letter or a digit",
                 );
             } else if !seen.insert(&t.name) {
                 self.err(

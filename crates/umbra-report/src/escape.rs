@@ -79,6 +79,16 @@ pub fn shell_word(s: &str) -> String {
     }
 }
 
+/// A file `path` as one shell word that no command line reads as an option: a relative path
+/// that begins with `-` gets `./` before it (`-x.json` → `./-x.json`), the same file.
+pub fn operand(path: &str) -> String {
+    if path.starts_with('-') {
+        shell_word(&format!("./{path}"))
+    } else {
+        shell_word(path)
+    }
+}
+
 /// Text for one line of terminal output: every control character (C0, DEL, C1: escape
 /// sequences, carriage returns and line feeds that could redraw or fake a line) and every
 /// bidirectional override or isolate (which reorder what is shown) is written as its Rust
@@ -150,6 +160,13 @@ mod tests {
             "{s:?}"
         );
         assert!(s.contains("\\u{1b}[2K\\r"), "{s}");
+    }
+
+    #[test]
+    fn an_operand_never_reads_as_an_option() {
+        assert_eq!(super::operand("-rf.json"), "./-rf.json");
+        assert_eq!(super::operand("cases/a b.json"), "'cases/a b.json'");
+        assert_eq!(super::operand("/tmp/-x"), "/tmp/-x");
     }
 
     #[test]

@@ -31,16 +31,20 @@ pub fn repro_command(run: &str, mesa: Option<&str>) -> String {
         file_name(run)
     );
     if let Some(m) = mesa {
-        c.push_str(" --mesa ");
+        c.push_str(" --mesa=");
         c.push_str(&crate::escape::shell_word(m));
     }
     c
 }
 
-/// The `--mesa` value of a reproduce command (`RunResult::reproduce`), as the shell reads
-/// the word [`crate::escape::shell_word`] wrote.
+/// The `--mesa` value of a reproduce command (`RunResult::reproduce`; `--mesa=DIR`, or
+/// `--mesa DIR` as reports before 2026-12 wrote it), as the shell reads the word
+/// [`crate::escape::shell_word`] wrote.
 pub fn mesa_of(reproduce: &str) -> Option<String> {
-    let rest = reproduce.split_once(" --mesa ")?.1;
+    let rest = reproduce
+        .split_once(" --mesa=")
+        .or_else(|| reproduce.split_once(" --mesa "))?
+        .1;
     let (mut word, mut quoted, mut chars) = (String::new(), false, rest.chars());
     while let Some(c) = chars.next() {
         match c {
@@ -112,11 +116,13 @@ mod tests {
             "cargo run --bin umbra -- repro gl33/softpipe/a@x=1 -o target/umbra/repro/gl33_softpipe_a@x=1"
         );
         for m in ["/opt/mesa", "/opt/my mesa", "/opt/it's"] {
-            let reproduce = format!(
-                "cargo run --bin umbra -- render c.json --backend gl33/zink --point p --mesa {}",
-                crate::escape::shell_word(m)
-            );
-            assert_eq!(super::mesa_of(&reproduce).as_deref(), Some(m));
+            for form in ["--mesa=", "--mesa "] {
+                let reproduce = format!(
+                    "cargo run --bin umbra -- render c.json --backend=gl33/zink --point=p {form}{}",
+                    crate::escape::shell_word(m)
+                );
+                assert_eq!(super::mesa_of(&reproduce).as_deref(), Some(m));
+            }
         }
         assert_eq!(
             super::mesa_of("cargo run --bin umbra -- render c.json"),

@@ -40,11 +40,13 @@ impl Exit {
         if ok { Exit::Pass } else { Exit::Fail }
     }
 
-    /// The status of a child umbra that exited with `code` (anything but 0 and 1 could not run).
+    /// The status of a child umbra that exited with `code` (an interrupt stays one;
+    /// anything else but 0 and 1 could not run).
     pub const fn of_code(code: i32) -> Exit {
         match code {
             0 => Exit::Pass,
             1 => Exit::Fail,
+            130 => Exit::Interrupted,
             _ => Exit::CouldNotRun,
         }
     }
@@ -126,6 +128,8 @@ mod tests {
             [0, 1, 125]
         );
         assert_eq!(Exit::of_code(3), Exit::CouldNotRun);
+        assert_eq!(Exit::of_code(130), Exit::Interrupted);
+        assert_eq!(Exit::of_code(101), Exit::CouldNotRun);
         assert_eq!(Error::new("x").exit(), Exit::CouldNotRun);
         assert_eq!(code(Err(Error::said(Exit::Fail))), 1);
     }

@@ -16,3 +16,4 @@ pub mod judge;
 pub mod repro;
 pub mod run_dir;
 pub mod shards;
+pub mod version;

@@ -37,7 +37,20 @@ fn main() -> ExitCode {
             return ExitCode::from(exit.code());
         }
     };
-    let outcome = match &command {
+    // A panic is umbra's own bug: the hook has printed it; the process exits 125 (could
+    // not run), never Rust's 101, which `git bisect run` would read as a bad commit.
+    let dispatched = std::panic::catch_unwind(|| dispatch(&command));
+    let outcome = dispatched.unwrap_or_else(|_| {
+        Err(Error::new(
+            "umbra stopped on an internal error (the panic above is a bug in umbra; please report it with the command line)",
+        ))
+    });
+    ExitCode::from(exit::code(outcome))
+}
+
+/// Runs one parsed command.
+fn dispatch(command: &Command) -> exit::Outcome {
+    match command {
         Command::Render(a) => render::main(a),
         Command::Conformance(a) => conformance::main(a),
         Command::Merge(a) => merge::main(a),
@@ -53,8 +66,7 @@ fn main() -> ExitCode {
         Command::Worker(a) => harness::worker::main(&a.backend),
         Command::BisectStep(a) => bisect::step(a),
         Command::Completions(a) => cli::completions(a),
-    };
-    ExitCode::from(exit::code(outcome))
+    }
 }
 
 /// `umbra render CASE | head -1`: when the reader of stdout goes away, stop quietly (exit 0,

@@ -7,7 +7,8 @@
 //! replaced by `rename(2)` over it only once the run's reports are all written: a reader sees
 //! the previous run's complete reports or this run's, never a mixture, and a run that is
 //! interrupted, fails to write or fills the disk leaves `latest` as it was and its own
-//! directory marked [`INCOMPLETE`], saying why. The newest [`KEEP`] runs are kept.
+//! directory marked [`INCOMPLETE`], saying why. The newest [`KEEP`] runs are kept; only run
+//! directories umbra made (each holds [`umbra_owned::MARKER`]) are ever pruned.
 
 use std::io;
 use std::path::{Path, PathBuf};
@@ -51,7 +52,10 @@ impl RunDir {
                         dir,
                         id,
                     };
-                    if let Err(e) = std::fs::write(run.dir.join(INCOMPLETE), "in progress\n") {
+                    let marked = umbra_owned::mark(&run.dir, "an umbra run");
+                    if let Err(e) = marked
+                        .and_then(|()| std::fs::write(run.dir.join(INCOMPLETE), "in progress\n"))
+                    {
                         let _ = std::fs::remove_dir_all(&run.dir);
                         return Err(e);
                     }
@@ -70,6 +74,15 @@ impl RunDir {
     pub fn publish(&self) -> io::Result<()> {
         std::fs::remove_file(self.dir.join(INCOMPLETE))?;
         let latest = self.out.join("latest");
+        // `latest` is replaced only when it is umbra's link (or a run directory of before):
+        // a file of the user's by that name is kept, and the run is said to be left unpublished.
+        if std::fs::symlink_metadata(&latest).is_ok_and(|m| m.is_file()) {
+            return Err(io::Error::other(format!(
+                "{} is a file umbra did not write; this run stays in {} (move that file away to publish runs there)",
+                latest.display(),
+                self.dir.display()
+            )));
+        }
         if std::fs::symlink_metadata(&latest).is_ok_and(|m| m.is_dir()) {
             std::fs::rename(
                 &latest,
@@ -161,8 +174,10 @@ fn prune(out: &Path) {
                 .nth(1)
                 .and_then(|pid| pid.parse().ok())
                 .is_some_and(crate::atomic_file::process_alive);
+        // Only a run umbra made (its marker inside) is pruned: a directory a user keeps
+        // under runs/ is theirs.
         if Some(id) != shown.as_ref() && !live {
-            let _ = std::fs::remove_dir_all(dir);
+            let _ = umbra_owned::remove(&dir);
         }
     }
 }
@@ -220,6 +235,40 @@ mod tests {
         c.publish().expect("publish c");
         assert_eq!(shown(&out).as_deref(), Some(c.id.as_str()));
         assert!(out.join("runs/before-run-directories").is_dir());
+        let _ = std::fs::remove_dir_all(&out);
+    }
+
+    /// Only runs umbra made are pruned: a directory of the user's under `runs/` (no marker)
+    /// stays however many runs come after it, and a `latest` that is a user's file is kept
+    /// (the run stays unpublished, said).
+    #[test]
+    fn pruning_removes_only_umbras_runs() {
+        let out = std::env::temp_dir().join(format!("umbra-run-prune-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&out);
+        let mine = out.join("runs").join("00000000-mine");
+        std::fs::create_dir_all(&mine).expect("a user's directory");
+        std::fs::write(mine.join("notes.txt"), "mine").expect("write");
+        let mut ids = Vec::new();
+        for _ in 0..KEEP + 3 {
+            let r = RunDir::create(&out).expect("run");
+            r.publish().expect("publish");
+            ids.push(r.id);
+        }
+        assert!(
+            mine.join("notes.txt").is_file(),
+            "a user's directory was pruned"
+        );
+        let kept = std::fs::read_dir(out.join("runs")).expect("runs").count();
+        assert_eq!(kept, KEEP + 1, "KEEP runs and the user's directory");
+        let _ = std::fs::remove_file(out.join("latest"));
+        std::fs::write(out.join("latest"), "a user's file").expect("write");
+        let r = RunDir::create(&out).expect("run");
+        let e = r.publish().expect_err("a user's latest");
+        assert!(e.to_string().contains("umbra did not write"), "{e}");
+        assert_eq!(
+            std::fs::read_to_string(out.join("latest")).expect("kept"),
+            "a user's file"
+        );
         let _ = std::fs::remove_dir_all(&out);
     }
 }

@@ -108,3 +108,98 @@ fn completions_cover_the_commands_and_their_flags() {
         assert!(text.contains(word), "bash completion lacks {word}");
     }
 }
+
+/// umbra's four exit codes (docs/ci.md#exit-codes) hold for every command's usage error: each
+/// subcommand the parser knows, hidden ones included, walked from the parser itself (a new
+/// command is walked too), given a flag it lacks, exits 125 and never clap's 2.
+#[test]
+fn every_commands_usage_error_exits_125() {
+    let cli = umbra_runner::cli::command();
+    let mut walked = 0;
+    for sub in cli.get_subcommands() {
+        let name = sub.get_name();
+        if name == "help" {
+            continue;
+        }
+        let o = umbra(&[name, "--no-such-flag-anywhere"]);
+        assert_eq!(
+            o.status.code(),
+            Some(125),
+            "umbra {name} --no-such-flag-anywhere: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        walked += 1;
+    }
+    assert!(walked >= 12, "only {walked} commands walked");
+    for args in [
+        &["no-such-command"][..],
+        &[][..],
+        &["deqp", "--deqp-no-such-flag=1"][..],
+        &["render"][..],
+        &["completions", "tcsh"][..],
+    ] {
+        let o = umbra(args);
+        assert_eq!(
+            o.status.code(),
+            Some(125),
+            "umbra {args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+}
+
+/// `umbra drivers --out DIR` replaced DIR whole: a directory umbra did not make is refused
+/// (125) and nothing in it is touched (integrity round three, "a user's files deleted").
+#[test]
+fn a_users_directory_is_never_replaced() {
+    let root = std::env::temp_dir().join(format!("umbra-victim-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let victim = root.join("victim");
+    std::fs::create_dir_all(&victim).expect("mkdir");
+    std::fs::write(victim.join("precious.txt"), "precious\n").expect("write");
+    let o = umbra(&[
+        "drivers",
+        "--baseline",
+        "system",
+        "--candidate",
+        "system",
+        "--out",
+        &victim.to_string_lossy(),
+    ]);
+    let t = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(t.contains("holds files umbra did not write"), "{t}");
+    assert_eq!(
+        std::fs::read_to_string(victim.join("precious.txt")).expect("still there"),
+        "precious\n"
+    );
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+/// A case whose only point is a skip ran nothing: `umbra render` exits 125, as conformance
+/// does for the same tree (it exited 0).
+#[test]
+fn render_of_nothing_but_skips_exits_125() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let out = std::env::temp_dir().join(format!("umbra-render-skip-{}", std::process::id()));
+    let o = Command::new(env!("CARGO_BIN_EXE_umbra"))
+        .args([
+            "render",
+            "cases/lights/two-points.json",
+            "--backend",
+            "gles2/llvmpipe",
+            "-o",
+            &out.to_string_lossy(),
+        ])
+        .current_dir(&root)
+        .output()
+        .expect("run umbra");
+    let t = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(t.contains("skip") && t.contains("nothing ran"), "{t}");
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -1,5 +1,5 @@
 //! The runner's layers, checked from its sources (as rust-analyzer's `tidy` checks its tree):
-//! the leaves (`exit`, `glob`, `atomic_file`, `run_dir`, `case_size`) know nothing above them, `judge` (one
+//! the leaves (`exit`, `glob`, `atomic_file`, `run_dir`, `case_size`, `version`) know nothing above them, `judge` (one
 //! point judged, goldens, expectations) knows neither the harness nor a command, `harness`
 //! (workers, pool, registry, Mesa builds), `shards` and `repro` know no command, and no two
 //! modules import each other in a circle. Every module has a layer ([`layer`]): a new one that
@@ -108,7 +108,7 @@ fn layer(module: &str) -> u8 {
 fn known_layer(module: &str) -> Option<u8> {
     Some(match module.split("::").next().unwrap_or("") {
         // Leaves: parsing, globbing, files; used anywhere, using nothing above them.
-        "exit" | "glob" | "atomic_file" | "run_dir" | "case_size" => 0,
+        "exit" | "glob" | "atomic_file" | "run_dir" | "case_size" | "version" => 0,
         "judge" => 1,
         "harness" | "shards" | "repro" => 2,
         // The command line's tables name the commands' help only; `commands` run it all.

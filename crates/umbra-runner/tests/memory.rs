@@ -118,6 +118,35 @@ fn a_runaway_worker_is_killed_at_the_budget_and_costs_one_run() {
     assert!(t.contains("Pass ref/small"), "{t}");
 }
 
+/// `umbra render`, which renders in its own process, is stopped by its own watchdog at the
+/// budget: exit 125 (could not run: umbra's limit), with the figures; it aborted, and the
+/// shell saw 134.
+#[test]
+fn render_stopped_by_its_own_budget_exits_125() {
+    let cases = scratch("memory-render-hog");
+    let file = case(&cases, "small", 64, 64, SPOT);
+    let o = umbra(
+        &[
+            "render",
+            &file,
+            "--backend",
+            "fake/hog",
+            "--max-memory",
+            "512MiB",
+            "-o",
+            &cases.join("out").to_string_lossy(),
+        ],
+        &[("UMBRA_FAKE_BACKENDS", "1")],
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(
+        t.contains("stopped by umbra's memory budget")
+            && t.contains("over the memory budget of 512 MiB"),
+        "{t}"
+    );
+}
+
 /// Peak resident memory and the estimate, from `umbra render`'s last line.
 fn peak_and_estimate(out: &str) -> Option<(u64, u64)> {
     let line = out

@@ -117,7 +117,9 @@ pub fn main(args: &BisectArgs) -> Outcome {
     let src = absolute(&args.mesa_src);
     check_tree(&src, good, bad)?;
     let work = absolute(args.work.as_deref().unwrap_or("target/umbra/bisect"));
-    let _ = std::fs::create_dir_all(&work);
+    // The work directory is umbra's (its steps, prefixes and logs are replaced and removed):
+    // a directory that holds anything else is refused, never emptied.
+    umbra_owned::claim(&work, "umbra bisect").map_err(|e| Error::new(format!("--work: {e}")))?;
     let _ = std::fs::remove_file(work.join("steps.csv"));
     let script = args.build_script.as_deref().map(absolute);
     configure(args, &src, &work, script.as_deref())?;
@@ -506,6 +508,13 @@ pub fn step(args: &BisectStepArgs) -> Outcome {
     let (src, work) = (PathBuf::from(&args.src), PathBuf::from(&args.work));
     let sha = git(&src, &["rev-parse", "--short=12", "HEAD"]).unwrap_or_else(|_| "unknown".into());
     let subject = git(&src, &["log", "-1", "--format=%s"]).unwrap_or_default();
+    if !umbra_owned::owned(&work) {
+        return Err(Error::new(format!(
+            "--work {}: not a work directory umbra bisect made (no {} in it); start with umbra bisect, which makes it",
+            work.display(),
+            umbra_owned::MARKER
+        )));
+    }
     let prefix = work.join("prefixes").join(&sha);
     let log = work.join("logs");
     let _ = std::fs::create_dir_all(&log);

@@ -1595,15 +1595,17 @@ fn reproduce_command(p: &Planned) -> String {
         .iter()
         .map(|(k, v)| format!("{k}={} ", shell_word(v)))
         .collect();
+    // Values as `--flag=VALUE` and the file as an operand: nothing a case or a path is
+    // called can be read as an option.
     format!(
-        "{env}cargo run --bin umbra -- render {} --backend {} --point {}{}",
-        shell_word(&p.file.display().to_string()),
-        p.backend,
+        "{env}cargo run --bin umbra -- render {} --backend={} --point={}{}",
+        umbra_report::escape::operand(&p.file.display().to_string()),
+        shell_word(&p.backend),
         shell_word(&p.id),
         crate::harness::mesa_build::selected()
             .filter(|_| crate::harness::mesa_build::is_mesa_backed(&p.backend))
             .map_or(String::new(), |b| format!(
-                " --mesa {}",
+                " --mesa={}",
                 shell_word(&b.root.display().to_string())
             ))
     )

@@ -277,7 +277,8 @@ pub fn main(args: &DriversArgs) -> Outcome {
         }
     };
     let out = PathBuf::from(args.out.as_deref().unwrap_or("target/umbra/drivers"));
-    let _ = std::fs::remove_dir_all(&out);
+    // The last comparison is replaced; a directory umbra did not make is refused.
+    umbra_owned::fresh(&out, "umbra drivers").map_err(|e| Error::new(format!("--out: {e}")))?;
     let Ok(exe) = crate::harness::own_libc::self_exe() else {
         return Err(Error::new("cannot find this executable"));
     };
@@ -509,17 +510,14 @@ fn render_pictures(
     ] {
         let _ = Command::new(exe)
             .args([
-                "render",
-                &c.file,
-                "--point",
-                &c.point,
-                "--backend",
-                backend,
-                "--mesa",
-                mesa,
-                "-o",
+                "render".to_string(),
+                format!("--point={}", c.point),
+                format!("--backend={backend}"),
+                format!("--mesa={mesa}"),
+                format!("--out={}", dir.join(side).display()),
+                "--".to_string(),
+                c.file.clone(),
             ])
-            .arg(dir.join(side))
             .env_remove(crate::harness::mesa_build::ENV)
             .stdout(Stdio::null())
             .stderr(Stdio::null())

@@ -282,7 +282,7 @@ impl Reducer {
             .collect::<Result<BTreeSet<Check>, String>>()
             .map_err(|e| Error::new(format!("--check: {e}")))?;
         let dir = std::env::temp_dir().join(format!("umbra-reduce-{}", std::process::id()));
-        let _ = std::fs::create_dir_all(&dir);
+        umbra_owned::fresh(&dir, "umbra reduce").map_err(|e| Error::new(e.to_string()))?;
         let mut judge = Judge {
             backend: backend.to_string(),
             worker: None,
@@ -304,7 +304,7 @@ impl Reducer {
             e.remove("error_falls_along");
         }
         let gone = |e: Error| {
-            let _ = std::fs::remove_dir_all(&dir);
+            let _ = umbra_owned::remove(&dir);
             e
         };
         let want = judge.run_on(false, &case);
@@ -547,7 +547,7 @@ impl Reducer {
         let name = format!("{}-reduced", point.case.name);
         case["name"] = Value::from(name.clone());
         case["about"] = Value::from(format!(
-            "reduced by umbra reduce from {file} point {point_id} on {backend}, where it {}; reduced, it {now} there and passes on the reference; {} changes kept ({} candidates tried): {}",
+            "{REDUCED_BY}{file} point {point_id} on {backend}, where it {}; reduced, it {now} there and passes on the reference; {} changes kept ({} candidates tried): {}",
             self.want,
             self.removed.len(),
             self.judge.tried,
@@ -569,7 +569,10 @@ impl Reducer {
         if let Some(parent) = out.parent() {
             let _ = std::fs::create_dir_all(parent);
         }
-        let _ = std::fs::remove_dir_all(&self.dir);
+        let _ = umbra_owned::remove(&self.dir);
+        if let Some(why) = foreign_output(&out) {
+            return Err(Error::new(why));
+        }
         // The reduced case must load as written.
         let text = case_text(&tidy(case), 0) + "\n";
         if let Err(e) = umbra_case::load_str(&text, &out) {
@@ -594,6 +597,30 @@ impl Reducer {
         Ok(Exit::Pass)
     }
 }
+
+/// Why `out` must not be overwritten: it exists and is not a case `umbra reduce` wrote (its
+/// `about` begins with [`REDUCED_BY`]). `None` when it is not there or was reduced before.
+fn foreign_output(out: &Path) -> Option<String> {
+    let meta = std::fs::symlink_metadata(out).ok()?;
+    let reduced_before = meta.is_file()
+        && std::fs::read_to_string(out)
+            .ok()
+            .and_then(|t| serde_json::from_str::<Value>(&t).ok())
+            .is_some_and(|v| {
+                v["about"]
+                    .as_str()
+                    .is_some_and(|a| a.starts_with(REDUCED_BY))
+            });
+    (!reduced_before).then(|| {
+        format!(
+            "--out {}: the file exists and is not a case umbra reduce wrote; give a new path (or remove it yourself if it is not yours to keep)",
+            out.display()
+        )
+    })
+}
+
+/// How a reduced case's `about` begins: what marks the file as one umbra may overwrite.
+const REDUCED_BY: &str = "reduced by umbra reduce from ";
 
 /// The case as a person would write it: f32 values at their shortest (0.4, not
 /// 0.4000000059604645), no nulls.

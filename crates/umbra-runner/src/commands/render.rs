@@ -35,9 +35,13 @@ pub fn main(args: &RenderArgs) -> crate::exit::Outcome {
         return crate::harness::child::rerun_for(backend_id, &again, &env);
     }
     let on_build = build.filter(|_| crate::harness::mesa_build::is_mesa_backed(backend_id));
+    // Nothing that could not run exits 0: a skip of every point is 125, as conformance's
+    // "nothing ran" is.
     if let Some(why) = on_build.and_then(|b| b.lacks(backend_id)) {
         println!("skip {backend_id}: {why}");
-        return Ok(Exit::Pass);
+        return Err(Error::new(format!(
+            "nothing ran: {backend_id} is a skip on this Mesa build"
+        )));
     }
     if let Some(Err(e)) = on_build.map(crate::harness::mesa_build::MesaBuild::enter) {
         return Err(Error::new(format!("{backend_id}: {e}")));
@@ -54,7 +58,9 @@ pub fn main(args: &RenderArgs) -> crate::exit::Outcome {
         }
         Err(e) => {
             println!("skip {backend_id}: {e}");
-            return Ok(Exit::Pass);
+            return Err(Error::new(format!(
+                "nothing ran: {backend_id} is not available here"
+            )));
         }
     };
     if let Some(b) = on_build.filter(|b| b.layout != "fake (tests)") {
@@ -100,10 +106,13 @@ pub fn main(args: &RenderArgs) -> crate::exit::Outcome {
     crate::harness::memory_limit::watch_self(budget);
     let many = selected.len() > 1;
     let mut failed = false;
+    let mut ran = 0;
     for point in selected {
         let id = point.id();
         println!("{id} on {backend_id}");
-        match run_point(backend.as_mut(), point, true) {
+        let outcome = run_point(backend.as_mut(), point, true);
+        ran += usize::from(!matches!(outcome, Outcome::Skip(_)));
+        match outcome {
             Outcome::Skip(why) => println!("  skip: {why}"),
             Outcome::Error(e) => {
                 println!("  error: {e}");
@@ -144,6 +153,11 @@ pub fn main(args: &RenderArgs) -> crate::exit::Outcome {
             umbra_case::memory::gib(estimated),
             umbra_case::memory::gib(budget)
         );
+    }
+    if ran == 0 {
+        return Err(Error::new(format!(
+            "nothing ran: every point of {case} is a skip on {backend_id}"
+        )));
     }
     Ok(Exit::pass_if(!failed))
 }

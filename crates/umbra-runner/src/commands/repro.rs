@@ -131,22 +131,22 @@ fn target(args: &ReproArgs) -> Result<Target, Error> {
 /// reproduce".
 fn reduce_step(args: &ReproArgs, t: &Target) -> Result<(PathBuf, String), Error> {
     let reduced = t.out.join("case.json");
+    // Values as `--flag=VALUE`, the file as an operand: no case name or path reads as an
+    // option in the child (a case point `-rf` once did).
     let mut reduce: Vec<String> = vec![
         "reduce".into(),
+        format!("--point={}", t.point),
+        format!("--backend={}", t.backend),
+        format!("--out={}", reduced.display()),
+        "--".into(),
         t.case_file.display().to_string(),
-        "--point".into(),
-        t.point.clone(),
-        "--backend".into(),
-        t.backend.clone(),
-        "--out".into(),
-        reduced.display().to_string(),
     ];
     for c in &args.check {
-        reduce.extend(["--check".into(), c.clone()]);
+        reduce.insert(1, format!("--check={c}"));
     }
     for (flag, value) in [("mesa", &args.mesa), ("timeout", &args.timeout)] {
         if let Some(v) = value {
-            reduce.extend([format!("--{flag}"), v.clone()]);
+            reduce.insert(1, format!("--{flag}={v}"));
         }
     }
     let (code, log) =
@@ -209,15 +209,13 @@ fn emit_step(args: &ReproArgs, t: &Target, reduced: &Path) -> Result<serde_json:
     let mut emit_args: Vec<String> = vec![
         "repro".into(),
         "--emit".into(),
-        reduced.display().to_string(),
-        "--backend".into(),
-        t.backend.clone(),
-        "--out".into(),
-        t.out.display().to_string(),
+        format!("--backend={}", t.backend),
+        format!("--out={}", t.out.display()),
     ];
     if let Some(m) = &args.mesa {
-        emit_args.extend(["--mesa".into(), m.clone()]);
+        emit_args.push(format!("--mesa={m}"));
     }
+    emit_args.extend(["--".into(), reduced.display().to_string()]);
     // The driver process says its own errors; its exit is the command's.
     let emitted = crate::harness::child::rerun_for(
         &t.backend,
@@ -727,9 +725,10 @@ fn gfxr_capture(
     let (code, text) = run_with_timeout(
         Command::new(exe)
             .arg("render")
+            .arg(format!("--backend={backend}"))
+            .arg(format!("--out={}", out.join("gfxr-render").display()))
+            .arg("--")
             .arg(reduced)
-            .args(["--backend", backend, "--out"])
-            .arg(out.join("gfxr-render"))
             .envs(layer)
             .env("GFXRECON_CAPTURE_FILE", &file),
         PROGRAM_TIMEOUT,

@@ -9,7 +9,7 @@
 //! - **While rendering**: the parent polls each worker's resident memory (`VmRSS`) every
 //!   100 ms and kills a worker that exceeds the budget: that run is a `Crash` whose reason
 //!   gives the figures, and a fresh worker takes the rest. `umbra render`, which renders in
-//!   its own process, watches itself the same way and aborts.
+//!   its own process, watches itself the same way and exits 125.
 
 use std::sync::OnceLock;
 use std::time::Duration;
@@ -117,16 +117,18 @@ pub fn over(pid: u32, budget: u64) -> Option<String> {
     })
 }
 
-/// Watches this process from a thread: aborts it, with the figures on stderr, if its
-/// resident memory goes over `budget` (for commands that render in their own process).
+/// Watches this process from a thread: ends it with exit 125 (could not run: umbra's own
+/// limit, not a finding), the figures on stderr, if its resident memory goes over `budget`
+/// (for commands that render in their own process). It once aborted, and the shell saw
+/// 134, a code outside umbra's four.
 pub fn watch_self(budget: u64) {
     let pid = std::process::id();
     std::thread::spawn(move || {
         loop {
             std::thread::sleep(POLL);
             if let Some(why) = over(pid, budget) {
-                eprintln!("error: {why}");
-                std::process::abort();
+                eprintln!("error: stopped by umbra's memory budget: {why}");
+                std::process::exit(i32::from(crate::exit::Exit::CouldNotRun.code()));
             }
         }
     });

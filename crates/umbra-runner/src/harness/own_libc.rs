@@ -300,11 +300,11 @@ fn missing(text: &str) -> Vec<(String, String)> {
 /// The libraries of `libs` built for a newer glibc than the machine's, as (the version it
 /// needs, the library): the highest `GLIBC_2.N` each names.
 fn newer_glibc(libs: &[PathBuf], machine: &str) -> Vec<(String, String)> {
-    let have = crate::judge::expectations::version_parts(machine);
+    let have = crate::version::parts(machine);
     libs.iter()
         .filter_map(|l| {
             let need = highest_glibc(&std::fs::read(l).ok()?)?;
-            (crate::judge::expectations::version_parts(&need) > have).then(|| {
+            (crate::version::parts(&need) > have).then(|| {
                 (
                     format!("glibc {need} is needed"),
                     l.file_name()

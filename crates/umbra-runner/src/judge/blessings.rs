@@ -50,7 +50,7 @@ pub fn folder(id: &str) -> String {
 /// The release a driver version belongs to for goldens: its numeric parts (`26.2.6-1` →
 /// `26.2.6`), so a distribution's packaging suffix does not matter.
 pub fn release(version: &str) -> String {
-    crate::judge::expectations::version_parts(version)
+    crate::version::parts(version)
         .iter()
         .map(u32::to_string)
         .collect::<Vec<_>>()

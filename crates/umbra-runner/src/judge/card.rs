@@ -351,7 +351,7 @@ pub fn check(dir: &Path, live: &Card) -> Verdict {
 /// How far apart two releases are, for picking the nearest kept card: the differences of
 /// their major, minor and patch numbers, weighted by place (10⁶, 10³, 1) and summed.
 fn release_distance(a: &str, b: &str) -> u64 {
-    let parts = |s: &str| crate::judge::expectations::version_parts(s.trim_start_matches("mesa-"));
+    let parts = |s: &str| crate::version::parts(s.trim_start_matches("mesa-"));
     let (pa, pb) = (parts(a), parts(b));
     let mut d = 0u64;
     for (i, w) in [1_000_000u64, 1_000, 1].iter().enumerate() {

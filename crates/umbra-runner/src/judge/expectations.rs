@@ -346,18 +346,6 @@ pub enum Term {
     Renderer(String),
 }
 
-/// The numeric components of a version string's upstream part: up to the first
-/// non-numeric component, and never past a packaging suffix (`25.0.7-2~bpo12+1` → [25, 0,
-/// 7]; `26.3.0-devel (git-abc)` → [26, 3, 0]).
-pub fn version_parts(v: &str) -> Vec<u32> {
-    v.split(['-', '~', '+', ' '])
-        .next()
-        .unwrap_or("")
-        .split('.')
-        .map_while(|p| p.parse().ok())
-        .collect()
-}
-
 impl Selector {
     /// Parses the terms of an `@applies` line.
     pub fn parse(text: &str) -> Result<Selector, String> {
@@ -389,13 +377,73 @@ impl Selector {
                 .into_iter()
                 .find(|op| rest.starts_with(op))
                 .ok_or_else(|| format!("@applies term {t:?} needs one of >= <= > < ="))?;
-            let parts = version_parts(&rest[op.len()..]);
-            if parts.is_empty() {
-                return Err(format!("@applies term {t:?} has no version number"));
-            }
+            let parts = crate::version::reviewed(&rest[op.len()..])
+                .map_err(|e| format!("@applies term {t:?}: {e}"))?;
             terms.push(Term::Mesa(op.to_string(), parts));
         }
-        Ok(Selector(terms))
+        let selector = Selector(terms);
+        if let Some(why) = selector.never_holds() {
+            return Err(format!(
+                "@applies {}: no Mesa version is {why}; the lines under it would never apply (write the range you mean, e.g. mesa>=22.3 mesa<22.4)",
+                text.trim()
+            ));
+        }
+        Ok(selector)
+    }
+
+    /// Why the `mesa` terms admit no version at all (`mesa>=22.4 mesa<22.4`, `mesa>=25
+    /// mesa<22`, `mesa=22 mesa=23`), or `None` when some version satisfies them all. Each term
+    /// is a bound on versions compared part by part with missing parts as 0 (as
+    /// [`Selector::matches`] compares); `mesa=22.3` is the prefix range [22.3, 22.4).
+    fn never_holds(&self) -> Option<String> {
+        // (version, inclusive); versions compare as padded vectors.
+        type Bound = (Vec<u32>, bool);
+        let pad = |v: &[u32]| {
+            let mut v = v.to_vec();
+            v.resize(4, 0);
+            v
+        };
+        let mut low: Option<(Bound, String)> = None;
+        let mut high: Option<(Bound, String)> = None;
+        let raise = |b: Bound, t: String, low: &mut Option<(Bound, String)>| {
+            let tighter = low
+                .as_ref()
+                .is_none_or(|((v, inc), _)| b.0 > *v || (b.0 == *v && *inc && !b.1));
+            if tighter {
+                *low = Some((b, t));
+            }
+        };
+        let lower = |b: Bound, t: String, high: &mut Option<(Bound, String)>| {
+            let tighter = high
+                .as_ref()
+                .is_none_or(|((v, inc), _)| b.0 < *v || (b.0 == *v && *inc && !b.1));
+            if tighter {
+                *high = Some((b, t));
+            }
+        };
+        for term in &self.0 {
+            let Term::Mesa(op, want) = term else { continue };
+            let text = term_text(term);
+            let v = pad(want);
+            match op.as_str() {
+                ">=" => raise((v, true), text, &mut low),
+                ">" => raise((v, false), text, &mut low),
+                "<=" => lower((v, true), text, &mut high),
+                "<" => lower((v, false), text, &mut high),
+                _ => {
+                    // `=22.3` holds on [22.3, 22.4): the next value of its last part.
+                    let mut next = want.clone();
+                    if let Some(last) = next.last_mut() {
+                        *last = last.saturating_add(1);
+                    }
+                    raise((v, true), text.clone(), &mut low);
+                    lower((pad(&next), false), text, &mut high);
+                }
+            }
+        }
+        let (((lv, linc), lt), ((hv, hinc), ht)) = (low?, high?);
+        let empty = lv > hv || (lv == hv && !(linc && hinc));
+        empty.then(|| format!("both {lt} and {ht}"))
     }
 
     /// The release that closed this selector's range for driver `d`: where every term
@@ -429,7 +477,7 @@ impl Selector {
         self.0.iter().all(|t| match t {
             Term::Renderer(g) => crate::glob::matches(g, &d.renderer),
             Term::Mesa(op, want) => {
-                let Some(have) = d.mesa.as_deref().map(version_parts) else {
+                let Some(have) = d.mesa.as_deref().map(crate::version::parts) else {
                     return false;
                 };
                 if op == "=" {
@@ -453,22 +501,23 @@ impl Selector {
     }
 }
 
+/// One term as it is written (`mesa>=22.3`, `renderer=*zink*`).
+fn term_text(t: &Term) -> String {
+    match t {
+        Term::Renderer(g) => format!("renderer={g}"),
+        Term::Mesa(op, v) => format!(
+            "mesa{op}{}",
+            v.iter().map(u32::to_string).collect::<Vec<_>>().join(".")
+        ),
+    }
+}
+
 impl fmt::Display for Selector {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if self.0.is_empty() {
             return f.write_str("all");
         }
-        let parts: Vec<String> = self
-            .0
-            .iter()
-            .map(|t| match t {
-                Term::Renderer(g) => format!("renderer={g}"),
-                Term::Mesa(op, v) => format!(
-                    "mesa{op}{}",
-                    v.iter().map(u32::to_string).collect::<Vec<_>>().join(".")
-                ),
-            })
-            .collect();
+        let parts: Vec<String> = self.0.iter().map(term_text).collect();
         f.write_str(&parts.join(" "))
     }
 }
@@ -1164,6 +1213,57 @@ mod tests {
         std::fs::write(dir.join("bad.txt"), "@applies mesa~22\n").expect("write");
         let e = Expectations::load(&dir).expect_err("bad term");
         assert!(e.contains("bad.txt:1") && e.contains(">="), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Integrity round three: `@applies` versions were read like a driver's version string,
+    /// so `mesa>=22.4x` meant `mesa>=22` and applied on 22.3.6; a range that can never hold
+    /// was accepted and silently never applied. Both are refused now, naming the line.
+    #[test]
+    fn applies_versions_parse_strictly_and_ranges_that_never_hold_are_refused() {
+        for bad in [
+            "mesa>=22.4x",
+            "mesa>=22..4",
+            "mesa>=22.99999999999",
+            "mesa>=22.3.6.1",
+            "mesa<",
+            "mesa=22.3-rc1",
+        ] {
+            let e = Selector::parse(bad).expect_err(bad);
+            assert!(e.contains("MAJOR[.MINOR[.PATCH]]"), "{bad}: {e}");
+        }
+        for never in [
+            "mesa>=22.4 mesa<22.4",
+            "mesa>=25 mesa<22",
+            "mesa>22.4 mesa<=22.4",
+            "mesa=22 mesa=23",
+            "mesa=22.3 mesa>=22.4",
+            "renderer=*zink* mesa<22.3 mesa>22.3.6",
+        ] {
+            let e = Selector::parse(never).expect_err(never);
+            assert!(e.contains("no Mesa version is both"), "{never}: {e}");
+        }
+        for fine in [
+            "mesa>=22.3 mesa<22.4",
+            "mesa>=22.4 mesa<=22.4",
+            "mesa=22.3 mesa<22.3.7",
+            "mesa>=25",
+            "all",
+            "mesa=26",
+        ] {
+            assert!(Selector::parse(fine).is_ok(), "{fine}");
+        }
+        // The reproducer: an expectation meant for 22.4 and later is refused whole, so a
+        // failing run on 22.3.6 stays a failure.
+        let dir = std::env::temp_dir().join(format!("umbra-exp-strict-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        std::fs::write(
+            dir.join("mesa.txt"),
+            "# fixed in 22.4\n@applies mesa>=22.4x\ngl33/llvmpipe/*,Fail,a deviation\n",
+        )
+        .expect("write");
+        let e = Expectations::load(&dir).expect_err("22.4x");
+        assert!(e.contains("mesa.txt:2") && e.contains("\"22.4x\""), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 

@@ -524,9 +524,16 @@ fn unwritable(dir: &Path) -> String {
 pub const NONE_FOR_BACKEND: &str =
     "no goldens for this backend: judged by the specs and the reference";
 
-/// Whether this process runs under CI (`CI=true` or `CI=1`, as CI systems set it).
+/// Whether this process runs under CI: `CI` set to anything but empty, `0`, `false`, `no` or
+/// `off` (any case). CI systems set `true`, `1` or `True` (AppVeyor); reading only `true` and
+/// `1` let `CI=True` bless goldens in CI.
 pub fn under_ci() -> bool {
-    std::env::var("CI").is_ok_and(|v| v == "true" || v == "1")
+    std::env::var("CI").is_ok_and(|v| {
+        !matches!(
+            v.to_ascii_lowercase().as_str(),
+            "" | "0" | "false" | "no" | "off"
+        )
+    })
 }
 
 /// The insta variables this process inherited ([`controls_insta`], `NAME=VALUE`): each is

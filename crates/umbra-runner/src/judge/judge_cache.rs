@@ -346,7 +346,7 @@ fn cached<T>(
     };
     let file = dir.join(format!("{kind}-{key:016x}.bin"));
     // A missing entry is a miss; one that is there but cannot be used is said, and missed.
-    let read = || match std::fs::read(&file) {
+    let read = || match regular_file_bytes(&file) {
         Ok(bytes) => reader(&bytes, key)
             .map_err(|why| warn_once(&file, &format!("{why}; recomputed, not used")))
             .ok(),
@@ -456,12 +456,30 @@ const SECRET_FILE: &str = "secret";
 /// Reads `dir`'s secret into [`SECRET`], making it first if the directory has none (16 bytes
 /// from the kernel's random source, mode 0600, linked into place so that of two workers
 /// making it at once one wins and both read the winner's). `false`: no cache can be trusted.
+///
+/// A secret is trusted only as it was made ([`secret_flaw`]): a regular file, not a link, of
+/// 16 bytes, owned by this user, readable by nobody else. Anything else (a world-readable
+/// secret lets anyone local reseal a widened entry; one cut short or replaced by a directory
+/// disabled the cache on every run) is moved aside with a warning, a new one is made, and the
+/// entries the old one sealed are removed, to be computed again.
 fn load_secret(dir: &Path) -> bool {
     if SECRET.get().is_some() {
         return true;
     }
     let file = dir.join(SECRET_FILE);
-    if !file.is_file() {
+    if let Some(flaw) = secret_flaw(&file) {
+        let aside = dir.join(format!("secret.refused-{}", std::process::id()));
+        if std::fs::rename(&file, &aside).is_err() {
+            return false;
+        }
+        let removed = remove_entries(dir);
+        eprintln!(
+            "warning: the judging cache's secret {} {flaw}: not trusted; moved aside to {} and a new one made; its {removed} entries are removed and computed again",
+            file.display(),
+            aside.display()
+        );
+    }
+    if std::fs::symlink_metadata(&file).is_err() {
         let mut bytes = [0u8; 16];
         let made = std::fs::File::open("/dev/urandom")
             .and_then(|mut r| r.read_exact(&mut bytes))
@@ -487,7 +505,11 @@ fn load_secret(dir: &Path) -> bool {
             return false;
         }
     }
-    match std::fs::read(&file) {
+    // Read only what was checked: a regular file, here; never a link's target.
+    if secret_flaw(&file).is_some() {
+        return false;
+    }
+    match regular_file_bytes(&file) {
         Ok(b) if b.len() == 16 => {
             let k0 = u64::from_le_bytes(b[..8].try_into().unwrap_or_default());
             let k1 = u64::from_le_bytes(b[8..].try_into().unwrap_or_default());
@@ -496,6 +518,57 @@ fn load_secret(dir: &Path) -> bool {
         }
         _ => false,
     }
+}
+
+/// The bytes of the regular file at `file`. It is opened without blocking and without
+/// following a link, and anything but a regular file is refused before a byte is read: a FIFO
+/// in an entry's place once blocked the worker until its timeout, and the backend was blamed.
+fn regular_file_bytes(file: &Path) -> std::io::Result<Vec<u8>> {
+    use std::os::unix::fs::OpenOptionsExt as _;
+    let mut f = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK | libc::O_NOFOLLOW)
+        .open(file)?;
+    if !f.metadata()?.is_file() {
+        return Err(std::io::Error::other("is not a regular file"));
+    }
+    let mut bytes = Vec::new();
+    f.read_to_end(&mut bytes)?;
+    Ok(bytes)
+}
+
+/// What is wrong with the secret at `file`, if it is there and not as umbra makes one.
+fn secret_flaw(file: &Path) -> Option<String> {
+    use std::os::unix::fs::{MetadataExt as _, PermissionsExt as _};
+    let meta = std::fs::symlink_metadata(file).ok()?;
+    let me = std::fs::metadata("/proc/self").map(|m| m.uid()).ok();
+    if meta.file_type().is_symlink() {
+        Some("is a symbolic link".into())
+    } else if !meta.is_file() {
+        Some("is not a regular file".into())
+    } else if meta.len() != 16 {
+        Some(format!("is {} bytes, not 16", meta.len()))
+    } else if me.is_some_and(|me| me != meta.uid()) {
+        Some(format!("is owned by user {}, not this one", meta.uid()))
+    } else if meta.permissions().mode() & 0o077 != 0 {
+        Some(format!(
+            "has mode {:04o}: others can read it, and so reseal an entry (it must be 0600)",
+            meta.permissions().mode() & 0o7777
+        ))
+    } else {
+        None
+    }
+}
+
+/// Removes every entry (`*.bin`) of the cache directory `dir`: how many.
+fn remove_entries(dir: &Path) -> usize {
+    std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter(|e| e.path().extension().is_some_and(|x| x == "bin"))
+        .filter(|e| std::fs::remove_file(e.path()).is_ok())
+        .count()
 }
 
 /// `bytes` with its checksum appended.
