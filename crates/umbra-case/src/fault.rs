@@ -323,6 +323,11 @@ pub enum Fault {
     /// reads layer (cube) 0 (a layer index that never reaches the shader or the sampler's
     /// coordinate).
     ArrayLayerZero,
+    /// State leaks from one case point to the next: the lit pass keeps the texture matrices
+    /// of the first case a worker process rendered for every later case (a uniform upload
+    /// skipped once a program has one, a stale binding). Each point alone renders right; a
+    /// point after another renders with the other's lookup.
+    StaleUniform,
     /// One face of the map is drawn with a wrong orientation: cube face `face` (0–5 in the
     /// GL order +x, −x, +y, −y, +z, −z), or the 2D map when `face` is `None`.
     Oriented {
@@ -347,7 +352,7 @@ impl Fault {
     /// three stand for them here (a wrong handedness on the +x face, the one the
     /// four-fold symmetric point-light cases could not see; a wrong up vector on the −y face;
     /// a transposed 2D map), and `umbra selftest --fault` or `--orientations` runs any.
-    pub const ALL: [Fault; 45] = [
+    pub const ALL: [Fault; 46] = [
         Fault::CompareFlipped,
         Fault::NoDivide,
         Fault::NoGuard,
@@ -390,6 +395,7 @@ impl Fault {
         Fault::SrgbIgnored,
         Fault::LightSwap,
         Fault::ArrayLayerZero,
+        Fault::StaleUniform,
         Fault::Oriented {
             face: Some(0),
             orientation: Orientation::MirrorX,
@@ -459,6 +465,7 @@ impl Fault {
             Fault::SrgbIgnored => "srgb-ignored",
             Fault::LightSwap => "light-swap",
             Fault::ArrayLayerZero => "array-layer-zero",
+            Fault::StaleUniform => "stale-uniform",
             Fault::Oriented { face, orientation } => {
                 return match face {
                     Some(f) => format!("face{f}-{}", orientation.name()),
@@ -662,6 +669,31 @@ impl Fault {
             Some(Fault::LightSwap) if cube((k + 1) % lights) == cube(k) => (k + 1) % lights,
             Some(Fault::ArrayLayerZero) if array => 0,
             _ => k,
+        }
+    }
+
+    /// Light `k`'s texture matrices `tex` for case `case`, as a backend under `fault` uploads
+    /// them: under [`Fault::StaleUniform`], those the process first uploaded for light `k`
+    /// of another case (same count), the stale state an earlier point left; otherwise (and
+    /// for the first case, its twins included) as given.
+    pub fn stale_texture(fault: Option<Fault>, case: &str, k: usize, tex: &mut [glam::Mat4]) {
+        use std::sync::Mutex;
+        type Kept = std::collections::BTreeMap<usize, (String, Vec<glam::Mat4>)>;
+        static FIRST: Mutex<Kept> = Mutex::new(Kept::new());
+        if fault != Some(Fault::StaleUniform) {
+            return;
+        }
+        let Ok(mut first) = FIRST.lock() else {
+            return;
+        };
+        match first.get(&k) {
+            Some((name, kept)) if name != case && kept.len() == tex.len() => {
+                tex.copy_from_slice(kept);
+            }
+            Some(_) => {}
+            None => {
+                first.insert(k, (case.to_string(), tex.to_vec()));
+            }
         }
     }
 

@@ -100,6 +100,8 @@ pub enum Object {
     Box(BoxShape),
     /// A UV sphere.
     Sphere(Sphere),
+    /// A capped cylinder along y with smooth side normals.
+    Cylinder(Cylinder),
     /// An inline triangle mesh with flat normals.
     Mesh(Mesh),
 }
@@ -149,6 +151,30 @@ pub struct Sphere {
     pub radius: f32,
     /// Segments around the equator. Default 32; 4 to 512.
     #[serde(default = "default_segments")]
+    pub segments: u32,
+    /// Albedo. Default `[0.8, 0.8, 0.8]`.
+    #[serde(default = "default_albedo")]
+    pub color: V3,
+    /// Placement after the primitive is built. Default: identity.
+    #[serde(default)]
+    pub transform: Option<Transform>,
+}
+
+/// `cylinder`: a capped cylinder along y, centred at `center`, as engines tessellate one:
+/// `segments` side quads whose vertex normals point straight out from the axis (so the
+/// interpolated normal between them is short of unit length, by 1 − cos(π/segments) at a
+/// quad's middle: 7.6 % at 8 segments), and flat caps.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Cylinder {
+    /// Centre (the middle of the axis). Required.
+    pub center: V3,
+    /// Radius. Required, > 0.
+    pub radius: f32,
+    /// Length along y. Required, > 0.
+    pub height: f32,
+    /// Side quads around the axis. Default 16; 3 to 512.
+    #[serde(default = "default_cylinder_segments")]
     pub segments: u32,
     /// Albedo. Default `[0.8, 0.8, 0.8]`.
     #[serde(default = "default_albedo")]
@@ -293,6 +319,16 @@ pub enum Light {
 }
 
 impl Light {
+    /// How many map faces (layers) the light's shadow map has: six cube faces for a point
+    /// light, one per cascade for a directional light, one for a spot light.
+    pub fn map_faces(&self) -> u32 {
+        match self {
+            Light::Point(_) => 6,
+            Light::Directional(d) => d.cascades.as_ref().map_or(1, |c| c.count),
+            Light::Spot(_) => 1,
+        }
+    }
+
     /// The light's `color` and `intensity`, whatever its kind.
     pub fn emission(&self) -> (V3, f32) {
         match self {
@@ -1239,6 +1275,9 @@ fn default_albedo() -> V3 {
 }
 fn default_segments() -> u32 {
     32
+}
+fn default_cylinder_segments() -> u32 {
+    16
 }
 fn default_scale() -> Scale {
     Scale::Uniform(1.0)

@@ -1017,6 +1017,7 @@ mod tests {
                             Object::Plane(_) => "plane",
                             Object::Box(_) => "box",
                             Object::Sphere(_) => "sphere",
+                            Object::Cylinder(_) => "cylinder",
                             Object::Mesh(_) => "mesh",
                         }
                         .to_string(),

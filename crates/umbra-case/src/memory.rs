@@ -23,8 +23,8 @@
 //! the constants below add about a fifth on each, and summing the parts (the peaks of the map
 //! and the judging phases do not add up) adds more. Triangles are not calibrated beyond the
 //! catalogue's few thousand. The test `estimate_bounds_measured_peaks` in `umbra-runner`
-//! re-measures four of these sizes on all three backends and fails if a run needs more than
-//! its estimate.
+//! re-measures four of these sizes and two several-light cases on all three backends and
+//! fails if a run needs more than its estimate (or, with several lights, less than half of it).
 
 use crate::Case;
 use crate::format::Light;
@@ -33,6 +33,16 @@ use crate::format::Light;
 pub const BYTES_PER_PIXEL: u64 = 240;
 /// Bytes per shadow-map texel, all faces (measured; see the module notes).
 pub const BYTES_PER_TEXEL: u64 = 80;
+/// Bytes per texel of every light's map but the largest, in a case with several lights: what
+/// a judged run keeps of each light while the others are judged (the backend's map, the
+/// reference's map and its intervals). Measured by `VmHWM` on 256² frames with 2 and 4 lights,
+/// separate and in one array (2 cores, Mesa 22.3.6): point lights at 1024² (six faces) add
+/// 27–30 bytes a texel each after the first on ref, 27–33 on gl33/llvmpipe, 18–21 on
+/// wgpu-vk/lavapipe; spot lights at 4096² 16, 21 and 12; 36 covers the most with a tenth to
+/// spare (`estimate_bounds_measured_peaks` in umbra-runner re-measures). Counting the first light alone
+/// once estimated 1, 2 and 4 point lights at the same 641 MiB, and four 4096² spot lights at
+/// 1.4 GiB where they peaked at 2.1 GiB.
+pub const BYTES_PER_KEPT_TEXEL: u64 = 36;
 /// Bytes per drawn triangle (geometry, its f64 copy for the truth, the acceleration grid).
 pub const BYTES_PER_TRIANGLE: u64 = 2_000;
 /// What a worker holds before any case: the process, the driver, the compiled shaders.
@@ -96,18 +106,22 @@ impl Estimate {
 pub fn estimate(case: &Case, triangles: usize) -> Estimate {
     let [cw, ch] = case.camera.size;
     let [sw, sh] = case.shadow.size;
-    let faces: u64 = match &case.light {
-        Light::Point(_) => 6,
-        Light::Directional(d) => d.cascades.as_ref().map_or(1, |c| u64::from(c.count)),
-        Light::Spot(_) => 1,
-    };
-    let cube = matches!(case.light, Light::Point(_));
+    // Every light's map: the largest is judged at the full cost a texel, the others kept at
+    // theirs ([`BYTES_PER_KEPT_TEXEL`]).
+    let lights = case.all_lights();
+    let largest = lights
+        .iter()
+        .max_by_key(|l| l.map_faces())
+        .unwrap_or(&case.light);
+    let faces = u64::from(largest.map_faces());
+    let other_faces: u64 = lights.iter().map(|l| u64::from(l.map_faces())).sum::<u64>() - faces;
     let pixels = u64::from(cw) * u64::from(ch);
-    let texels = faces * u64::from(sw) * u64::from(sh);
+    let face_texels = u64::from(sw) * u64::from(sh);
+    let texels = faces * face_texels;
     let mut parts = vec![
         Part {
             field: "shadow.size",
-            what: if cube {
+            what: if matches!(largest, Light::Point(_)) {
                 format!("{sw}×{sh} × 6 cube faces")
             } else if faces > 1 {
                 format!("{sw}×{sh} × {faces} cascades")
@@ -115,6 +129,14 @@ pub fn estimate(case: &Case, triangles: usize) -> Estimate {
                 format!("{sw}×{sh}")
             },
             bytes: texels.saturating_mul(BYTES_PER_TEXEL),
+        },
+        Part {
+            field: "lights",
+            what: format!(
+                "{} more lights' maps, {other_faces} faces of {sw}×{sh}",
+                lights.len() - 1
+            ),
+            bytes: (other_faces * face_texels).saturating_mul(BYTES_PER_KEPT_TEXEL),
         },
         Part {
             field: "camera.size",
@@ -127,6 +149,7 @@ pub fn estimate(case: &Case, triangles: usize) -> Estimate {
             bytes: (triangles as u64).saturating_mul(BYTES_PER_TRIANGLE),
         },
     ];
+    parts.retain(|p| p.bytes > 0 || p.field != "lights");
     parts.sort_by_key(|p| std::cmp::Reverse(p.bytes));
     Estimate { parts }
 }
@@ -197,6 +220,36 @@ mod tests {
                 "shadow": {"size": [512, 512]}}"#,
         );
         assert_eq!(estimate(&small, 2).refuse(1 << 30), None);
+    }
+
+    /// Integrity round three: the estimate read the first light alone, so 1, 2 and 4 point
+    /// lights all estimated 641 MiB. Every light's map counts now.
+    #[test]
+    fn every_lights_map_counts() {
+        let lights = |n: usize| {
+            let one = r#"{"point": {"position": [0,3,0], "near": 0.1, "far": 40}}"#;
+            let list = vec![one; n].join(",");
+            let light = if n == 1 {
+                format!(r#""light": {one}"#)
+            } else {
+                format!(r#""lights": [{list}]"#)
+            };
+            case(&format!(
+                r#"{{"name": "l", "about": "t", "scene": {{"objects": [{{"plane": {{"point": [0,0,0], "half_extent": 5}}}}]}},
+                "camera": {{"eye": [0,5,5], "target": [0,0,0], "fov_y_deg": 50, "near": 0.5, "far": 30, "size": [256, 256]}},
+                {light}, "shading": {{"model": "dimmed"}},
+                "shadow": {{"size": [1024, 1024]}}}}"#
+            ))
+        };
+        let [one, two, four] = [1, 2, 4].map(|n| estimate(&lights(n), 2).total());
+        let kept = 6 * 1024 * 1024 * BYTES_PER_KEPT_TEXEL;
+        assert_eq!(two - one, kept);
+        assert_eq!(four - one, 3 * kept);
+        let why = estimate(&lights(4), 2).refuse(1 << 30).expect("refused");
+        assert!(
+            why.contains("lights 3 more lights' maps, 18 faces of 1024×1024"),
+            "{why}"
+        );
     }
 
     #[test]

@@ -27,6 +27,7 @@ pub fn apply_offset(case: &Case) -> Case {
             Object::Plane(p) => (&mut p.transform, vec![&mut p.point]),
             Object::Box(b) => (&mut b.transform, vec![&mut b.center]),
             Object::Sphere(s) => (&mut s.transform, vec![&mut s.center]),
+            Object::Cylinder(c) => (&mut c.transform, vec![&mut c.center]),
             Object::Mesh(m) => (&mut m.transform, m.positions.iter_mut().collect()),
         };
         match transform {

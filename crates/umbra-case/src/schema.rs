@@ -35,6 +35,7 @@ pub const EXEMPLARS: &[&str] = &[
             {"box":{"center":[0,0,0],"size":[1,1,1],"color":[1,1,1],
                     "transform":{"translate":[0,0,0],"rotate_deg":{"axis":[0,1,0],"angle":10},"scale":[1,1,1]}}},
             {"sphere":{"center":[0,0,0],"radius":1,"segments":16,"color":[1,1,1],"transform":{"translate":[0,0,0],"rotate_deg":{"axis":[0,1,0],"angle":10}}}},
+            {"cylinder":{"center":[0,0,0],"radius":1,"height":2,"segments":12,"color":[1,1,1],"transform":{"translate":[0,0,0],"rotate_deg":{"axis":[1,0,0],"angle":90}}}},
             {"mesh":{"positions":[[0,0,0],[1,0,0],[0,1,0]],"triangles":[[0,1,2]],"color":[1,1,1],"transform":{"translate":[0,0,0],"rotate_deg":{"axis":[0,1,0],"angle":10}}}}],
             "offset":[1,0,0]},
         "camera":{"eye":[0,1,1],"target":[0,0,0],"up":[0,1,0],"fov_y_deg":45,"near":0.1,"far":10,"size":[64,64],

@@ -377,6 +377,29 @@ impl Validator<'_> {
                     self.color(&p, sp.color);
                     self.transform(&p, &sp.transform);
                 }
+                Object::Cylinder(cy) => {
+                    let p = format!("{p}.cylinder");
+                    self.finite3(&format!("{p}.center"), cy.center);
+                    self.positive(
+                        &format!("{p}.radius"),
+                        cy.radius,
+                        "give the cylinder a positive radius",
+                    );
+                    self.positive(
+                        &format!("{p}.height"),
+                        cy.height,
+                        "give the cylinder a positive height",
+                    );
+                    if !(3..=512).contains(&cy.segments) {
+                        self.err(
+                            format!("{p}.segments"),
+                            format!("must be from 3 to 512, got {}", cy.segments),
+                            "use 8 to 32, as engines tessellate a cylinder",
+                        );
+                    }
+                    self.color(&p, cy.color);
+                    self.transform(&p, &cy.transform);
+                }
                 Object::Mesh(m) => {
                     let p = format!("{p}.mesh");
                     self.mesh(&p, m);

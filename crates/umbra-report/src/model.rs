@@ -28,7 +28,12 @@ pub enum Status {
     ExpectedFail,
     /// Passed although an expectation says it fails: update the baseline.
     UnexpectedPass,
-    /// Failed, then passed on its rerun.
+    /// Failed on a worker where another run had gone before it, then passed alone on a fresh
+    /// worker: state left by an earlier run (a stale uniform, a stale binding) changed its
+    /// answer. A regression, never a flake; the reason names the run that went before.
+    OrderDependent,
+    /// Failed with evidence of nondeterminism (the worker crashed or hung), then passed on
+    /// its rerun on a fresh worker.
     Flake,
 }
 
@@ -43,6 +48,7 @@ impl Status {
             Status::Skip(_) => "Skip",
             Status::ExpectedFail => "ExpectedFail",
             Status::UnexpectedPass => "UnexpectedPass",
+            Status::OrderDependent => "OrderDependent",
             Status::Flake => "Flake",
         }
     }
@@ -51,7 +57,11 @@ impl Status {
     pub fn is_regression(&self) -> bool {
         matches!(
             self,
-            Status::Fail | Status::Crash | Status::Timeout | Status::UnexpectedPass
+            Status::Fail
+                | Status::Crash
+                | Status::Timeout
+                | Status::UnexpectedPass
+                | Status::OrderDependent
         )
     }
 
@@ -456,12 +466,13 @@ impl TimeBudget {
 pub fn breakdown(results: &[RunResult]) -> String {
     let count = |n: &str| results.iter().filter(|r| r.status.name() == n).count();
     format!(
-        "pass {}, expected fail {}, flake {}, skip {}; fail {}, crash {}, timeout {}, unexpected pass {}",
+        "pass {}, expected fail {}, flake {}, skip {}; fail {}, order-dependent {}, crash {}, timeout {}, unexpected pass {}",
         count("Pass"),
         count("ExpectedFail"),
         count("Flake"),
         count("Skip"),
         count("Fail"),
+        count("OrderDependent"),
         count("Crash"),
         count("Timeout"),
         count("UnexpectedPass"),

@@ -13,7 +13,7 @@ pub struct Size {
     pub triangles: usize,
     /// Camera pixels.
     pub pixels: u64,
-    /// Shadow-map texels (all faces).
+    /// Shadow-map texels (every light's, all faces).
     pub texels: u64,
 }
 
@@ -23,11 +23,14 @@ impl Size {
         let points = umbra_case::load_str(&case.to_string(), Path::new("reduce.json")).ok()?;
         let p = points.into_iter().next()?;
         let g = umbra_case::tessellate(&p.case.scene);
-        let faces = if matches!(p.case.light, umbra_case::format::Light::Point(_)) {
-            6
-        } else {
-            1
-        };
+        // Every light's map, each face (a cube's six, a cascade's layers): a case's size
+        // once counted its first light's alone.
+        let faces: u64 = p
+            .case
+            .all_lights()
+            .iter()
+            .map(|l| u64::from(l.map_faces()))
+            .sum();
         Some(Size {
             triangles: g.triangles.len(),
             pixels: u64::from(p.case.camera.size[0]) * u64::from(p.case.camera.size[1]),

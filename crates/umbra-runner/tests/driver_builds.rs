@@ -639,7 +639,7 @@ fn the_drivers_page_offers_a_bug_report_for_each_regression() {
     let html = std::fs::read_to_string(out.join("report.html")).expect("report.html");
     assert!(
         html.contains(&format!(
-            "bug report: <code>cargo run --bin umbra -- repro fake/mesa/l-occluder -o target/umbra/repro/fake_mesa_l-occluder --mesa {}</code>",
+            "bug report: <code>cargo run --bin umbra -- repro fake/mesa/l-occluder -o target/umbra/repro/fake_mesa_l-occluder --mesa={}</code>",
             bad.display()
         )),
         "{t}\n{html}"

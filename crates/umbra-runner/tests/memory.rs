@@ -88,7 +88,7 @@ fn a_case_too_big_for_the_machine_is_refused_before_rendering() {
 }
 
 #[test]
-fn a_runaway_worker_is_killed_at_the_budget_and_costs_one_run() {
+fn a_runaway_worker_is_stopped_at_the_budget_as_umbras_limit_and_costs_one_run() {
     let cases = scratch("memory-hog-cases");
     case(&cases, "small", 64, 64, SPOT);
     let o = umbra(
@@ -110,11 +110,16 @@ fn a_runaway_worker_is_killed_at_the_budget_and_costs_one_run() {
         &[("UMBRA_FAKE_BACKENDS", "1")],
     );
     let t = text(&o);
-    assert_eq!(o.status.code(), Some(1), "{t}");
+    // umbra's own limit, with its figures: a skip that says whose it is, never the driver's
+    // Crash or a Flake (integrity round three).
+    assert_eq!(o.status.code(), Some(0), "{t}");
     assert!(
-        t.contains("Crash fake/hog/small") && t.contains("over the memory budget of 768 MiB"),
+        t.contains("Skip fake/hog/small")
+            && t.contains("umbra's memory budget stopped the run, not the driver")
+            && t.contains("over the memory budget of 768 MiB"),
         "{t}"
     );
+    assert!(!t.contains("Crash fake/hog") && !t.contains("Flake"), "{t}");
     assert!(t.contains("Pass ref/small"), "{t}");
 }
 
@@ -199,3 +204,72 @@ fn estimate_bounds_measured_peaks() {
     }
     assert!(rows.len() >= 3, "{rows:?}");
 }
+
+/// Several lights: every light's map counts (the estimate read the first light's alone, so
+/// four 4096² spot lights peaked at 2.1 GiB against 1.4 GiB estimated, and a worker stopped
+/// by that underestimate read as the driver's crash). The estimate holds the measured peak on
+/// every backend, and is at most twice it.
+#[test]
+fn estimate_bounds_several_lights() {
+    let dir = scratch("memory-lights");
+    let mut rows = Vec::new();
+    for (name, light, map, placement) in [
+        ("points", POINT_AT, 1024, "cube_array"),
+        ("spots", SPOT_AT, 2048, "array"),
+    ] {
+        let lights: Vec<String> = [[2, 2], [-2, 2], [2, -2], [-2, -2]]
+            .iter()
+            .map(|[x, z]| {
+                light
+                    .replace("X", &x.to_string())
+                    .replace("Z", &z.to_string())
+            })
+            .collect();
+        let file = dir.join(format!("{name}.json"));
+        std::fs::write(
+            &file,
+            format!(
+                r#"{{"name": "{name}", "about": "memory limits, four lights",
+  "scene": {{"objects": [{{"plane": {{"point": [0, 0, 0], "half_extent": 5}}}},
+                        {{"box": {{"center": [0, 1, 0], "size": [1, 1, 1]}}}}]}},
+  "camera": {{"eye": [0, 6, 6], "target": [0, 0, 0], "fov_y_deg": 50, "near": 0.5, "far": 30, "size": [256, 256]}},
+  "lights": [{}],
+  "shading": {{"model": "dimmed", "dimming": 0.3}},
+  "shadow": {{"size": [{map}, {map}], "placement": "{placement}"}}}}"#,
+                lights.join(", ")
+            ),
+        )
+        .expect("write case");
+        for backend in ["ref", "gl33/llvmpipe", "wgpu-vk/lavapipe"] {
+            let o = umbra(
+                &[
+                    "render",
+                    &file.to_string_lossy(),
+                    "--backend",
+                    backend,
+                    "--max-memory",
+                    "8GiB",
+                    "-o",
+                    &dir.join("out").to_string_lossy(),
+                ],
+                &[],
+            );
+            let t = text(&o);
+            if t.contains("skip ") {
+                continue;
+            }
+            let (peak, est) = peak_and_estimate(&t).unwrap_or_else(|| panic!("{t}"));
+            rows.push(format!("{backend} {name}: peak {peak}, estimate {est}"));
+            assert!(
+                peak <= est && est <= 2 * peak,
+                "{backend}, four {name}: peak {peak}, estimate {est}\n{}",
+                rows.join("\n")
+            );
+        }
+    }
+    assert!(rows.len() >= 4, "{rows:?}");
+}
+
+const POINT_AT: &str =
+    r#"{"point": {"position": [X, 4, Z], "near": 0.1, "far": 40, "intensity": 0.25}}"#;
+const SPOT_AT: &str = r#"{"spot": {"position": [X, 6, Z], "target": [0, 0, 0], "fov_y_deg": 60, "near": 1, "far": 20, "intensity": 0.25}}"#;

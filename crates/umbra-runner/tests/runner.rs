@@ -15,6 +15,12 @@ fn umbra(args: &[&str]) -> Output {
         .args(args)
         .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
         .env("UMBRA_FAKE_BACKENDS", "1")
+        // fake/flaky's one death per run, claimed in a file no earlier run left.
+        .env("UMBRA_FAKE_FLAKY_FILE", {
+            static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+            let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            scratch(&format!("flaky-claim-{n}")).join("claimed")
+        })
         // Fakes have no goldens: these tests are about statuses, not pictures.
         .args(["--golden", "none"])
         .output()
@@ -68,7 +74,7 @@ fn crash_hang_flake_and_wrong_each_get_their_status_and_the_run_completes() {
     assert_eq!(
         failures.lines().count(),
         3,
-        "crash, timeout and fail are regressions; a flake is not:\n{failures}"
+        "crash, timeout and fail are regressions; a flake (a crash, then a pass on a fresh worker) is not:\n{failures}"
     );
     let report: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(out.join("latest/report.json")).expect("report.json"),
@@ -88,7 +94,7 @@ fn crash_hang_flake_and_wrong_each_get_their_status_and_the_run_completes() {
         wrong["reproduce"]
             .as_str()
             .unwrap_or("")
-            .contains("--backend fake/wrong"),
+            .contains("--backend=fake/wrong"),
         "{wrong}"
     );
     let junit = std::fs::read_to_string(out.join("latest/junit.xml")).expect("junit.xml");
@@ -222,4 +228,60 @@ fn shards_split_a_run_exactly() {
     );
     let o = umbra(&["conformance", "--shard", "3/3"]);
     assert_eq!(o.status.code(), Some(125), "{}", text(&o));
+}
+
+/// Integrity round three: a backend that keeps state from one point to the next failed the
+/// second point by thousands of pixels, passed its rerun on the same worker right after, and
+/// was a Flake (exit 0). The rerun is alone on a fresh worker now: the run is
+/// OrderDependent (a regression), naming the point that went before it, and the order alone
+/// reproduces it.
+#[test]
+fn state_left_by_an_earlier_point_is_an_order_dependent_failure_not_a_flake() {
+    let out = scratch("stale");
+    let no_expectations = scratch("stale-exp");
+    let o = umbra(&[
+        "conformance",
+        "--backend",
+        "fake/stale",
+        "--filter",
+        "*-occluder",
+        "--jobs",
+        "1",
+        "--out",
+        out.to_str().unwrap_or_default(),
+        "--expectations",
+        no_expectations.to_str().unwrap_or_default(),
+    ]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    let results = std::fs::read_to_string(out.join("latest/results.csv")).expect("results.csv");
+    let rows: Vec<&str> = results
+        .lines()
+        .filter(|l| l.starts_with("fake/stale/"))
+        .collect();
+    assert_eq!(rows.len(), 2, "{results}");
+    // Whichever ran first on the worker passed; the other is order-dependent, naming it.
+    let passed = rows.iter().filter(|l| l.contains(",Pass,")).count();
+    let ordered = rows
+        .iter()
+        .filter(|l| l.contains(",OrderDependent,"))
+        .count();
+    assert_eq!((passed, ordered), (1, 1), "{results}");
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("latest/report.json")).expect("report.json"),
+    )
+    .expect("json");
+    let run = report["runs"]
+        .as_array()
+        .and_then(|r| r.iter().find(|r| r["status"] == "OrderDependent"))
+        .expect("the order-dependent run");
+    let reason = run["reason"].as_str().unwrap_or("");
+    assert!(
+        reason.contains("failed after fake/stale/")
+            && reason.contains("passed alone on a fresh worker")
+            && reason.contains("reproduced: run after it on a fresh worker, it failed again"),
+        "{reason}"
+    );
+    assert!(!results.contains(",Flake,"), "{results}");
+    assert!(t.contains("order-dependent 1"), "{t}");
 }

@@ -217,7 +217,8 @@ fn faults() -> impl Iterator<Item = Option<Fault>> {
             // Faults that act on the passes' state, not on any source (orientations, the
             // mipmapped sampler's levels, the shadow pass's depth clamp, the layer it draws
             // a cascade into, the lit pass's clear colour, culling and colour target, the
-            // shadow pass's depth function, which light's map a lit pass reads), leave the
+            // shadow pass's depth function, which light's map a lit pass reads, the texture
+            // matrices a later point is given), leave the
             // sources as they were.
             .filter(|f| {
                 !matches!(
@@ -234,6 +235,7 @@ fn faults() -> impl Iterator<Item = Option<Fault>> {
                         | Fault::SrgbIgnored
                         | Fault::LightSwap
                         | Fault::ArrayLayerZero
+                        | Fault::StaleUniform
                 )
             })
             .map(Some),

@@ -168,12 +168,15 @@ impl Renderer {
             let cam = run.camera.view_proj(conv);
             gl.uniform_matrix_4_f32_slice(loc("u_view_proj").as_ref(), false, &cam.to_cols_array());
             let mut light = Vec::with_capacity(16 * p.faces);
-            let mut tex = Vec::with_capacity(16 * p.faces);
+            let mut textures = Vec::with_capacity(p.faces);
             for v in &run.light.views {
                 let m = LookupMatrices::new(conv, v.view_proj(conv));
                 light.extend_from_slice(&m.light.to_cols_array());
-                tex.extend_from_slice(&m.texture.to_cols_array());
+                textures.push(m.texture);
             }
+            let k = run.of_lights.map_or(0, |o| o.light);
+            Fault::stale_texture(p.fault, &run.case().name, k, &mut textures);
+            let tex: Vec<f32> = textures.iter().flat_map(|m| m.to_cols_array()).collect();
             gl.uniform_matrix_4_f32_slice(
                 loc("u_light[0]").or_else(|| loc("u_light")).as_ref(),
                 false,

@@ -349,7 +349,10 @@ fn say_first_bad(
     println!("bisect: the case's failure on it ({}):", report.display());
     for run in r["runs"].as_array().into_iter().flatten() {
         let status = run["status"].as_str().unwrap_or("");
-        if matches!(status, "Fail" | "Crash" | "Timeout" | "UnexpectedPass") {
+        if matches!(
+            status,
+            "Fail" | "Crash" | "Timeout" | "UnexpectedPass" | "OrderDependent"
+        ) {
             println!(
                 "  {status} {}: {}",
                 run["name"].as_str().unwrap_or(""),

@@ -88,6 +88,9 @@ pub fn of_session(session: &mut Session) -> Result<Card, String> {
         (crate::harness::pool::Reply::TimedOut, _) => {
             Err("the probes did not finish within the time limit".into())
         }
+        (crate::harness::pool::Reply::OverBudget(why), _) => {
+            Err(format!("stopped by umbra's memory budget: {why}"))
+        }
     }
 }
 

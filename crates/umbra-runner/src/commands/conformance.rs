@@ -1510,7 +1510,7 @@ impl Group<'_> {
                     card: false,
                     calibration: self.calibration.clone(),
                 };
-                session.attempt_or_rerun(&req)
+                session.attempt_or_rerun(&req, &p.name())
             }
         }
     }

@@ -153,6 +153,7 @@ impl Judge {
             },
             Ok(Reply::Crashed(how)) => Verdict::Crash(how),
             Ok(Reply::TimedOut) => Verdict::Crash("timeout".into()),
+            Ok(Reply::OverBudget(why)) => Verdict::Other(format!("umbra's memory budget: {why}")),
             Err(e) => Verdict::Other(format!("no worker for {id}: {e}")),
         };
         let _ = std::fs::remove_file(&file);

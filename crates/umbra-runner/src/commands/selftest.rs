@@ -791,6 +791,9 @@ impl Faulted {
             }
             Reply::Crashed(how) => Seen::Caught(format!("crash ({how})")),
             Reply::TimedOut => Seen::Caught("timeout".into()),
+            // umbra's own limit saw nothing of the fault: never a catch (a budget too small
+            // for any run once made every fault "caught").
+            Reply::OverBudget(why) => Seen::Skipped(format!("umbra's memory budget: {why}")),
         }
     }
 }

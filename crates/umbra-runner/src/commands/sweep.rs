@@ -264,6 +264,9 @@ impl Sweep<'_> {
                 Ok((Reply::TimedOut, _)) => {
                     (Err(format!("no answer in {} s", timeout.as_secs())), false)
                 }
+                Ok((Reply::OverBudget(why), _)) => {
+                    (Err(format!("umbra's memory budget: {why}")), true)
+                }
                 Err(e) => (Err(format!("cannot start the worker: {e}")), false),
             };
             let line = match &result {
@@ -330,6 +333,7 @@ pub fn measure_backends(
                     Reply::Report(r) => r.measured.ok_or(r.reason),
                     Reply::Crashed(why) => Err(format!("the worker crashed: {why}")),
                     Reply::TimedOut => Err("timed out".into()),
+                    Reply::OverBudget(why) => Err(format!("umbra's memory budget: {why}")),
                 }
             })();
             (b.clone(), result)

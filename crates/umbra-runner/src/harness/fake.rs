@@ -1,6 +1,9 @@
 //! Fake backends that misbehave on purpose, for the runner's own tests: `fake/crash` aborts
-//! the process, `fake/hang` never returns, `fake/flaky` renders wrong on its first call and
-//! right afterwards, `fake/wrong` inverts every shadow, and `fake/mesa` stands in for a Mesa
+//! the process, `fake/hang` never returns, `fake/flaky` aborts its first worker of a run
+//! (the first to claim `UMBRA_FAKE_FLAKY_FILE`, else a file named for its parent process) and renders right in every
+//! other, `fake/stale` keeps state from one render to the next (right on a worker's first
+//! case, every shadow of any later case inverted, as a stale uniform would), `fake/wrong` inverts
+//! every shadow, and `fake/mesa` stands in for a Mesa
 //! driver build (`--mesa DIR` with a [`MARKER`] file: it reports that
 //! file's version, and inverts every shadow when the file says `"fault": "invert"`), so the
 //! bisect driver and per-driver expectations are tested without building Mesa; `fake/hog`
@@ -21,13 +24,14 @@ pub fn enabled() -> bool {
 }
 
 /// The fake ids.
-pub const IDS: [&str; 6] = [
+pub const IDS: [&str; 7] = [
     "fake/crash",
     "fake/hang",
     "fake/flaky",
     "fake/wrong",
     MESA,
     "fake/hog",
+    "fake/stale",
 ];
 
 /// The fake that runs on a fake Mesa build.
@@ -65,14 +69,18 @@ fn fake_build() -> Option<(String, Option<String>)> {
 pub struct Fake {
     id: &'static str,
     calls: u32,
+    /// The first case this worker rendered (`fake/stale`: its state is right for it alone).
+    first: Option<String>,
 }
 
 impl Fake {
     /// The fake `id`, if it is one.
     pub fn new(id: &str) -> Option<Fake> {
-        IDS.iter()
-            .find(|f| **f == id)
-            .map(|f| Fake { id: f, calls: 0 })
+        IDS.iter().find(|f| **f == id).map(|f| Fake {
+            id: f,
+            calls: 0,
+            first: None,
+        })
     }
 }
 
@@ -131,7 +139,36 @@ impl Backend for Fake {
             "fake/hang" => loop {
                 std::thread::sleep(std::time::Duration::from_secs(3600));
             },
-            "fake/flaky" if self.calls > 1 => {}
+            // Nondeterminism across processes: the first worker of the run to claim the file
+            // dies, every later one renders right.
+            "fake/flaky" if run.case().name != "card-probe" => {
+                // The test names a fresh file (no earlier run's claim can be reused).
+                let claim = std::env::var_os("UMBRA_FAKE_FLAKY_FILE").map_or_else(
+                    || {
+                        std::env::temp_dir().join(format!(
+                            "umbra-fake-flaky-{}",
+                            std::os::unix::process::parent_id()
+                        ))
+                    },
+                    std::path::PathBuf::from,
+                );
+                if std::fs::OpenOptions::new()
+                    .write(true)
+                    .create_new(true)
+                    .open(&claim)
+                    .is_ok()
+                {
+                    eprintln!("fake/flaky: this worker dies once");
+                    std::process::abort()
+                }
+            }
+            // The state a worker's first case left (a stale uniform) is right for that
+            // case, and its twins, alone: every other case point renders wrong.
+            "fake/flaky" => {}
+            "fake/stale"
+                if run.case().name == "card-probe"
+                    || self.first.get_or_insert_with(|| run.case().name.clone())
+                        == &run.case().name => {}
             // A change only where the judge does not look: the background's alpha (the judge
             // holds the background's RGB to the clear colour since issue 39; alpha is the
             // golden's alone).

@@ -1,7 +1,8 @@
 //! The parent's side of the workers: one worker process per backend (with the driver's
 //! environment), fed one run at a time; a per-run timeout; a dead or hung worker costs its
 //! run (Crash or Timeout) and a fresh worker takes the rest; so does one whose resident
-//! memory goes over the budget ([`crate::harness::memory_limit`]).
+//! memory goes over the budget ([`crate::harness::memory_limit`]), whose run is umbra's limit
+//! ([`Reply::OverBudget`]), not the driver's crash.
 
 use std::io::{BufRead, BufReader, Write};
 use std::process::{Child, ChildStdin, Command, Stdio};
@@ -19,6 +20,9 @@ pub enum Reply {
     Crashed(String),
     /// No answer within the limit.
     TimedOut,
+    /// Stopped by umbra's own memory budget ([`crate::harness::memory_limit::over`]: the
+    /// figures): umbra's limit, not a finding about the driver, so never a crash.
+    OverBudget(String),
 }
 
 /// A live worker.
@@ -178,7 +182,7 @@ impl Worker {
                     if let Some(why) = crate::harness::memory_limit::over(self.child.id(), budget) {
                         let _ = self.child.kill();
                         let _ = self.child.wait();
-                        return Reply::Crashed(why);
+                        return Reply::OverBudget(why);
                     }
                 }
                 Err(RecvTimeoutError::Disconnected) => return Reply::Crashed(self.stop()),

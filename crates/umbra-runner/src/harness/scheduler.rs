@@ -6,7 +6,9 @@
 //!   or a hang costs one run. [`Session::attempt`] turns a reply into an [`Attempt`] (a
 //!   report's status, a crash with the worker's last stderr line, a timeout), and
 //!   [`Session::attempt_or_rerun`] adds the rerun policy: a run that fails is run once more,
-//!   and a pass then makes it a flake, with the failed attempt's evidence kept. Commands
+//!   alone on a fresh worker; a pass then makes a crash or a hang a flake, and a judged
+//!   failure that followed another run [`Status::OrderDependent`] (a regression), with the
+//!   failed attempt's evidence kept. Commands
 //!   that read replies their own way (a sweep's timings, the self-test's catches, a
 //!   reduction's verdicts) ask [`Session::reply`], which restarts the same way.
 //! - [`run_pool`]: independent tasks (the self-test's fault × backend pairs) on `jobs`
@@ -148,6 +150,9 @@ pub struct Session {
     hello: Hello,
     /// Why the first worker could not be started at all.
     start_error: Option<String>,
+    /// The request the current worker answered last, with its run's name: what state it
+    /// holds may have come from ([`Session::attempt_or_rerun`]). None on a fresh worker.
+    previous: Option<(Request, String)>,
 }
 
 impl Session {
@@ -181,6 +186,7 @@ impl Session {
             worker: Err("not started".into()),
             hello: Hello::Unavailable("it has not said hello yet".into()),
             start_error: None,
+            previous: None,
         };
         s.worker = s.spawn();
         match &s.worker {
@@ -236,6 +242,7 @@ impl Session {
     /// the first worker never started, the first that does gives the session its hello.
     pub fn restart(&mut self) -> Result<(), String> {
         if self.worker.is_err() {
+            self.previous = None;
             self.worker = self.spawn();
             if let (Ok(w), Some(_)) = (&self.worker, &self.start_error) {
                 self.hello = w.hello.clone();
@@ -256,9 +263,20 @@ impl Session {
         match &reply {
             Reply::Crashed(how) => self.worker = Err(how.clone()),
             Reply::TimedOut => self.worker = Err("timed out".into()),
+            Reply::OverBudget(why) => self.worker = Err(why.clone()),
+            // A worker that retired after this run is a fresh one: nothing went before.
+            Reply::Report(r) if r.retired.is_some() => self.previous = None,
             Reply::Report(_) => {}
         }
         Ok((reply, stderr))
+    }
+
+    /// Ends the current worker, so the next request starts a fresh one that has run nothing.
+    fn retire(&mut self) {
+        if self.worker.is_ok() {
+            self.worker = Err("retired for a run alone on a fresh worker".into());
+        }
+        self.previous = None;
     }
 
     /// One attempt at `req`: the report, or a crash (with the worker's last stderr line) or a
@@ -282,31 +300,88 @@ impl Session {
                     last_words(&stderr)
                 ),
             ),
+            // umbra's limit, with its figures: a skip that says whose it is, never the
+            // driver's crash or a flake.
+            Reply::OverBudget(why) => {
+                let why = format!(
+                    "umbra's memory budget stopped the run, not the driver: {why}; run it alone with a larger --max-memory to judge it"
+                );
+                Attempt::bare(Status::Skip(why.clone()), why)
+            }
         };
         a.stderr = stderr;
         a
     }
 
-    /// [`Session::attempt`], and once more if it failed: a pass then makes it a flake (the
-    /// reason says how it failed first, and the evidence is the failed attempt's); a second
-    /// failure keeps the first attempt.
-    pub fn attempt_or_rerun(&mut self, req: &Request) -> Attempt {
+    /// [`Session::attempt`] of run `name`, and once more if it failed, alone on a fresh
+    /// worker (the failed attempt's evidence is kept either way):
+    ///
+    /// - a second failure keeps the first attempt;
+    /// - a pass after a crash or a timeout (the worker's own nondeterminism) is a flake;
+    /// - a pass after a judged failure on a worker where another run went before is
+    ///   [`Status::OrderDependent`], naming that run: state it left changed the answer (a
+    ///   rerun on the same worker right after once passed such a run as a flake). The two
+    ///   are then run again in their order on another fresh worker, and the reason says
+    ///   whether that reproduced the failure;
+    /// - a pass after a judged failure on a worker that had run nothing before stays a
+    ///   failure: the same request answered two ways with nothing before it.
+    pub fn attempt_or_rerun(&mut self, req: &Request, name: &str) -> Attempt {
+        let before = self.previous.take();
         let first = self.attempt(req);
+        self.previous = Some((req.clone(), name.to_string()));
         if !first.status.is_failure() {
             return first;
         }
+        self.retire();
         let second = self.attempt(req);
+        self.previous = Some((req.clone(), name.to_string()));
         if second.status != Status::Pass {
             return first;
         }
-        Attempt {
-            status: Status::Flake,
-            reason: format!(
-                "failed first ({}: {}), passed on rerun",
-                first.status, first.reason
+        let how = format!("{}: {}", first.status, first.reason);
+        let (status, reason) = match (&first.status, before) {
+            (Status::Crash | Status::Timeout, _) => (
+                Status::Flake,
+                format!("failed first ({how}), passed on its rerun on a fresh worker"),
             ),
+            (_, Some((prev, prev_name))) => {
+                let replay = self.replay(&prev, req);
+                (
+                    Status::OrderDependent,
+                    format!(
+                        "failed after {prev_name} on the same worker ({how}) and passed alone on a fresh worker: state left by an earlier run changed its answer; {replay}"
+                    ),
+                )
+            }
+            (_, None) => (
+                Status::Fail,
+                format!(
+                    "failed on a fresh worker ({how}), then passed on another: the same run answered two ways with nothing before it"
+                ),
+            ),
+        };
+        Attempt {
+            status,
+            reason,
             stderr: first.stderr,
             ..second
+        }
+    }
+
+    /// `prev` then `req` on a fresh worker: whether the order alone reproduces `req`'s
+    /// failure, in words for the reason.
+    fn replay(&mut self, prev: &Request, req: &Request) -> String {
+        self.retire();
+        let _ = self.attempt(prev);
+        let again = self.attempt(req);
+        self.previous = Some((req.clone(), String::new()));
+        if again.status.is_failure() {
+            format!(
+                "reproduced: run after it on a fresh worker, it failed again ({})",
+                again.status
+            )
+        } else {
+            "not reproduced by that run alone before it: an earlier run on the worker may have left the state".into()
         }
     }
 }

@@ -208,6 +208,8 @@ impl Gpu {
             light.push(m.light);
             tex.push(m.texture);
         }
+        let k = run.of_lights.map_or(0, |o| o.light);
+        umbra_case::fault::Fault::stale_texture(p.fault, &run.case().name, k, &mut tex);
         let (pos, towards) = match run.light.kind {
             // A directional light's eye is read only by an N·L bias towards its position.
             LightKind::Directional { towards, position } => (position, towards),
