@@ -323,6 +323,12 @@ pub enum Fault {
     /// reads layer (cube) 0 (a layer index that never reaches the shader or the sampler's
     /// coordinate).
     ArrayLayerZero,
+    /// The lookup takes the interpolated normal as the rasteriser gives it, not renormalised
+    /// (the shading still normalises it): the normal offset and the N·L and slope biases
+    /// read a normal short of unit length between the vertices of a curved receiver, by
+    /// 1 − cos(π/segments) at a quad's middle (7.6 % on an 8-segment cylinder, 5·10⁻⁴ on a
+    /// 96-segment sphere).
+    NormalUnnormalized,
     /// State leaks from one case point to the next: the lit pass keeps the texture matrices
     /// of the first case a worker process rendered for every later case (a uniform upload
     /// skipped once a program has one, a stale binding). Each point alone renders right; a
@@ -352,7 +358,7 @@ impl Fault {
     /// three stand for them here (a wrong handedness on the +x face, the one the
     /// four-fold symmetric point-light cases could not see; a wrong up vector on the −y face;
     /// a transposed 2D map), and `umbra selftest --fault` or `--orientations` runs any.
-    pub const ALL: [Fault; 46] = [
+    pub const ALL: [Fault; 47] = [
         Fault::CompareFlipped,
         Fault::NoDivide,
         Fault::NoGuard,
@@ -396,6 +402,7 @@ impl Fault {
         Fault::LightSwap,
         Fault::ArrayLayerZero,
         Fault::StaleUniform,
+        Fault::NormalUnnormalized,
         Fault::Oriented {
             face: Some(0),
             orientation: Orientation::MirrorX,
@@ -466,6 +473,7 @@ impl Fault {
             Fault::LightSwap => "light-swap",
             Fault::ArrayLayerZero => "array-layer-zero",
             Fault::StaleUniform => "stale-uniform",
+            Fault::NormalUnnormalized => "normal-unnormalized",
             Fault::Oriented { face, orientation } => {
                 return match face {
                     Some(f) => format!("face{f}-{}", orientation.name()),
@@ -486,7 +494,9 @@ impl Fault {
             Fault::QuarterTexel | Fault::ShadowHalfTexel | Fault::NormalOffsetShort => {
                 Subtlety::SubTexel
             }
-            Fault::OffsetUnitsLow | Fault::SlopeShort => Subtlety::SubStep,
+            Fault::OffsetUnitsLow | Fault::SlopeShort | Fault::NormalUnnormalized => {
+                Subtlety::SubStep
+            }
             Fault::PcfOffCentre
             | Fault::PcfDoubleCentre
             | Fault::BilinearCoarse

@@ -135,7 +135,9 @@ pub trait Dialect {
     /// A vec3 literal.
     fn vec3(&self, v: [f32; 3]) -> String;
     /// Opens the entry point, up to `vis`.
-    fn main_start(&self) -> &'static str;
+    /// Opens `main`: the normal `n` (renormalised), and `vis` from `visibility(p, N)` with
+    /// `N` the renormalised normal, or the raw interpolant when `raw_normal` (a fault).
+    fn main_start(&self, raw_normal: bool) -> String;
     /// The shaded colour `col` (and the face id) from `vis`.
     fn main_colour(&self) -> &'static str;
     /// Writes the outputs and closes the entry point.
@@ -164,7 +166,7 @@ pub fn lit_fragment(d: &impl Dialect, t: &Technique) -> String {
     }
     lookup(&mut s, d, t);
     shade(&mut s, d, t);
-    s += d.main_start();
+    s += &d.main_start(t.lookup_normal_raw());
     if let Some(steps) = t.visibility_steps() {
         s += &format!("  vis = floor(vis * {steps}.0 + 0.5) / {steps}.0;\n");
     }

@@ -307,6 +307,12 @@ impl Technique {
         self.is(Fault::WrongComponent)
     }
 
+    /// The normal the lookup reads: the interpolated one renormalised (`n`), or as it
+    /// arrives under NormalUnnormalized.
+    pub fn lookup_normal_raw(&self) -> bool {
+        self.is(Fault::NormalUnnormalized)
+    }
+
     /// The share of the case's normal offset applied (NormalOffsetShort: 0.75).
     pub fn normal_offset_scale(&self) -> f32 {
         if self.is(Fault::NormalOffsetShort) {

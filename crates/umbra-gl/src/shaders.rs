@@ -646,10 +646,13 @@ impl Dialect for Glsl {
     }
 
     /// Outputs: colour; visibility in R and face id + 1 in G, B, A (base 256).
-    fn main_start(&self) -> &'static str {
-        "vec4 encode(float vis, float face) {\n  float id = face + 1.0;\n\
-           return vec4(vis, mod(id, 256.0) / 255.0, mod(floor(id / 256.0), 256.0) / 255.0, floor(id / 65536.0) / 255.0);\n}\n\
-         void main() {\n  vec3 n = normalize(v_normal);\n  float vis = visibility(v_pos, n);\n"
+    fn main_start(&self, raw_normal: bool) -> String {
+        format!(
+            "vec4 encode(float vis, float face) {{\n  float id = face + 1.0;\n\
+               return vec4(vis, mod(id, 256.0) / 255.0, mod(floor(id / 256.0), 256.0) / 255.0, floor(id / 65536.0) / 255.0);\n}}\n\
+             void main() {{\n  vec3 n = normalize(v_normal);\n  float vis = visibility(v_pos, {});\n",
+            if raw_normal { "v_normal" } else { "n" }
+        )
     }
 
     fn main_colour(&self) -> &'static str {

@@ -444,9 +444,12 @@ impl Dialect for Wgsl {
         format!("vec3<f32>({:.9}, {:.9}, {:.9})", v[0], v[1], v[2])
     }
 
-    fn main_start(&self) -> &'static str {
-        "struct FOut {\n  @location(0) color: vec4<f32>,\n  @location(1) vis: vec4<f32>,\n  @location(2) face: u32,\n}\n\
-         @fragment fn fs(v: VOut) -> FOut {\n  let n = normalize(v.normal);\n  var vis = visibility(v.pos, n);\n"
+    fn main_start(&self, raw_normal: bool) -> String {
+        format!(
+            "struct FOut {{\n  @location(0) color: vec4<f32>,\n  @location(1) vis: vec4<f32>,\n  @location(2) face: u32,\n}}\n\
+             @fragment fn fs(v: VOut) -> FOut {{\n  let n = normalize(v.normal);\n  var vis = visibility(v.pos, {});\n",
+            if raw_normal { "v.normal" } else { "n" }
+        )
     }
 
     fn main_colour(&self) -> &'static str {

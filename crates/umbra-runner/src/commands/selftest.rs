@@ -88,6 +88,22 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
         Fault::NoClamp => s.format.is_fixed() && s.compare == Compare::Hardware,
         Fault::QuarterTexel => !matches!(c.light, Light::Point(_)),
         Fault::NormalOffsetShort => s.bias.normal_offset != 0.0,
+        // A normal short of unit length between the vertices of a curved receiver, read by
+        // whatever bias reads the normal.
+        Fault::NormalUnnormalized => {
+            let curved = c.scene.objects.iter().any(|o| {
+                matches!(
+                    o,
+                    umbra_case::format::Object::Sphere(_) | umbra_case::format::Object::Cylinder(_)
+                )
+            });
+            let b = &s.bias;
+            curved
+                && (b.normal_offset != 0.0
+                    || b.normal_offset_texels != 0.0
+                    || b.n_dot_l.is_some()
+                    || b.slope.is_some())
+        }
         Fault::OffsetUnitsLow => s.bias.polygon_offset[1] != 0.0,
         Fault::SlopeShort => s.bias.slope.is_some(),
         Fault::PcfOffCentre | Fault::PcfDoubleCentre => matches!(s.filter, Filter::Pcf(_)),
@@ -157,6 +173,7 @@ pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
         Fault::NormalOffsetShort | Fault::OffsetUnitsLow | Fault::SlopeShort => {
             &["bias-forms-magnified", "contact", "grazing"]
         }
+        Fault::NormalUnnormalized => &["engine-curved", "bias-forms-curved-magnified"],
         Fault::PcfOffCentre | Fault::PcfDoubleCentre | Fault::BilinearCoarse | Fault::Vis4Bit => {
             &["filters-magnified", "filters"]
         }
