@@ -419,16 +419,20 @@ fn update(apt: &Apt, suite: &str) -> Result<(), String> {
         .lines()
         .filter(|l| l.starts_with("W:") || l.starts_with("E:") || l.starts_with("Err:"))
         .collect();
-    let fetched = std::fs::read_dir(apt.dir.join("lists")).is_ok_and(|d| {
-        d.flatten().any(|e| {
-            let n = e.file_name().to_string_lossy().into_owned();
-            n.contains(&format!("_dists_{suite}_"))
-                && (n.ends_with("_InRelease") || n.ends_with("_Release"))
-        })
+    // apt names a list file after its URI without the scheme, `/` as `_`: the Release file
+    // of this mirror's suite, not one a fetch from another mirror left.
+    let uri = mirror();
+    let stem = uri
+        .split_once("://")
+        .map_or(uri.as_str(), |(_, rest)| rest)
+        .trim_end_matches('/')
+        .replace('/', "_");
+    let fetched = ["InRelease", "Release"].iter().any(|f| {
+        apt.dir
+            .join("lists")
+            .join(format!("{stem}_dists_{suite}_{f}"))
+            .is_file()
     });
-    if fetched && o.status.success() {
-        return Ok(());
-    }
     let unreachable = said.iter().any(|l| {
         [
             "Could not resolve",
@@ -441,6 +445,9 @@ fn update(apt: &Apt, suite: &str) -> Result<(), String> {
         .iter()
         .any(|w| l.contains(w))
     });
+    if fetched && o.status.success() && !unreachable {
+        return Ok(());
+    }
     let apt_said = if said.is_empty() {
         String::new()
     } else {
@@ -453,8 +460,7 @@ fn update(apt: &Apt, suite: &str) -> Result<(), String> {
                 .all(|l| !l.contains("does not have a Release file"))
     {
         return Err(format!(
-            "the mirror {} could not be reached for suite {suite:?}: apt-get update fetched no Release file{apt_said}; fix: check this machine's network and its apt mirror, or skip current Mesa (UMBRA_SKIP_CURRENT_MESA=1 for cargo xtask test)",
-            mirror()
+            "the mirror {uri} could not be reached for suite {suite:?}: apt-get update fetched no Release file{apt_said}; fix: check this machine's network and its apt mirror, or skip current Mesa (UMBRA_SKIP_CURRENT_MESA=1 for cargo xtask test)"
         ));
     }
     Err(format!(

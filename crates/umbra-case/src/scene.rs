@@ -452,7 +452,7 @@ mod tests {
             let mid = (g.normals[g.triangles[0][0] as usize]
                 + g.normals[g.triangles[0][1] as usize])
                 / 2.0;
-            let short = 1.0 - (std::f32::consts::PI / segments as f32).cos();
+            let short = (1.0 - crate::math::cos(std::f64::consts::PI / f64::from(segments))) as f32;
             assert!(
                 (1.0 - mid.length() - short).abs() < 1e-5,
                 "{segments}: {}",

@@ -723,6 +723,69 @@ pub fn usage_error(command: &str, message: impl std::fmt::Display) -> crate::exi
     crate::exit::Error::new(format!("{message}\nusage: {}", usage(command)))
 }
 
+/// `--timeout SECS` of `command`: whole seconds, 1 or more, `default` when not given.
+pub fn timeout_secs(
+    command: &str,
+    value: Option<&str>,
+    default: u64,
+) -> Result<std::time::Duration, crate::exit::Error> {
+    match value.map(str::parse::<u64>).transpose() {
+        Ok(Some(0)) => Err(usage_error(
+            command,
+            format!(
+                "--timeout 0: no run can finish in no time; give whole seconds, 1 or more (default {default})"
+            ),
+        )),
+        Ok(t) => Ok(std::time::Duration::from_secs(t.unwrap_or(default))),
+        Err(_) => Err(usage_error(
+            command,
+            format!("--timeout takes whole seconds, 1 or more (default {default})"),
+        )),
+    }
+}
+
+/// `--jobs`, `--timeout` and `--max-memory`, read strictly and the budget selected: one
+/// reading for every command that runs workers (selftest once ran `--timeout 10s` silently
+/// with its default, and a budget below one run's base counted every fault as caught). A
+/// value that is not whole and positive is a usage error of `command`.
+pub fn limits(
+    command: &str,
+    execution: &Execution,
+    default_timeout: u64,
+) -> Result<(usize, std::time::Duration), crate::exit::Error> {
+    let jobs = match execution
+        .jobs
+        .as_deref()
+        .map(str::parse::<usize>)
+        .transpose()
+    {
+        Ok(Some(0)) => {
+            return Err(usage_error(
+                command,
+                "--jobs 0: at least one worker must run; give --jobs 1 or more (default: the core count)",
+            ));
+        }
+        Ok(j) => j.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+        Err(_) => {
+            return Err(usage_error(command, "--jobs takes a positive number"));
+        }
+    };
+    let timeout = timeout_secs(command, execution.timeout.as_deref(), default_timeout)?;
+    crate::harness::memory_limit::check_jobs(jobs).map_err(|e| usage_error(command, e))?;
+    match crate::harness::memory_limit::select(execution.max_memory.as_deref(), jobs) {
+        Ok(b) if b < umbra_case::memory::BASE_BYTES => Err(usage_error(
+            command,
+            format!(
+                "the memory budget per worker, {}, is below one run's base ({}: a worker with its driver, before any case; umbra_case::memory::BASE_BYTES); give --max-memory 1GiB or more, or fewer --jobs",
+                umbra_case::memory::gib(b),
+                umbra_case::memory::gib(umbra_case::memory::BASE_BYTES)
+            ),
+        )),
+        Ok(_) => Ok((jobs, timeout)),
+        Err(e) => Err(usage_error(command, e)),
+    }
+}
+
 /// Writes the completion script for `shell` to stdout.
 pub fn completions(args: &CompletionsArgs) -> crate::exit::Outcome {
     clap_complete::generate(args.shell, &mut command(), "umbra", &mut std::io::stdout());

@@ -238,7 +238,7 @@ impl Options {
             .transpose()
             .map_err(|e| crate::cli::usage_error("conformance", e))?
             .unwrap_or((0, 1));
-        let (jobs, timeout) = limits(execution)?;
+        let (jobs, timeout) = crate::cli::limits("conformance", execution, 300)?;
         let golden = golden_dir(args.golden.as_deref())?;
         if let Some(warning) = golden
             .as_deref()
@@ -334,65 +334,6 @@ fn golden_dir(flag: Option<&str>) -> Result<Option<PathBuf>, Error> {
         Some(dir) => Some(PathBuf::from(dir)),
         None => Some(PathBuf::from("golden")),
     })
-}
-
-/// `--jobs`, `--timeout` and the memory budget per worker, checked together (the budget
-/// depends on the job count).
-fn limits(execution: &crate::cli::Execution) -> Result<(usize, Duration), Error> {
-    let jobs = match execution
-        .jobs
-        .as_deref()
-        .map(str::parse::<usize>)
-        .transpose()
-    {
-        Ok(Some(0)) => {
-            return Err(crate::cli::usage_error(
-                "conformance",
-                "--jobs 0: at least one worker must run; give --jobs 1 or more (default: the core count)",
-            ));
-        }
-        Ok(j) => j.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
-        Err(_) => {
-            return Err(crate::cli::usage_error(
-                "conformance",
-                "--jobs takes a positive number",
-            ));
-        }
-    };
-    let timeout = match execution
-        .timeout
-        .as_deref()
-        .map(str::parse::<u64>)
-        .transpose()
-    {
-        Ok(Some(0)) => {
-            return Err(crate::cli::usage_error(
-                "conformance",
-                "--timeout 0: no run can finish in no time; give whole seconds, 1 or more (default 300)",
-            ));
-        }
-        Ok(t) => Duration::from_secs(t.unwrap_or(300)),
-        Err(_) => {
-            return Err(crate::cli::usage_error(
-                "conformance",
-                "--timeout takes whole seconds",
-            ));
-        }
-    };
-    crate::harness::memory_limit::check_jobs(jobs)
-        .map_err(|e| crate::cli::usage_error("conformance", e))?;
-    match crate::harness::memory_limit::select(execution.max_memory.as_deref(), jobs) {
-        Ok(b) if b < umbra_case::memory::BASE_BYTES => Err(crate::cli::usage_error(
-            "conformance",
-            format!(
-                "the memory budget per worker, {}, is below one run's base ({}: a worker with its driver, before any case; umbra_case::memory::BASE_BYTES); give --max-memory 1GiB or more, or fewer --jobs",
-                umbra_case::memory::gib(b),
-                umbra_case::memory::gib(umbra_case::memory::BASE_BYTES)
-            ),
-        )),
-        Ok(_) => Ok((jobs, timeout)),
-        Err(e) => Err(crate::cli::usage_error("conformance", e)),
-    }
 }
 
 /// The runs to make: the case files that did not load (each a failed result already), the

@@ -269,12 +269,7 @@ impl Reducer {
     ) -> Result<Reducer, Error> {
         let file = args.positional.clone();
         let point_id = point.id();
-        let timeout = Duration::from_secs(
-            args.timeout
-                .as_deref()
-                .and_then(|t| t.parse().ok())
-                .unwrap_or(120),
-        );
+        let timeout = crate::cli::timeout_secs("reduce", args.timeout.as_deref(), 120)?;
         let required = args
             .check
             .iter()

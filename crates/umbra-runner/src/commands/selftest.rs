@@ -316,22 +316,7 @@ pub(crate) fn setup(args: &SelftestArgs) -> Result<Setup, Error> {
         Some(dir) => dir.clone(),
         None => PathBuf::from(args.cases.as_deref().unwrap_or("cases")),
     };
-    let timeout = Duration::from_secs(
-        args.execution
-            .timeout
-            .as_deref()
-            .and_then(|t| t.parse().ok())
-            .unwrap_or(120),
-    );
-    let jobs = args
-        .execution
-        .jobs
-        .as_deref()
-        .and_then(|j| j.parse().ok())
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-        .max(1);
-    crate::harness::memory_limit::select(args.execution.max_memory.as_deref(), jobs)
-        .map_err(|e| crate::cli::usage_error("selftest", e))?;
+    let (jobs, timeout) = crate::cli::limits("selftest", &args.execution, 120)?;
     let expectations = Expectations::load(Path::new(
         args.expectations.as_deref().unwrap_or("expectations"),
     ))
@@ -791,7 +776,12 @@ impl Faulted {
                 }
                 // A run that failed with no check failed broke (a shader the driver refused,
                 // a GL error): the judge did not see the fault, so it is not a catch.
-                if status.is_regression() && !checks.is_empty() {
+                // umbra's own memory refusal saw nothing of the fault either.
+                let judged = r
+                    .failed
+                    .iter()
+                    .any(|c| c.check != umbra_report::check::Check::Memory);
+                if status.is_regression() && judged {
                     Seen::Caught(checks)
                 } else {
                     Seen::Passed
