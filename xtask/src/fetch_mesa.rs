@@ -226,46 +226,63 @@ fn parse_closure(text: &str) -> Vec<String> {
     names
 }
 
-/// One fetch of a suite at a time: an advisory lock (`flock(2)`) on `target/mesa/.SUITE.lock`,
-/// which the kernel gives to one process and takes back when it ends, however it ends. (A
-/// lock directory with the owner's pid written after it was made let two fetches both run
-/// in 3 of 33 trials: the second saw the directory before its pid and took it as
-/// abandoned.) The file keeps the holder's pid for the refusal's message and stays; removing
-/// a lock file would let a third process lock a new file while the second holds the old one.
-struct Lock(#[allow(dead_code)] std::fs::File);
+/// One fetch of a suite at a time: a lock file made whole, its owner's pid inside, by
+/// `link(2)`ing a file already written into place (which fails if the lock is there). A lock
+/// directory whose pid was written after it was made let two fetches both run in 3 of 33
+/// trials: the second saw the directory before its pid and took it as abandoned. A lock whose
+/// process is gone is moved aside under a name of this process's own, and only if what was
+/// moved is still that dead process's lock is it discarded; a live one is put back. Removed
+/// when dropped, if it is still this process's.
+struct Lock(PathBuf);
 
 impl Lock {
     fn take(path: &Path, suite: &str) -> Result<Lock, String> {
-        use std::io::{Seek, Write};
         if let Some(parent) = path.parent() {
             std::fs::create_dir_all(parent)
                 .map_err(|e| format!("cannot create {}: {e}", parent.display()))?;
         }
-        let mut file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(path)
-            .map_err(|e| format!("cannot open {}: {e}", path.display()))?;
-        match file.try_lock() {
-            Ok(()) => {}
-            Err(std::fs::TryLockError::WouldBlock) => {
-                let pid = std::fs::read_to_string(path).unwrap_or_default();
-                return Err(format!(
-                    "another fetch-mesa (pid {}) is fetching {suite} now; wait for it to end",
-                    pid.trim()
-                ));
+        let me = std::process::id().to_string();
+        let tmp = beside(path, &format!(".{me}"));
+        std::fs::write(&tmp, &me).map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
+        let taken = (|| {
+            for _ in 0..3 {
+                match std::fs::hard_link(&tmp, path) {
+                    Ok(()) => return Ok(Lock(path.to_path_buf())),
+                    Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+                    Err(e) => return Err(format!("cannot create {}: {e}", path.display())),
+                }
+                let holder = std::fs::read_to_string(path).unwrap_or_default();
+                let holder = holder.trim();
+                if holder.is_empty() || Path::new("/proc").join(holder).exists() {
+                    return Err(format!(
+                        "another fetch-mesa (pid {holder}) is fetching {suite} now; wait for it to end"
+                    ));
+                }
+                // Left by a process that is gone: moved aside, and discarded only if it is.
+                let aside = beside(path, &format!(".stale.{me}"));
+                if std::fs::rename(path, &aside).is_ok() {
+                    let moved = std::fs::read_to_string(&aside).unwrap_or_default();
+                    if moved.trim() == holder {
+                        let _ = std::fs::remove_file(&aside);
+                    } else {
+                        let _ = std::fs::rename(&aside, path);
+                    }
+                }
             }
-            Err(std::fs::TryLockError::Error(e)) => {
-                return Err(format!("cannot lock {}: {e}", path.display()));
-            }
+            Err(format!("cannot take {}", path.display()))
+        })();
+        let _ = std::fs::remove_file(&tmp);
+        taken
+    }
+}
+
+impl Drop for Lock {
+    fn drop(&mut self) {
+        if std::fs::read_to_string(&self.0)
+            .is_ok_and(|p| p.trim() == std::process::id().to_string())
+        {
+            let _ = std::fs::remove_file(&self.0);
         }
-        let _ = file
-            .set_len(0)
-            .and_then(|()| file.rewind())
-            .and_then(|()| write!(file, "{}", std::process::id()));
-        Ok(Lock(file))
     }
 }
 

@@ -16,7 +16,7 @@
 # `umbra backends` found), cards.txt and cards.json (each backend's behaviour card: what its
 # driver chose inside the specs' freedom) and run.log; OUT/run/latest/ holds report.html and
 # the pictures.
-# Exit status: umbra conformance's (0 as expected, 1 a failure, 125 nothing could run).
+# Exit status: umbra conformance's (0 as expected, 1 a failure, 125 nothing could run, 130 interrupted).
 set -u
 # Ids and paths are taken as they are: no pathname expansion of a glob-like id.
 set -f
@@ -48,7 +48,7 @@ rm -f "$out/.rc" "$out/report.json" "$out/results.csv" "$out/drivers.txt" \
     "$out/failures.csv" "$out/junit.xml" "$out/backends.txt" "$out/run.log" \
     "$out/cards.txt" "$out/cards.json"
 rm -f "$out/run/latest"
-trap 'echo "run.sh: interrupted" >&2; exit 125' INT TERM
+trap 'echo "run.sh: interrupted" >&2; exit 130' INT TERM
 
 # The loaders, where the machine has none of its own.
 unpacked=0
@@ -88,6 +88,8 @@ sed -n '/^Backends/,/^$/p' "$out/backends.txt" | grep -E '^  [a-z]' || cat "$out
     echo $? > "$out/.rc"
 } | tee "$out/run.log"
 rc=$(cat "$out/.rc" 2>/dev/null || echo 125)
+# umbra's four codes (docs/ci.md#exit-codes): a death by a signal (128 + N) could not run.
+case "$rc" in 0 | 1 | 125 | 130) ;; *) rc=125 ;; esac
 # The cards, kept: the first thing a driver developer asks of a GPU umbra has never seen.
 # shellcheck disable=SC2086
 "$here/umbra" card $backends --timeout 120 > "$out/cards.txt" 2>&1

@@ -209,36 +209,6 @@ fn main() -> ExitCode {
     })
 }
 
-#[cfg(test)]
-mod tests {
-    use std::os::unix::process::ExitStatusExt as _;
-    use std::process::ExitStatus;
-
-    /// A child's status in umbra's four codes: cargo test's 101 is a failed test (1), cargo
-    /// run's 101 (a build that failed, a panic) and any stray code or signal could not run
-    /// (125), SIGINT and SIGTERM an interrupt (130).
-    #[test]
-    fn a_childs_status_becomes_one_of_the_four() {
-        let code = |c: i32| ExitStatus::from_raw(c << 8);
-        let signal = ExitStatus::from_raw;
-        for (status, tests, want) in [
-            (code(0), false, 0),
-            (code(1), false, 1),
-            (code(125), false, 125),
-            (code(130), false, 130),
-            (code(101), true, 1),
-            (code(101), false, 125),
-            (code(2), false, 125),
-            (code(134), false, 125),
-            (signal(15), false, 130),
-            (signal(2), false, 130),
-            (signal(9), false, 125),
-        ] {
-            assert_eq!(super::four(status, "x", tests), want, "{status:?}");
-        }
-    }
-}
-
 /// Whether this process runs under CI: `CI` set to anything but empty, `0`, `false`, `no` or
 /// `off` (any case), as `umbra_runner::judge::golden::under_ci` reads it; `CI=True`
 /// (AppVeyor) once read as "not CI" and let goldens be blessed there.
@@ -421,6 +391,36 @@ fn status(mut cmd: Command) -> i32 {
         Err(e) => {
             eprintln!("error: cannot run {cmd:?}: {e}");
             COULD_NOT_RUN
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::os::unix::process::ExitStatusExt as _;
+    use std::process::ExitStatus;
+
+    /// A child's status in umbra's four codes: cargo test's 101 is a failed test (1), cargo
+    /// run's 101 (a build that failed, a panic) and any stray code or signal could not run
+    /// (125), SIGINT and SIGTERM an interrupt (130).
+    #[test]
+    fn a_childs_status_becomes_one_of_the_four() {
+        let code = |c: i32| ExitStatus::from_raw(c << 8);
+        let signal = ExitStatus::from_raw;
+        for (status, tests, want) in [
+            (code(0), false, 0),
+            (code(1), false, 1),
+            (code(125), false, 125),
+            (code(130), false, 130),
+            (code(101), true, 1),
+            (code(101), false, 125),
+            (code(2), false, 125),
+            (code(134), false, 125),
+            (signal(15), false, 130),
+            (signal(2), false, 130),
+            (signal(9), false, 125),
+        ] {
+            assert_eq!(super::four(status, "x", tests), want, "{status:?}");
         }
     }
 }

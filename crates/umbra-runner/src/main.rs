@@ -37,6 +37,11 @@ fn main() -> ExitCode {
             return ExitCode::from(exit.code());
         }
     };
+    // An interrupt is 130 for every command; conformance and soak then install their own
+    // orderly stop over this. A worker is stopped by its parent, and keeps the default.
+    if !matches!(command, Command::Worker(_)) {
+        harness::interrupt::exit_on_signal();
+    }
     // A panic is umbra's own bug: the hook has printed it; the process exits 125 (could
     // not run), never Rust's 101, which `git bisect run` would read as a bad commit.
     let dispatched = std::panic::catch_unwind(|| dispatch(&command));

@@ -203,3 +203,33 @@ fn render_of_nothing_but_skips_exits_125() {
     assert!(t.contains("skip") && t.contains("nothing ran"), "{t}");
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// An interrupt is 130 for a command that does not stop in order too (it died by the signal:
+/// the shell read 143 for SIGTERM, outside umbra's four codes).
+#[test]
+fn a_command_stopped_by_sigterm_exits_130() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_umbra"))
+        .args([
+            "render",
+            "cases/cascades/bevy-sun.json",
+            "--backend",
+            "ref",
+            "-o",
+            &std::env::temp_dir()
+                .join(format!("umbra-sigterm-{}", std::process::id()))
+                .to_string_lossy(),
+        ])
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("../.."))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("run umbra");
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let killed = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(killed.success());
+    let status = child.wait().expect("wait");
+    assert_eq!(status.code(), Some(130), "{status:?}");
+}
