@@ -249,32 +249,73 @@ fn four(status: std::process::ExitStatus, what: &str, failed_tests_are_101: bool
 }
 
 fn test(extra: &[String]) -> i32 {
-    disk::warn_if_short(
-        &workspace_root(),
-        disk::test_peak_gib(),
-        "`cargo xtask test`",
-    );
-    mesa::ensure();
-    mesa::ensure_test_tools();
-    let mut cmd = cargo();
-    cmd.args(["test", "--workspace"]);
-    cmd.args(extra);
-    let code = status(cmd);
+    let mut phases = Phases::default();
+    let code = phases.time("set-up (disk, apt)", || {
+        disk::warn_if_short(
+            &workspace_root(),
+            disk::test_peak_gib(),
+            "`cargo xtask test`",
+        );
+        mesa::ensure();
+        mesa::ensure_test_tools();
+        0
+    });
+    let code = phases.then(code, "cargo test (build and run)", || {
+        let mut cmd = cargo();
+        cmd.args(["test", "--workspace"]);
+        cmd.args(extra);
+        status(cmd)
+    });
     if code != 0 {
+        phases.print();
         return code;
     }
     // The main job on every case, as CI will run it, then the harness's own sensitivity, then
     // the judge on scenes it was not developed against (a fixed seed: the same 60 generated
     // cases in every CI run, about a minute on 2 cores), then the catalogue again on the
     // newest Mesa Debian ships, so umbra stays green on what its users run today.
-    let conformance = umbra(&["conformance"], &[]);
-    let selftest = umbra(&["selftest"], &[]);
-    let soak = umbra(&["soak"], &CI_SOAK.map(String::from));
-    let current = current_mesa();
+    let conformance = phases.time("conformance (this machine's Mesa)", || {
+        umbra(&["conformance"], &[])
+    });
+    let selftest = phases.time("selftest", || umbra(&["selftest"], &[]));
+    let soak = phases.time("soak", || umbra(&["soak"], &CI_SOAK.map(String::from)));
+    let current = phases.time("conformance (sid's Mesa, fetch included)", current_mesa);
+    phases.print();
     [conformance, selftest, soak, current]
         .into_iter()
         .find(|c| *c != 0)
         .unwrap_or(0)
+}
+
+/// Where `cargo xtask test`'s wall time went, phase by phase, printed at its end: CI's total
+/// is read against these (a CI log that only says "2,093 s" cannot say what grew).
+#[derive(Default)]
+struct Phases {
+    rows: Vec<(&'static str, std::time::Duration, i32)>,
+}
+
+impl Phases {
+    /// Runs `f` as phase `name`, timing it: its exit code.
+    fn time(&mut self, name: &'static str, f: impl FnOnce() -> i32) -> i32 {
+        let t0 = std::time::Instant::now();
+        let code = f();
+        self.rows.push((name, t0.elapsed(), code));
+        code
+    }
+
+    /// [`Phases::time`] after a phase that returned `code`: run only where it was 0.
+    fn then(&mut self, code: i32, name: &'static str, f: impl FnOnce() -> i32) -> i32 {
+        if code == 0 { self.time(name, f) } else { code }
+    }
+
+    fn print(&self) {
+        let total: std::time::Duration = self.rows.iter().map(|r| r.1).sum();
+        eprintln!("cargo xtask test: wall time by phase");
+        for (name, took, code) in &self.rows {
+            eprintln!("  {:>7.1} s  {name} (exit {code})", took.as_secs_f64());
+        }
+        eprintln!("  {:>7.1} s  in all", total.as_secs_f64());
+    }
 }
 
 /// The Debian suite with the newest Mesa (`cargo xtask test` runs the catalogue on it too).

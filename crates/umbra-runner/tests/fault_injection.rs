@@ -1123,6 +1123,68 @@ fn a_crash_leaves_its_evidence_with_its_run() {
     );
 }
 
+/// A worker killed by a fault says where (issue 55, "whose SIGBUS"): the signal's code, the
+/// mapping its address lies in and the faulting instruction's library, in the run's reason;
+/// the worker still dies by the same signal, and the run is the same Crash.
+#[test]
+fn a_fault_names_its_mapping_and_the_faulting_library() {
+    let out = scratch("fi-sigbus");
+    let o = umbra(
+        &[
+            "conformance",
+            "--backend",
+            "fake/sigbus",
+            "--filter",
+            "square-occluder",
+            "--golden",
+            "none",
+            "--out",
+            s(&out),
+        ],
+        &[],
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("latest/report.json")).expect("report.json"),
+    )
+    .expect("JSON");
+    let run = report["runs"]
+        .as_array()
+        .and_then(|r| {
+            r.iter()
+                .find(|r| r["name"] == "fake/sigbus/square-occluder")
+        })
+        .unwrap_or_else(|| panic!("the run in {report}"));
+    assert_eq!(run["status"], "Crash", "{run}");
+    let reason = run["reason"].as_str().unwrap_or_default();
+    assert!(reason.contains("SIGBUS"), "{reason}");
+    assert!(
+        reason.contains("umbra: fatal SIGBUS (BUS_ADRERR")
+            && reason.contains("umbra-fake-sigbus-")
+            && reason.contains("(file offset 0x0)"),
+        "{reason}"
+    );
+    // The faulting instruction is umbra's own (the fake reads the mapping): named with its
+    // offset into the executable.
+    let (exe, offset) = reason
+        .split("; instruction 0x")
+        .nth(1)
+        .and_then(|r| r.split_once(" in "))
+        .and_then(|(_, r)| r.split_once("+0x"))
+        .unwrap_or_else(|| panic!("no instruction in {reason}"));
+    let offset: String = offset.chars().take_while(char::is_ascii_hexdigit).collect();
+    assert!(exe.ends_with("/umbra"), "{reason}");
+    // The address is what addr2line takes (binutils comes with the C compiler the test
+    // set-up installs): it names the fake's own function.
+    let symbol = Command::new("addr2line")
+        .args(["-f", "-i", "-C", "-e", exe, &format!("0x{offset}")])
+        .output()
+        .expect("addr2line (binutils)");
+    let symbol = String::from_utf8_lossy(&symbol.stdout);
+    assert!(symbol.contains("fake::sigbus"), "{reason}\n{symbol}");
+}
+
 /// A damaged golden PNG is said to be one, naming the file, not "differs" (issue 36).
 #[test]
 fn a_golden_that_cannot_be_decoded_is_said() {

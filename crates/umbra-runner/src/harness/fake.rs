@@ -1,5 +1,5 @@
 //! Fake backends that misbehave on purpose, for the runner's own tests: `fake/crash` aborts
-//! the process, `fake/hang` never returns, `fake/flaky` aborts its first worker of a run
+//! the process, `fake/sigbus` dies of a real SIGBUS (a mapped file cut short), `fake/hang` never returns, `fake/flaky` aborts its first worker of a run
 //! (the first to claim `UMBRA_FAKE_FLAKY_FILE`, else a file named for its parent process) and renders right in every
 //! other, `fake/stale` keeps state from one render to the next (right on a worker's first
 //! case, every shadow of any later case inverted, as a stale uniform would), `fake/wrong` inverts
@@ -24,8 +24,9 @@ pub fn enabled() -> bool {
 }
 
 /// The fake ids.
-pub const IDS: [&str; 7] = [
+pub const IDS: [&str; 8] = [
     "fake/crash",
+    "fake/sigbus",
     "fake/hang",
     "fake/flaky",
     "fake/wrong",
@@ -136,6 +137,9 @@ impl Backend for Fake {
                 );
                 std::process::abort()
             }
+            // A real SIGBUS as a driver meets one: a shared mapping of a file that another
+            // hand cut short under it (BUS_ADRERR), for the crash report's test.
+            "fake/sigbus" => sigbus(),
             "fake/hang" => loop {
                 std::thread::sleep(std::time::Duration::from_secs(3600));
             },
@@ -199,4 +203,40 @@ impl Backend for Fake {
         }
         Ok(frame)
     }
+}
+
+/// Maps a one-page file, cuts the file to nothing and reads the mapping: the kernel sends
+/// SIGBUS (BUS_ADRERR), as it does to a driver whose mapped cache file shrank.
+#[allow(unsafe_code)] // mmap(2): the block says why it holds.
+fn sigbus() -> ! {
+    use std::os::fd::AsRawFd as _;
+    let path = std::env::temp_dir().join(format!("umbra-fake-sigbus-{}", std::process::id()));
+    let file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(true)
+        .open(&path);
+    if let Ok(file) = file {
+        let _ = file.set_len(4096);
+        // SAFETY: a fresh shared mapping of the file's one page, read once below; the
+        // process is meant to die of that read.
+        unsafe {
+            let p = libc::mmap(
+                std::ptr::null_mut(),
+                4096,
+                libc::PROT_READ,
+                libc::MAP_SHARED,
+                file.as_raw_fd(),
+                0,
+            );
+            let _ = std::fs::remove_file(&path);
+            if p != libc::MAP_FAILED {
+                let _ = file.set_len(0);
+                std::ptr::read_volatile(p.cast::<u8>());
+            }
+        }
+    }
+    eprintln!("fake/sigbus: the mapping did not fault");
+    std::process::abort()
 }

@@ -1,11 +1,12 @@
 //! Orchestration: backends by id ([`registry`], with the test doubles in [`fake`]), the Mesa
 //! build a worker runs on ([`mesa_build`], and its own C library where it carries one:
 //! [`own_libc`]), one process per backend ([`worker`], [`child`]), which dies with its parent
-//! ([`orphan`]), kept in a [`pool`] under a memory limit ([`memory_limit`]) and fed by the one
+//! ([`orphan`]) and says where a fault killed it ([`crash_report`]), kept in a [`pool`] under a memory limit ([`memory_limit`]) and fed by the one
 //! [`scheduler`] every command uses (sessions that restart a dead worker, reruns, queues), sweep timings ([`measure`]) and the
 //! terminal's progress line ([`progress`]). Uses the judge; knows no command.
 
 pub mod child;
+pub mod crash_report;
 pub mod fake;
 pub mod interrupt;
 pub mod measure;

@@ -215,6 +215,9 @@ pub struct RunReport {
 /// `id`: the backend it hosts (`umbra worker --backend ID`).
 pub fn main(id: &str) -> crate::exit::Outcome {
     crate::harness::orphan::watch();
+    // A fault in the driver (or here) names its address's mapping and the faulting library
+    // on stderr before the signal ends the worker: the crash's reason says whose it is.
+    crate::harness::crash_report::install();
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     let created = std::time::Instant::now();
