@@ -527,6 +527,11 @@ impl Fault {
                 .parse()
                 .ok()
                 .filter(|e: &f64| e.is_finite() && e.abs() <= 100.0)?;
+            // Held to the nearest millionth; an E that rounds to none is refused (it once
+            // became no fault at all, which then read as a fault the judge missed).
+            if (e * 1e6).round() == 0.0 {
+                return None;
+            }
             return Some(Fault::scaled(param, e));
         }
         Fault::ALL
@@ -792,6 +797,10 @@ mod tests {
         assert_eq!(Fault::ShadowHalfTexel.shadow_shift_texels(), [0.5, 0.0]);
         assert!(Fault::parse("offset-units@nan").is_none());
         assert!(Fault::parse("no-such@0.1").is_none());
+        // To the nearest millionth, never rounded to no fault.
+        assert!(Fault::parse("offset-units@0.0000004").is_none());
+        assert!(Fault::parse("offset-units@0").is_none());
+        assert!(Fault::parse("offset-units@0.000002").is_some());
     }
 
     #[test]

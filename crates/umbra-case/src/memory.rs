@@ -163,7 +163,8 @@ pub fn gib(bytes: u64) -> String {
     }
 }
 
-/// Parses a size such as `512MiB`, `4GiB`, `2G`, `1500M` or a byte count.
+/// Parses a size such as `512MiB`, `4GiB`, `2G`, `1500M` or `4096B` (a bare number has no
+/// unit and is refused).
 pub fn parse_size(text: &str) -> Result<u64, String> {
     let t = text.trim();
     let split = t
@@ -174,7 +175,13 @@ pub fn parse_size(text: &str) -> Result<u64, String> {
         .parse()
         .map_err(|_| format!("{text:?} is not a size; write e.g. 512MiB or 4GiB"))?;
     let scale: u64 = match unit.trim().to_ascii_lowercase().as_str() {
-        "" | "b" => 1,
+        // A bare number was once bytes: `--max-memory 4` then meant 4 bytes, not 4 GiB.
+        "" => {
+            return Err(format!(
+                "{text:?} has no unit; write e.g. 512MiB or 4GiB (B for bytes)"
+            ));
+        }
+        "b" => 1,
         "k" | "kb" | "kib" => 1 << 10,
         "m" | "mb" | "mib" => 1 << 20,
         "g" | "gb" | "gib" => 1 << 30,
@@ -258,6 +265,8 @@ mod tests {
         assert_eq!(parse_size("4G"), Ok(4 << 30));
         assert_eq!(parse_size("1.5GiB"), Ok(3 << 29));
         assert!(parse_size("lots").is_err());
+        assert!(parse_size("4").is_err_and(|e| e.contains("no unit")));
+        assert_eq!(parse_size("4096B"), Ok(4096));
         assert!(parse_size("4 parsecs").is_err());
     }
 }

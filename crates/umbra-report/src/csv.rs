@@ -212,7 +212,9 @@ pub fn parse_results(text: &str) -> Result<Vec<(String, String, f64)>, String> {
         let time: f64 = time
             .trim()
             .parse()
-            .map_err(|_| bad("the duration is not a number of seconds"))?;
+            .ok()
+            .filter(|t: &f64| t.is_finite() && *t >= 0.0)
+            .ok_or_else(|| bad("the duration is not a number of seconds (finite, not negative)"))?;
         rows.push((name.clone(), status.clone(), time));
     }
     Ok(rows)
@@ -237,5 +239,8 @@ mod tests {
         );
         assert!(parse_results("\"a,Pass,1").is_err());
         assert!(parse_results("a,Pass,fast").is_err());
+        assert!(parse_results("a,Pass,NaN").is_err());
+        assert!(parse_results("a,Pass,-1").is_err());
+        assert!(parse_results("a,Pass,inf").is_err());
     }
 }

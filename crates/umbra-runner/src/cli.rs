@@ -115,8 +115,10 @@ pub enum Command {
 
 /// Each flag's one line of help, shared by every command that takes the flag.
 pub mod help {
+    /// `--backend` of a command that runs one backend (render).
+    pub const BACKEND_ONE: &str = "the one backend to run (once): ref, gl33|gles3|gles2/llvmpipe|softpipe|zink, wgpu-vk/lavapipe, wgpu-gl/llvmpipe, or a device of this machine (`umbra backends` lists them) [default: ref]";
     /// `--backend`.
-    pub const BACKEND: &str = "backend id: ref, gl33|gles3|gles2/llvmpipe|softpipe|zink, wgpu-vk/lavapipe, wgpu-gl/llvmpipe, a device of this machine (gl33/radeonsi, gl33/nvidia, wgpu-vk/radv …: `umbra backends` lists them), and, where a command takes several, the aliases hw (every hardware device) and all (this build's ids and every hardware device) (repeatable; default: this build's ids, `ref` for render)";
+    pub const BACKEND: &str = "backend id: ref, gl33|gles3|gles2/llvmpipe|softpipe|zink, wgpu-vk/lavapipe, wgpu-gl/llvmpipe, a device of this machine (gl33/radeonsi, gl33/nvidia, wgpu-vk/radv …: `umbra backends` lists them), and, where a command takes several, the aliases hw (every hardware device) and all (this build's ids and every hardware device) (repeatable; default: this build's ids)";
     /// `--cases`.
     pub const CASES: &str = "directory of case files (*.json) [default: cases]";
     /// `--filter`.
@@ -286,9 +288,10 @@ pub struct RenderArgs {
     /// The positional argument.
     #[arg(value_name = "CASE.json", help = "the case file")]
     pub positional: String,
-    /// `--backend`: backend ids and aliases, as given.
-    #[arg(long, value_name = "ID", help = help::BACKEND)]
-    pub backend: Vec<String>,
+    /// `--backend`: the one backend render runs; given twice, refused by clap (a `Vec` here
+    /// once took the last without a word).
+    #[arg(long, value_name = "ID", help = help::BACKEND_ONE)]
+    pub backend: Option<String>,
     /// `--out`: where results go.
     #[arg(short = 'o', long, value_name = "PATH", help = help::OUT)]
     pub out: Option<String>,
@@ -568,9 +571,9 @@ pub struct ReproArgs {
     /// `--expectations`: the directory of expectation files.
     #[arg(long, value_name = "DIR", help = help::EXPECTATIONS)]
     pub expectations: Option<String>,
-    /// `--backend`: backend ids and aliases, as given.
-    #[arg(long, value_name = "ID", help = help::BACKEND)]
-    pub backend: Vec<String>,
+    /// `--backend`: the backend of `--emit`'s process (once).
+    #[arg(long, value_name = "ID", help = help::BACKEND_ONE)]
+    pub backend: Option<String>,
     /// `--emit`.
     #[arg(long, help = help::EMIT)]
     pub emit: bool,
@@ -830,7 +833,7 @@ mod tests {
         };
         assert_eq!(a.positional, "c.json");
         assert_eq!(a.out.as_deref(), Some("x"));
-        assert_eq!(a.backend, ["ref"]);
+        assert_eq!(a.backend.as_deref(), Some("ref"));
     }
 
     #[test]

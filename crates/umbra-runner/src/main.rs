@@ -19,6 +19,9 @@ fn main() -> ExitCode {
         Ok(Some(warning)) => eprintln!("warning: {warning}"),
         Ok(None) => {}
     }
+    if let Err(e) = harness::memory_limit::check_env() {
+        return ExitCode::from(Error::new(e).report().code());
+    }
     let argv: Vec<String> = std::env::args().collect();
     // dEQP's protocol (deqp-runner): its `--deqp-*=V` flags are not umbra's to parse.
     if argv.get(1).is_some_and(|a| a == "deqp") {

@@ -204,6 +204,30 @@ fn render_of_nothing_but_skips_exits_125() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// render runs one backend: a second `--backend` is refused, not taken in place of the first.
+#[test]
+fn render_refuses_a_second_backend() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let o = Command::new(env!("CARGO_BIN_EXE_umbra"))
+        .args([
+            "render",
+            "cases/basics/square-occluder.json",
+            "--backend",
+            "ref",
+            "--backend",
+            "gl33/llvmpipe",
+        ])
+        .current_dir(&root)
+        .output()
+        .expect("run umbra");
+    let t = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(
+        t.contains("--backend") && t.contains("cannot be used multiple times"),
+        "{t}"
+    );
+}
+
 /// An interrupt is 130 for a command that does not stop in order too (it died by the signal:
 /// the shell read 143 for SIGTERM, outside umbra's four codes).
 #[test]

@@ -155,6 +155,61 @@ fn a_run_that_passes_is_refused_with_a_reason() {
     assert!(!dir.join("repro.c").exists(), "{t}");
 }
 
+/// What repro was given is read strictly: a `--case` file that does not load says why (it
+/// once became "no case point"), a damaged expectations directory is said before any work (it
+/// was dropped from issue.md), and `--bisect-log` without `--first-bad` is refused (it was
+/// ignored).
+#[test]
+fn what_repro_is_given_is_refused_when_it_cannot_be_read() {
+    let dir = scratch("repro-strict");
+    let bad = dir.join("bad.json");
+    std::fs::write(&bad, "{\"name\": \"bad\", \"shadow\": 3}").expect("case");
+    let out = dir.join("bundle");
+    let o = umbra(
+        &[
+            "repro",
+            "gl33/llvmpipe/bad",
+            &format!("--case={}", bad.display()),
+            &format!("--out={}", out.display()),
+        ],
+        None,
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(
+        t.contains("bad.json") && !t.contains("no case point"),
+        "{t}"
+    );
+    let exp = dir.join("expectations");
+    std::fs::create_dir_all(&exp).expect("dir");
+    std::fs::write(exp.join("x.txt"), "not an expectation\n").expect("expectation");
+    let o = umbra(
+        &[
+            "repro",
+            "gl33/llvmpipe/l-occluder",
+            &format!("--expectations={}", exp.display()),
+            &format!("--out={}", out.display()),
+        ],
+        None,
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(t.contains("x.txt:1"), "{t}");
+    let o = umbra(
+        &[
+            "repro",
+            "gl33/llvmpipe/l-occluder",
+            "--bisect-log=log.txt",
+            &format!("--out={}", out.display()),
+        ],
+        None,
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(t.contains("--bisect-log goes with --first-bad"), "{t}");
+    assert!(!out.exists(), "{t}");
+}
+
 #[test]
 fn a_mistake_in_umbras_own_calls_is_not_blamed_on_the_driver() {
     // The shadow pass's viewport set to the camera's size: a bug in the program, which the

@@ -30,7 +30,11 @@ pub fn main(args: &CardArgs) -> Outcome {
     let named: Vec<&str> = args.backend.iter().map(String::as_str).collect();
     let ids = crate::harness::registry::selected(&named, crate::harness::registry::known())
         .map_err(|e| crate::cli::usage_error("card", &e))?;
-    let limit = Duration::from_secs(args.timeout.unwrap_or(DEFAULT_TIMEOUT_S).max(1));
+    let limit = crate::cli::timeout_secs(
+        "card",
+        args.timeout.map(|t| t.to_string()).as_deref(),
+        DEFAULT_TIMEOUT_S,
+    )?;
     let mut cards = Vec::new();
     let mut could_not = Vec::new();
     for id in &ids {

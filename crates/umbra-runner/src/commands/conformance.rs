@@ -246,6 +246,9 @@ impl Options {
         {
             eprintln!("{}", term(&warning));
         }
+        if let Some(dir) = golden.as_deref() {
+            crate::judge::golden::check_confirmed(dir).map_err(fail)?;
+        }
         let expectations_dir =
             Path::new(selection.expectations.as_deref().unwrap_or("expectations"));
         let expectations = Expectations::load(expectations_dir).map_err(fail)?;

@@ -108,8 +108,27 @@ fn known_flags(argv: &[String]) -> Result<(), String> {
             }
         }
     }
+    let list = argv.iter().any(|a| a == "--list");
+    for name in FLAGS.iter().chain(READ_ONCE) {
+        let n = values(argv, name).len();
+        if *name == "backend" && n > 0 && !list {
+            return Err(
+                "--backend selects what --list lists; a test's name says its backend".into(),
+            );
+        }
+        if n > 1 && !(*name == "backend" && list) {
+            return Err(format!("--{name} is given {n} times: give it once"));
+        }
+    }
+    if !values(argv, "expectations").is_empty() && !values(argv, "umbra-expectations").is_empty() {
+        return Err("--expectations and --umbra-expectations name the same thing: give one".into());
+    }
     Ok(())
 }
+
+/// The deqp-runner flags umbra deqp reads (one value each): a repeated one is refused rather
+/// than its first taken.
+const READ_ONCE: &[&str] = &["deqp-caselist-file", "deqp-case", "deqp-log-filename"];
 
 /// `umbra deqp --help`.
 const HELP: &str = "umbra deqp: umbra as a dEQP test binary, for Mesa's deqp-runner (cargo xtask mesa-ci writes the suite)
@@ -472,5 +491,35 @@ mod tests {
             Some(("wgpu-vk/lavapipe".into(), "l-occluder".into(), 0))
         );
         assert_eq!(parse_test_name("dEQP-GLES2.info.version"), None);
+    }
+
+    /// A flag umbra deqp reads once is refused when repeated (the first was taken without a
+    /// word), and `--backend` outside `--list`, where it selected nothing.
+    #[test]
+    fn repeated_or_idle_flags_are_refused() {
+        let argv = |a: &[&str]| a.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        assert!(known_flags(&argv(&["--deqp-case=a", "--cases=c", "--deqp-foo=1"])).is_ok());
+        assert!(known_flags(&argv(&["--list", "--backend=a", "--backend=b"])).is_ok());
+        for (a, why) in [
+            (
+                &["--deqp-case=a", "--cases=c", "--cases=d"][..],
+                "--cases is given 2 times",
+            ),
+            (
+                &["--deqp-case=a", "--deqp-case=b"],
+                "--deqp-case is given 2 times",
+            ),
+            (
+                &["--deqp-case=a", "--backend=gl33/llvmpipe"],
+                "--backend selects what --list",
+            ),
+            (
+                &["--list", "--expectations=a", "--umbra-expectations=b"],
+                "give one",
+            ),
+        ] {
+            let e = known_flags(&argv(a)).expect_err(why);
+            assert!(e.contains(why), "{a:?}: {e}");
+        }
     }
 }

@@ -17,7 +17,7 @@ pub fn main(args: &RenderArgs) -> crate::exit::Outcome {
         .map_err(|e| crate::cli::usage_error("render", e))?;
     let build = crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
     let case = &args.positional;
-    let backend_id = args.backend.last().map_or("ref", String::as_str);
+    let backend_id = args.backend.as_deref().unwrap_or("ref");
     let out = PathBuf::from(args.out.as_deref().unwrap_or("target/umbra/render"));
     if !crate::harness::registry::is_known(backend_id) {
         return Err(crate::cli::usage_error(

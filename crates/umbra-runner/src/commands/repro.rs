@@ -48,6 +48,16 @@ pub fn main(args: &ReproArgs) -> Outcome {
     if args.emit {
         return emit(args);
     }
+    if args.bisect_log.is_some() && args.first_bad.is_none() {
+        return Err(usage(
+            "--bisect-log goes with --first-bad COMMIT (the commit the log found): give both",
+        ));
+    }
+    // Read before the reduction, not after it: a damaged directory is said, not dropped from
+    // issue.md.
+    let dir = args.expectations.as_deref().unwrap_or("expectations");
+    let expectations =
+        crate::judge::expectations::Expectations::load(Path::new(dir)).map_err(Error::new)?;
     let t = target(args)?;
     println!(
         "repro: {} ({} point {})",
@@ -76,7 +86,7 @@ pub fn main(args: &ReproArgs) -> Outcome {
     } else {
         capture(&t.out, &binary, &t.backend, control.as_deref(), &m)
     };
-    m.diagnosis = diagnosis(args, &t.run, &reduced);
+    m.diagnosis = diagnosis(&expectations, &t.run, &reduced);
     m.mesa_build = crate::harness::mesa_build::selected().map(|b| b.describe());
     if let Some(commit) = args.first_bad.as_deref() {
         let log = match args.bisect_log.as_deref() {
@@ -114,9 +124,10 @@ fn target(args: &ReproArgs) -> Result<Target, Error> {
             out.display()
         )));
     }
+    // The point first: a run that names no case point leaves no directory behind.
+    let (case_file, point) = find_point(args, &case_point).map_err(Error::new)?;
     std::fs::create_dir_all(&out)
         .map_err(|e| Error::new(format!("cannot create {}: {e}", out.display())))?;
-    let (case_file, point) = find_point(args, &case_point).map_err(Error::new)?;
     Ok(Target {
         run: run.clone(),
         backend,
@@ -335,7 +346,7 @@ fn finish(out: &Path, facts: &serde_json::Value, m: &mut Measured) -> Outcome {
 
 /// The driver-side step (in the backend's process).
 fn emit(args: &ReproArgs) -> Outcome {
-    let Some(backend) = args.backend.last() else {
+    let Some(backend) = args.backend.as_deref() else {
         return Err(usage("--emit takes the reduced case, --backend and --out"));
     };
     if !registry::hostable_here(backend) {
@@ -365,9 +376,8 @@ fn find_point(args: &ReproArgs, case_point: &str) -> Result<(PathBuf, String), S
         }
     };
     for f in &files {
-        let Ok(points) = umbra_case::load_file(f) else {
-            continue;
-        };
+        // A file that does not load is said (it once became "no case point").
+        let points = umbra_case::load_file(f).map_err(|e| e.to_string())?;
         // A case without a sweep has one point, named by the case alone.
         if let Some(p) = points.iter().find(|p| p.id() == case_point) {
             return Ok((f.clone(), p.id()));
@@ -783,9 +793,11 @@ fn version(package: &str) -> String {
 }
 
 /// umbra's diagnosis of the run, when an expectation names it (its reason).
-fn diagnosis(args: &ReproArgs, run: &str, reduced: &Path) -> Option<String> {
-    let dir = args.expectations.as_deref().unwrap_or("expectations");
-    let all = crate::judge::expectations::Expectations::load(Path::new(dir)).ok()?;
+fn diagnosis(
+    all: &crate::judge::expectations::Expectations,
+    run: &str,
+    reduced: &Path,
+) -> Option<String> {
     let case: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(reduced).ok()?).ok()?;
     all.find(run, &case)

@@ -308,6 +308,7 @@ fn clean_calibrations(backends: &[String], timeout: Duration) -> BTreeMap<String
 /// Checks the command line and loads what every mode needs; an error is what the command
 /// ends with (could not run).
 pub(crate) fn setup(args: &SelftestArgs) -> Result<Setup, Error> {
+    conflicts(args).map_err(|e| crate::cli::usage_error("selftest", e))?;
     crate::harness::mesa_build::select(args.execution.mesa.as_deref()).map_err(Error::new)?;
     // `--seed S --count N`: the faults on generated cases, every exercising point run, and
     // the catch rate reported (how the judge's sensitivity holds off the catalogue).
@@ -336,7 +337,8 @@ pub(crate) fn setup(args: &SelftestArgs) -> Result<Setup, Error> {
                 return Err(Error::new(format!(
                     "--fault {name:?} is not a fault; the faults are {}, and any \
                      face<0-5>-<orientation> or map-<orientation> (orientations: {}), and \
-                     PARAM@E (a parameter off by a relative error E, or E texels for a shift; \
+                     PARAM@E (a parameter off by a relative error E, or E texels for a shift, held to the \
+                     nearest millionth, at least one; \
                      parameters: {})",
                     all.join(", "),
                     umbra_case::fault::Orientation::ALL
@@ -390,6 +392,22 @@ pub(crate) fn setup(args: &SelftestArgs) -> Result<Setup, Error> {
         generated,
         jobs,
     })
+}
+
+/// Flags that would be ignored by the rest of the command line: refused, never dropped (a
+/// `--cases` under `--seed` once ran the generated cases without a word, and `--fault` in the
+/// thresholds, orientations and cards modes chose nothing).
+fn conflicts(args: &SelftestArgs) -> Result<(), String> {
+    if args.cases.is_some() && (args.seed.is_some() || args.count.is_some()) {
+        return Err("--cases and --seed/--count each choose the cases (a directory, or generated ones): give one".into());
+    }
+    if !args.fault.is_empty() && args.mode() != SelftestMode::Faults {
+        return Err(format!(
+            "--fault chooses the faults the faults mode hunts; the {} mode injects its own: leave --fault out",
+            format!("{:?}", args.mode()).to_lowercase()
+        ));
+    }
+    Ok(())
 }
 
 /// The self-test proper: every fault hunted on every backend it applies to; it fails when
@@ -934,6 +952,27 @@ mod tests {
                 f.name()
             );
         }
+    }
+
+    #[test]
+    fn flags_the_command_line_would_ignore_are_refused() {
+        let cases_and_seed = SelftestArgs {
+            cases: Some("cases".into()),
+            seed: Some("3".into()),
+            ..SelftestArgs::default()
+        };
+        assert!(conflicts(&cases_and_seed).is_err_and(|e| e.contains("give one")));
+        let fault_in_cards = SelftestArgs {
+            mode: SelftestMode::Cards,
+            fault: vec!["no-guard".into()],
+            ..SelftestArgs::default()
+        };
+        assert!(conflicts(&fault_in_cards).is_err_and(|e| e.contains("leave --fault out")));
+        let fault_in_faults = SelftestArgs {
+            fault: vec!["no-guard".into()],
+            ..SelftestArgs::default()
+        };
+        assert_eq!(conflicts(&fault_in_faults), Ok(()));
     }
 
     #[test]

@@ -97,24 +97,17 @@ pub fn main(args: &SweepArgs) -> Outcome {
     crate::harness::memory_limit::select(args.max_memory.as_deref(), 1)
         .map_err(|e| crate::cli::usage_error("sweep", e))?;
     let scene = PathBuf::from(args.scene.as_deref().unwrap_or(DEFAULT_SCENE.0));
+    // `--repeat 0` once ran once and `--timeout 0` gave every run no time, without a word.
     let repeat = match args.repeat.as_deref().map(str::parse::<u32>).transpose() {
-        Ok(r) => r.unwrap_or(5).max(1),
-        Err(_) => {
+        Ok(Some(0)) | Err(_) => {
             return Err(crate::cli::usage_error(
                 "sweep",
-                "--repeat takes a positive number",
+                "--repeat takes a positive number of renders per point (default 5)",
             ));
         }
+        Ok(r) => r.unwrap_or(5),
     };
-    let timeout = match args.timeout.as_deref().map(str::parse::<u64>).transpose() {
-        Ok(t) => Duration::from_secs(t.unwrap_or(600)),
-        Err(_) => {
-            return Err(crate::cli::usage_error(
-                "sweep",
-                "--timeout takes whole seconds",
-            ));
-        }
-    };
+    let timeout = crate::cli::timeout_secs("sweep", args.timeout.as_deref(), 600)?;
     let out = PathBuf::from(args.out.as_deref().unwrap_or("target/umbra/sweep"));
     let default = DEFAULT_BACKENDS.iter().map(|s| s.to_string()).collect();
     let named: Vec<&str> = args.backend.iter().map(String::as_str).collect();

@@ -69,6 +69,19 @@ pub fn budget() -> u64 {
     })
 }
 
+/// `UMBRA_MAX_MEMORY` as every command reads it, checked once before any command runs: a
+/// value that is not a size is refused (exit 125) rather than taken as the default by the
+/// commands that read the budget without `--max-memory` (reduce, repro, card, deqp, workers).
+pub fn check_env() -> Result<(), String> {
+    match std::env::var(ENV) {
+        Ok(v) => umbra_case::memory::parse_size(&v)
+            .map(drop)
+            .map_err(|e| format!("{ENV}: {e}; or unset it for the default")),
+        Err(std::env::VarError::NotPresent) => Ok(()),
+        Err(e) => Err(format!("{ENV}: {e}")),
+    }
+}
+
 /// Half of the available memory, shared by `workers`; 4 GiB a worker where the kernel does
 /// not say.
 pub fn default_budget(workers: usize) -> u64 {

@@ -414,7 +414,7 @@ pub fn worker_env(id: &str) -> Vec<(String, String)> {
     }
     env.push((
         crate::harness::memory_limit::ENV.to_string(),
-        crate::harness::memory_limit::budget().to_string(),
+        format!("{}B", crate::harness::memory_limit::budget()),
     ));
     if std::env::var_os("GLIBC_TUNABLES").is_none() {
         env.push(("GLIBC_TUNABLES".into(), MALLOC_TUNABLES.into()));

@@ -193,7 +193,8 @@ fn manifest_sum(map: &std::collections::BTreeMap<String, String>) -> String {
 pub fn check_manifest(dir: &Path) -> Option<String> {
     manifest(dir).err().map(|why| {
         format!(
-            "warning: {} {why}; its driver versions are not used; restore it from git, or rewrite it with `cargo xtask bless`",
+            "warning: {} {why}; its driver versions are not used; restore it from git (`git checkout -- {}`): a bless records nothing over it",
+            dir.join(MANIFEST).display(),
             dir.join(MANIFEST).display()
         )
     })
@@ -211,10 +212,20 @@ pub fn blessed_on(dir: &Path, id: &str, name: &str) -> Option<String> {
 /// Records blessings: `(key, version)` where the key is a golden's stem (that golden was
 /// written on that version) or a backend id (set only if the backend has no entry yet). Keeps
 /// every other entry of a whole manifest; leaves the file untouched when nothing changes.
-/// The checksum is written with the entries.
+/// The checksum is written with the entries. A damaged manifest is left as it is and the
+/// bless's entries are refused: rewritten from what could be read, it once kept only the
+/// new entries and dropped every other golden's version without a word.
 pub fn record_blessed(dir: &Path, entries: &[(String, String)]) -> std::io::Result<()> {
     let path = dir.join(MANIFEST);
-    let mut map = manifest(dir).ok().flatten().unwrap_or_default();
+    let mut map = manifest(dir)
+        .map_err(|why| {
+            std::io::Error::other(format!(
+                "{} {why}: nothing recorded over it; restore it from git (`git checkout -- {}`) and bless again",
+                path.display(),
+                path.display()
+            ))
+        })?
+        .unwrap_or_default();
     for (key, v) in entries {
         if key.contains('/') {
             map.entry(key.clone()).or_insert_with(|| v.clone());
@@ -264,20 +275,72 @@ fn confirmations(dir: &Path, version: &str) -> std::collections::HashMap<String,
     {
         return m;
     }
-    let m = parse_confirmed(&std::fs::read_to_string(&path).unwrap_or_default());
+    // A damaged file confirms nothing (conformance refuses to start on one: [`check_confirmed`]).
+    let m =
+        parse_confirmed(&std::fs::read_to_string(&path).unwrap_or_default()).unwrap_or_default();
     if let Ok(mut c) = read.lock() {
         c.insert(path, (stamp, m.clone()));
     }
     m
 }
 
-fn parse_confirmed(text: &str) -> std::collections::HashMap<String, String> {
-    text.lines()
-        .filter_map(|l| {
-            let (stem, hash) = l.trim().split_once(' ')?;
-            Some((stem.to_string(), hash.trim().to_string()))
-        })
-        .collect()
+/// [`CONFIRMED`]'s entries, read strictly: every line `STEM HASH` as [`record_confirmed`]
+/// writes it (a golden's stem, one space, 16 lower-case hex digits), no stem twice. `Err`
+/// names the line. Read leniently, a merge-conflict marker became an entry, a line without
+/// its space was dropped and a duplicate kept its last hash: a golden that lost its
+/// confirmation that way was judged leniently on the release without a word.
+fn parse_confirmed(text: &str) -> Result<std::collections::HashMap<String, String>, String> {
+    let mut out = std::collections::HashMap::new();
+    for (n, line) in text.lines().enumerate() {
+        let at = |why: &str| format!("line {}: {why} ({line:?})", n + 1);
+        let Some((stem, hash)) = line.split_once(' ') else {
+            return Err(at("not `STEM HASH`"));
+        };
+        let stem_ok = !stem.is_empty()
+            && stem
+                .bytes()
+                .all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_');
+        if !stem_ok {
+            return Err(at("the stem is not a golden's file stem"));
+        }
+        let hash_ok =
+            hash.len() == 16 && hash.bytes().all(|b| matches!(b, b'0'..=b'9' | b'a'..=b'f'));
+        if !hash_ok {
+            return Err(at("the hash is not 16 lower-case hex digits"));
+        }
+        if out.insert(stem.to_string(), hash.to_string()).is_some() {
+            return Err(at("the stem is listed twice"));
+        }
+    }
+    Ok(out)
+}
+
+/// Every release's [`CONFIRMED`] in the golden directory `dir`, read strictly: the first
+/// that is damaged, with the fix. Conformance refuses to start on it (exit 125).
+pub fn check_confirmed(dir: &Path) -> Result<(), String> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(());
+    };
+    let mut files: Vec<_> = entries
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().starts_with("mesa-"))
+        .map(|e| e.path().join(CONFIRMED))
+        .filter(|f| f.exists())
+        .collect();
+    files.sort();
+    for f in files {
+        let read = std::fs::read_to_string(&f)
+            .map_err(|e| e.to_string())
+            .and_then(|t| parse_confirmed(&t).map(drop));
+        if let Err(why) = read {
+            return Err(format!(
+                "{}: {why}; restore it from git (`git checkout -- {}`), or remove it (that release's confirmations are lost: its goldens of other releases are judged leniently there until a bless on it confirms them again)",
+                f.display(),
+                f.display()
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Whether the golden `file` of run `stem` (a golden of another release) was compared on
@@ -304,10 +367,20 @@ pub fn record_confirmed(
     }
     let release = release_dir(dir, version);
     let path = release.join(CONFIRMED);
-    let mut map: std::collections::BTreeMap<String, String> =
-        parse_confirmed(&std::fs::read_to_string(&path).unwrap_or_default())
-            .into_iter()
-            .collect();
+    let text = match std::fs::read_to_string(&path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
+        Err(e) => return Err(e),
+    };
+    let mut map: std::collections::BTreeMap<String, String> = parse_confirmed(&text)
+        .map_err(|why| {
+            std::io::Error::other(format!(
+                "{} {why}: nothing recorded over it; restore it from git and bless again",
+                path.display()
+            ))
+        })?
+        .into_iter()
+        .collect();
     for (stem, file) in goldens {
         map.insert(stem.clone(), bytes_hash(&std::fs::read(file)?));
     }
@@ -370,6 +443,55 @@ mod manifest_tests {
         std::fs::write(&path, edited).expect("edit");
         assert!(check_manifest(&dir).is_some_and(|w| w.contains("fails its checksum")));
         assert_eq!(blessed_on(&dir, "ref", "ref/x"), None);
+        // A bless over it records nothing and leaves it as it was.
+        let damaged = std::fs::read_to_string(&path).expect("manifest");
+        let e =
+            record_blessed(&dir, &[("gl33/llvmpipe".into(), "2.0".into())]).expect_err("refused");
+        assert!(e.to_string().contains("restore it from git"), "{e}");
+        assert_eq!(std::fs::read_to_string(&path).expect("manifest"), damaged);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// confirmed.txt is read strictly: the committed files pass; a conflict marker, a line
+    /// without its hash, a bad hash and a stem listed twice are each refused with their line,
+    /// by conformance's check and by a bless, which then leaves the file as it was.
+    #[test]
+    fn a_damaged_confirmation_file_is_refused_with_its_line() {
+        let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../golden");
+        assert_eq!(check_confirmed(&golden), Ok(()));
+        let ok = "a_b-12345678 0123456789abcdef\nc-9abcdef0 fedcba9876543210\n";
+        assert_eq!(parse_confirmed(ok).map(|m| m.len()), Ok(2));
+        for (text, why) in [
+            ("<<<<<<< HEAD\n", "line 1: the stem"),
+            ("a-12345678\n", "line 1: not `STEM HASH`"),
+            ("a-12345678 0123\n", "line 1: the hash"),
+            ("a-12345678  0123456789abcdef\n", "line 1: the hash"),
+            (
+                "a-12345678 0123456789abcdef\na-12345678 0123456789abcdee\n",
+                "line 2: the stem is listed twice",
+            ),
+        ] {
+            let e = parse_confirmed(text).expect_err(text);
+            assert!(e.starts_with(why), "{text:?}: {e}");
+        }
+        let dir = std::env::temp_dir().join(format!("umbra-confirmed-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let release = dir.join("mesa-26.2.6");
+        std::fs::create_dir_all(&release).expect("dir");
+        let file = release.join(CONFIRMED);
+        std::fs::write(&file, "a-12345678\n").expect("write");
+        let e = check_confirmed(&dir).expect_err("damaged");
+        assert!(
+            e.contains("confirmed.txt: line 1") && e.contains("restore it from git"),
+            "{e}"
+        );
+        let golden = dir.join("g.png");
+        std::fs::write(&golden, b"png").expect("golden");
+        assert!(record_confirmed(&dir, "26.2.6", &[("b-12345678".into(), golden)]).is_err());
+        assert_eq!(
+            std::fs::read_to_string(&file).expect("file"),
+            "a-12345678\n"
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -555,8 +555,9 @@ impl Expectations {
         let mut files: Vec<_> = match std::fs::read_dir(dir) {
             Ok(rd) => rd
                 .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|x| x == "txt"))
-                .collect(),
+                .map(|p| expectation_file(&p).map(|read| read.then_some(p)))
+                .filter_map(Result::transpose)
+                .collect::<Result<_, _>>()?,
             Err(e) => {
                 return Err(format!(
                     "--expectations {}: {e}; give the directory of expectation files (expectations/*.txt), or an empty directory for none",
@@ -894,6 +895,32 @@ pub fn reported_version<'a>(strings: impl IntoIterator<Item = &'a str>) -> Optio
     })
 }
 
+/// Whether `path`, an entry of the expectations directory, is an expectation file (`*.txt`,
+/// read); a dotfile or a `*.md` note beside them (not read); or neither, refused with the
+/// fix: a `zink.TXT` or a subdirectory skipped without a word once turned its expected
+/// failures into regressions, or, read by another tool, a reviewer's intent into nothing.
+fn expectation_file(path: &Path) -> Result<bool, String> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    if name.starts_with('.') || name.ends_with(".md") {
+        return Ok(false);
+    }
+    let is_file = std::fs::metadata(path).is_ok_and(|m| m.is_file());
+    match (name.ends_with(".txt"), is_file) {
+        (true, true) => Ok(true),
+        (_, false) => Err(format!(
+            "{}: not a file: expectations are read from the directory's own *.txt files, not from subdirectories; move its files up or out of the directory",
+            path.display()
+        )),
+        (false, true) => Err(format!(
+            "{}: not an expectation file (expectations are *.txt, lower case; notes *.md): rename it to end in .txt, or move it out of the directory",
+            path.display()
+        )),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -913,6 +940,33 @@ mod tests {
             Some("22.3.6")
         );
         assert_eq!(reported_version(["OpenGL ES 3.2 NVIDIA 550.1"]), None);
+    }
+
+    /// A file the loader would not read is refused, not skipped: `zink.TXT` and a subdirectory
+    /// each name themselves and the fix; dotfiles and notes (`*.md`) stay beside the files.
+    #[test]
+    fn an_entry_that_is_not_an_expectation_file_is_refused_not_skipped() {
+        let dir = std::env::temp_dir().join(format!("umbra-exp-entries-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("dir");
+        std::fs::write(dir.join("a.txt"), "gl33/zink/x,Skip,a reason\n").expect("txt");
+        std::fs::write(dir.join(".gitkeep"), "").expect("dotfile");
+        std::fs::write(dir.join("README.md"), "notes").expect("md");
+        assert!(Expectations::load(&dir).is_ok());
+        std::fs::write(dir.join("zink.TXT"), "gl33/zink/y,Skip,a reason\n").expect("TXT");
+        let e = Expectations::load(&dir).err().unwrap_or_default();
+        assert!(
+            e.contains("zink.TXT: not an expectation file") && e.contains("rename it"),
+            "{e}"
+        );
+        std::fs::remove_file(dir.join("zink.TXT")).expect("rm");
+        std::fs::create_dir_all(dir.join("zink")).expect("subdir");
+        let e = Expectations::load(&dir).err().unwrap_or_default();
+        assert!(
+            e.contains("zink: not a file") && e.contains("subdirectories"),
+            "{e}"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     /// `apply` for a run with no `@when` in play and no deviation judged.

@@ -53,8 +53,8 @@ use std::path::Path;
 use umbra_case::Frame;
 
 pub use crate::judge::blessings::{
-    Held, MANIFEST, Subject, blessed_on, check_manifest, confirmed, folder, has_goldens, held,
-    record_blessed, record_confirmed, release, release_dir, same_release, stem,
+    Held, MANIFEST, Subject, blessed_on, check_confirmed, check_manifest, confirmed, folder,
+    has_goldens, held, record_blessed, record_confirmed, release, release_dir, same_release, stem,
 };
 
 /// What happened to a run's golden.
