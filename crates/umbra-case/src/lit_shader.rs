@@ -134,7 +134,6 @@ pub trait Dialect {
     fn dimmed(&self, kept: &str, lit_spec: &str, light: Option<&str>, shading: &Shading) -> String;
     /// A vec3 literal.
     fn vec3(&self, v: [f32; 3]) -> String;
-    /// Opens the entry point, up to `vis`.
     /// Opens `main`: the normal `n` (renormalised), and `vis` from `visibility(p, N)` with
     /// `N` the renormalised normal, or the raw interpolant when `raw_normal` (a fault).
     fn main_start(&self, raw_normal: bool) -> String;

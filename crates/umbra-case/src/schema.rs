@@ -93,7 +93,8 @@ fn exemplars() -> Vec<Value> {
         .collect()
 }
 
-/// One step of a path: an object key, then its array indices (`positions[3][1]`).
+/// The steps of the dotted `path`: each an object key, then its array indices
+/// (`positions[3][1]`); `Err` names a bad segment.
 fn steps(path: &str) -> Result<Vec<(&str, Vec<usize>)>, String> {
     path.split('.')
         .map(|seg| {

@@ -49,8 +49,7 @@ pub fn mssim(a: &[u8], b: &[u8], width: usize, height: usize) -> Option<f64> {
     )
 }
 
-/// The pixels of window `(col, row, x1, y1)` (inclusive corners), row by row, as f64.
-/// Σ f(pixel) over window `w` of `img`, row by row, left to right, from −0.0 (the order and
+/// Σ f(pixel) over window `w` = `(col, row, x1, y1)` (inclusive corners) of `img`, row by row, left to right, from −0.0 (the order and
 /// start of `Iterator::sum` over the window's pixels, which image-compare uses), as plain
 /// loops: an iterator chained per row compiled to several times the work.
 #[inline]

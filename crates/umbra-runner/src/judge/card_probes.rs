@@ -495,7 +495,7 @@ fn slope_term(p: &mut Prober) -> Vec<Entry> {
     vec![axis_entry, diag_entry]
 }
 
-/// The name of the known value `x` is within `tol` of, else `x` to two decimals and `unit`.
+/// The name of the known value `x` is within `tol` of, else `≈x` to one decimal and `unit`.
 fn classify(x: f64, known: &[(f64, &str)], tol: f64, unit: &str) -> String {
     known
         .iter()

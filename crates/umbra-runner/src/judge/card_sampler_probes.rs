@@ -249,7 +249,7 @@ fn lod_case(h: f64, rotated: bool) -> Value {
     })
 }
 
-/// The camera height in `[lo, hi]` at which the LOD probe's centre turns from level 0
+/// The camera height in [2, 14] m at which the LOD probe's centre turns from level 0
 /// (shadowed) to level 1 (lit), bisected over `steps` renders: middle and half-width.
 fn lod_crossing(render: &mut Render, rotated: bool, steps: u32) -> Result<(f64, f64), String> {
     let mut read = |h: f64| -> Result<f64, String> {
