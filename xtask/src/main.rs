@@ -250,7 +250,7 @@ fn four(status: std::process::ExitStatus, what: &str, failed_tests_are_101: bool
 
 fn test(extra: &[String]) -> i32 {
     let mut phases = Phases::default();
-    let code = phases.time("set-up (disk, apt)", || {
+    phases.time("set-up (disk, apt)", || {
         disk::warn_if_short(
             &workspace_root(),
             disk::test_peak_gib(),
@@ -260,7 +260,7 @@ fn test(extra: &[String]) -> i32 {
         mesa::ensure_test_tools();
         0
     });
-    let code = phases.then(code, "cargo test (build and run)", || {
+    let code = phases.time("cargo test (build and run)", || {
         let mut cmd = cargo();
         cmd.args(["test", "--workspace"]);
         cmd.args(extra);
@@ -301,11 +301,6 @@ impl Phases {
         let code = f();
         self.rows.push((name, t0.elapsed(), code));
         code
-    }
-
-    /// [`Phases::time`] after a phase that returned `code`: run only where it was 0.
-    fn then(&mut self, code: i32, name: &'static str, f: impl FnOnce() -> i32) -> i32 {
-        if code == 0 { self.time(name, f) } else { code }
     }
 
     fn print(&self) {

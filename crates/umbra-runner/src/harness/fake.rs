@@ -1,5 +1,6 @@
 //! Fake backends that misbehave on purpose, for the runner's own tests: `fake/crash` aborts
-//! the process, `fake/sigbus` dies of a real SIGBUS (a mapped file cut short), `fake/hang` never returns, `fake/flaky` aborts its first worker of a run
+//! the process, `fake/sigbus` dies of a real SIGBUS (a mapped file cut short), `fake/hang`
+//! never returns, `fake/flaky` aborts its first worker of a run
 //! (the first to claim `UMBRA_FAKE_FLAKY_FILE`, else a file named for its parent process) and renders right in every
 //! other, `fake/stale` keeps state from one render to the next (right on a worker's first
 //! case, every shadow of any later case inverted, as a stale uniform would), `fake/wrong` inverts
