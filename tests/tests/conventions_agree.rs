@@ -26,7 +26,7 @@ fn gl_and_zero_to_one_references_agree_away_from_edges() {
             let run = Prepared::new(point);
             let gl = umbra_ref::render(&run, ClipDepth::MinusOneToOne);
             let zo = umbra_ref::render(&run, ClipDepth::ZeroToOne);
-            let truth = umbra_ref::truth::ground_truth(&run);
+            let truth = umbra_ref::truth::ground_truth(&run.lights[0]);
             let g = umbra_compare::agreement(&gl, &zo, 0);
             assert_eq!(g.coverage_differs, 0, "{id}: coverage differs");
             compared += g.compared;

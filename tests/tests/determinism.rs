@@ -35,8 +35,8 @@ fn frames_and_truth_are_identical_on_1_and_3_threads() {
         );
         assert_eq!(one.surface, three.surface, "{case}: surface ids");
         assert_eq!(one.shadow_map, three.shadow_map, "{case}: shadow map");
-        let t1 = in_pool(1, || umbra_ref::truth::ground_truth(&run));
-        let t3 = in_pool(3, || umbra_ref::truth::ground_truth(&run));
+        let t1 = in_pool(1, || umbra_ref::truth::ground_truth(&run.lights[0]));
+        let t3 = in_pool(3, || umbra_ref::truth::ground_truth(&run.lights[0]));
         assert_eq!((t1.class, t1.edge), (t3.class, t3.edge), "{case}: truth");
     }
 }

@@ -33,7 +33,7 @@ fn culled_faces_show_nowhere_and_reference_and_truth_agree() {
         let run = Prepared::new(point);
         let cull = run.case().camera.cull;
         let frame = umbra_ref::render(&run, umbra_case::ClipDepth::MinusOneToOne);
-        let truth = umbra_ref::truth::ground_truth(&run);
+        let truth = umbra_ref::truth::ground_truth(&run.lights[0]);
         let by_ref = objects_shown(
             &run,
             frame.surface.as_deref().expect("the reference's faces"),

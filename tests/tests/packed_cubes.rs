@@ -49,7 +49,7 @@ fn no_light_leaks_between_the_cubes_in_truth_or_reference() {
     for point in points("packed-cubes/packed-cubes.json") {
         let id = point.id();
         let run = Prepared::new(point);
-        let LightKind::Directional { towards, .. } = run.light.kind else {
+        let LightKind::Directional { towards, .. } = run.lights[0].light.kind else {
             panic!("directional")
         };
         let t = towards.as_dvec3();
@@ -64,9 +64,9 @@ fn no_light_leaks_between_the_cubes_in_truth_or_reference() {
         }
         let shadow = hull(corners);
         let frame = umbra_ref::render(&run, umbra_case::ClipDepth::MinusOneToOne);
-        let truth = ground_truth(&run);
+        let truth = ground_truth(&run.lights[0]);
         // One shadow texel in world units (ortho width / map size), twice, for the reference.
-        let b = match run.light.views[0].projection {
+        let b = match run.lights[0].light.views[0].projection {
             umbra_case::light::Projection::Ortho { bounds } => bounds,
             _ => unreachable!(),
         };

@@ -9,7 +9,7 @@ use umbra_tests::prepared;
 fn reference_and_truth_shadow_the_analytic_square() {
     let run = prepared("basics/square-occluder.json");
     let frame = umbra_ref::render(&run, umbra_case::ClipDepth::MinusOneToOne);
-    let truth = umbra_ref::truth::ground_truth(&run);
+    let truth = umbra_ref::truth::ground_truth(&run.lights[0]);
     let px = 2.0 * 10.0 * 35f64.to_radians().tan() / 256.0;
     let texel = 12.0 / 512.0;
     let half = px / 2.0;

@@ -25,7 +25,7 @@ fn every_case_file_loads_and_ids_are_unique() {
 #[test]
 fn seed_setups_use_the_write_ups_parameters() {
     let d = points("lights/directional-ortho-10.json").remove(0).case;
-    let Light::Directional(l) = &d.light else {
+    let Light::Directional(l) = &d.lights[0] else {
         panic!("directional")
     };
     let o = l.ortho.expect("explicit bounds");
@@ -45,7 +45,7 @@ fn seed_setups_use_the_write_ups_parameters() {
     );
 
     let d = points("lights/directional-ortho-20.json").remove(0).case;
-    let Light::Directional(l) = &d.light else {
+    let Light::Directional(l) = &d.lights[0] else {
         panic!("directional")
     };
     let o = l.ortho.expect("explicit bounds");
@@ -55,7 +55,7 @@ fn seed_setups_use_the_write_ups_parameters() {
     );
 
     let s = points("lights/spot-20deg.json").remove(0).case;
-    let Light::Spot(l) = &s.light else {
+    let Light::Spot(l) = &s.lights[0] else {
         panic!("spot")
     };
     assert_eq!((l.fov_y_deg, l.near, l.far), (20.0, 1.0, 50.0));

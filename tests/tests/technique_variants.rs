@@ -17,7 +17,7 @@ fn assert_same_shadows(base: CasePoint, change: impl Fn(&mut umbra_case::Case), 
     let (a, b) = (Prepared::new(base), Prepared::new(varied));
     let fa = umbra_ref::render(&a, ClipDepth::MinusOneToOne);
     let fb = umbra_ref::render(&b, ClipDepth::MinusOneToOne);
-    let truth = umbra_ref::truth::ground_truth(&a);
+    let truth = umbra_ref::truth::ground_truth(&a.lights[0]);
     let g = umbra_compare::agreement(&fa, &fb, 0);
     for (i, bad) in g.disagrees.iter().enumerate() {
         assert!(
@@ -89,7 +89,7 @@ fn a_point_light_shadows_in_every_direction() {
     let mut pts = umbra_case::load_str(json, std::path::Path::new("inline/point-light-room.json"))
         .expect("valid case");
     let run = Prepared::new(pts.remove(0));
-    assert_eq!(run.light.views.len(), 6);
+    assert_eq!(run.lights[0].light.views.len(), 6);
     let frame = umbra_ref::render(&run, ClipDepth::MinusOneToOne);
     let map = frame.shadow_map.as_ref().expect("depth map");
     assert_eq!(map.layers, 6);
@@ -103,7 +103,7 @@ fn a_point_light_shadows_in_every_direction() {
             "cube face {k}: {written} texels written"
         );
     }
-    let truth = umbra_ref::truth::ground_truth(&run);
+    let truth = umbra_ref::truth::ground_truth(&run.lights[0]);
     let e = umbra_compare::truth_error(&frame, &truth);
     println!("all {:?}, away from edges {:?}", e.all, e.away_from_edges);
     assert!(e.truth_shadowed > 2000, "four long shadows must be in view");
@@ -118,7 +118,7 @@ fn front_face_culling_keeps_closed_casters_shadows() {
     culled.case.shadow.cull = Cull::Front;
     let run = Prepared::new(culled);
     let frame = umbra_ref::render(&run, ClipDepth::MinusOneToOne);
-    let e = umbra_compare::truth_error(&frame, &umbra_ref::truth::ground_truth(&run));
+    let e = umbra_compare::truth_error(&frame, &umbra_ref::truth::ground_truth(&run.lights[0]));
     // The floor is single-sided and faces the light, so culling front faces removes it from
     // the map: the floor reads lit wherever no box is in front, which is the truth there.
     assert_eq!(e.away_from_edges.false_light, 0, "{:?}", e.away_from_edges);

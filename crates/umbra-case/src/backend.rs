@@ -120,14 +120,8 @@ impl Needs {
     pub fn of(case: &Case) -> Self {
         let s = &case.shadow;
         Needs {
-            cube_map: case
-                .all_lights()
-                .iter()
-                .any(|l| matches!(l, Light::Point(_))),
-            flat_map: case
-                .all_lights()
-                .iter()
-                .any(|l| !matches!(l, Light::Point(_))),
+            cube_map: case.lights.iter().any(|l| matches!(l, Light::Point(_))),
+            flat_map: case.lights.iter().any(|l| !matches!(l, Light::Point(_))),
             format: s.format,
             compare: s.compare,
             filter: s.filter,
@@ -137,19 +131,30 @@ impl Needs {
             fractional_offset_units: s.bias.polygon_offset[1].fract() != 0.0,
             mipmaps: s.mipmaps,
             depth_clamp: s.depth_clamp,
-            array_layers: match &case.light {
-                _ if !case.lights.is_empty() && s.placement == crate::format::Placement::Array => {
-                    case.lights.len() as u32
-                }
-                Light::Directional(d) => d.cascades.as_ref().map_or(0, |c| c.count),
-                _ => 0,
+            array_layers: if case.maps_share_array()
+                && s.placement == crate::format::Placement::Array
+            {
+                case.lights.len() as u32
+            } else {
+                // Several lights never have cascades (validation): a light's cascades are
+                // its map's layers.
+                case.lights
+                    .iter()
+                    .map(|l| match l {
+                        Light::Directional(d) => d.cascades.as_ref().map_or(0, |c| c.count),
+                        _ => 0,
+                    })
+                    .max()
+                    .unwrap_or(0)
             },
-            cube_array: if s.placement == crate::format::Placement::CubeArray {
+            cube_array: if case.maps_share_array()
+                && s.placement == crate::format::Placement::CubeArray
+            {
                 case.lights.len() as u32
             } else {
                 0
             },
-            lights: case.all_lights().len() as u32,
+            lights: case.lights.len() as u32,
             map_size: s.size[0].max(s.size[1]),
             image_size: case.camera.size[0].max(case.camera.size[1]),
             srgb_target: case.camera.color_format == crate::format::ColorFormat::Srgb8Alpha8,

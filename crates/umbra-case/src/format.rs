@@ -16,9 +16,13 @@ pub const BIAS_ORDER: &str = "bias-order";
 /// A 3-vector as written in JSON: `[x, y, z]`.
 pub type V3 = [f32; 3];
 
-/// One case: a scene, a camera, a light and a shadow-mapping technique.
+/// One case: a scene, a camera, its lights and a shadow-mapping technique.
+///
+/// A case file writes one light as `light` and several as `lights` ([`CaseFile`], the file's
+/// shape); a loaded case holds them all in `lights`, never empty, so that every consumer
+/// goes over every light and none reads "the first" by accident.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(try_from = "CaseFile", into = "CaseFile")]
 pub struct Case {
     /// Identifier: lower-case letters, digits, `-` and `_`, beginning with a letter or a digit. Required.
     pub name: String,
@@ -28,13 +32,41 @@ pub struct Case {
     pub scene: Scene,
     /// The viewer. Required.
     pub camera: Camera,
-    /// The light: required, unless `lights` is given (then the loader fills it in with the
-    /// first of them).
-    pub light: Light,
+    /// Every light, 1 to [`MAX_LIGHTS`], never empty: each has its own map, placed by
+    /// `shadow.placement`, and the lit pass adds their contributions (several: the `dimmed`
+    /// model only).
+    pub lights: Vec<Light>,
+    /// The shadow-mapping technique.
+    pub shadow: Shadow,
+    /// The illumination model of docs/catalogue.md §17.
+    pub shading: Shading,
+    /// Parameters to sweep: JSON path to an axis.
+    pub sweep: BTreeMap<String, SweepAxis>,
+    /// What the judge may assume of this case.
+    pub expect: Expect,
+}
+
+/// A case as its file writes it: what [`Case`] reads and writes. Its one difference is the
+/// lights: `light` for one, `lights` for several (written back, a case of several lights
+/// holds both, `light` equal to `lights[0]`, so that paths and conditions that name `light`
+/// read the same document whatever the count).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CaseFile {
+    /// Identifier: lower-case letters, digits, `-` and `_`, beginning with a letter or a digit. Required.
+    pub name: String,
+    /// One sentence: what the case checks and why. Required.
+    pub about: String,
+    /// The objects. Required, at least one.
+    pub scene: Scene,
+    /// The viewer. Required.
+    pub camera: Camera,
+    /// The light: required, unless `lights` is given (then it may be left out, or must equal
+    /// the first of them).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub light: Option<Light>,
     /// Several lights, each written as `light` is, 2 to [`MAX_LIGHTS`] (a case gives `light` for
-    /// one, or `lights`; written back, a case holds both, `light` equal to `lights[0]`).
-    /// Every light has its own map, placed by `shadow.placement`; the lit pass adds their
-    /// contributions (the `dimmed` model only). Default: none (the one `light`).
+    /// one, or `lights`). Default: none (the one `light`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub lights: Vec<Light>,
     /// The shadow-mapping technique. Default: every field's default.
@@ -50,6 +82,77 @@ pub struct Case {
     /// What the judge may assume of this case. Default: every field's default.
     #[serde(default)]
     pub expect: Expect,
+}
+
+/// Why a [`CaseFile`] is not a [`Case`] (the loader names the field and the fix first:
+/// `crate::point::parse_value`; this is what a plain serde reader sees).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum LightsError {
+    /// Neither `light` nor `lights`.
+    Missing,
+    /// Both, and `light` is not `lights[0]`.
+    Differ,
+    /// `lights` with one light (one is written as `light`).
+    One,
+}
+
+impl std::fmt::Display for LightsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LightsError::Missing => f.write_str("missing field `light`"),
+            LightsError::Differ => {
+                f.write_str("both `light` and `lights` are given, and `light` is not `lights[0]`")
+            }
+            LightsError::One => write!(f, "1 lights; a case with `lights` has 2 to {MAX_LIGHTS}"),
+        }
+    }
+}
+
+impl TryFrom<CaseFile> for Case {
+    type Error = LightsError;
+
+    fn try_from(f: CaseFile) -> Result<Case, LightsError> {
+        let lights = match (f.light, f.lights) {
+            (None, lights) if lights.is_empty() => return Err(LightsError::Missing),
+            (Some(one), lights) if lights.is_empty() => vec![one],
+            (_, lights) if lights.len() == 1 => return Err(LightsError::One),
+            (Some(one), lights) if one != lights[0] => return Err(LightsError::Differ),
+            (_, lights) => lights,
+        };
+        Ok(Case {
+            name: f.name,
+            about: f.about,
+            scene: f.scene,
+            camera: f.camera,
+            lights,
+            shadow: f.shadow,
+            shading: f.shading,
+            sweep: f.sweep,
+            expect: f.expect,
+        })
+    }
+}
+
+impl From<Case> for CaseFile {
+    fn from(c: Case) -> CaseFile {
+        let mut lights = c.lights;
+        let light = (!lights.is_empty()).then(|| lights[0].clone());
+        if lights.len() == 1 {
+            lights.clear();
+        }
+        CaseFile {
+            name: c.name,
+            about: c.about,
+            scene: c.scene,
+            camera: c.camera,
+            light,
+            lights,
+            shadow: c.shadow,
+            shading: c.shading,
+            sweep: c.sweep,
+            expect: c.expect,
+        }
+    }
 }
 
 /// The objects of a scene. Every object casts and receives shadows.
@@ -1201,26 +1304,33 @@ pub enum InteriorError {
 }
 
 impl Case {
-    /// Every light of the case: `lights`, or the one `light`.
-    pub fn all_lights(&self) -> &[Light] {
-        if self.lights.is_empty() {
-            std::slice::from_ref(&self.light)
-        } else {
-            &self.lights
-        }
-    }
-
-    /// The case as light `k` alone lights it: `light` = light `k`, no `lights`, and for every
-    /// light but the first no ambient term (the first light's pass adds it once: the lit
-    /// pass's contributions add up to the case's colour).
+    /// The case as light `k` alone lights it: only light `k`, and for every light but the
+    /// first no ambient term (the first light's pass adds it once: the lit pass's
+    /// contributions add up to the case's colour).
     pub fn for_light(&self, k: usize) -> Case {
         let mut c = self.clone();
-        c.light = self.all_lights()[k].clone();
-        c.lights = Vec::new();
+        c.lights = vec![self.lights[k].clone()];
         if k > 0 {
             c.shading.ambient = 0.0;
         }
         c
+    }
+
+    /// Where light `k` is written in the case's file: `light` when it is the only one,
+    /// `lights[k]` among several ([`CaseFile`]); errors about a light name this path.
+    pub fn light_path(&self, k: usize) -> String {
+        if self.lights.len() == 1 {
+            "light".to_string()
+        } else {
+            format!("lights[{k}]")
+        }
+    }
+
+    /// Whether the lights' maps are one array's layers: `shadow.placement` `array` or
+    /// `cube_array` and a map for each of several lights to share it (a lone light's map is
+    /// its own texture whatever the placement).
+    pub fn maps_share_array(&self) -> bool {
+        self.shadow.placement != Placement::Separate && self.lights.len() > 1
     }
 }
 

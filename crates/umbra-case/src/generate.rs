@@ -118,8 +118,8 @@ impl Gen {
             name,
             scene,
             camera,
-            light,
-            lights: Vec::new(),
+            // The one drawn light (`lights[0]` below, until `more_lights` may add others).
+            lights: vec![light],
             shadow,
             shading,
             sweep: BTreeMap::new(),
@@ -175,7 +175,7 @@ impl Gen {
             } else {
                 self.rng.range(0.5, 1.0, 2)
             };
-            match &mut case.light {
+            match &mut case.lights[0] {
                 Light::Directional(d) => (d.color, d.intensity) = (color, intensity),
                 Light::Spot(l) => (l.color, l.intensity) = (color, intensity),
                 Light::Point(l) => (l.color, l.intensity) = (color, intensity),
@@ -221,7 +221,7 @@ impl Gen {
     /// sums saturate less often; their maps in one 2D array in half the cases that have no
     /// point light and no mip levels.
     fn more_lights(&mut self, case: &mut Case) {
-        let cascaded = matches!(&case.light, Light::Directional(d) if d.cascades.is_some());
+        let cascaded = matches!(&case.lights[0], Light::Directional(d) if d.cascades.is_some());
         if !self.rng.chance(0.15)
             || case.shading.model != ShadingModel::Dimmed
             || !case.sweep.is_empty()
@@ -230,7 +230,7 @@ impl Gen {
             return;
         }
         let square = case.shadow.size[0] == case.shadow.size[1];
-        let mut lights = vec![case.light.clone()];
+        let mut lights = vec![case.lights[0].clone()];
         for _ in 0..self.rng.int(1, 2) {
             let mut light = self.light();
             // A point light's cube map needs square faces, has no mip levels and no Castano
@@ -662,7 +662,7 @@ impl Gen {
     /// Bevy's forms in some: drawn after everything else, so that only cascaded cases'
     /// streams move when they change.
     fn cascades(&mut self, case: &mut Case) {
-        if let Light::Directional(d) = &mut case.light {
+        if let Light::Directional(d) = &mut case.lights[0] {
             if case.shadow.mipmaps.is_none() && self.rng.chance(0.2) {
                 let split = self.rng.pick(&[
                     SplitScheme::Uniform,
@@ -799,7 +799,7 @@ impl Gen {
             ),
             ("shadow.bias.constant", vec![0.into(), 0.0005.into()]),
         ];
-        if let Light::Directional(d) = &case.light {
+        if let Light::Directional(d) = &case.lights[0] {
             if d.azimuth_deg.is_some() {
                 axes.push((
                     "light.directional.azimuth_deg",
@@ -807,7 +807,7 @@ impl Gen {
                 ));
             }
         }
-        if matches!(case.light, Light::Point(_)) {
+        if matches!(case.lights[0], Light::Point(_)) {
             // A cube map's faces must stay square.
             axes.retain(|(p, _)| !p.starts_with("shadow.size"));
         }
@@ -844,7 +844,8 @@ fn outward(p: &[V3], tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
 
 /// One sentence saying what the case draws (the `about` every case has).
 fn about(c: &Case) -> String {
-    let light = match c.light {
+    // The light drawn first (several lights add their count and placement at the end).
+    let light = match c.lights[0] {
         Light::Directional(_) => "directional",
         Light::Spot(_) => "spot",
         Light::Point(_) => "point",
@@ -872,7 +873,7 @@ fn about(c: &Case) -> String {
             )
             .to_lowercase()
         })
-        + &match &c.light {
+        + &match &c.lights[0] {
             Light::Directional(Directional {
                 cascades: Some(k), ..
             }) => format!(", {} {:?} cascades", k.count, k.split).to_lowercase(),
@@ -885,7 +886,7 @@ fn about(c: &Case) -> String {
         } else {
             ", srgb target"
         }
-        + &if c.lights.is_empty() {
+        + &if c.lights.len() == 1 {
             String::new()
         } else {
             format!(", {} lights, {} maps", c.lights.len(), s.placement.name())
@@ -969,38 +970,40 @@ mod tests {
                 for form in bias_forms(&s.bias).split('+') {
                     seen.insert(format!("bias {form}"));
                 }
-                if let Light::Directional(d) = &case.light {
-                    if let Some(c) = &d.cascades {
-                        seen.insert(format!("cascades {:?}", c.split));
-                        if c.blend > 0.0 {
-                            seen.insert("cascade blend".into());
-                        }
-                        if c.distance.is_some() {
-                            seen.insert("cascade distance".into());
-                        }
-                        if c.blend_of == BlendOf::Far {
-                            seen.insert("cascade band of the far bound".into());
-                        }
-                        if c.fit == CascadeFit::Stable {
-                            seen.insert("cascade stable fit".into());
+                for light in &case.lights {
+                    if let Light::Directional(d) = light {
+                        if let Some(c) = &d.cascades {
+                            seen.insert(format!("cascades {:?}", c.split));
+                            if c.blend > 0.0 {
+                                seen.insert("cascade blend".into());
+                            }
+                            if c.distance.is_some() {
+                                seen.insert("cascade distance".into());
+                            }
+                            if c.blend_of == BlendOf::Far {
+                                seen.insert("cascade band of the far bound".into());
+                            }
+                            if c.fit == CascadeFit::Stable {
+                                seen.insert("cascade stable fit".into());
+                            }
                         }
                     }
-                }
-                seen.insert(format!(
-                    "light {}",
-                    match case.light {
-                        Light::Directional(_) => "directional",
-                        Light::Spot(_) => "spot",
-                        Light::Point(_) => "point",
+                    seen.insert(format!(
+                        "light {}",
+                        match light {
+                            Light::Directional(_) => "directional",
+                            Light::Spot(_) => "spot",
+                            Light::Point(_) => "point",
+                        }
+                    ));
+                    seen.insert(format!("shading {:?}", case.shading.model));
+                    let radiance = light.radiance();
+                    if radiance != [1.0; 3] {
+                        seen.insert("tinted light".into());
                     }
-                ));
-                seen.insert(format!("shading {:?}", case.shading.model));
-                let radiance = case.light.radiance();
-                if radiance != [1.0; 3] {
-                    seen.insert("tinted light".into());
-                }
-                if radiance.iter().any(|x| *x > 1.0) {
-                    seen.insert("light above 1".into());
+                    if radiance.iter().any(|x| *x > 1.0) {
+                        seen.insert("light above 1".into());
+                    }
                 }
                 if case.camera.clear != [0.0; 3] {
                     seen.insert("clear colour".into());

@@ -61,7 +61,7 @@ pub use format::Case;
 pub use frame::{Clock, DepthMap, Frame, LightPlane, Timings, VisibilityStorage};
 pub use light::{LightKind, LightSetup};
 pub use load::{CasePoint, case_files, get_path, load_file, load_str};
-pub use prepare::{OfLights, Prepared};
+pub use prepare::{LightRun, OfLights, Prepared};
 pub use profile::{Deviation, Deviations, Profile, Spec};
 pub use scene::{Geometry, tessellate};
 pub use technique::Technique;

@@ -714,13 +714,13 @@ mod tests {
                 "shadow": {{"size": [1024, 1024]}}}}"#
             ))
             .expect("a case");
-            let Light::Directional(d) = &case.light else {
+            let Light::Directional(d) = &case.lights[0] else {
                 panic!("directional");
             };
             assert_eq!(d.cascades.as_ref().map(|c| c.fit), Some(CascadeFit::Stable));
             let camera = CameraSetup::new(&case.camera);
             let geometry = crate::scene::tessellate(&case.scene);
-            let light = LightSetup::new(&case.light, case.shadow.size, &geometry, &camera);
+            let light = LightSetup::new(&case.lights[0], case.shadow.size, &geometry, &camera);
             let mut sides = Vec::new();
             for v in &light.views {
                 let Projection::Ortho { bounds } = v.projection else {

@@ -108,11 +108,10 @@ pub fn estimate(case: &Case, triangles: usize) -> Estimate {
     let [sw, sh] = case.shadow.size;
     // Every light's map: the largest is judged at the full cost a texel, the others kept at
     // theirs ([`BYTES_PER_KEPT_TEXEL`]).
-    let lights = case.all_lights();
-    let largest = lights
-        .iter()
-        .max_by_key(|l| l.map_faces())
-        .unwrap_or(&case.light);
+    let lights = &case.lights;
+    let Some(largest) = lights.iter().max_by_key(|l| l.map_faces()) else {
+        return Estimate { parts: Vec::new() };
+    };
     let faces = u64::from(largest.map_faces());
     let other_faces: u64 = lights.iter().map(|l| u64::from(l.map_faces())).sum::<u64>() - faces;
     let pixels = u64::from(cw) * u64::from(ch);

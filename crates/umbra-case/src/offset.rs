@@ -37,18 +37,22 @@ pub fn apply_offset(case: &Case) -> Case {
     }
     mv(&mut c.camera.eye);
     mv(&mut c.camera.target);
-    match &mut c.light {
-        Light::Directional(d) => {
-            if let Some(p) = &mut d.position {
-                mv(p);
+    // Every light moves with the scene (once only the first did, and a case of several
+    // lights with an offset lit a moved scene from where its other lights had been).
+    for light in &mut c.lights {
+        match light {
+            Light::Directional(d) => {
+                if let Some(p) = &mut d.position {
+                    mv(p);
+                }
+                mv(&mut d.target);
             }
-            mv(&mut d.target);
+            Light::Spot(s) => {
+                mv(&mut s.position);
+                mv(&mut s.target);
+            }
+            Light::Point(p) => mv(&mut p.position),
         }
-        Light::Spot(s) => {
-            mv(&mut s.position);
-            mv(&mut s.target);
-        }
-        Light::Point(p) => mv(&mut p.position),
     }
     c
 }
@@ -85,9 +89,42 @@ mod tests {
             [(100001.3f64) as f32, 0.0, 0.0]
         );
         assert_eq!(c.camera.eye, [x, 5.0, 5.0]);
-        let Light::Spot(s) = &c.light else { panic!() };
+        let Light::Spot(s) = &c.lights[0] else {
+            panic!()
+        };
         assert_eq!(s.position, [x, 9.0, 1.0]);
         // f32 spacing at 1e5 is 1/128: the offset is rounded, as an application's would be.
         assert_eq!(f64::from(x), 100_000.296_875);
+    }
+
+    /// Every light of several moves with the scene, and every light's run sees it moved (only
+    /// the first light once did: the others lit the moved scene from where they had been).
+    #[test]
+    fn offset_moves_every_light_and_every_lights_run() {
+        let text = r#"{ "name": "t", "about": "t",
+            "scene": { "offset": [1000, 0, -500], "objects": [ { "plane": { "point": [0, 0, 0], "half_extent": 5 } } ] },
+            "camera": { "eye": [0, 5, 5], "target": [0, 0, 0] },
+            "shading": { "model": "dimmed" },
+            "lights": [
+                { "spot": { "position": [0, 9, 1], "target": [0, 0, 0], "fov_y_deg": 60 } },
+                { "point": { "position": [2, 3, 0], "near": 0.2, "far": 30 } },
+                { "directional": { "position": [0, 9, 0], "target": [1, 0, 0], "up": [0, 0, 1], "fit": "scene" } } ] }"#;
+        let point =
+            crate::load_str(text, std::path::Path::new("t.json")).expect("valid")[0].clone();
+        let run = crate::Prepared::new(point);
+        let at = |l: &Light| match l {
+            Light::Spot(s) => (s.position, s.target),
+            Light::Point(p) => (p.position, p.position),
+            Light::Directional(d) => (d.position.expect("placed"), d.target),
+        };
+        let moved = [
+            ([1000.0, 9.0, -499.0], [1000.0, 0.0, -500.0]),
+            ([1002.0, 3.0, -500.0], [1002.0, 3.0, -500.0]),
+            ([1000.0, 9.0, -500.0], [1001.0, 0.0, -500.0]),
+        ];
+        for (k, want) in moved.iter().enumerate() {
+            assert_eq!(at(&run.case().lights[k]), *want, "light {k}");
+            assert_eq!(at(run.lights[k].as_written()), *want, "light {k}'s run");
+        }
     }
 }

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use serde_json::Value;
 
 use crate::error::CaseError;
-use crate::format::Case;
+use crate::format::{Case, LightsError};
 
 /// One runnable point of a case: the case with its sweep values applied.
 #[derive(Clone, Debug)]
@@ -42,30 +42,11 @@ pub(crate) fn compact(v: &Value) -> String {
     }
 }
 
-/// Deserialises a case from JSON, naming the path of the first type error. A case that gives
-/// `lights` and no `light` has `light` filled in with the first of them; one that gives both
-/// (as a case written back does) must give the same first light.
+/// Deserialises a case from JSON, naming the path of the first type error. One light is
+/// written `light`, several `lights` ([`crate::format::CaseFile`]); one that gives both (as a
+/// case written back does) must give the same first light.
 pub(crate) fn parse_value(value: &Value, file: &Path, context: &str) -> Result<Case, CaseError> {
-    let filled;
-    let value = match value.get("lights").and_then(Value::as_array) {
-        Some(lights) if value.get("light").is_none() && !lights.is_empty() => {
-            let mut v = value.clone();
-            v["light"] = lights[0].clone();
-            filled = v;
-            &filled
-        }
-        _ => value,
-    };
-    let case = deserialize(value, file, context)?;
-    if !case.lights.is_empty() && case.light != case.lights[0] {
-        return Err(CaseError::new(
-            file,
-            "light",
-            format!("{context}both `light` and `lights` are given, and `light` is not `lights[0]`"),
-            "give `light` for one light or `lights` for several, not both",
-        ));
-    }
-    Ok(case)
+    deserialize(value, file, context)
 }
 
 fn deserialize(value: &Value, file: &Path, context: &str) -> Result<Case, CaseError> {
@@ -73,6 +54,22 @@ fn deserialize(value: &Value, file: &Path, context: &str) -> Result<Case, CaseEr
         let path = e.path().to_string();
         let path = if path == "." { String::new() } else { path };
         let inner = e.into_inner().to_string();
+        // The lights' own rules (`Case`'s conversion from its file), each at its field.
+        let lights = [
+            (
+                LightsError::Differ,
+                "light",
+                "give `light` for one light or `lights` for several, not both",
+            ),
+            (
+                LightsError::One,
+                "lights",
+                "write one light as `light`, or remove lights (each is one lit pass and one map)",
+            ),
+        ];
+        if let Some((_, field, fix)) = lights.iter().find(|(l, ..)| inner == l.to_string()) {
+            return CaseError::new(file, *field, format!("{context}{inner}"), *fix);
+        }
         let fix = if inner.starts_with("unknown field") {
             "remove the field or correct its spelling (cases/README.md lists every field)"
         } else if inner.starts_with("missing field") {

@@ -8,7 +8,7 @@ use crate::light::LightSetup;
 use crate::point::CasePoint;
 use crate::scene::{Geometry, tessellate};
 
-/// One run's inputs.
+/// One run's inputs: the case point, its triangles and camera, and every light's own run.
 #[derive(Clone, Debug)]
 pub struct Prepared {
     /// The case point, resolved: its `scene.offset` already applied to every position (and
@@ -18,23 +18,38 @@ pub struct Prepared {
     pub geometry: Arc<Geometry>,
     /// Its camera.
     pub camera: CameraSetup,
-    /// Its light.
-    pub light: LightSetup,
-    /// A light's run of a case with several lights ([`Prepared::for_light`]): which light
-    /// of how many, and whether their maps are one 2D array's layers (the light's in layer
-    /// `light`). `None` for a case's own run.
-    pub of_lights: Option<OfLights>,
+    /// Every light's run, in the case's order: never empty (one light is a list of one).
+    /// Every backend and the reference render a case as these runs, one shadow pass and one
+    /// lit pass each, the lit passes' colours added; each run's visibility is judged alone.
+    pub lights: Vec<LightRun>,
 }
 
-/// Which light of several a run is ([`Prepared::of_lights`]).
+/// One light's run of a case: the case as that light alone lights it
+/// ([`crate::format::Case::for_light`]: no ambient term but the first light's), the case's
+/// triangles and camera, and the light's set-up.
+#[derive(Clone, Debug)]
+pub struct LightRun {
+    /// The case point with only this light.
+    pub point: CasePoint,
+    /// The case's triangles (shared by every light's run).
+    pub geometry: Arc<Geometry>,
+    /// The case's camera.
+    pub camera: CameraSetup,
+    /// This light's set-up: its views, matrices and cascades.
+    pub light: LightSetup,
+    /// Which light of how many, and whether their maps are one array's layers.
+    pub of_lights: OfLights,
+}
+
+/// Which light of a case a run is ([`LightRun::of_lights`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct OfLights {
-    /// The light's index in `lights`.
+    /// The light's index in the case's `lights`.
     pub light: usize,
     /// How many lights the case has.
     pub lights: usize,
-    /// The maps are one array's layers (`shadow.placement` `array`, or `cube_array`
-    /// whose layers are cubes).
+    /// The maps are one array's layers ([`crate::format::Case::maps_share_array`]; the
+    /// light's is layer `light`, or its cube in a cube-map array).
     pub array: bool,
 }
 
@@ -44,24 +59,33 @@ impl Prepared {
     pub fn new(mut point: CasePoint) -> Self {
         point.case = crate::offset::apply_offset(&point.case);
         let geometry = Arc::new(tessellate(&point.case.scene));
-        Self::with_geometry(point, geometry)
-    }
-
-    /// Sets up a point whose (offset-free) scene was already tessellated.
-    fn with_geometry(point: CasePoint, geometry: Arc<Geometry>) -> Self {
         let camera = CameraSetup::new(&point.case.camera);
-        let light = LightSetup::new(
-            &point.case.light,
-            point.case.shadow.size,
-            &geometry,
-            &camera,
-        );
+        let case = &point.case;
+        let array = case.maps_share_array();
+        let lights = (0..case.lights.len())
+            .map(|k| {
+                let point = CasePoint {
+                    case: case.for_light(k),
+                    ..point.clone()
+                };
+                LightRun {
+                    light: LightSetup::new(&case.lights[k], case.shadow.size, &geometry, &camera),
+                    point,
+                    geometry: Arc::clone(&geometry),
+                    camera,
+                    of_lights: OfLights {
+                        light: k,
+                        lights: case.lights.len(),
+                        array,
+                    },
+                }
+            })
+            .collect();
         Prepared {
             point,
             geometry,
             camera,
-            light,
-            of_lights: None,
+            lights,
         }
     }
 
@@ -69,30 +93,17 @@ impl Prepared {
     pub fn case(&self) -> &crate::format::Case {
         &self.point.case
     }
+}
 
-    /// How many lights the case has (`lights`, or the one `light`).
-    pub fn light_count(&self) -> usize {
-        self.case().all_lights().len()
+impl LightRun {
+    /// The case as this light alone lights it.
+    pub fn case(&self) -> &crate::format::Case {
+        &self.point.case
     }
 
-    /// Light `k`'s run: the case as that light alone lights it ([`crate::format::Case::for_light`]:
-    /// no ambient term but the first light's), the same triangles. Every backend and the
-    /// reference render a case with several lights as these runs, one lit pass each, the
-    /// passes' colours added; each run's visibility is judged as a one-light case's is.
-    pub fn for_light(&self, k: usize) -> Prepared {
-        let point = CasePoint {
-            case: self.point.case.for_light(k),
-            ..self.point.clone()
-        };
-        let lights = self.light_count();
-        let array = self.case().shadow.placement != crate::format::Placement::Separate;
-        Prepared {
-            of_lights: (lights > 1).then_some(OfLights {
-                light: k,
-                lights,
-                array,
-            }),
-            ..Self::with_geometry(point, Arc::clone(&self.geometry))
-        }
+    /// This light as the case writes it (its colour, intensity and placement).
+    pub fn as_written(&self) -> &crate::format::Light {
+        // The run's case holds this light alone (`Case::for_light`).
+        &self.point.case.lights[0]
     }
 }

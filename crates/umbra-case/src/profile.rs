@@ -280,7 +280,9 @@ impl Profile {
         let hardware_linear = case.shadow.filter.sampler_linear()
             && case.shadow.compare == Compare::Hardware
             && !self.packed_depth;
-        let cube = matches!(case.light, Light::Point(_));
+        // A light's run has one light; a case of several is judged light by light, and
+        // named here by whether any of its maps is a cube.
+        let cube = case.lights.iter().any(|l| matches!(l, Light::Point(_)));
         let spec = if hardware_linear { self.spec } else { Spec::Gl };
         let c = self.calibration;
         let own =

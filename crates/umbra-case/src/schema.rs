@@ -222,8 +222,20 @@ pub fn check_term(path: &str, op: &str, value: &Value) -> Result<(), String> {
             continue;
         }
         let mut doc = doc.clone();
-        if let Some(slot) = doc.pointer_mut(&pointer) {
-            *slot = value.clone();
+        // A case of several lights writes its first twice (`light` is `lights[0]`, which
+        // the format holds it to): a value put in one is put in the other.
+        let twin = pointer
+            .strip_prefix("/light/")
+            .map(|rest| format!("/lights/0/{rest}"))
+            .or_else(|| {
+                pointer
+                    .strip_prefix("/lights/0/")
+                    .map(|rest| format!("/light/{rest}"))
+            });
+        for at in std::iter::once(&pointer).chain(twin.as_ref()) {
+            if let Some(slot) = doc.pointer_mut(at) {
+                *slot = value.clone();
+            }
         }
         match serde_json::from_value::<crate::format::Case>(doc) {
             Ok(_) => return Ok(()),

@@ -20,7 +20,7 @@ use crate::format::{
     BeyondFar, BiasMatrix, BlendOf, Compare, DepthOrder, Filter, LightVector, Outside, Shading,
 };
 use crate::light::LightKind;
-use crate::prepare::Prepared;
+use crate::prepare::LightRun;
 
 /// Everything that shapes a lit pass's lookup and shading.
 #[derive(Clone, Debug, PartialEq)]
@@ -203,7 +203,7 @@ pub enum Taps {
 
 impl Technique {
     /// The technique of `run`, with the self-test's `fault` (`Fault::active()`, or `None`).
-    pub fn new(run: &Prepared, fault: Option<Fault>) -> Self {
+    pub fn new(run: &LightRun, fault: Option<Fault>) -> Self {
         let case = run.case();
         let s = &case.shadow;
         Technique {
@@ -226,8 +226,7 @@ impl Technique {
             },
             world_offsets: (s.bias.normal_offset_texels != 0.0 || s.bias.light_offset != 0.0)
                 && fault != Some(Fault::WorldOffsetsDropped),
-            layer: run
-                .of_lights
+            layer: Some(run.of_lights)
                 .filter(|o| o.array)
                 .map(|o| Fault::map_of_light(fault, o.light, o.lights, true, |_| false)),
             filter: s.filter,
@@ -246,7 +245,7 @@ impl Technique {
             beyond_far_lit: s.beyond_far == BeyondFar::Lit,
             mipmapped: s.mipmaps.is_some(),
             shading: case.shading.clone(),
-            radiance: case.light.radiance(),
+            radiance: run.as_written().radiance(),
             fault,
         }
     }
@@ -484,7 +483,7 @@ mod tests {
     use super::*;
     use crate::format::DepthFormat;
 
-    fn spot(edit: impl FnOnce(&mut crate::format::Shadow)) -> Prepared {
+    fn spot(edit: impl FnOnce(&mut crate::format::Shadow)) -> LightRun {
         let text = r#"{ "name": "t", "about": "a technique",
             "scene": { "objects": [ { "plane": { "point": [0, 0, 0], "half_extent": 4 } } ] },
             "camera": { "eye": [0, 5, 5], "target": [0, 0, 0], "size": [8, 8] },
@@ -493,7 +492,7 @@ mod tests {
             .expect("a valid case")
             .remove(0);
         edit(&mut point.case.shadow);
-        Prepared::new(point)
+        crate::Prepared::new(point).lights.remove(0)
     }
 
     #[test]

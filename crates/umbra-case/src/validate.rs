@@ -209,11 +209,7 @@ impl Validator<'_> {
         }
         self.scene(&c.scene);
         self.camera(&c.camera);
-        if c.lights.is_empty() {
-            self.light(&c.light, &c.shadow, &c.camera);
-        } else {
-            self.lights(c);
-        }
+        self.lights(c);
         self.shadow(&c.shadow);
         self.light_bias(c);
         self.shading(&c.shading);
@@ -233,11 +229,12 @@ impl Validator<'_> {
         }
     }
 
-    /// `lights`: 2 to MAX_LIGHTS, each checked as `light` is (its errors under
-    /// `lights[k]`), and what several lights cannot have yet, each with its fix.
+    /// Every light, each under its own path ([`Case::light_path`]: `light` for one light,
+    /// `lights[k]` for several), at most MAX_LIGHTS of them; then what several lights cannot
+    /// have yet, each with its fix.
     fn lights(&mut self, c: &Case) {
         let n = c.lights.len();
-        if !(2..=MAX_LIGHTS).contains(&n) {
+        if n > MAX_LIGHTS {
             self.err(
                 "lights",
                 format!("{n} lights; a case with `lights` has 2 to {MAX_LIGHTS}"),
@@ -252,10 +249,20 @@ impl Validator<'_> {
             one.light(l, &c.shadow, &c.camera);
             for mut e in one.errors {
                 if let Some(rest) = e.path.strip_prefix("light") {
-                    e.path = format!("lights[{k}]{rest}");
+                    e.path = format!("{}{rest}", c.light_path(k));
                 }
                 self.errors.push(e);
             }
+        }
+        if n > 1 {
+            self.several_lights(c);
+        }
+    }
+
+    /// What several lights cannot have yet (cascades on one of them, a map kind the
+    /// placement cannot hold, the classic model, mip levels in an array), each with its fix.
+    fn several_lights(&mut self, c: &Case) {
+        for (k, l) in c.lights.iter().enumerate() {
             let cascaded = matches!(l, Light::Directional(d) if d.cascades.is_some());
             if cascaded {
                 self.err(
@@ -831,10 +838,7 @@ impl Validator<'_> {
             if !self.finite(&path, x) || x == 0.0 {
                 continue;
             }
-            if c.all_lights()
-                .iter()
-                .any(|l| !matches!(l, Light::Directional(_)))
-            {
+            if c.lights.iter().any(|l| !matches!(l, Light::Directional(_))) {
                 self.err(
                     path,
                     "only a directional light's map has one world size per texel and one direction to the light",
@@ -843,7 +847,7 @@ impl Validator<'_> {
             }
         }
         if c.shadow.filter == Filter::Castano13
-            && c.all_lights().iter().any(|l| matches!(l, Light::Point(_)))
+            && c.lights.iter().any(|l| matches!(l, Light::Point(_)))
         {
             self.err(
                 "shadow.filter",

@@ -483,7 +483,7 @@ fn sweeps_expand_to_the_cartesian_product_in_order() {
         "base@light.spot.fov_y_deg=60,shadow.format=depth32f"
     );
     assert!(points.iter().all(|p| p.case.sweep.is_empty()));
-    let umbra_case::format::Light::Spot(s) = &points[2].case.light else {
+    let umbra_case::format::Light::Spot(s) = &points[2].case.lights[0] else {
         panic!("spot")
     };
     assert_eq!(s.fov_y_deg, 40.0);
@@ -499,7 +499,7 @@ fn log_sweeps_are_evenly_spaced_in_decades() {
     let points = load_str(&doc.to_string(), Path::new(FILE)).expect("valid");
     let nears: Vec<f32> = points
         .iter()
-        .map(|p| match &p.case.light {
+        .map(|p| match &p.case.lights[0] {
             umbra_case::format::Light::Spot(s) => s.near,
             _ => unreachable!(),
         })
@@ -746,7 +746,7 @@ fn light_colour_intensity_and_clear_colour_validate_and_name_the_field() {
     let text = serde_json::to_string(&points[0].case).expect("json");
     assert!(text.contains("\"intensity\":2.5") && text.contains("\"clear\":[0.1,0.2,0.3]"));
     let plain = load_str(&base().to_string(), Path::new(FILE)).expect("valid");
-    let light = serde_json::to_string(&plain[0].case.light).expect("json");
+    let light = serde_json::to_string(&plain[0].case.lights[0]).expect("json");
     let camera = serde_json::to_string(&plain[0].case.camera).expect("json");
     assert!(!light.contains("intensity") && !light.contains("color") && !camera.contains("clear"));
     assert_error(
@@ -811,24 +811,34 @@ fn with_lights(lights: Value) -> Value {
 }
 
 #[test]
-fn several_lights_fill_in_light_and_are_refused_with_the_fix_where_not_modelled() {
+fn several_lights_are_a_list_and_are_refused_with_the_fix_where_not_modelled() {
     let spot = json!({ "spot": { "position": [3, 10, 3], "target": [0, 0, 0], "fov_y_deg": 60 } });
     let sun = json!({ "directional": { "azimuth_deg": 30, "elevation_deg": 50, "fit": "scene" } });
     let lamp = json!({ "point": { "position": [0, 3, 0], "near": 0.2, "far": 30 } });
     let doc = with_lights(json!([spot, sun]));
     let points = load_str(&doc.to_string(), Path::new(FILE)).expect("valid");
     let case = &points[0].case;
-    assert_eq!(case.all_lights().len(), 2);
-    assert_eq!(case.light, case.lights[0], "light is the first of lights");
+    assert_eq!(case.lights.len(), 2);
     // Light 1's run: that light alone, no ambient term (the first light's pass adds it).
     let one = case.for_light(1);
-    assert_eq!(one.light, case.lights[1]);
-    assert!(one.lights.is_empty() && one.shading.ambient == 0.0);
+    assert_eq!(one.lights, [case.lights[1].clone()]);
+    assert!(one.shading.ambient == 0.0);
     assert_eq!(case.for_light(0).shading.ambient, case.shading.ambient);
-    // Written back, the case holds both, and reads back the same.
-    let written = serde_json::to_string(case).expect("json");
-    let again = load_str(&written, Path::new(FILE)).expect("reads back");
+    // Written back, the case holds both, `light` the first of `lights` (paths and conditions
+    // that name `light` read it), and reads back the same.
+    let written = serde_json::to_value(case).expect("json");
+    assert_eq!(written["light"], written["lights"][0], "{written}");
+    let again = load_str(&written.to_string(), Path::new(FILE)).expect("reads back");
     assert_eq!(&again[0].case, case);
+    // One light is written back as `light` alone, as its file gave it.
+    let single = serde_json::to_value(
+        &load_str(&base().to_string(), Path::new(FILE)).expect("valid")[0].case,
+    )
+    .expect("json");
+    assert!(
+        single.get("lights").is_none() && single.get("light").is_some(),
+        "{single}"
+    );
     // Both given and different: which one is meant?
     let both = set(doc.clone(), "/light", sun.clone());
     assert_error(both, "light", "`light` is not `lights[0]`");

@@ -104,8 +104,8 @@ pub struct TruthError {
     pub verdicts: Vec<PixelVerdict>,
 }
 
-/// Judges every light of `frame` against its own truth (`truths`, light by light: the one
-/// light's truth, or each of [`umbra_case::Prepared::for_light`]'s): the counts add up over
+/// Judges every light of `frame` against its own truth (`truths`, light by light, each light's
+/// run's in [`umbra_case::Prepared::lights`]): the counts add up over
 /// the lights (a pixel lit by two lights is judged twice, once per light's shadow), the
 /// verdicts are the first light's.
 pub fn truth_error_lights(frame: &Frame, truths: &[Truth]) -> TruthError {

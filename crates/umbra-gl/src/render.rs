@@ -29,7 +29,9 @@ use std::time::{Duration, Instant};
 use glow::HasContext;
 use umbra_case::fault::Fault;
 use umbra_case::format::MipSource;
-use umbra_case::{BackendError, Clock, Convention, Frame, Prepared, Timings, VisibilityStorage};
+use umbra_case::{
+    BackendError, Clock, Convention, Frame, LightRun, Prepared, Timings, VisibilityStorage,
+};
 
 use crate::api::Api;
 use crate::caps::Caps;
@@ -60,11 +62,14 @@ pub struct Renderer {
     recorder: Option<std::cell::RefCell<Recorder>>,
 }
 
-/// A run's shadow map, kept for the twins that share its shadow pass.
+/// A run's shadow maps, kept for the twins that share its shadow pass.
 struct KeptMap {
     /// The case it was rendered for.
     case: umbra_case::Case,
-    texture: glow::Texture,
+    /// Each light's map, in the case's order (the lights of an array share one texture).
+    maps: Vec<glow::Texture>,
+    /// The textures themselves, each once (deleted when the maps are released).
+    textures: Vec<glow::Texture>,
 }
 
 /// The most compiled programs a renderer keeps between runs, all dropped at once when
@@ -320,9 +325,9 @@ impl Renderer {
                 if k.case == *of.case()
                     && umbra_case::twin::same_shadow_pass(of.case(), run.case()) =>
             {
-                Some(k.texture)
+                k.maps.clone()
             }
-            _ => None,
+            _ => Vec::new(),
         };
         if twin_of.is_none() {
             self.release_kept();
@@ -334,31 +339,41 @@ impl Renderer {
             }
         }
         let mut res = Resources::default();
-        let out = self.render_with(run, &mut res, start, reuse);
-        if twin_of.is_none() && out.is_ok() {
-            let [mw, mh] = run.case().shadow.size;
-            let bytes = 4 * u64::from(mw) * u64::from(mh) * run.light.views.len() as u64;
-            if bytes <= KEEP_LIMIT {
-                if let Some(texture) = res.shadow_map.take() {
+        let shared = !reuse.is_empty();
+        let out = self.render_with(run, &mut res, start, &reuse);
+        let out = match out {
+            Ok((frame, maps)) => {
+                let [mw, mh] = run.case().shadow.size;
+                let faces: u64 = run.lights.iter().map(|l| l.light.views.len() as u64).sum();
+                let bytes = 4 * u64::from(mw) * u64::from(mh) * faces;
+                // Kept where every light's map is a texture of its own run (not GLES 2's
+                // cascades, a texture each).
+                let whole = maps.iter().all(|m| res.maps.contains(m));
+                if twin_of.is_none() && bytes <= KEEP_LIMIT && whole {
                     self.kept = Some(KeptMap {
                         case: run.case().clone(),
-                        texture,
+                        maps,
+                        textures: std::mem::take(&mut res.maps),
                     });
                 }
+                Ok(frame)
             }
-        }
+            Err(e) => Err(e),
+        };
         res.delete(&self.g());
         // A failed run must not leave errors behind for the next one.
         let _ = self.check("cleanup");
-        out.map(|f| (f, reuse.is_some()))
+        out.map(|f| (f, shared))
     }
 
     /// Deletes the kept shadow map, if any.
     fn release_kept(&mut self) {
         if let Some(k) = self.kept.take() {
-            // SAFETY: a texture this renderer created on its own context, bound to nothing
-            // that outlives a run.
-            unsafe { self.g().delete_texture(k.texture) };
+            for t in k.textures {
+                // SAFETY: a texture this renderer created on its own context, bound to
+                // nothing that outlives a run.
+                unsafe { self.g().delete_texture(t) };
+            }
         }
     }
 
@@ -399,49 +414,104 @@ impl Renderer {
         })
     }
 
-    /// One run, in stages: upload, the shadow pass (timed), the map's readback (GL 3.3), the
-    /// lit pass (timed, read back), the frame.
+    /// One run, in stages, as engines' forward renderers with a pass per light do (Unity's
+    /// forward-add, Doom 3's interactions): the triangles uploaded once; every light's shadow
+    /// pass (timed together) into its own map (`separate`) or its layer of one 2D array
+    /// (`array`), or the maps kept from the run `reuse` is of (a twin's: none read back);
+    /// every map read back (GL 3.3); every light's lit pass (timed together), the first into
+    /// a fresh colour target and each later one added into it ([`Renderer::add_light`]),
+    /// each light's visibility read back on its own; the colour read back once. The frame,
+    /// and each light's map texture.
     fn render_with(
         &mut self,
         run: &Prepared,
         res: &mut Resources,
         start: Instant,
-        reuse: Option<glow::Texture>,
-    ) -> Result<Frame, BackendError> {
-        if run.light_count() > 1 {
-            return self.render_lights(run, res, start);
-        }
-        let p = RunPlan::new(run, self.api);
+        reuse: &[glow::Texture],
+    ) -> Result<(Frame, Vec<glow::Texture>), BackendError> {
+        let mut plans: Vec<RunPlan> = run
+            .lights
+            .iter()
+            .map(|r| RunPlan::new(r, self.api))
+            .collect();
         self.check("before the run")?;
-        self.upload(&p, res)?;
-        let shadow_programs = self.shadow_programs(&p)?;
+        self.upload(&run.geometry, res)?;
+        // Programs are compiled (or found in the cache) before the stage that runs them, so
+        // that no stage's time counts a compile.
+        let shadow_programs = plans
+            .iter()
+            .map(|p| self.shadow_programs(p))
+            .collect::<Result<Vec<_>, _>>()?;
         let (timer, shadow_start) = self.begin_stages(run, res)?;
-        let map = self.shadow_map(&p, &shadow_programs, res, reuse)?;
+        let mut maps = Vec::new();
+        let mut stored = Vec::new();
+        for (k, (p, programs)) in plans.iter_mut().zip(&shadow_programs).enumerate() {
+            if p.layered {
+                // A later light's layer of the array the first light's pass allocated.
+                p.array_map = maps.first().copied();
+            }
+            let p = &*p;
+            let kept = reuse.get(k).copied();
+            let map = self.shadow_map(p, programs, res, kept)?;
+            // Every map this run allocated is the run's, deleted with it unless kept.
+            res.maps.extend(res.shadow_map.take());
+            stored.push(if p.api == Api::Gl33 && kept.is_none() {
+                Some(self.read_map(p, map)?)
+            } else {
+                None
+            });
+            maps.push(map);
+        }
         let shadow_wall = self.end_stage(timer.as_ref(), shadow_start);
-        let shadow_map = if p.api == Api::Gl33 && reuse.is_none() {
-            Some(self.read_map(&p, map)?)
-        } else {
-            None
-        };
-        let (technique, lit_program) = self.lit_program(&p)?;
+        let lit_programs = plans
+            .iter()
+            .map(|p| self.lit_program(p))
+            .collect::<Result<Vec<_>, _>>()?;
         let lit_start = Instant::now();
         if let Some(t) = &timer {
             t.begin(&self.g(), 1);
         }
-        let (color, vis) = self.lit_pass(&p, &technique, lit_program, map, res)?;
+        let mut planes = Vec::new();
+        let mut target = None;
+        for (k, (p, (technique, program))) in plans.iter().zip(lit_programs).enumerate() {
+            // The map light k reads: its own, unless the self-test mixes the lights up (in an
+            // array, the layer is the shader's: Technique::layer).
+            let read = if p.layered {
+                maps[k]
+            } else {
+                maps[Fault::map_of_light(p.fault, k, maps.len(), false, |j| plans[j].cube)]
+            };
+            match target {
+                None => {
+                    let (fbo, vis) = self.lit_pass(p, &technique, program, read, res)?;
+                    target = Some(fbo);
+                    planes.push(vis);
+                }
+                Some(fbo) => planes.push(self.add_light(p, &technique, program, read, fbo, res)?),
+            }
+        }
+        let target = target.ok_or_else(|| BackendError::Other("a case without a light".into()))?;
+        let color = self.read_colour(&plans[0], target)?;
         let lit_wall = self.end_stage(timer.as_ref(), lit_start);
         let (shadow_pass, lit_pass, clock) =
             self.stage_times(timer.as_ref(), shadow_wall, lit_wall)?;
         let [w, h] = run.camera.size;
-        let (visibility, surface) = readback::decode_visibility(&vis);
-        Ok(Frame {
-            more_lights: Vec::new(),
+        let mut lights = planes.iter().zip(stored).map(|(v, shadow_map)| {
+            let (visibility, surface) = readback::decode_visibility(v);
+            umbra_case::LightPlane {
+                visibility,
+                shadow_map,
+                surface: Some(surface),
+            }
+        });
+        let first = lights.next().expect("a plane a light");
+        let frame = Frame {
             width: w,
             height: h,
             color,
-            visibility,
-            surface: Some(surface),
-            shadow_map,
+            visibility: first.visibility,
+            surface: first.surface,
+            shadow_map: first.shadow_map,
             // The visibility target is RGBA8 on every GL flavour.
             visibility_storage: VisibilityStorage::Unorm8,
             timings: Timings {
@@ -451,103 +521,9 @@ impl Renderer {
                 total: start.elapsed(),
                 clock: Some(clock),
             },
-        })
-    }
-
-    /// A case with several lights, as engines' forward renderers with a pass per light do
-    /// (Unity's forward-add, Doom 3's interactions): every light's shadow pass into its own
-    /// map (`separate`) or its layer of one 2D array (`array`), then every light's lit pass
-    /// over the first's depth, added into its colour ([`Renderer::add_light`]), each pass's
-    /// visibility read back on its own. Stages are timed over all lights.
-    fn render_lights(
-        &mut self,
-        run: &Prepared,
-        res: &mut Resources,
-        start: Instant,
-    ) -> Result<Frame, BackendError> {
-        let runs: Vec<Prepared> = (0..run.light_count()).map(|k| run.for_light(k)).collect();
-        let mut plans: Vec<RunPlan> = runs.iter().map(|r| RunPlan::new(r, self.api)).collect();
-        self.check("before the run")?;
-        self.upload(&plans[0], res)?;
-        let (timer, shadow_start) = self.begin_stages(run, res)?;
-        let mut maps = Vec::new();
-        let mut stored = Vec::new();
-        for (k, p) in plans.iter_mut().enumerate() {
-            if k > 0 && p.layered {
-                p.array_map = maps.first().copied();
-            }
-            let p = &*p;
-            let programs = self.shadow_programs(p)?;
-            let map = self.shadow_map(p, &programs, res, None)?;
-            // Every light's map is the run's, deleted with it.
-            res.textures.extend(res.shadow_map.take());
-            stored.push(if p.api == Api::Gl33 {
-                Some(self.read_map(p, map)?)
-            } else {
-                None
-            });
-            maps.push(map);
-        }
-        let shadow_wall = self.end_stage(timer.as_ref(), shadow_start);
-        let lit_start = Instant::now();
-        if let Some(t) = &timer {
-            t.begin(&self.g(), 1);
-        }
-        let mut planes = Vec::new();
-        let mut target = None;
-        for (k, p) in plans.iter().enumerate() {
-            let (technique, program) = self.lit_program(p)?;
-            let array = p.layered;
-            // The map light k reads: its own, unless the self-test mixes the lights up (in an
-            // array, the layer is the shader's: Technique::layer).
-            let read = if array {
-                maps[k]
-            } else {
-                maps[Fault::map_of_light(p.fault, k, maps.len(), false, |j| plans[j].cube)]
-            };
-            if k == 0 {
-                let first = res.framebuffers.len();
-                // Its colour is read once every light has been added.
-                let (_, vis) = self.lit_pass(p, &technique, program, read, res)?;
-                target = Some(res.framebuffers[first]);
-                planes.push(vis);
-            } else {
-                let fbo = target.expect("the first light's target");
-                planes.push(self.add_light(p, &technique, program, read, fbo, res)?);
-            }
-        }
-        let color = self.read_colour(&plans[0], target.expect("a lit pass"))?;
-        let lit_wall = self.end_stage(timer.as_ref(), lit_start);
-        let (shadow_pass, lit_pass, clock) =
-            self.stage_times(timer.as_ref(), shadow_wall, lit_wall)?;
-        let [w, h] = run.camera.size;
-        let mut decoded = planes.iter().map(|v| readback::decode_visibility(v));
-        let (visibility, surface) = decoded.next().expect("the first light");
-        let more_lights = decoded
-            .zip(stored.iter().skip(1))
-            .map(|((visibility, surface), map)| umbra_case::LightPlane {
-                visibility,
-                shadow_map: map.clone(),
-                surface: Some(surface),
-            })
-            .collect();
-        Ok(Frame {
-            width: w,
-            height: h,
-            color,
-            visibility,
-            surface: Some(surface),
-            shadow_map: stored.swap_remove(0),
-            visibility_storage: VisibilityStorage::Unorm8,
-            timings: Timings {
-                shadow_pass,
-                lit_pass,
-                readback: Duration::ZERO,
-                total: start.elapsed(),
-                clock: Some(clock),
-            },
-            more_lights,
-        })
+            more_lights: lights.collect(),
+        };
+        Ok((frame, maps))
     }
 
     /// The stages' timer (where the context has timer queries), begun on the shadow pass,
@@ -603,14 +579,18 @@ impl Renderer {
 
     /// The run's vertices into a buffer, with the four attributes of
     /// `Geometry::interleaved` (position, normal, albedo, face id).
-    fn upload(&self, p: &RunPlan, res: &mut Resources) -> Result<(), BackendError> {
-        let verts = p.run.geometry.interleaved();
+    fn upload(
+        &self,
+        geometry: &umbra_case::Geometry,
+        res: &mut Resources,
+    ) -> Result<(), BackendError> {
+        let verts = geometry.interleaved();
         let gl = &self.g();
         // SAFETY: buffers and vertex arrays of the current context.
         unsafe {
             let vbo = gl.create_buffer().map_err(|e| gl_err("upload", e))?;
             res.buffers.push(vbo);
-            if p.api != Api::Gles2 {
+            if self.api != Api::Gles2 {
                 let vao = gl.create_vertex_array().map_err(|e| gl_err("upload", e))?;
                 res.vaos.push(vao);
                 gl.bind_vertex_array(Some(vao));
@@ -635,7 +615,7 @@ impl Renderer {
 
 /// What every stage of a run reads, decided once from the case and the API.
 struct RunPlan<'a> {
-    run: &'a Prepared,
+    run: &'a LightRun,
     s: &'a umbra_case::format::Shadow,
     api: Api,
     /// GL's clip range in the case's depth order.
@@ -675,11 +655,11 @@ struct RunPlan<'a> {
 }
 
 impl<'a> RunPlan<'a> {
-    fn new(run: &'a Prepared, api: Api) -> RunPlan<'a> {
+    fn new(run: &'a LightRun, api: Api) -> RunPlan<'a> {
         let s = &run.case().shadow;
         let fault = Fault::active();
         let cube = run.light.is_cube();
-        let array = run.of_lights.filter(|o| o.array);
+        let array = Some(run.of_lights).filter(|o| o.array);
         let layered = run.light.cascading.is_some() || array.is_some();
         let levels = s.mipmaps.map_or(1, |m| m.levels);
         RunPlan {
@@ -769,8 +749,10 @@ impl<'a> RunPlan<'a> {
 struct Resources {
     /// The stages' timer queries (ended if a stage failed with one active).
     timer: Option<Timer>,
-    /// The run's shadow map (taken out when it is kept for the run's twins).
+    /// The map the light's shadow pass allocated last, until the run takes it into `maps`.
     shadow_map: Option<glow::Texture>,
+    /// Every light's map the run allocated (taken out when kept for the run's twins).
+    maps: Vec<glow::Texture>,
     /// GLES 2's cascades, a 2D texture each, in cascade order (also in `textures`, and
     /// never kept for a twin); empty otherwise.
     layer_maps: Vec<glow::Texture>,
@@ -795,7 +777,12 @@ impl Resources {
             for r in self.renderbuffers {
                 gl.delete_renderbuffer(r);
             }
-            for t in self.textures.into_iter().chain(self.shadow_map) {
+            for t in self
+                .textures
+                .into_iter()
+                .chain(self.shadow_map)
+                .chain(self.maps)
+            {
                 gl.delete_texture(t);
             }
             for v in self.vaos {

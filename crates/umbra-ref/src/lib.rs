@@ -34,7 +34,7 @@ use umbra_case::fault::Fault;
 use umbra_case::format::{Case, ColorFormat, Cull, MipSource, Mipmaps, Shadow};
 use umbra_case::{
     Backend, BackendError, BackendId, ClipDepth, Clock, Convention, DepthMap, DriverInfo, Frame,
-    Needs, Prepared, Profile, Support, Timings, VisibilityStorage,
+    LightRun, Needs, Prepared, Profile, Support, Timings, VisibilityStorage,
 };
 
 pub use lit_pass::PixelLegal;
@@ -52,17 +52,11 @@ pub fn render(run: &Prepared, clip: ClipDepth) -> Frame {
     each_light(run, |one| render_inner(one, clip, None, None, None).0)
 }
 
-/// A case with several lights as every backend renders it: each light's run
-/// ([`Prepared::for_light`]) by `one`, the lights' colours added where a surface shows
-/// ([`add_lights`]); one light's frame as `one` renders it.
-fn each_light(run: &Prepared, one: impl Fn(&Prepared) -> Frame) -> Frame {
-    if run.light_count() == 1 {
-        return one(run);
-    }
+/// A case as every backend renders it: each light's run ([`Prepared::lights`]) by `one`, the
+/// lights' colours added where a surface shows ([`add_lights`]).
+fn each_light(run: &Prepared, one: impl Fn(&LightRun) -> Frame) -> Frame {
     add_lights(
-        (0..run.light_count())
-            .map(|k| one(&run.for_light(k)))
-            .collect(),
+        run.lights.iter().map(one).collect(),
         run.case().camera.color_format,
     )
 }
@@ -142,7 +136,7 @@ pub struct Judged {
     /// may store there ([`shadow_pass::Freedom`]). Empty when not kept.
     pub map: Vec<(f32, f32)>,
     /// A case with several lights: each light's after the first, judged as its own run
-    /// ([`Prepared::for_light`]); the fields above are the first light's, but for the frame,
+    /// ([`Prepared::lights`]); the fields above are the first light's, but for the frame,
     /// whose colour is all lights' ([`add_lights`]). Empty for one light.
     pub others: Vec<Judged>,
 }
@@ -156,6 +150,19 @@ impl Judged {
     /// Light `k`'s judged run (light 0: this one, with its frame).
     pub fn for_light(&self, k: usize) -> &Judged {
         if k == 0 { self } else { &self.others[k - 1] }
+    }
+
+    /// A case's judged run from its lights' (`each`, in the case's order, at least one): the
+    /// frame's colour all lights' ([`add_lights`]).
+    pub fn of_lights(each: Vec<Judged>, format: ColorFormat) -> Judged {
+        let frame = add_lights(each.iter().map(|j| j.frame.clone()).collect(), format);
+        let mut each = each.into_iter();
+        let first = each.next().expect("a case has a light");
+        Judged {
+            frame,
+            others: each.collect(),
+            ..first
+        }
     }
 }
 
@@ -173,31 +180,28 @@ pub fn explain(
     profile: Profile,
     pixel: Option<(u32, u32)>,
 ) -> (Judged, String) {
-    if run.light_count() > 1 {
-        let mut judged = Vec::new();
-        let mut traces = String::new();
-        for k in 0..run.light_count() {
-            let (j, trace) = explain(&run.for_light(k), clip, profile, pixel);
-            if !trace.is_empty() {
-                traces += &format!("light {k}:\n{trace}");
-            }
-            judged.push(j);
+    let mut judged = Vec::new();
+    let mut traces = String::new();
+    for (k, light) in run.lights.iter().enumerate() {
+        let (j, trace) = explain_light(light, clip, profile, pixel);
+        if !trace.is_empty() {
+            traces += &format!("light {k}:\n{trace}");
         }
-        let frame = add_lights(
-            judged.iter().map(|j| j.frame.clone()).collect(),
-            run.case().camera.color_format,
-        );
-        let mut judged = judged.into_iter();
-        let first = judged.next().expect("two lights or more");
-        return (
-            Judged {
-                frame,
-                others: judged.collect(),
-                ..first
-            },
-            traces,
-        );
+        judged.push(j);
     }
+    (
+        Judged::of_lights(judged, run.case().camera.color_format),
+        traces,
+    )
+}
+
+/// One light's judged run ([`explain`]), with its pixel's trace.
+pub fn explain_light(
+    run: &LightRun,
+    clip: ClipDepth,
+    profile: Profile,
+    pixel: Option<(u32, u32)>,
+) -> (Judged, String) {
     let (frame, legal, map, trace) = render_inner(run, clip, Some(profile), pixel, None);
     (
         Judged {
@@ -217,7 +221,7 @@ pub fn explain(
 /// conformant implementation of `profile` may store in each texel (raster row order, row 0 =
 /// window y 0 of `clip`'s convention).
 pub fn judged_layers(
-    run: &Prepared,
+    run: &LightRun,
     clip: ClipDepth,
     profile: Profile,
 ) -> Vec<shadow_pass::DepthLayer> {
@@ -242,7 +246,7 @@ pub fn judged_layers(
 }
 
 fn render_inner(
-    run: &Prepared,
+    run: &LightRun,
     clip: ClipDepth,
     profile: Option<Profile>,
     pixel: Option<(u32, u32)>,
@@ -352,7 +356,7 @@ fn render_inner(
 /// geometric `fault` ([`Fault::face_mistake`]) the face drawn with a wrong orientation, and a
 /// mirror turning the front face with it, so that the same triangles are culled.
 fn face_view(
-    run: &Prepared,
+    run: &LightRun,
     conv: Convention,
     k: usize,
     fault: Option<Fault>,
@@ -375,7 +379,7 @@ fn face_view(
 /// ([`umbra_case::format::MipSource`]); nothing for a map with one level. `judged`: the
 /// scene's adjacency and the profile, for the levels' stored ranges.
 pub(crate) fn mip_levels(
-    run: &Prepared,
+    run: &LightRun,
     conv: Convention,
     layers: &[shadow_pass::DepthLayer],
     judged: Option<(&adjacency::Adjacency, Profile)>,

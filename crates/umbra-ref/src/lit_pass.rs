@@ -16,7 +16,7 @@
 
 use glam::Vec3;
 use rayon::prelude::*;
-use umbra_case::{Convention, Geometry, Prepared, Profile};
+use umbra_case::{Convention, Geometry, LightRun, Profile};
 
 use crate::bands::for_each_band;
 use crate::lookup::{Legal, Lookup, Neighbours, Turn, ambiguity, position_freedom};
@@ -86,7 +86,7 @@ pub struct LitImage {
 
 /// The lit pass's rasteriser: the camera's image in `conv`, culling by `camera.cull`, the
 /// near and far planes clipping.
-fn camera_raster(run: &Prepared, conv: Convention) -> Rasterizer {
+fn camera_raster(run: &LightRun, conv: Convention) -> Rasterizer {
     let [width, height] = run.camera.size;
     Rasterizer {
         conv,
@@ -100,7 +100,7 @@ fn camera_raster(run: &Prepared, conv: Convention) -> Rasterizer {
 /// Renders the camera view of `run`, looking shadows up with `lookup`; with `judged` (the
 /// camera view's edge kinds and the profile), also what every pixel allows.
 pub fn render(
-    run: &Prepared,
+    run: &LightRun,
     conv: Convention,
     lookup: &Lookup,
     judged: Option<(&[[EdgeKind; 3]], Profile)>,
@@ -120,7 +120,7 @@ pub fn render(
     let eye = run.camera.eye;
     let format = case.camera.color_format;
     let bg = background(case.camera.clear, format);
-    let light = Vec3::from(case.light.radiance());
+    let light = Vec3::from(run.as_written().radiance());
     // The judged lookup at a surface point: its value and what it allows.
     let judge = |pt: &Point, free: u8| judged_point(run, &tris, lookup, pt, free);
     // Shade row by row straight into the outputs, a run of pixels that show the same
@@ -286,7 +286,7 @@ fn nearest_surfaces(tris: &[Tri], w: u32, h: u32) -> Vec<Nearest> {
 /// The judged lookup at surface point `pt` (its pixel's surface freedoms `free`): the value
 /// the reference computes and everything the specs allow there, colour included.
 fn judged_point(
-    run: &Prepared,
+    run: &LightRun,
     tris: &[Tri],
     lookup: &Lookup,
     pt: &Point,
@@ -311,7 +311,7 @@ fn judged_point(
         lookup.judged(p, n, moves, turn)
     };
     let (albedo, to_light, to_eye) = (pt.albedo, pt.to_light, pt.to_eye);
-    let light = Vec3::from(case.light.radiance());
+    let light = Vec3::from(run.as_written().radiance());
     let c0 = shade_linear(&case.shading, light, albedo, n, to_light, to_eye, 0.0);
     let c1 = shade_linear(&case.shading, light, albedo, n, to_light, to_eye, 1.0);
     let d = position_freedom(p, lookup.reach) + moves[0].length() + moves[1].length();

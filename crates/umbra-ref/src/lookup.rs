@@ -316,7 +316,7 @@ impl<'a> Lookup<'a> {
     /// The lookup of `run`'s lit pass in convention `conv` over the rendered `layers` (one per
     /// light face), its judged intervals for `profile`.
     pub fn new(
-        run: &'a umbra_case::Prepared,
+        run: &'a umbra_case::LightRun,
         conv: Convention,
         layers: &'a [DepthLayer],
         profile: Profile,

@@ -846,7 +846,7 @@ mod tests {
         let point = umbra_case::load::load_str(CASE, std::path::Path::new("sphere.json"))
             .expect("the case")
             .remove(0);
-        let run = umbra_case::Prepared::new(point);
+        let run = umbra_case::Prepared::new(point).lights.remove(0);
         let clip = umbra_case::ClipDepth::MinusOneToOne;
         let mut card = Profile::GL;
         card.calibration.slope = Some(umbra_case::calibration::SlopeForm::Max);

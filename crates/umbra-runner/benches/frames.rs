@@ -109,11 +109,19 @@ fn catalogue_sizes(root: &Path) -> Vec<(std::path::PathBuf, usize, u64, u64, Str
         {
             let [w, h] = p.case.camera.size;
             let [mw, mh] = p.case.shadow.size;
-            let faces = if matches!(p.case.light, umbra_case::format::Light::Point(_)) {
-                6
-            } else {
-                1
-            };
+            // Every light's map: a cube's six faces, else one.
+            let faces: u64 = p
+                .case
+                .lights
+                .iter()
+                .map(|l| {
+                    if matches!(l, umbra_case::format::Light::Point(_)) {
+                        6
+                    } else {
+                        1
+                    }
+                })
+                .sum();
             catalogue.push((
                 f.clone(),
                 k,

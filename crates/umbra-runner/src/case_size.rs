@@ -25,12 +25,7 @@ impl Size {
         let g = umbra_case::tessellate(&p.case.scene);
         // Every light's map, each face (a cube's six, a cascade's layers): a case's size
         // once counted its first light's alone.
-        let faces: u64 = p
-            .case
-            .all_lights()
-            .iter()
-            .map(|l| u64::from(l.map_faces()))
-            .sum();
+        let faces: u64 = p.case.lights.iter().map(|l| u64::from(l.map_faces())).sum();
         Some(Size {
             triangles: g.triangles.len(),
             pixels: u64::from(p.case.camera.size[0]) * u64::from(p.case.camera.size[1]),

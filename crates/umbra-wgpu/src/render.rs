@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use umbra_case::fault::Fault;
 use umbra_case::format::{DepthFormat, MipSource};
-use umbra_case::{BackendError, Convention, Frame, Prepared, Technique};
+use umbra_case::{BackendError, Convention, Frame, LightRun, Prepared, Technique};
 
 use crate::shaders::UNIFORM_SIZE;
 
@@ -111,18 +111,28 @@ impl Gpu {
         self.scoped("run", || self.render_inner(run))
     }
 
-    /// One run, in stages: upload, the shadow pass (submitted and waited for), the lit pass,
-    /// readback, the frame.
+    /// One run, in stages, as the GL backend renders one (`render_with` there): the triangles
+    /// uploaded once; every light's shadow pass into its own map or its layer of one 2D array,
+    /// all in one submission; then every light's lit pass over the same targets, the later
+    /// ones added into the colour ([`Gpu::encode_added`]), each submitted and its visibility
+    /// read back on its own; every map read back. Each light's passes write their own
+    /// timestamps (queries 4k to 4k + 3), so a stage's GPU time is the sum over the lights.
     fn render_inner(&self, run: &Prepared) -> Result<Frame, BackendError> {
-        if run.light_count() > 1 {
-            return self.render_lights(run);
-        }
         let start = Instant::now();
-        let p = RunPlan::new(run, self);
-        let vbo = self.upload(&p);
-        let map = self.create_map(&p);
-        let pipelines = self.shadow_pipelines(&p);
-        let dummy_views = self.dummy_views(&p);
+        let plans: Vec<RunPlan> = run.lights.iter().map(|r| RunPlan::new(r, self)).collect();
+        let array = run.case().maps_share_array();
+        let vbo = self.upload(&run.geometry);
+        let maps: Vec<wgpu::Texture> = if array {
+            // The first light's plan sizes the array for every light's layer.
+            plans
+                .first()
+                .map(|p| self.create_map(p))
+                .into_iter()
+                .collect()
+        } else {
+            plans.iter().map(|p| self.create_map(p)).collect()
+        };
+        let map_of = |k: usize| if array { &maps[0] } else { &maps[k] };
         let timestamps = self
             .features
             .contains(wgpu::Features::TIMESTAMP_QUERY)
@@ -130,89 +140,19 @@ impl Gpu {
                 self.device.create_query_set(&wgpu::QuerySetDescriptor {
                     label: Some("passes"),
                     ty: wgpu::QueryType::Timestamp,
-                    count: 4,
+                    count: 4 * plans.len() as u32,
                 })
             });
+        let shadow: Vec<_> = plans
+            .iter()
+            .map(|p| (self.shadow_pipelines(p), self.dummy_views(p)))
+            .collect();
         let shadow_start = Instant::now();
         let mut enc = self.encoding("shadow", &vbo, timestamps.as_ref());
-        let face_buffers = self.encode_shadow(&p, &map, &pipelines, &dummy_views, &mut enc);
-        self.queue.submit([enc.encoder.finish()]);
-        self.wait()?;
-        let shadow_wall = shadow_start.elapsed();
-
-        let technique = Technique::new(run, p.fault);
-        let lit = self.lit_pipeline(&p, &technique, false);
-        let bindings = self.lit_bindings(&p, &technique, &lit, &map);
-        let targets = self.lit_targets(&p);
-        let lit_start = Instant::now();
-        let mut enc = self.encoding("lit", &vbo, timestamps.as_ref());
-        self.encode_lit(&p, &lit, &bindings, &targets, &mut enc);
-        let mut encoder = enc.encoder;
-        let stamps = timestamps.as_ref().map(|q| {
-            let resolve = self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps"),
-                size: 32,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            encoder.resolve_query_set(q, 0..4, &resolve, 0);
-            resolve
-        });
-        self.queue.submit([encoder.finish()]);
-        self.wait()?;
-        let lit_wall = lit_start.elapsed();
-
-        let out = self.read_outputs(&p, &targets)?;
-        let shadow_map = self.read_map(&p, &map)?;
-        let (shadow_pass, lit_pass, clock) = self.pass_times(stamps, shadow_wall, lit_wall)?;
-        let total = start.elapsed();
-        drop(face_buffers);
-        let [w, h] = run.camera.size;
-        Ok(Frame {
-            more_lights: Vec::new(),
-            width: w,
-            height: h,
-            color: out.color,
-            visibility: out.visibility,
-            surface: Some(out.surface),
-            shadow_map,
-            visibility_storage: self.visibility_storage(),
-            timings: umbra_case::Timings {
-                shadow_pass,
-                lit_pass,
-                readback: total.saturating_sub(shadow_wall + lit_wall),
-                total,
-                clock: Some(clock),
-            },
-        })
-    }
-
-    /// A case with several lights, as the GL backend renders one (`render_lights` there):
-    /// every light's shadow pass into its own map or its layer of one 2D array, then every
-    /// light's lit pass over the same targets, the later ones added into the colour
-    /// ([`Gpu::encode_added`]), each submitted and its visibility read back on its own. Times
-    /// are wall times (a light's passes would reuse the timestamp queries).
-    fn render_lights(&self, run: &Prepared) -> Result<Frame, BackendError> {
-        let start = Instant::now();
-        let runs: Vec<Prepared> = (0..run.light_count()).map(|k| run.for_light(k)).collect();
-        let plans: Vec<RunPlan> = runs.iter().map(|r| RunPlan::new(r, self)).collect();
-        let array = runs[0].of_lights.is_some_and(|o| o.array);
-        let vbo = self.upload(&plans[0]);
-        let maps: Vec<wgpu::Texture> = if array {
-            vec![self.create_map(&plans[0])]
-        } else {
-            plans.iter().map(|p| self.create_map(p)).collect()
-        };
-        let map_of = |k: usize| if array { &maps[0] } else { &maps[k] };
-        let shadow_start = Instant::now();
-        let mut enc = self.encoding("shadow", &vbo, None);
         // What the recorded passes reference, kept until they are submitted.
         let mut recorded = Vec::new();
-        for (k, p) in plans.iter().enumerate() {
-            let pipelines = self.shadow_pipelines(p);
-            let dummy_views = self.dummy_views(p);
-            let faces = self.encode_shadow(p, map_of(k), &pipelines, &dummy_views, &mut enc);
-            recorded.push((pipelines, dummy_views, faces));
+        for (k, (p, (pipelines, dummy_views))) in plans.iter().zip(&shadow).enumerate() {
+            recorded.push(self.encode_shadow(p, map_of(k), pipelines, dummy_views, &mut enc));
         }
         self.queue.submit([enc.encoder.finish()]);
         self.wait()?;
@@ -222,7 +162,7 @@ impl Gpu {
         let mut lit_wall = std::time::Duration::ZERO;
         let mut outputs = Vec::new();
         for (k, p) in plans.iter().enumerate() {
-            let technique = Technique::new(&runs[k], p.fault);
+            let technique = Technique::new(p.run, p.fault);
             let lit = self.lit_pipeline(p, &technique, k > 0);
             // The map light k reads: its own, unless the self-test mixes the lights up (in
             // an array the layer is the shader's, Technique::layer).
@@ -233,7 +173,7 @@ impl Gpu {
             };
             let bindings = self.lit_bindings(p, &technique, &lit, read);
             let lit_start = Instant::now();
-            let mut enc = self.encoding("lit", &vbo, None);
+            let mut enc = self.encoding("lit", &vbo, timestamps.as_ref());
             if k == 0 {
                 self.encode_lit(p, &lit, &bindings, &targets, &mut enc);
             } else {
@@ -244,47 +184,67 @@ impl Gpu {
             lit_wall += lit_start.elapsed();
             outputs.push(self.read_outputs(p, &targets)?);
         }
+        let stamps = timestamps.as_ref().map(|q| self.resolve(q));
         let mut stored = Vec::new();
         for (k, p) in plans.iter().enumerate() {
             stored.push(self.read_map(p, map_of(k))?);
         }
+        let (shadow_pass, lit_pass, clock) = self.pass_times(stamps, shadow_wall, lit_wall)?;
         let total = start.elapsed();
         let [w, h] = run.camera.size;
-        let mut last = outputs.pop().expect("two lights or more");
-        let color = std::mem::take(&mut last.color);
-        let mut planes: Vec<(Vec<f32>, Vec<u32>, Option<umbra_case::DepthMap>)> = outputs
-            .into_iter()
-            .chain([last])
-            .zip(stored)
-            .map(|(o, map)| (o.visibility, o.surface, map))
-            .collect();
-        // The first light's pass: its visibility and the surface it drew.
-        let (visibility, surface, shadow_map) = planes.remove(0);
+        // Every light added: the last pass's colour.
+        let color = outputs
+            .last_mut()
+            .map(|o| std::mem::take(&mut o.color))
+            .unwrap_or_default();
+        let mut lights =
+            outputs
+                .into_iter()
+                .zip(stored)
+                .map(|(o, shadow_map)| umbra_case::LightPlane {
+                    visibility: o.visibility,
+                    shadow_map,
+                    surface: Some(o.surface),
+                });
+        let first = lights
+            .next()
+            .ok_or_else(|| err("run", "a case without a light".to_string()))?;
         Ok(Frame {
             width: w,
             height: h,
-            // Every light added: the last pass's colour.
             color,
-            visibility,
-            surface: Some(surface),
-            shadow_map,
+            visibility: first.visibility,
+            surface: first.surface,
+            shadow_map: first.shadow_map,
             visibility_storage: self.visibility_storage(),
             timings: umbra_case::Timings {
-                shadow_pass: shadow_wall,
-                lit_pass: lit_wall,
+                shadow_pass,
+                lit_pass,
                 readback: total.saturating_sub(shadow_wall + lit_wall),
                 total,
-                clock: Some(umbra_case::Clock::CpuWall),
+                clock: Some(clock),
             },
-            more_lights: planes
-                .into_iter()
-                .map(|(visibility, surface, shadow_map)| umbra_case::LightPlane {
-                    visibility,
-                    shadow_map,
-                    surface: Some(surface),
-                })
-                .collect(),
+            more_lights: lights.collect(),
         })
+    }
+
+    /// Every light's timestamps (`q`) resolved into a buffer, in a submission of its own.
+    fn resolve(&self, q: &wgpu::QuerySet) -> wgpu::Buffer {
+        let count = q.count();
+        let resolve = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("timestamps"),
+            size: 8 * u64::from(count),
+            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("timestamps"),
+            });
+        encoder.resolve_query_set(q, 0..count, &resolve, 0);
+        self.queue.submit([encoder.finish()]);
+        resolve
     }
 
     /// How the visibility target stores values: R32Float where the adapter renders to it,
@@ -314,8 +274,8 @@ impl Gpu {
     }
 
     /// The run's vertices, interleaved as `Geometry::interleaved` lays them out.
-    fn upload(&self, p: &RunPlan) -> wgpu::Buffer {
-        let verts = p.run.geometry.interleaved();
+    fn upload(&self, geometry: &umbra_case::Geometry) -> wgpu::Buffer {
+        let verts = geometry.interleaved();
         let vbo = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("vertices"),
             size: (verts.len() * 4) as u64,
@@ -328,7 +288,7 @@ impl Gpu {
 }
 
 /// A stage's command encoder and what its passes draw with: the run's vertices and the
-/// timestamp queries (0, 1: the shadow pass; 2, 3: the lit pass).
+/// timestamp queries (light k's 4k, 4k + 1: its shadow pass; 4k + 2, 4k + 3: its lit pass).
 struct Encoding<'e> {
     vbo: &'e wgpu::Buffer,
     timestamps: Option<&'e wgpu::QuerySet>,
@@ -337,7 +297,7 @@ struct Encoding<'e> {
 
 /// What every stage of a run reads, decided once from the case and the device.
 struct RunPlan<'a> {
-    run: &'a Prepared,
+    run: &'a LightRun,
     s: &'a umbra_case::format::Shadow,
     /// A deliberate mistake, only under `cargo xtask selftest`.
     fault: Option<Fault>,
@@ -370,7 +330,7 @@ struct RunPlan<'a> {
 }
 
 impl<'a> RunPlan<'a> {
-    fn new(run: &'a Prepared, gpu: &Gpu) -> RunPlan<'a> {
+    fn new(run: &'a LightRun, gpu: &Gpu) -> RunPlan<'a> {
         let s = &run.case().shadow;
         let fault = Fault::active();
         let conv = if fault == Some(Fault::GlDepthRange) {
@@ -381,7 +341,7 @@ impl<'a> RunPlan<'a> {
         .with_order(s.depth_order);
         let format = texture_format(s.format);
         let levels = s.mipmaps.map_or(1, |m| m.levels);
-        let array = run.of_lights.filter(|o| o.array);
+        let array = Some(run.of_lights).filter(|o| o.array);
         let cube = run.light.is_cube();
         // Light k's faces (six for a cube) start at layer k · faces of the lights' array.
         let faces = run.light.views.len();

@@ -20,7 +20,7 @@ fn l_case() -> umbra_case::CasePoint {
 #[test]
 fn the_l_shaped_shadow_lands_where_the_reference_puts_it() {
     let run = Prepared::new(l_case());
-    let truth = umbra_ref::truth::ground_truth(&run);
+    let truth = umbra_ref::truth::ground_truth(&run.lights[0]);
     let mut mirrored = l_case();
     if let umbra_case::format::Object::Mesh(m) = &mut mirrored.case.scene.objects[1] {
         for p in &mut m.positions {

@@ -36,20 +36,19 @@ impl Renderer {
         program: glow::Program,
         map: glow::Texture,
         res: &mut Resources,
-    ) -> Result<(Vec<u8>, Vec<u8>), BackendError> {
+    ) -> Result<(glow::Framebuffer, Vec<u8>), BackendError> {
         self.map_sampler(p, technique, map)?;
         for &layer in res.layer_maps.iter().skip(1) {
             self.map_sampler(p, technique, layer)?;
         }
         self.lit_uniforms(p, program, map)?;
         self.bind_layers(program, &res.layer_maps)?;
-        let mut images = Vec::new();
+        let colour = res.framebuffers.len();
+        let mut vis = Vec::new();
         for pass in 0..if p.es2 { 2 } else { 1 } {
-            images.extend(self.draw_lit(p, program, map, res, pass)?);
+            vis = self.draw_lit(p, program, map, res, pass)?;
         }
-        let vis = images.pop().unwrap_or_default();
-        let color = images.pop().unwrap_or_default();
-        Ok((color, vis))
+        Ok((res.framebuffers[colour], vis))
     }
 
     /// GLES 2's cascades after the first (which is the map, on unit 0): cascade k's texture
@@ -174,7 +173,7 @@ impl Renderer {
                 light.extend_from_slice(&m.light.to_cols_array());
                 textures.push(m.texture);
             }
-            let k = run.of_lights.map_or(0, |o| o.light);
+            let k = run.of_lights.light;
             Fault::stale_texture(p.fault, &run.case().name, k, &mut textures);
             let tex: Vec<f32> = textures.iter().flat_map(|m| m.to_cols_array()).collect();
             gl.uniform_matrix_4_f32_slice(
@@ -288,8 +287,9 @@ impl Renderer {
     }
 
     /// One draw of the lit pass into its framebuffer (GL: colour and visibility as two
-    /// targets; GLES 2: pass 0 colour, pass 1 visibility) and the readback of its outputs,
-    /// rows flipped to top first.
+    /// targets; GLES 2: pass 0 colour, pass 1 visibility) and the readback of its
+    /// visibility, rows flipped to top first (empty for GLES 2's colour pass: the colour is
+    /// read once every light has been added).
     fn draw_lit(
         &self,
         p: &RunPlan,
@@ -297,13 +297,12 @@ impl Renderer {
         map: glow::Texture,
         res: &mut Resources,
         pass: usize,
-    ) -> Result<Vec<Vec<u8>>, BackendError> {
+    ) -> Result<Vec<u8>, BackendError> {
         let gl = &self.g();
         let es2 = p.es2;
         let [w, h] = p.run.camera.size;
-        let outputs = if es2 { 1 } else { 2 };
         let srgb = Fault::colour_format(p.fault, &p.run.case().camera) == ColorFormat::Srgb8Alpha8;
-        let mut images = Vec::new();
+        let mut visibility = Vec::new();
         // SAFETY: objects of the current context; completeness is checked before drawing.
         unsafe {
             let fbo = gl.create_framebuffer().map_err(|e| gl_err("lit pass", e))?;
@@ -385,17 +384,13 @@ impl Renderer {
                 gl.disable(glow::FRAMEBUFFER_SRGB);
             }
             self.check("lit pass")?;
-            for a in 0..outputs {
+            // GL: attachment 1 is the visibility; GLES 2: pass 1's one output.
+            if !es2 || pass == 1 {
                 if !es2 {
-                    gl.read_buffer(glow::COLOR_ATTACHMENT0 + a);
+                    gl.read_buffer(glow::COLOR_ATTACHMENT1);
                 }
                 let mut bytes = vec![0u8; (w * h * 4) as usize];
-                // GL: attachment 0 colour, 1 visibility; GLES 2: pass 0 colour, 1 visibility.
-                gl.tag_readback(if a + pass as u32 == 0 {
-                    Readback::Color
-                } else {
-                    Readback::Visibility
-                });
+                gl.tag_readback(Readback::Visibility);
                 gl.read_pixels(
                     0,
                     0,
@@ -405,15 +400,15 @@ impl Renderer {
                     glow::UNSIGNED_BYTE,
                     glow::PixelPackData::Slice(Some(&mut bytes)),
                 );
-                images.push(if p.is(Fault::NoYFlip) {
+                visibility = if p.is(Fault::NoYFlip) {
                     bytes
                 } else {
                     flip_rows(&bytes, (w * 4) as usize)
-                });
+                };
             }
         }
         self.check("readback")?;
-        Ok(images)
+        Ok(visibility)
     }
 }
 
@@ -491,8 +486,7 @@ impl Renderer {
         }
         self.check("lit pass (added light)")?;
         if p.es2 {
-            let mut images = self.draw_lit(p, program, map, res, 1)?;
-            return Ok(images.pop().unwrap_or_default());
+            return self.draw_lit(p, program, map, res, 1);
         }
         self.read_target(p, fbo, 1, Readback::Visibility)
     }

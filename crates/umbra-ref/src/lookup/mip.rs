@@ -200,14 +200,14 @@ mod tests {
     fn gl_run(
         case: &str,
     ) -> (
-        umbra_case::Prepared,
+        umbra_case::LightRun,
         Convention,
         Vec<crate::shadow_pass::DepthLayer>,
     ) {
         let point = umbra_case::load::load_str(case, std::path::Path::new("case.json"))
             .expect("the case")
             .remove(0);
-        let run = umbra_case::Prepared::new(point);
+        let run = umbra_case::Prepared::new(point).lights.remove(0);
         let clip = umbra_case::ClipDepth::MinusOneToOne;
         let conv = crate::convention(run.case(), clip);
         let layers = crate::judged_layers(&run, clip, Profile::GL);
@@ -300,7 +300,7 @@ mod tests {
         let mut checked = 0;
         for mut point in points() {
             point.case.shadow.bias.normal_offset = 0.3;
-            let run = umbra_case::Prepared::new(point);
+            let run = umbra_case::Prepared::new(point).lights.remove(0);
             let clip = umbra_case::ClipDepth::MinusOneToOne;
             let conv = crate::convention(run.case(), clip);
             let s = &run.case().shadow;

@@ -15,7 +15,9 @@ fn the_interval_holds_inside_the_region_of_moves() {
         let point = umbra_case::load_str(&text, std::path::Path::new("g.json"))
             .expect("a generated case is valid")
             .swap_remove(0);
-        checked += region_checks(&umbra_case::Prepared::new(point), &mut rand, 120);
+        for light in &umbra_case::Prepared::new(point).lights {
+            checked += region_checks(light, &mut rand, 120);
+        }
     }
     assert!(checked > 50_000, "{checked}");
 }
@@ -30,7 +32,9 @@ fn the_interval_holds_across_cascade_splits_and_bands() {
     let mut checked = 0;
     for name in ["blend.json", "on-split.json"] {
         for point in umbra_case::load_file(&dir.join(name)).expect("a cascade case loads") {
-            checked += region_checks(&umbra_case::Prepared::new(point), &mut rand, 400);
+            for light in &umbra_case::Prepared::new(point).lights {
+                checked += region_checks(light, &mut rand, 400);
+            }
         }
     }
     assert!(checked > 50_000, "{checked}");
@@ -45,7 +49,7 @@ fn the_interval_holds_for_castanos_taps() {
     let mut checked = 0;
     for mut case in umbra_case::generate::cases(13, 24) {
         if case
-            .all_lights()
+            .lights
             .iter()
             .any(|l| matches!(l, umbra_case::format::Light::Point(_)))
             || case.shadow.mipmaps.is_some()
@@ -57,7 +61,9 @@ fn the_interval_holds_for_castanos_taps() {
         let point = umbra_case::load_str(&text, std::path::Path::new("g.json"))
             .expect("a 2D generated case takes castano13")
             .swap_remove(0);
-        checked += region_checks(&umbra_case::Prepared::new(point), &mut rand, 120);
+        for light in &umbra_case::Prepared::new(point).lights {
+            checked += region_checks(light, &mut rand, 120);
+        }
     }
     assert!(checked > 20_000, "{checked}");
 }
@@ -107,7 +113,7 @@ fn castanos_taps_are_one_continuous_filter() {
 /// reference's value at 24 points of each region against the region's interval; returns
 /// how many values it checked.
 fn region_checks(
-    run: &umbra_case::Prepared,
+    run: &umbra_case::LightRun,
     rand: &mut impl FnMut() -> f32,
     tries: usize,
 ) -> usize {

@@ -17,7 +17,7 @@
 //! leave the first slice with 1 + (f − n)/(N·n).
 
 use glam::Vec3;
-use umbra_case::Prepared;
+use umbra_case::LightRun;
 use umbra_case::light::Projection;
 
 use super::Truth;
@@ -37,7 +37,7 @@ pub struct Aliasing {
 
 /// The perspective aliasing of `run` at the truth's judged pixels, or `None` without any
 /// (the points are found again by [`super::camera_hits`]: a cached truth keeps none).
-pub fn perspective_aliasing(run: &Prepared, truth: &Truth) -> Option<Aliasing> {
+pub fn perspective_aliasing(run: &LightRun, truth: &Truth) -> Option<Aliasing> {
     let hits = super::camera_hits(run);
     let cam = &run.camera;
     let tan_y = umbra_case::math::tan(0.5 * f64::from(cam.fov_y));

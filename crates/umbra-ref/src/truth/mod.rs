@@ -33,7 +33,7 @@ use std::time::{Duration, Instant};
 use glam::{DMat4, DVec3, DVec4};
 use rayon::prelude::*;
 use umbra_case::format::Filter;
-use umbra_case::{Convention, LightKind, Prepared};
+use umbra_case::{Convention, LightKind, LightRun};
 
 use bvh::Bvh;
 use ray::Ray;
@@ -106,7 +106,7 @@ struct Scene<'a> {
 }
 
 /// Computes the truth of `run`.
-pub fn ground_truth(run: &Prepared) -> Truth {
+pub fn ground_truth(run: &LightRun) -> Truth {
     let start = Instant::now();
     let [w, h] = run.camera.size;
     let scene = Scene::new(run);
@@ -137,7 +137,7 @@ pub fn ground_truth(run: &Prepared) -> Truth {
 /// [`ground_truth`] computes there: class, edge flag and face. A stored truth is checked
 /// against a sample of its pixels this way (the judging cache's sanity check) at the cost of
 /// those pixels' rays, not the frame's.
-pub fn truth_at(run: &Prepared, at: &[usize]) -> Vec<(Class, bool, u32)> {
+pub fn truth_at(run: &LightRun, at: &[usize]) -> Vec<(Class, bool, u32)> {
     let scene = Scene::new(run);
     at.iter()
         .map(|&i| {
@@ -148,7 +148,7 @@ pub fn truth_at(run: &Prepared, at: &[usize]) -> Vec<(Class, bool, u32)> {
 }
 
 impl<'a> Scene<'a> {
-    fn new(run: &'a Prepared) -> Scene<'a> {
+    fn new(run: &'a LightRun) -> Scene<'a> {
         let case = run.case();
         let geo = &run.geometry;
         let conv = Convention::ZERO_TO_ONE;
@@ -198,7 +198,7 @@ fn camera_ray(inv_cam: DMat4, [w, h]: [u32; 2], i: u32) -> Ray {
 /// The world point each camera pixel's centre ray hits first (`None`: background), found as
 /// the truth finds it but without its shadow rays: for measures that need where the pixels
 /// land when the truth came from the judge cache, which keeps no hit points.
-pub fn camera_hits(run: &Prepared) -> Vec<Option<DVec3>> {
+pub fn camera_hits(run: &LightRun) -> Vec<Option<DVec3>> {
     let bvh = Bvh::new(&run.geometry);
     let inv_cam = to_f64(run.camera.view_proj(Convention::ZERO_TO_ONE)).inverse();
     let [w, h] = run.camera.size;

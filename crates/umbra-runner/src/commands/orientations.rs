@@ -57,7 +57,7 @@ pub fn table(points: &[CasePoint], enough: Option<usize>) -> Vec<(Fault, Cell)> 
         let mut cell = Cell::default();
         for &i in &order {
             let point = &points[i];
-            let cube = matches!(point.case.light, umbra_case::format::Light::Point(_));
+            let cube = matches!(point.case.lights[0], umbra_case::format::Light::Point(_));
             if cube != face.is_some() {
                 continue;
             }

@@ -77,16 +77,19 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
         ColorFormat, Compare, DepthFormat, Filter, Light, Outside, Placement, ShadingModel,
     };
     let s = &c.shadow;
+    // A light's kind, cascades and colour: the first light's decide, as they always have
+    // (a fault's applicability light by light is for its place beside the fault).
+    let light = &c.lights[0];
     match fault {
         // GLES 2 compares by hand whatever the case says.
         Fault::WrongComponent => s.compare == Compare::Manual || es2,
         Fault::Repeat => s.outside != Outside::Lit,
-        Fault::NoGuard => !matches!(c.light, Light::Directional(_)) && s.guard_behind_light,
-        Fault::NoDivide => !matches!(c.light, Light::Directional(_)),
+        Fault::NoGuard => !matches!(light, Light::Directional(_)) && s.guard_behind_light,
+        Fault::NoDivide => !matches!(light, Light::Directional(_)),
         Fault::ShadowViewport => s.size != c.camera.size,
         Fault::ClampFloat => s.format == DepthFormat::Depth32f && s.compare == Compare::Hardware,
         Fault::NoClamp => s.format.is_fixed() && s.compare == Compare::Hardware,
-        Fault::QuarterTexel => !matches!(c.light, Light::Point(_)),
+        Fault::QuarterTexel => !matches!(light, Light::Point(_)),
         Fault::NormalOffsetShort => s.bias.normal_offset != 0.0,
         // A normal short of unit length between the vertices of a curved receiver, read by
         // whatever bias reads the normal.
@@ -115,22 +118,22 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
         Fault::SpecularUnshadowed => {
             c.shading.model == ShadingModel::Dimmed && c.shading.specular > 0.0
         }
-        Fault::Oriented { face, .. } => face.is_some() == matches!(c.light, Light::Point(_)),
+        Fault::Oriented { face, .. } => face.is_some() == matches!(light, Light::Point(_)),
         Fault::MipBaseOnly | Fault::MipLevelCoarse => s.mipmaps.is_some(),
         Fault::ClampIgnored => s.depth_clamp,
         Fault::ClampForced => !s.depth_clamp,
         Fault::LayerShift | Fault::CascadeByDistance => {
-            matches!(&c.light, Light::Directional(d) if d.cascades.as_ref().is_some_and(|k| k.count > 1))
+            matches!(light, Light::Directional(d) if d.cascades.as_ref().is_some_and(|k| k.count > 1))
         }
-        Fault::BlendIgnored => matches!(&c.light, Light::Directional(d)
+        Fault::BlendIgnored => matches!(light, Light::Directional(d)
             if d.cascades.as_ref().is_some_and(|k| k.count > 1 && k.blend > 0.0)),
-        Fault::BandOfRange => matches!(&c.light, Light::Directional(d)
+        Fault::BandOfRange => matches!(light, Light::Directional(d)
             if d.cascades.as_ref().is_some_and(|k| k.count > 1 && k.blend > 0.0
                 && k.blend_of == umbra_case::format::BlendOf::Far)),
         Fault::WorldOffsetsDropped => {
             s.bias.normal_offset_texels != 0.0 || s.bias.light_offset != 0.0
         }
-        Fault::LightColourIgnored => c.light.radiance() != [1.0; 3],
+        Fault::LightColourIgnored => light.radiance() != [1.0; 3],
         Fault::ClearIgnored => c.camera.clear != [0.0; 3],
         Fault::LitCullFlipped => !c.camera.cull.is_none(),
         Fault::DepthFuncSwapped => s.depth_test().inclusive(),
@@ -149,7 +152,7 @@ pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
                 Param::SlopeScale | Param::SlopeCap => b.slope.is_some(),
                 Param::NormalOffset => b.normal_offset != 0.0,
                 Param::NdotLScale | Param::NdotLMin => b.n_dot_l.is_some(),
-                Param::LookupU | Param::LookupV => !matches!(c.light, Light::Point(_)),
+                Param::LookupU | Param::LookupV => !matches!(light, Light::Point(_)),
                 Param::ShadowShiftU | Param::ShadowShiftV => true,
                 // GLES 2 compares (and so filters) in the shader whatever the case says.
                 Param::FilterWeights => {

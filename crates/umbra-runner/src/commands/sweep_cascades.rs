@@ -43,7 +43,8 @@ fn scheme_name(s: SplitScheme) -> &'static str {
 
 /// The cascade matrix of `case`, or `None` where its light has no cascades.
 pub fn matrix(case: &umbra_case::Case) -> Option<Vec<Technique>> {
-    let Light::Directional(d) = &case.light else {
+    // Cascades are a case's one light's (validation).
+    let [Light::Directional(d)] = case.lights.as_slice() else {
         return None;
     };
     let distance = d.cascades.as_ref()?.distance;

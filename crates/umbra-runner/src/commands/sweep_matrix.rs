@@ -111,7 +111,8 @@ fn lights(light: &Value) -> Vec<(String, Value)> {
 /// The technique matrix around the scene's own technique (see the module note).
 pub fn matrix(case: &umbra_case::Case) -> Vec<Technique> {
     let shadow = serde_json::to_value(&case.shadow).unwrap_or(Value::Null);
-    let light = serde_json::to_value(&case.light).unwrap_or(Value::Null);
+    // The sweep's axis is the file's `light` (the first light of several).
+    let light = serde_json::to_value(&case.lights[0]).unwrap_or(Value::Null);
     let base_size = case.shadow.size[0];
     let base_format = serde_json::to_value(case.shadow.format)
         .ok()

@@ -103,10 +103,12 @@ pub fn measure(backend: &mut dyn Backend, point: CasePoint, repeat: u32) -> Meas
     } else {
         "mixed"
     };
-    let truth = crate::judge::judge_cache::truth(&prepared);
-    let error = crate::judge::judge_cache::truth_error(&prepared, &frame, &truth);
-    let edges = umbra_compare::edges::edge_displacement(&frame, &truth);
-    let aliasing = umbra_ref::truth::aliasing::perspective_aliasing(&prepared, &truth);
+    let truths = crate::judge::judge_cache::truths(&prepared);
+    let error = crate::judge::judge_cache::truth_error(&frame, &truths);
+    // Edges and aliasing: the sweep's one light (its cases have one; of several, the first).
+    let (truth, light) = (&truths[0], &prepared.lights[0]);
+    let edges = umbra_compare::edges::edge_displacement(&frame, truth);
+    let aliasing = umbra_ref::truth::aliasing::perspective_aliasing(light, truth);
     Measurement::Done(Measured {
         clock: clock.into(),
         samples: timed.len() as u32,

@@ -65,7 +65,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use umbra_case::format::ColorFormat;
-use umbra_case::{ClipDepth, Frame, Prepared, Profile};
+use umbra_case::{ClipDepth, Frame, LightRun, Prepared, Profile};
 use umbra_ref::truth::{Class, Truth, ground_truth};
 use umbra_ref::{Judged, PixelLegal};
 
@@ -83,8 +83,8 @@ pub const SAMPLE: usize = 64;
 
 /// The truth, and the reference's judged render for one profile.
 pub struct Basis {
-    /// The exact truth.
-    pub truth: Truth,
+    /// Every light's exact truth, in the case's order.
+    pub truths: Vec<Truth>,
     /// The reference's frame and what every pixel allows.
     pub judged: Judged,
 }
@@ -204,37 +204,33 @@ pub fn prepare(root: &Path) -> PathBuf {
     dir
 }
 
-/// The exact truth of `prepared`: from the cache when the process has one, else computed.
-pub fn truth(prepared: &Prepared) -> Truth {
-    if prepared.light_count() > 1 {
-        // The first light's: the same entry as its own run's.
-        return truth(&prepared.for_light(0));
-    }
+/// Every light's exact truth, in the case's order ([`truth`]).
+pub fn truths(prepared: &Prepared) -> Vec<Truth> {
+    prepared.lights.iter().map(truth).collect()
+}
+
+/// The exact truth of one light's run: from the cache when the process has one, else
+/// computed. A case's light shares its entry with the one-light case that is the same run.
+pub fn truth(run: &LightRun) -> Truth {
     let dir = std::env::var_os(ENV).map(PathBuf::from);
     cached(
         dir.as_deref(),
         "truth",
-        key(prepared, ""),
+        key(&run.point, ""),
         write_truth,
-        |bytes, k| read_truth(bytes, k).and_then(|t| sampled(prepared, t)),
-        || ground_truth(prepared),
+        |bytes, k| read_truth(bytes, k).and_then(|t| sampled(run, t)),
+        || ground_truth(run),
     )
 }
 
 /// `frame`'s error against the truth: each light's visibility against its own run's truth
-/// (`first`, the first light's, is [`truth`]'s; the others are read or computed here),
-/// [`umbra_compare::truth_error_lights`].
-pub fn truth_error(prepared: &Prepared, frame: &Frame, first: &Truth) -> umbra_compare::TruthError {
-    if prepared.light_count() == 1 {
-        return umbra_compare::truth_error(frame, first);
-    }
-    let mut truths = vec![first.clone()];
-    truths.extend((1..prepared.light_count()).map(|k| truth(&prepared.for_light(k))));
-    umbra_compare::truth_error_lights(frame, &truths)
+/// (`truths`, [`truths`]), [`umbra_compare::truth_error_lights`].
+pub fn truth_error(frame: &Frame, truths: &[Truth]) -> umbra_compare::TruthError {
+    umbra_compare::truth_error_lights(frame, truths)
 }
 
 /// `truth` if it is the exact truth at [`SAMPLE`] pixels spread over the frame, else why not.
-fn sampled(prepared: &Prepared, truth: Truth) -> Result<Truth, String> {
+fn sampled(prepared: &LightRun, truth: Truth) -> Result<Truth, String> {
     let n = truth.class.len();
     let [w, h] = prepared.camera.size;
     if (truth.width, truth.height) != (w, h) {
@@ -283,42 +279,37 @@ fn gcd(a: usize, b: usize) -> usize {
 /// The basis of `prepared` for a backend of `profile`: from the cache when the run has one,
 /// else computed.
 pub fn basis(prepared: &Prepared, profile: Profile) -> Basis {
-    let truth = truth(prepared);
+    let truths = truths(prepared);
     let judged = judged(prepared, profile);
-    Basis { truth, judged }
+    Basis { truths, judged }
 }
 
-/// The reference's judged render of `prepared` for `profile` (its effective profile), cached
-/// like [`basis`]'s.
+/// The reference's judged render of `prepared` for `profile`: each light's run judged on its
+/// own ([`judged_light`]), the frame's colour all lights'.
 pub fn judged(prepared: &Prepared, profile: Profile) -> Judged {
-    if prepared.light_count() > 1 {
-        // Each light's run is its own entry: a case's lights share them with the one-light
-        // cases that are the same run, and the entry format stays one light's.
-        let each: Vec<Judged> = (0..prepared.light_count())
-            .map(|k| judged(&prepared.for_light(k), profile))
-            .collect();
-        let frame = umbra_ref::add_lights(
-            each.iter().map(|j| j.frame.clone()).collect(),
-            prepared.case().camera.color_format,
-        );
-        let mut each = each.into_iter();
-        let first = each.next().expect("two lights or more");
-        return Judged {
-            frame,
-            others: each.collect(),
-            ..first
-        };
-    }
+    let each = prepared
+        .lights
+        .iter()
+        .map(|light| judged_light(light, profile))
+        .collect();
+    Judged::of_lights(each, prepared.case().camera.color_format)
+}
+
+/// One light's judged run for `profile` (its effective profile), cached like [`basis`]'s:
+/// each light's run is its own entry, which a case's light shares with the one-light case
+/// that is the same run, and the entry format stays one light's.
+pub fn judged_light(prepared: &LightRun, profile: Profile) -> Judged {
     let profile = profile.effective_for(prepared.case());
     let dir = std::env::var_os(ENV).map(PathBuf::from);
     cached(
         dir.as_deref(),
         "judged",
-        key(prepared, &profile.name()),
+        key(&prepared.point, &profile.name()),
         write_judged,
         |bytes, k| read_judged(bytes, k, profile, prepared.case().camera.color_format),
         || {
-            let mut j = umbra_ref::render_judged(prepared, ClipDepth::MinusOneToOne, profile);
+            let mut j =
+                umbra_ref::explain_light(prepared, ClipDepth::MinusOneToOne, profile, None).0;
             // Only the GL 3.3 backends read their shadow map back; keep its ranges for them
             // (under their card's narrowing too).
             let uncalibrated = profile.with_calibration(Default::default());
@@ -684,8 +675,8 @@ fn store(dir: &Path, file: &Path, bytes: &[u8]) -> std::io::Result<()> {
 }
 
 /// 64-bit FNV-1a of the resolved case point and `tag` (everything an entry depends on).
-fn key(prepared: &Prepared, tag: &str) -> u64 {
-    let text = serde_json::to_string(&prepared.point.case).unwrap_or_default() + tag;
+fn key(point: &umbra_case::CasePoint, tag: &str) -> u64 {
+    let text = serde_json::to_string(&point.case).unwrap_or_default() + tag;
     text.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
         (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
     })
@@ -988,14 +979,17 @@ mod tests {
         let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../cases/basics/square-occluder.json");
         let point = umbra_case::load_file(&file).expect("case").remove(0);
-        let prepared = Prepared::new(point);
+        let prepared = Prepared::new(point).lights.remove(0);
         let profile = Profile::GLES2;
         let truth = ground_truth(&prepared);
-        let judged = umbra_ref::render_judged(&prepared, ClipDepth::MinusOneToOne, profile);
-        let (kt, kj) = (key(&prepared, ""), key(&prepared, &profile.name()));
+        let judged = umbra_ref::explain_light(&prepared, ClipDepth::MinusOneToOne, profile, None).0;
+        let (kt, kj) = (
+            key(&prepared.point, ""),
+            key(&prepared.point, &profile.name()),
+        );
         assert_ne!(
             kj,
-            key(&prepared, &Profile::GL.name()),
+            key(&prepared.point, &Profile::GL.name()),
             "the profile is part of the key"
         );
         let back = read_truth(&write_truth(&truth, kt), kt).expect("truth");
@@ -1032,9 +1026,11 @@ mod tests {
         settled_secret();
         let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../cases/basics/square-occluder.json");
-        let prepared = Prepared::new(umbra_case::load_file(&file).expect("case").remove(0));
+        let prepared = Prepared::new(umbra_case::load_file(&file).expect("case").remove(0))
+            .lights
+            .remove(0);
         let clean = ground_truth(&prepared);
-        let kt = key(&prepared, "");
+        let kt = key(&prepared.point, "");
         let good = write_truth(&clean, kt);
         let mut flipped = good.clone();
         flipped[40] ^= 0x04;

@@ -190,14 +190,16 @@ fn judging_pictures(
     j: &crate::judge::run::Judged,
     shared: Option<&Path>,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    let truth = heatmap::truth_map(&j.truth);
+    // The first light's truth, beside the frame's first light's visibility (a picture per
+    // light comes with the frame's lights as a list).
+    let truth = heatmap::truth_map(&j.truths[0]);
     png(
         dir,
         "truth.png",
         (&truth.data, truth.width, truth.height),
         shared,
     )?;
-    let error = heatmap::truth_error_map(&j.error, &j.truth);
+    let error = heatmap::truth_error_map(&j.error, &j.truths[0]);
     png(
         dir,
         "error.png",

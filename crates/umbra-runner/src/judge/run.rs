@@ -20,8 +20,8 @@ pub struct Judged {
     pub prepared: Prepared,
     /// What the backend rendered.
     pub frame: Frame,
-    /// The exact truth.
-    pub truth: Truth,
+    /// Every light's exact truth, in the case's order.
+    pub truths: Vec<Truth>,
     /// The frame's error against it.
     pub error: TruthError,
     /// Agreement with the reference (None for the reference itself).
@@ -111,9 +111,9 @@ pub fn run_point_as(
     // The truth, and the reference's judged render for this backend's profile (which also
     // judges the twins, so even the reference needs it): computed once per point and profile
     // in a conformance run.
-    let crate::judge::judge_cache::Basis { truth, judged } =
+    let crate::judge::judge_cache::Basis { truths, judged } =
         crate::judge::judge_cache::basis(&prepared, profile);
-    let error = crate::judge::judge_cache::truth_error(&prepared, &frame, &truth);
+    let error = crate::judge::judge_cache::truth_error(&frame, &truths);
     let mut problems = Vec::new();
     let mut failed = Vec::new();
     let is_ref = backend.id().0 == "ref";
@@ -187,7 +187,7 @@ pub fn run_point_as(
     Outcome::Done(Box::new(Judged {
         prepared,
         frame,
-        truth,
+        truths,
         error,
         agreement,
         pixels,
@@ -417,11 +417,10 @@ fn run_twins(
             }
             if matches!(plan.agree, TwinAgree::NoWorse | TwinAgree::Reported) {
                 // Cached like the case's own: the same twin on every backend is one truth.
-                let twin_truth = crate::judge::judge_cache::truth(&twin_prepared);
+                let twin_truths = crate::judge::judge_cache::truths(&twin_prepared);
                 m.twin_interior_error = Some(interior(&crate::judge::judge_cache::truth_error(
-                    &twin_prepared,
                     &twin,
-                    &twin_truth,
+                    &twin_truths,
                 )));
             }
             let (pair, px) = umbra_compare::reference::judge(judged, &twin);

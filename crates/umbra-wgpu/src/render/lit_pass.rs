@@ -208,7 +208,7 @@ impl Gpu {
             light.push(m.light);
             tex.push(m.texture);
         }
-        let k = run.of_lights.map_or(0, |o| o.light);
+        let k = run.of_lights.light;
         umbra_case::fault::Fault::stale_texture(p.fault, &run.case().name, k, &mut tex);
         let (pos, towards) = match run.light.kind {
             // A directional light's eye is read only by an N·L bias towards its position.
@@ -333,7 +333,7 @@ impl Gpu {
         }
     }
 
-    /// Records the lit pass (timestamps 2 and 3) into `encoder`.
+    /// Records the first light's lit pass (its timestamps, [`Encoding`]) into `encoder`.
     pub(super) fn encode_lit(
         &self,
         p: &RunPlan,
@@ -378,11 +378,7 @@ impl Gpu {
                 }),
                 stencil_ops: None,
             }),
-            timestamp_writes: timestamps.map(|q| wgpu::RenderPassTimestampWrites {
-                query_set: q,
-                beginning_of_pass_write_index: Some(2),
-                end_of_pass_write_index: Some(3),
-            }),
+            timestamp_writes: timestamps.map(|q| lit_stamps(q, p)),
             occlusion_query_set: None,
             multiview_mask: None,
         });
@@ -405,7 +401,7 @@ impl Gpu {
         targets: &LitTargets,
         enc: &mut Encoding,
     ) {
-        let vbo = enc.vbo;
+        let (vbo, timestamps) = (enc.vbo, enc.timestamps);
         let attach = |i: usize, load| {
             Some(wgpu::RenderPassColorAttachment {
                 view: &targets.views[i],
@@ -432,7 +428,7 @@ impl Gpu {
                 }),
                 stencil_ops: None,
             }),
-            timestamp_writes: None,
+            timestamp_writes: timestamps.map(|q| lit_stamps(q, p)),
             occlusion_query_set: None,
             multiview_mask: None,
         });
@@ -506,5 +502,15 @@ fn colour_format(p: &RunPlan) -> wgpu::TextureFormat {
     match Fault::colour_format(p.fault, &p.run.case().camera) {
         ColorFormat::Rgba8 => wgpu::TextureFormat::Rgba8Unorm,
         ColorFormat::Srgb8Alpha8 => wgpu::TextureFormat::Rgba8UnormSrgb,
+    }
+}
+
+/// Light k's lit pass writes queries 4k + 2 (its start) and 4k + 3 (its end).
+fn lit_stamps<'q>(q: &'q wgpu::QuerySet, p: &RunPlan) -> wgpu::RenderPassTimestampWrites<'q> {
+    let base = 4 * p.run.of_lights.light as u32;
+    wgpu::RenderPassTimestampWrites {
+        query_set: q,
+        beginning_of_pass_write_index: Some(base + 2),
+        end_of_pass_write_index: Some(base + 3),
     }
 }

@@ -121,8 +121,8 @@ impl Gpu {
         }))
     }
 
-    /// The shadow and lit passes' times: the GPU's timestamps where they were written and
-    /// fit in the wall times, else the wall times.
+    /// The shadow and lit passes' times, each summed over the lights: the GPU's timestamps
+    /// where they were written and fit in the wall times, else the wall times.
     pub(super) fn pass_times(
         &self,
         stamps: Option<wgpu::Buffer>,
@@ -132,7 +132,7 @@ impl Gpu {
         let Some(buf) = stamps else {
             return Ok((shadow_wall, lit_wall, Clock::CpuWall));
         };
-        let bytes = read_buffer(self, &buf, 32)?;
+        let bytes = read_buffer(self, &buf, buf.size())?;
         let t: Vec<u64> = bytes
             .chunks_exact(8)
             .map(|b| u64::from_ne_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]))
@@ -140,7 +140,12 @@ impl Gpu {
         let period = f64::from(self.queue.get_timestamp_period());
         let ns =
             |a: u64, b: u64| Duration::from_nanos((b.saturating_sub(a) as f64 * period) as u64);
-        let (sp, lp) = (ns(t[0], t[1]), ns(t[2], t[3]));
+        // Each light's four queries: its shadow pass's start and end, its lit pass's.
+        let (sp, lp) = t
+            .chunks_exact(4)
+            .fold((Duration::ZERO, Duration::ZERO), |(sp, lp), q| {
+                (sp + ns(q[0], q[1]), lp + ns(q[2], q[3]))
+            });
         Ok(if sp <= shadow_wall && lp <= lit_wall {
             (sp, lp, Clock::Gpu)
         } else {

@@ -200,6 +200,7 @@ impl Gpu {
         enc: &mut Encoding,
     ) -> FaceResources {
         let (vbo, timestamps, encoder) = (enc.vbo, enc.timestamps, &mut enc.encoder);
+        let base = 4 * p.run.of_lights.light as u32;
         let mut face_buffers = Vec::new();
         // Every face, and on a mipmapped map every level its source draws.
         let passes: Vec<(u32, u32)> = (0..p.faces)
@@ -257,12 +258,13 @@ impl Gpu {
                 }),
                 // The shadow pass spans all faces: stamp the start of the first, the end of
                 // the last.
+                // Light k's queries 4k and 4k + 1.
                 timestamp_writes: timestamps
                     .filter(|_| pass_index == 0 || pass_index == last_pass)
                     .map(|q| wgpu::RenderPassTimestampWrites {
                         query_set: q,
-                        beginning_of_pass_write_index: (pass_index == 0).then_some(0),
-                        end_of_pass_write_index: (pass_index == last_pass).then_some(1),
+                        beginning_of_pass_write_index: (pass_index == 0).then_some(base),
+                        end_of_pass_write_index: (pass_index == last_pass).then_some(base + 1),
                     }),
                 occlusion_query_set: None,
                 multiview_mask: None,
