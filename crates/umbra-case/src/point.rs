@@ -46,10 +46,6 @@ pub(crate) fn compact(v: &Value) -> String {
 /// written `light`, several `lights` ([`crate::format::CaseFile`]); one that gives both (as a
 /// case written back does) must give the same first light.
 pub(crate) fn parse_value(value: &Value, file: &Path, context: &str) -> Result<Case, CaseError> {
-    deserialize(value, file, context)
-}
-
-fn deserialize(value: &Value, file: &Path, context: &str) -> Result<Case, CaseError> {
     serde_path_to_error::deserialize::<_, Case>(value).map_err(|e| {
         let path = e.path().to_string();
         let path = if path == "." { String::new() } else { path };

@@ -453,8 +453,6 @@ impl Renderer {
             let p = &*p;
             let kept = reuse.get(k).copied();
             let map = self.shadow_map(p, programs, res, kept)?;
-            // Every map this run allocated is the run's, deleted with it unless kept.
-            res.maps.extend(res.shadow_map.take());
             stored.push(if p.api == Api::Gl33 && kept.is_none() {
                 Some(self.read_map(p, map)?)
             } else {
@@ -749,9 +747,8 @@ impl<'a> RunPlan<'a> {
 struct Resources {
     /// The stages' timer queries (ended if a stage failed with one active).
     timer: Option<Timer>,
-    /// The map the light's shadow pass allocated last, until the run takes it into `maps`.
-    shadow_map: Option<glow::Texture>,
-    /// Every light's map the run allocated (taken out when kept for the run's twins).
+    /// Every light's map the run allocated, deleted with it unless taken out to be kept for
+    /// the run's twins.
     maps: Vec<glow::Texture>,
     /// GLES 2's cascades, a 2D texture each, in cascade order (also in `textures`, and
     /// never kept for a twin); empty otherwise.
@@ -777,12 +774,7 @@ impl Resources {
             for r in self.renderbuffers {
                 gl.delete_renderbuffer(r);
             }
-            for t in self
-                .textures
-                .into_iter()
-                .chain(self.shadow_map)
-                .chain(self.maps)
-            {
+            for t in self.textures.into_iter().chain(self.maps) {
                 gl.delete_texture(t);
             }
             for v in self.vaos {

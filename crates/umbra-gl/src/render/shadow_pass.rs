@@ -105,7 +105,7 @@ impl Renderer {
         // SAFETY: objects of the current context.
         let map = unsafe {
             let map = gl.create_texture().map_err(|e| gl_err("shadow map", e))?;
-            res.shadow_map = Some(map);
+            res.maps.push(map);
             gl.bind_texture(target, Some(map));
             let (internal, format, ty) = if p.es2 {
                 (glow::RGBA as i32, glow::RGBA, glow::UNSIGNED_BYTE)

@@ -15,9 +15,7 @@ fn the_interval_holds_inside_the_region_of_moves() {
         let point = umbra_case::load_str(&text, std::path::Path::new("g.json"))
             .expect("a generated case is valid")
             .swap_remove(0);
-        for light in &umbra_case::Prepared::new(point).lights {
-            checked += region_checks(light, &mut rand, 120);
-        }
+        checked += every_light(point, &mut rand, 120);
     }
     assert!(checked > 50_000, "{checked}");
 }
@@ -32,9 +30,7 @@ fn the_interval_holds_across_cascade_splits_and_bands() {
     let mut checked = 0;
     for name in ["blend.json", "on-split.json"] {
         for point in umbra_case::load_file(&dir.join(name)).expect("a cascade case loads") {
-            for light in &umbra_case::Prepared::new(point).lights {
-                checked += region_checks(light, &mut rand, 400);
-            }
+            checked += every_light(point, &mut rand, 400);
         }
     }
     assert!(checked > 50_000, "{checked}");
@@ -61,9 +57,7 @@ fn the_interval_holds_for_castanos_taps() {
         let point = umbra_case::load_str(&text, std::path::Path::new("g.json"))
             .expect("a 2D generated case takes castano13")
             .swap_remove(0);
-        for light in &umbra_case::Prepared::new(point).lights {
-            checked += region_checks(light, &mut rand, 120);
-        }
+        checked += every_light(point, &mut rand, 120);
     }
     assert!(checked > 20_000, "{checked}");
 }
@@ -112,6 +106,19 @@ fn castanos_taps_are_one_continuous_filter() {
 /// Judges `tries` random surface points of `run` with snapping-like moves and checks the
 /// reference's value at 24 points of each region against the region's interval; returns
 /// how many values it checked.
+/// [`region_checks`] on every light's run of `point`.
+fn every_light(
+    point: umbra_case::CasePoint,
+    rand: &mut impl FnMut() -> f32,
+    tries: usize,
+) -> usize {
+    let run = umbra_case::Prepared::new(point);
+    run.lights
+        .iter()
+        .map(|l| region_checks(l, rand, tries))
+        .sum()
+}
+
 fn region_checks(
     run: &umbra_case::LightRun,
     rand: &mut impl FnMut() -> f32,
