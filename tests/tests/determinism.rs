@@ -29,12 +29,18 @@ fn frames_and_truth_are_identical_on_1_and_3_threads() {
         // Bitwise, NaN background included.
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(
-            bits(&one.visibility),
-            bits(&three.visibility),
+            bits(&one.lights[0].visibility),
+            bits(&three.lights[0].visibility),
             "{case}: visibility"
         );
-        assert_eq!(one.surface, three.surface, "{case}: surface ids");
-        assert_eq!(one.shadow_map, three.shadow_map, "{case}: shadow map");
+        assert_eq!(
+            one.lights[0].surface, three.lights[0].surface,
+            "{case}: surface ids"
+        );
+        assert_eq!(
+            one.lights[0].shadow_map, three.lights[0].shadow_map,
+            "{case}: shadow map"
+        );
         let t1 = in_pool(1, || umbra_ref::truth::ground_truth(&run.lights[0]));
         let t3 = in_pool(3, || umbra_ref::truth::ground_truth(&run.lights[0]));
         assert_eq!((t1.class, t1.edge), (t3.class, t3.edge), "{case}: truth");
@@ -74,8 +80,8 @@ fn the_batched_frame_is_the_per_pixel_frame() {
             let judged = umbra_ref::render_judged(&run, clip, profile).frame;
             assert_eq!(plain.color, judged.color, "{id} {clip:?}: colour");
             assert_eq!(
-                bits(&plain.visibility),
-                bits(&judged.visibility),
+                bits(&plain.lights[0].visibility),
+                bits(&judged.lights[0].visibility),
                 "{id} {clip:?}: visibility"
             );
         }

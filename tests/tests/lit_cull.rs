@@ -36,7 +36,10 @@ fn culled_faces_show_nowhere_and_reference_and_truth_agree() {
         let truth = umbra_ref::truth::ground_truth(&run.lights[0]);
         let by_ref = objects_shown(
             &run,
-            frame.surface.as_deref().expect("the reference's faces"),
+            frame.lights[0]
+                .surface
+                .as_deref()
+                .expect("the reference's faces"),
         );
         let by_truth = objects_shown(&run, &truth.face);
         let n = by_ref.len();

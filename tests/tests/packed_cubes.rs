@@ -89,14 +89,14 @@ fn no_light_leaks_between_the_cubes_in_truth_or_reference() {
             }
             if depth_inside > 2.0 * texel {
                 assert!(
-                    umbra_compare::is_shadowed(frame.visibility[i]),
+                    umbra_compare::is_shadowed(frame.lights[0].visibility[i]),
                     "{id}: the reference leaks light at ({:.4}, {:.4})",
                     p.x,
                     p.z
                 );
             }
         }
-        let e = umbra_compare::truth_error(&frame, &truth);
+        let e = umbra_compare::truth_error(frame.light(0).expect("a light"), &truth);
         assert_eq!(
             e.away_from_edges.false_light, 0,
             "{id}: false light away from edges"

@@ -22,7 +22,7 @@ fn reference_and_truth_shadow_the_analytic_square() {
         let p = truth.point[i];
         assert!(p.y.abs() < 1e-9, "the camera sees only the floor here");
         let (ax, az) = (p.x.abs(), p.z.abs());
-        let ref_shadowed = umbra_compare::is_shadowed(frame.visibility[i]);
+        let ref_shadowed = umbra_compare::is_shadowed(frame.lights[0].visibility[i]);
         let truth_shadowed = truth.class[i] == Class::Shadowed;
         ref_area += u64::from(ref_shadowed);
         truth_area += u64::from(truth_shadowed);
@@ -62,7 +62,7 @@ fn reference_and_truth_shadow_the_analytic_square() {
         inside > 1000 && outside > 10000,
         "the test must judge real areas ({inside} inside, {outside} outside)"
     );
-    let e = umbra_compare::truth_error(&frame, &truth);
+    let e = umbra_compare::truth_error(frame.light(0).expect("a light"), &truth);
     assert_eq!(
         (
             e.away_from_edges.false_shadow,

@@ -18,7 +18,11 @@ fn assert_same_shadows(base: CasePoint, change: impl Fn(&mut umbra_case::Case), 
     let fa = umbra_ref::render(&a, ClipDepth::MinusOneToOne);
     let fb = umbra_ref::render(&b, ClipDepth::MinusOneToOne);
     let truth = umbra_ref::truth::ground_truth(&a.lights[0]);
-    let g = umbra_compare::agreement(&fa, &fb, 0);
+    let g = umbra_compare::agreement(
+        fa.light(0).expect("a light"),
+        fb.light(0).expect("a light"),
+        0,
+    );
     for (i, bad) in g.disagrees.iter().enumerate() {
         assert!(
             !*bad || truth.edge[i] || !truth.judged(i),
@@ -91,7 +95,7 @@ fn a_point_light_shadows_in_every_direction() {
     let run = Prepared::new(pts.remove(0));
     assert_eq!(run.lights[0].light.views.len(), 6);
     let frame = umbra_ref::render(&run, ClipDepth::MinusOneToOne);
-    let map = frame.shadow_map.as_ref().expect("depth map");
+    let map = frame.lights[0].shadow_map.as_ref().expect("depth map");
     assert_eq!(map.layers, 6);
     // Every face but +y sees the floor or a box, so it holds something nearer than the clear.
     let face = (map.width * map.height) as usize;
@@ -104,7 +108,7 @@ fn a_point_light_shadows_in_every_direction() {
         );
     }
     let truth = umbra_ref::truth::ground_truth(&run.lights[0]);
-    let e = umbra_compare::truth_error(&frame, &truth);
+    let e = umbra_compare::truth_error(frame.light(0).expect("a light"), &truth);
     println!("all {:?}, away from edges {:?}", e.all, e.away_from_edges);
     assert!(e.truth_shadowed > 2000, "four long shadows must be in view");
     assert_eq!(e.away_from_edges.false_light, 0, "leaks away from edges");
@@ -118,7 +122,10 @@ fn front_face_culling_keeps_closed_casters_shadows() {
     culled.case.shadow.cull = Cull::Front;
     let run = Prepared::new(culled);
     let frame = umbra_ref::render(&run, ClipDepth::MinusOneToOne);
-    let e = umbra_compare::truth_error(&frame, &umbra_ref::truth::ground_truth(&run.lights[0]));
+    let e = umbra_compare::truth_error(
+        frame.light(0).expect("a light"),
+        &umbra_ref::truth::ground_truth(&run.lights[0]),
+    );
     // The floor is single-sided and faces the light, so culling front faces removes it from
     // the map: the floor reads lit wherever no box is in front, which is the truth there.
     assert_eq!(e.away_from_edges.false_light, 0, "{:?}", e.away_from_edges);

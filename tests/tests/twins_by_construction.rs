@@ -20,8 +20,8 @@ fn the_reference_ignores_exactly_the_attachments_it_claims_to() {
     let b = umbra_ref::render(&Prepared::new(with_color.clone()), ClipDepth::MinusOneToOne);
     let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     assert_eq!(a.color, b.color);
-    assert_eq!(bits(&a.visibility), bits(&b.visibility));
-    assert_eq!(a.shadow_map, b.shadow_map);
+    assert_eq!(bits(&a.lights[0].visibility), bits(&b.lights[0].visibility));
+    assert_eq!(a.lights[0].shadow_map, b.lights[0].shadow_map);
 
     // Anything else it reads is not covered by the claim.
     let mut other = with_color.clone();

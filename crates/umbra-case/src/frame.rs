@@ -13,67 +13,82 @@ pub struct Frame {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    /// Shaded colour, RGBA8, top row first.
+    /// Shaded colour, every light's pass added, RGBA8, top row first.
     pub color: Vec<u8>,
-    /// The shadow term per pixel, 1 lit .. 0 shadowed; NaN where no surface covers the pixel.
-    pub visibility: Vec<f32>,
-    /// Per pixel: the covering triangle's face id + 1 (0 = background), where the backend can
-    /// write it; the judge uses it to find silhouettes.
-    pub surface: Option<Vec<u32>>,
-    /// The shadow map as stored, where the backend can read it back.
-    pub shadow_map: Option<DepthMap>,
+    /// Every light's own outputs, in the case's order: one light's frame has one.
+    pub lights: Vec<LightPlane>,
     /// How the visibility values were stored before they were read back (the judge widens
     /// the legal values by that storage's rounding).
     pub visibility_storage: VisibilityStorage,
-    /// Where the time went.
+    /// Where the time went (every light's passes).
     pub timings: Timings,
-    /// A case with several lights: what each light after the first wrote (its visibility,
-    /// its map); `visibility` and `shadow_map` above are the first light's. Empty otherwise.
-    pub more_lights: Vec<LightPlane>,
 }
 
-/// One light's own outputs in a frame of several lights.
+/// One light's own outputs in a frame ([`Frame::lights`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LightPlane {
-    /// The light's shadow term per pixel, as [`Frame::visibility`].
+    /// The light's shadow term per pixel, 1 lit .. 0 shadowed; NaN where no surface covers
+    /// the pixel.
     pub visibility: Vec<f32>,
-    /// The light's map as stored, where the backend reads it back.
+    /// The light's shadow map as stored, where the backend reads it back.
     pub shadow_map: Option<DepthMap>,
-    /// The surface id per pixel as the light's own pass drew it (as [`Frame::surface`]):
-    /// a later light's pass redraws the depth, and on an exact tie of two surfaces may show
-    /// the other one (soak-43-398), so each light's answer is judged on its own surface.
+    /// Per pixel: the covering triangle's face id + 1 (0 = background) as the light's own
+    /// pass drew it, where the backend can write it; the judge uses it to find silhouettes.
+    /// Each light's is its own: a later light's pass redraws the depth, and on an exact tie
+    /// of two surfaces may show the other one (soak-43-398).
     pub surface: Option<Vec<u32>>,
 }
 
+/// One light's view of a frame ([`Frame::light`]): the frame's size and storage, that light's
+/// visibility, map and surfaces. What the judge reads of a light, whatever the count.
+#[derive(Clone, Copy, Debug)]
+pub struct LightFrame<'a> {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// The light's shadow term per pixel ([`LightPlane::visibility`]).
+    pub visibility: &'a [f32],
+    /// The light's map as stored, where the backend reads it back.
+    pub shadow_map: Option<&'a DepthMap>,
+    /// The surface id per pixel as the light's pass drew it ([`LightPlane::surface`]).
+    pub surface: Option<&'a [u32]>,
+    /// How the visibility values were stored ([`Frame::visibility_storage`]).
+    pub visibility_storage: VisibilityStorage,
+}
+
 impl Frame {
-    /// How many lights wrote the frame.
-    pub fn light_count(&self) -> usize {
-        1 + self.more_lights.len()
+    /// Light `k`'s view; `None` where the frame has no plane for it (a backend that wrote
+    /// fewer planes than the case has lights).
+    pub fn light(&self, k: usize) -> Option<LightFrame<'_>> {
+        self.lights.get(k).map(|p| LightFrame {
+            width: self.width,
+            height: self.height,
+            visibility: &p.visibility,
+            shadow_map: p.shadow_map.as_ref(),
+            surface: p.surface.as_deref(),
+            visibility_storage: self.visibility_storage,
+        })
     }
 
-    /// The frame as light `k` alone shows it: its visibility and map in place of the first
-    /// light's (the colour stays the sum of all lights); light 0 is the frame itself.
-    pub fn for_light(&self, k: usize) -> Frame {
-        let mut f = Frame {
-            more_lights: Vec::new(),
-            ..self.clone()
-        };
-        if k > 0 {
-            let plane = &self.more_lights[k - 1];
-            f.visibility = plane.visibility.clone();
-            f.shadow_map = plane.shadow_map.clone();
-            if plane.surface.is_some() {
-                f.surface = plane.surface.clone();
-            }
-        }
-        f
+    /// Every light's view, in the case's order.
+    pub fn each_light(&self) -> impl Iterator<Item = LightFrame<'_>> {
+        (0..self.lights.len()).filter_map(|k| self.light(k))
     }
 
+    /// Whether pixel `i` (row-major, top row first) shows a surface in any light's pass
+    /// ([`LightFrame::covered`]; every pass draws the same triangles).
+    pub fn covered(&self, i: usize) -> bool {
+        self.each_light().any(|l| l.covered(i))
+    }
+}
+
+impl LightFrame<'_> {
     /// Whether pixel `i` (row-major, top row first) shows a surface: its surface id where the
     /// frame has them (so that a NaN visibility on a covered pixel is seen as what it is),
     /// else a visibility that is a number.
     pub fn covered(&self, i: usize) -> bool {
-        match &self.surface {
+        match self.surface {
             Some(s) => s[i] != 0,
             None => !self.visibility[i].is_nan(),
         }

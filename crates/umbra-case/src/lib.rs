@@ -58,7 +58,7 @@ pub use calibration::Calibration;
 pub use conventions::{ClipDepth, Convention, LookupMatrices, ShadowCoord};
 pub use error::{CaseError, CaseErrors};
 pub use format::Case;
-pub use frame::{Clock, DepthMap, Frame, LightPlane, Timings, VisibilityStorage};
+pub use frame::{Clock, DepthMap, Frame, LightFrame, LightPlane, Timings, VisibilityStorage};
 pub use light::{LightKind, LightSetup};
 pub use load::{CasePoint, case_files, get_path, load_file, load_str};
 pub use prepare::{LightRun, OfLights, Prepared};

@@ -35,14 +35,17 @@ pub const BYTES_PER_PIXEL: u64 = 240;
 pub const BYTES_PER_TEXEL: u64 = 80;
 /// Bytes per texel of every light's map but the largest, in a case with several lights: what
 /// a judged run keeps of each light while the others are judged (the backend's map, the
-/// reference's map and its intervals). Measured by `VmHWM` on 256² frames with 2 and 4 lights,
-/// separate and in one array (2 cores, Mesa 22.3.6): point lights at 1024² (six faces) add
-/// 27–30 bytes a texel each after the first on ref, 27–33 on gl33/llvmpipe, 18–21 on
-/// wgpu-vk/lavapipe; spot lights at 4096² 16, 21 and 12; 36 covers the most with a tenth to
-/// spare (`estimate_bounds_measured_peaks` in umbra-runner re-measures). Counting the first light alone
-/// once estimated 1, 2 and 4 point lights at the same 641 MiB, and four 4096² spot lights at
+/// reference's map and its intervals). Measured by `VmHWM` on 256² frames with 1, 2 and 4
+/// lights, point lights at 1024² (six faces, a cube array) and spot lights at 2048² (one
+/// array), 2 cores, Mesa 22.3.6, `umbra render --backend B`: each light after the first adds
+/// 21.0–21.2 bytes a texel on ref, 18.2–21.1 on gl33/llvmpipe and 15.9–21.2 on
+/// wgpu-vk/lavapipe (points); 17.5–18, 20.3–21.6 and 11.8–16.5 (spots). 24 covers the most
+/// with a tenth to spare (`estimate_bounds_measured_peaks` in umbra-runner re-measures). It
+/// was 36 while the judge cloned every light's reference frame to add their colours (ref's
+/// four point lights peaked at 730 MiB, now 575). Counting the first light alone once
+/// estimated 1, 2 and 4 point lights at the same 641 MiB, and four 4096² spot lights at
 /// 1.4 GiB where they peaked at 2.1 GiB.
-pub const BYTES_PER_KEPT_TEXEL: u64 = 36;
+pub const BYTES_PER_KEPT_TEXEL: u64 = 24;
 /// Bytes per drawn triangle (geometry, its f64 copy for the truth, the acceleration grid).
 pub const BYTES_PER_TRIANGLE: u64 = 2_000;
 /// What a worker holds before any case: the process, the driver, the compiled shaders.

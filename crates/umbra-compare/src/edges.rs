@@ -7,7 +7,7 @@
 //! shows as a large mean (speckle far from any true edge), aliasing as a mean of a pixel or
 //! two, peter-panning as a mean near the detachment width.
 
-use umbra_case::Frame;
+use umbra_case::LightFrame;
 use umbra_ref::truth::{Class, Truth};
 
 use crate::is_shadowed;
@@ -27,7 +27,7 @@ pub struct EdgeDisplacement {
 }
 
 /// Measures `frame`'s shadow edges against `truth`'s (same size).
-pub fn edge_displacement(frame: &Frame, truth: &Truth) -> EdgeDisplacement {
+pub fn edge_displacement(frame: LightFrame, truth: &Truth) -> EdgeDisplacement {
     let (w, h) = (truth.width as usize, truth.height as usize);
     let judged = |i: usize| matches!(truth.class[i], Class::Lit | Class::Shadowed);
     let truly = |i: usize| truth.class[i] == Class::Shadowed;

@@ -19,7 +19,7 @@ pub mod reference;
 pub mod ssim;
 
 use serde::Serialize;
-use umbra_case::Frame;
+use umbra_case::{Frame, LightFrame};
 use umbra_ref::truth::{Class, Truth};
 
 /// Visibility below this reads as shadowed.
@@ -105,13 +105,27 @@ pub struct TruthError {
 }
 
 /// Judges every light of `frame` against its own truth (`truths`, light by light, each light's
-/// run's in [`umbra_case::Prepared::lights`]): the counts add up over
-/// the lights (a pixel lit by two lights is judged twice, once per light's shadow), the
-/// verdicts are the first light's.
+/// run's in [`umbra_case::Prepared::lights`]): the counts add up over the lights (a pixel lit
+/// by two lights is judged twice, once per light's shadow); the verdicts (pictures) are the
+/// first light's. A light the frame has no plane for counts every covered pixel as judged
+/// and neither lit nor shadowed correctly (NaN).
 pub fn truth_error_lights(frame: &Frame, truths: &[Truth]) -> TruthError {
-    let mut e = truth_error(&frame.for_light(0), &truths[0]);
-    for (k, t) in truths.iter().enumerate().skip(1) {
-        let o = truth_error(&frame.for_light(k), t);
+    let missing = vec![f32::NAN; (frame.width * frame.height) as usize];
+    let mut each = truths.iter().enumerate().map(|(k, t)| {
+        let light = frame.light(k).unwrap_or(LightFrame {
+            visibility: &missing,
+            shadow_map: None,
+            surface: None,
+            width: frame.width,
+            height: frame.height,
+            visibility_storage: frame.visibility_storage,
+        });
+        truth_error(light, t)
+    });
+    let Some(mut e) = each.next() else {
+        return TruthError::default();
+    };
+    for o in each {
         for (a, b) in [
             (&mut e.all, o.all),
             (&mut e.away_from_edges, o.away_from_edges),
@@ -137,7 +151,7 @@ pub fn truth_error_lights(frame: &Frame, truths: &[Truth]) -> TruthError {
 /// (or is covered in one and not the other) is excluded. Without face ids, any pixel whose
 /// 8-neighbourhood in the truth shows another face is excluded instead (rasterization and ray
 /// differ by less than a pixel, so they can only disagree there).
-pub fn truth_error(frame: &Frame, truth: &Truth) -> TruthError {
+pub fn truth_error(frame: LightFrame, truth: &Truth) -> TruthError {
     assert_eq!(
         (frame.width, frame.height),
         (truth.width, truth.height),
@@ -250,18 +264,18 @@ impl Agreement {
     }
 }
 
-/// Compares the shadow masks of `a` and `b` (same size). A disagreeing pixel is explained by a
-/// shift when the other frame gives the same answer somewhere within `radius` pixels
-/// (Chebyshev distance); radius 0 counts every disagreement.
-pub fn agreement(a: &Frame, b: &Frame, radius: u32) -> Agreement {
+/// Compares the shadow masks of one light in `a` and `b` (same size). A disagreeing pixel is
+/// explained by a shift when the other frame gives the same answer somewhere within `radius`
+/// pixels (Chebyshev distance); radius 0 counts every disagreement.
+pub fn agreement(a: LightFrame, b: LightFrame, radius: u32) -> Agreement {
     assert_eq!(
         (a.width, a.height),
         (b.width, b.height),
         "frame sizes differ"
     );
     let (w, h) = (a.width as usize, a.height as usize);
-    let mask = |f: &Frame, i: usize| f.covered(i) && is_shadowed(f.visibility[i]);
-    let near = |f: &Frame, x: usize, y: usize, want: bool| {
+    let mask = |f: LightFrame, i: usize| f.covered(i) && is_shadowed(f.visibility[i]);
+    let near = |f: LightFrame, x: usize, y: usize, want: bool| {
         let r = radius as usize;
         (y.saturating_sub(r)..=(y + r).min(h - 1)).any(|ny| {
             (x.saturating_sub(r)..=(x + r).min(w - 1))
@@ -332,13 +346,14 @@ mod tests {
     fn frame(vis: Vec<f32>, w: u32) -> Frame {
         let h = vis.len() as u32 / w;
         Frame {
-            more_lights: Vec::new(),
             width: w,
             height: h,
             color: vec![0; vis.len() * 4],
-            visibility: vis,
-            surface: None,
-            shadow_map: None,
+            lights: vec![umbra_case::LightPlane {
+                visibility: vis,
+                surface: None,
+                shadow_map: None,
+            }],
             visibility_storage: Default::default(),
             timings: Timings::default(),
         }
@@ -362,7 +377,8 @@ mod tests {
             ],
             6,
         );
-        let strict = agreement(&a, &b, 0);
+        let (a, b) = (a.light(0).expect("a light"), b.light(0).expect("a light"));
+        let strict = agreement(a, b, 0);
         assert_eq!((strict.compared, strict.coverage_differs), (17, 1));
         assert_eq!(
             (
@@ -372,7 +388,7 @@ mod tests {
             ),
             (2, 0, 0)
         );
-        let shifted = agreement(&a, &b, 1);
+        let shifted = agreement(a, b, 1);
         // Pixel 1 has a shadowed neighbour in b and a lit neighbour in a: a shift explains it.
         // Pixel 17 has no shadowed pixel of b within one pixel: a real disagreement.
         assert_eq!((shifted.within_radius, shifted.only_a_shadowed), (1, 1));

@@ -24,10 +24,10 @@
 //! not exempt: the case's outside policy defines their answer.
 
 use serde::{Deserialize, Serialize};
-use umbra_case::Frame;
 use umbra_case::format::ColorFormat;
-use umbra_ref::Judged;
+use umbra_case::{Frame, LightFrame};
 use umbra_ref::lookup::ambiguity;
+use umbra_ref::{Judged, JudgedLight};
 
 use crate::consensus::Failed;
 use crate::is_shadowed;
@@ -257,20 +257,35 @@ pub fn value_ok(v: f32, lo: f32, hi: f32, quantum: f32, eps: f32) -> bool {
 /// Judges `frame` against the judged reference `basis` (same size, the backend's profile).
 /// Returns the counts and each pixel's judgement.
 ///
-/// A case with several lights: each light's visibility and map are judged against that
-/// light's run ([`Judged::for_light`]) as a one-light frame's are, the counts added up over
-/// the lights (a pixel is compared once per light); a pixel's judgement is the worst of its
-/// lights'. Its colour, the sum of the lights' passes, is checked once against all of them
-/// ([`colour_ok_lights`]); the background against the clear colour, once.
+/// Each light's visibility and map are judged against that light's run
+/// ([`Judged::lights`]), the counts added up over the lights (a pixel is compared once per
+/// light); a pixel's judgement is the worst of its lights'. Its colour, the sum of the
+/// lights' passes, is checked once against all of them ([`colour_ok_lights`]); the background
+/// against the clear colour, once.
 pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement>) {
-    if basis.light_count() == 1 && frame.light_count() == 1 {
-        return judge_light(basis, frame, true);
-    }
-    let lights = basis.light_count();
-    let frames: Vec<Frame> = (0..lights).map(|k| light_frame(frame, k)).collect();
-    let (mut r, mut px) = judge_light(basis, &frames[0], false);
-    for (k, f) in frames.iter().enumerate().skip(1) {
-        let (rk, pk) = judge_light(basis.for_light(k), f, false);
+    assert_eq!(
+        (basis.frame.width, basis.frame.height),
+        (frame.width, frame.height),
+        "frame and reference sizes differ"
+    );
+    let n = (frame.width * frame.height) as usize;
+    let missing = vec![f32::NAN; n];
+    let lights: Vec<(LightFrame, LightFrame, &JudgedLight)> = basis
+        .lights
+        .iter()
+        .enumerate()
+        .map(|(k, l)| {
+            (
+                light_of(&basis.frame, k, &missing),
+                light_of(frame, k, &missing),
+                l,
+            )
+        })
+        .collect();
+    let mut r = RefAgreement::default();
+    let mut px = vec![PixelJudgement::NotCompared; n];
+    for &(reference, f, light) in &lights {
+        let (rk, pk) = judge_light(reference, light, f);
         r.absorb(&rk);
         for (a, b) in px.iter_mut().zip(pk) {
             if b.rank() > a.rank() {
@@ -280,28 +295,47 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
     }
     let eps = frame.visibility_storage.tolerance();
     for (i, j) in px.iter_mut().enumerate() {
-        // As for one light: a colour is checked where both frames show the same surface, in
-        // every light's pass (a later pass may show the other surface of an exact tie).
-        let same_surface = frames
-            .iter()
-            .all(|f| match (&basis.frame.surface, &f.surface) {
-                (Some(a), Some(b)) => a[i] == b[i],
-                _ => true,
-            });
-        if !frame.covered(i) || !basis.frame.covered(i) || !same_surface {
+        let rgb = &frame.color[i * 4..i * 4 + 3];
+        let (ref_cov, b_cov) = (basis.frame.covered(i), frame.covered(i));
+        if !ref_cov && !b_cov {
+            // The background: the clear colour (`camera.clear`), the only thing a backend
+            // writes there (a clear value converted as any colour is: either code of a value
+            // halfway between two; in an sRGB target encoded, or on desktop GL and GLES 2
+            // possibly not: Profile::srgb_clear_may_be_unencoded). The clear colour is the
+            // first light's pass's, whose terms hold the ambient one.
+            r.colour_checked += 1;
+            let clear = &basis.lights[0].legal[i];
+            let cleared = |format| colour_ok(rgb, 0.0, 0.0, clear, format);
+            if !(cleared(basis.color_format)
+                || (basis.profile.srgb_clear_may_be_unencoded() && cleared(ColorFormat::Rgba8)))
+            {
+                r.illegal_colour += 1;
+                r.illegal += 1;
+                *j = PixelJudgement::Illegal;
+            }
             continue;
         }
-        let lights: Vec<(f32, &umbra_ref::PixelLegal)> = frames
+        // A colour is checked where both frames show the same surface, in every light's pass
+        // (a later pass may show the other surface of an exact tie).
+        let same_surface =
+            lights
+                .iter()
+                .all(|(reference, f, _)| match (reference.surface, f.surface) {
+                    (Some(a), Some(b)) => a[i] == b[i],
+                    _ => true,
+                });
+        if !ref_cov || !b_cov || !same_surface {
+            continue;
+        }
+        let values: Vec<(f32, &umbra_ref::PixelLegal)> = lights
             .iter()
-            .enumerate()
-            .map(|(k, f)| (f.visibility[i], &basis.for_light(k).legal[i]))
+            .map(|(_, f, l)| (f.visibility[i], &l.legal[i]))
             .collect();
-        if lights.iter().any(|(v, _)| v.is_nan()) {
+        if values.iter().any(|(v, _)| v.is_nan()) {
             continue;
         }
         r.colour_checked += 1;
-        let rgb = &frame.color[i * 4..i * 4 + 3];
-        if !colour_ok_lights(rgb, &lights, eps, basis.color_format) {
+        if !colour_ok_lights(rgb, &values, eps, basis.color_format) {
             r.illegal_colour += 1;
             if *j != PixelJudgement::Illegal {
                 r.illegal += 1;
@@ -312,58 +346,42 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
     (r, px)
 }
 
-/// Light `k` of `frame` as a one-light frame; a light the frame lacks (a backend that wrote
-/// fewer planes than the case has lights) reads NaN everywhere, which the judge finds illegal.
-fn light_frame(frame: &Frame, k: usize) -> Frame {
-    if k < frame.light_count() {
-        return frame.for_light(k);
-    }
-    let mut f = frame.for_light(0);
-    f.visibility = vec![f32::NAN; f.visibility.len()];
-    f.shadow_map = None;
-    f
+/// Light `k` of `frame`; a light the frame lacks (a backend that wrote fewer planes than the
+/// case has lights) reads `missing` (NaN everywhere, which the judge finds illegal) on the
+/// surfaces another light's pass drew.
+pub fn light_of<'a>(frame: &'a Frame, k: usize, missing: &'a [f32]) -> LightFrame<'a> {
+    frame.light(k).unwrap_or(LightFrame {
+        width: frame.width,
+        height: frame.height,
+        visibility: missing,
+        shadow_map: None,
+        surface: frame.lights.iter().find_map(|p| p.surface.as_deref()),
+        visibility_storage: frame.visibility_storage,
+    })
 }
 
-/// [`judge`] for one light: with `colour`, its colour (covered pixels and background) too.
-fn judge_light(basis: &Judged, frame: &Frame, colour: bool) -> (RefAgreement, Vec<PixelJudgement>) {
-    let reference = &basis.frame;
-    assert_eq!(
-        (reference.width, reference.height),
-        (frame.width, frame.height),
-        "frame and reference sizes differ"
-    );
+/// [`judge`] for one light: its visibility (against `light`'s intervals, on the surfaces
+/// `reference`'s pass drew) and its map; colours are [`judge`]'s.
+fn judge_light(
+    reference: LightFrame,
+    light: &JudgedLight,
+    frame: LightFrame,
+) -> (RefAgreement, Vec<PixelJudgement>) {
     let n = (frame.width * frame.height) as usize;
     let eps = frame.visibility_storage.tolerance();
-    let q = basis.quantum;
+    let q = light.quantum;
     let mut r = RefAgreement::default();
     let mut px = vec![PixelJudgement::NotCompared; n];
-    let surface_of = |f: &Frame, i: usize| f.surface.as_ref().map(|s| s[i]);
+    let surface_of = |f: LightFrame, i: usize| f.surface.map(|s| s[i]);
     // Pixels are visited by index: each reads five parallel arrays of two frames.
     #[allow(clippy::needless_range_loop)]
     for i in 0..n {
         let (ref_cov, b_cov) = (reference.covered(i), frame.covered(i));
-        if !ref_cov && !b_cov && !colour {
-            continue;
-        }
         if !ref_cov && !b_cov {
-            // The background: the clear colour (`camera.clear`), the only thing a backend
-            // writes there (a clear value converted as any colour is: either code of a value
-            // halfway between two; in an sRGB target encoded, or on desktop GL and GLES 2
-            // possibly not: Profile::srgb_clear_may_be_unencoded).
-            r.colour_checked += 1;
-            let rgb = &frame.color[i * 4..i * 4 + 3];
-            let cleared = |format| colour_ok(rgb, 0.0, 0.0, &basis.legal[i], format);
-            if !(cleared(basis.color_format)
-                || (basis.profile.srgb_clear_may_be_unencoded() && cleared(ColorFormat::Rgba8)))
-            {
-                r.illegal_colour += 1;
-                r.illegal += 1;
-                px[i] = PixelJudgement::Illegal;
-            }
             continue;
         }
         r.compared += 1;
-        let l = basis.legal[i];
+        let l = light.legal[i];
         let v = frame.visibility[i];
         if b_cov && v.is_nan() {
             r.illegal_nan += 1;
@@ -427,26 +445,9 @@ fn judge_light(basis: &Judged, frame: &Frame, colour: bool) -> (RefAgreement, Ve
                 (false, false) => PixelJudgement::Agrees,
             };
         }
-        if !colour {
-            continue;
-        }
-        r.colour_checked += 1;
-        if !colour_ok(
-            &frame.color[i * 4..i * 4 + 3],
-            v,
-            eps,
-            &l,
-            basis.color_format,
-        ) {
-            r.illegal_colour += 1;
-            if ok {
-                r.illegal += 1;
-                px[i] = PixelJudgement::Illegal;
-            }
-        }
     }
-    if let Some(map) = light_map_failures(basis, frame) {
-        r.map_checked = basis.map.len() as u64;
+    if let Some(map) = light_map_failures(light, frame) {
+        r.map_checked = light.map.len() as u64;
         r.illegal_map = map.total;
     }
     (r, px)
@@ -454,18 +455,14 @@ fn judge_light(basis: &Judged, frame: &Frame, colour: bool) -> (RefAgreement, Ve
 
 /// The shadow-map texels of `frame` outside the ranges a conformant implementation may store
 /// (each within one f32 spacing), side = above; `None` where the map is not checked (the
-/// backend reads none back, or the basis kept no ranges). Several lights: every light's map
-/// against its own run's ranges, light after light (a texel's index counts on from the
-/// previous lights' texels); `None` if any light's map is not checked.
+/// backend reads none back, or the basis kept no ranges). Every light's map against its own
+/// run's ranges, light after light (a texel's index counts on from the previous lights'
+/// texels); `None` if any light's map is not checked.
 pub fn map_failures(basis: &Judged, frame: &Frame) -> Option<Failed> {
-    if basis.light_count() == 1 && frame.light_count() == 1 {
-        return light_map_failures(basis, frame);
-    }
     let mut all = Failed::default();
     let mut offset = 0;
-    for k in 0..basis.light_count() {
-        let light = basis.for_light(k);
-        let failed = light_map_failures(light, &light_frame(frame, k))?;
+    for (k, light) in basis.lights.iter().enumerate() {
+        let failed = light_map_failures(light, frame.light(k)?)?;
         all.total += failed.total - failed.entries.len() as u64;
         for e in failed.entries {
             all.push(offset + (e >> 1) as usize, e & 1 == 1);
@@ -475,13 +472,13 @@ pub fn map_failures(basis: &Judged, frame: &Frame) -> Option<Failed> {
     Some(all)
 }
 
-fn light_map_failures(basis: &Judged, frame: &Frame) -> Option<Failed> {
-    let map = frame.shadow_map.as_ref()?;
-    if map.values.len() != basis.map.len() || basis.map.is_empty() {
+fn light_map_failures(light: &JudgedLight, frame: LightFrame) -> Option<Failed> {
+    let map = frame.shadow_map?;
+    if map.values.len() != light.map.len() || light.map.is_empty() {
         return None;
     }
     let mut failed = Failed::default();
-    for (k, (v, &(lo, hi))) in map.values.iter().zip(&basis.map).enumerate() {
+    for (k, (v, &(lo, hi))) in map.values.iter().zip(&light.map).enumerate() {
         let (lo, hi) = map_range(lo, hi);
         if !(lo <= *v && *v <= hi) {
             failed.push(k, *v > hi);
@@ -497,12 +494,14 @@ pub fn map_range(lo: f32, hi: f32) -> (f32, f32) {
     (lo - slack(lo), hi + slack(hi))
 }
 
-/// The pixels [`judge`] found illegal (`px`), side = shadowed: a fingerprint's frame part.
+/// The pixels [`judge`] found illegal (`px`), side = shadowed by the first light's map (the
+/// side a fingerprint has always recorded): a fingerprint's frame part.
 pub fn frame_failures(frame: &Frame, px: &[PixelJudgement]) -> Failed {
     let mut failed = Failed::default();
+    let first = frame.lights.first().map(|p| &p.visibility[..]);
     for (i, j) in px.iter().enumerate() {
         if *j == PixelJudgement::Illegal {
-            failed.push(i, is_shadowed(frame.visibility[i]));
+            failed.push(i, first.is_some_and(|v| is_shadowed(v[i])));
         }
     }
     failed
@@ -575,9 +574,10 @@ fn within_codes(lo: f32, hi: f32, code: u8) -> bool {
 /// interval straddles 0.5, or another surface may show; with several lights, for any of
 /// them): the golden check's tolerance.
 pub fn free_pixels(basis: &Judged) -> Vec<bool> {
-    let mut free: Vec<bool> = basis.legal.iter().map(free).collect();
-    for other in &basis.others {
-        for (f, l) in free.iter_mut().zip(&other.legal) {
+    let n = (basis.frame.width * basis.frame.height) as usize;
+    let mut free = vec![false; n];
+    for light in &basis.lights {
+        for (f, l) in free.iter_mut().zip(&light.legal) {
             *f |= self::free(l);
         }
     }
@@ -592,25 +592,25 @@ fn free(l: &umbra_ref::PixelLegal) -> bool {
 /// differ, the judged renders of both frames' profiles (`ja` for `a`, `jb` for `b`) must allow
 /// the answer to be free there (its interval straddles 0.5, or another surface may show).
 /// Counts as [`judge`] does; the legal classes follow `ja`'s flags.
-/// Several lights: light by light, each against its own runs' freedom, the counts added.
+/// Light by light, each against its own runs' freedom, the counts added.
 pub fn judge_pair(a: &Frame, ja: &Judged, b: &Frame, jb: &Judged) -> RefAgreement {
-    let mut r = pair_light(a, &ja.legal, b, &jb.legal);
-    for k in 1..ja.light_count().min(jb.light_count()) {
-        let (ak, bk) = (light_frame(a, k), light_frame(b, k));
+    let missing = vec![f32::NAN; (a.width * a.height) as usize];
+    let mut r = RefAgreement::default();
+    for (k, (la, lb)) in ja.lights.iter().zip(&jb.lights).enumerate() {
         r.absorb(&pair_light(
-            &ak,
-            &ja.for_light(k).legal,
-            &bk,
-            &jb.for_light(k).legal,
+            light_of(a, k, &missing),
+            &la.legal,
+            light_of(b, k, &missing),
+            &lb.legal,
         ));
     }
     r
 }
 
 fn pair_light(
-    a: &Frame,
+    a: LightFrame,
     ja: &[umbra_ref::PixelLegal],
-    b: &Frame,
+    b: LightFrame,
     jb: &[umbra_ref::PixelLegal],
 ) -> RefAgreement {
     let n = (a.width * a.height) as usize;
@@ -624,7 +624,7 @@ fn pair_light(
         r.compared += 1;
         let same_surface = a.covered(i)
             && b.covered(i)
-            && match (&a.surface, &b.surface) {
+            && match (a.surface, b.surface) {
                 (Some(x), Some(y)) => x[i] == y[i],
                 _ => true,
             };

@@ -494,7 +494,7 @@ impl Renderer {
         let (shadow_pass, lit_pass, clock) =
             self.stage_times(timer.as_ref(), shadow_wall, lit_wall)?;
         let [w, h] = run.camera.size;
-        let mut lights = planes.iter().zip(stored).map(|(v, shadow_map)| {
+        let lights = planes.iter().zip(stored).map(|(v, shadow_map)| {
             let (visibility, surface) = readback::decode_visibility(v);
             umbra_case::LightPlane {
                 visibility,
@@ -502,14 +502,11 @@ impl Renderer {
                 surface: Some(surface),
             }
         });
-        let first = lights.next().expect("a plane a light");
         let frame = Frame {
             width: w,
             height: h,
             color,
-            visibility: first.visibility,
-            surface: first.surface,
-            shadow_map: first.shadow_map,
+            lights: lights.collect(),
             // The visibility target is RGBA8 on every GL flavour.
             visibility_storage: VisibilityStorage::Unorm8,
             timings: Timings {
@@ -519,7 +516,6 @@ impl Renderer {
                 total: start.elapsed(),
                 clock: Some(clock),
             },
-            more_lights: lights.collect(),
         };
         Ok((frame, maps))
     }

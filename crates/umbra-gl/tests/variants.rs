@@ -115,12 +115,12 @@ fn variants_worker() {
             });
             let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(
-                bits(&depth_only.visibility),
-                bits(&with_color.visibility),
+                bits(&depth_only.lights[0].visibility),
+                bits(&with_color.lights[0].visibility),
                 "{id}: with_color changed the shadows"
             );
             assert_eq!(
-                depth_only.surface, with_color.surface,
+                depth_only.lights[0].surface, with_color.lights[0].surface,
                 "{id}: with_color changed the surfaces"
             );
 
@@ -138,10 +138,14 @@ fn variants_worker() {
             let (_, manual) = render(&mut backend, &nearest(Compare::Manual));
             let judged =
                 umbra_ref::render_judged(&run, ClipDepth::MinusOneToOne, backend.profile());
-            let ambiguity: Vec<u8> = judged.legal.iter().map(|l| l.flags).collect();
+            let ambiguity: Vec<u8> = judged.lights[0].legal.iter().map(|l| l.flags).collect();
             let free = umbra_compare::reference::free_pixels(&judged);
             tie_pixels_seen += ambiguity.iter().filter(|a| **a & DEPTH_TIE != 0).count() as u64;
-            let g = umbra_compare::agreement(&hw, &manual, 0);
+            let g = umbra_compare::agreement(
+                hw.light(0).expect("a light"),
+                manual.light(0).expect("a light"),
+                0,
+            );
             assert_eq!(
                 g.coverage_differs, 0,
                 "{id}: coverage differs between compare modes"
@@ -210,8 +214,8 @@ fn twin_shares_the_shadow_pass(backend: &mut GlBackend, base: &umbra_case::CaseP
     );
     assert_eq!(shared.color, fresh.color, "{id}: shared twin's colour");
     assert_eq!(
-        bits(&shared.visibility),
-        bits(&fresh.visibility),
+        bits(&shared.lights[0].visibility),
+        bits(&fresh.lights[0].visibility),
         "{id}: shared twin's visibility"
     );
     let mut other = base.clone();

@@ -34,7 +34,7 @@ use umbra_case::fault::Fault;
 use umbra_case::format::{Case, ColorFormat, Cull, MipSource, Mipmaps, Shadow};
 use umbra_case::{
     Backend, BackendError, BackendId, ClipDepth, Clock, Convention, DepthMap, DriverInfo, Frame,
-    LightRun, Needs, Prepared, Profile, Support, Timings, VisibilityStorage,
+    LightPlane, LightRun, Needs, Prepared, Profile, Support, Timings, VisibilityStorage,
 };
 
 pub use lit_pass::PixelLegal;
@@ -61,17 +61,18 @@ fn each_light(run: &Prepared, one: impl Fn(&LightRun) -> Frame) -> Frame {
     )
 }
 
-/// One frame from each light's (`frames`, the first light's first): the first light's
-/// visibility, map and background, the others' in [`Frame::more_lights`], and on covered pixels
-/// the colours added as a blend (ONE, ONE) into a `format` target adds each pass's colour to
-/// the stored one: codes added, saturating, on RGBA8; on an sRGB target both decoded, added
-/// in linear and encoded again. Each pass's colour is its own frame's stored code, a legal
-/// rendering of it (the judge allows each pass its rounding: `colour_ok_lights`).
+/// One frame from each light's (`frames`, in the case's order, each one light's): every
+/// light's plane, the timings added, and the colours added as a blend (ONE, ONE) into a
+/// `format` target adds each pass's colour to the stored one, from the first pass's (its
+/// background too) on, where each later pass covers a pixel: codes added, saturating, on
+/// RGBA8; on an sRGB target both decoded, added in linear and encoded again. Each pass's
+/// colour is its own frame's stored code, a legal rendering of it (the judge allows each
+/// pass its rounding: `colour_ok_lights`).
 pub fn add_lights(frames: Vec<Frame>, format: ColorFormat) -> Frame {
     let mut frames = frames.into_iter();
-    let mut first = frames.next().expect("at least one light");
+    let mut sum = frames.next().expect("a case has a light");
     for f in frames {
-        for (i, (dst, src)) in first
+        for (i, (dst, src)) in sum
             .color
             .chunks_exact_mut(4)
             .zip(f.color.chunks_exact(4))
@@ -90,18 +91,14 @@ pub fn add_lights(frames: Vec<Frame>, format: ColorFormat) -> Frame {
                 }
             }
         }
-        let t = &mut first.timings;
+        let t = &mut sum.timings;
         t.shadow_pass += f.timings.shadow_pass;
         t.lit_pass += f.timings.lit_pass;
         t.readback += f.timings.readback;
         t.total += f.timings.total;
-        first.more_lights.push(umbra_case::LightPlane {
-            visibility: f.visibility,
-            shadow_map: f.shadow_map,
-            surface: f.surface,
-        });
+        sum.lights.extend(f.lights);
     }
-    first
+    sum
 }
 
 /// Renders like [`render`] with a geometric `fault` in the shadow pass (a face drawn with a
@@ -114,54 +111,56 @@ pub fn render_with_fault(run: &Prepared, clip: ClipDepth, fault: Fault) -> Frame
     })
 }
 
-/// A judged reference render: the reference's frame and, per pixel (top row first), what a
-/// conformant implementation of `profile` may show there ([`PixelLegal`]): the interval of
-/// its visibility, why the interval is wide ([`lookup::ambiguity`]), and its colour as a
-/// function of the visibility it wrote. The judge in `umbra-compare` reads nothing else.
+/// A judged reference render: the reference's frame and, for each light, per pixel (top row
+/// first) what a conformant implementation of `profile` may show there ([`PixelLegal`]): the
+/// interval of its visibility, why the interval is wide ([`lookup::ambiguity`]), and its
+/// colour as a function of the visibility it wrote. The judge in `umbra-compare` reads
+/// nothing else.
 #[derive(Clone, Debug)]
 pub struct Judged {
-    /// The reference's own frame (one legal rendering among many).
+    /// The reference's own frame (one legal rendering among many), a plane per light.
     pub frame: Frame,
-    /// Per pixel, what is legal.
-    pub legal: Vec<PixelLegal>,
-    /// The step between the values the case's filter produces ([`lookup::quantum`]).
-    pub quantum: f32,
-    /// The profile the intervals are for.
+    /// Each light's judged run ([`Prepared::lights`]), in the case's order.
+    pub lights: Vec<JudgedLight>,
+    /// The profile the case is judged for.
     pub profile: Profile,
     /// The colour target the case asks for (`camera.color_format`): how the judge turns a
     /// pixel's linear colour bounds into the codes it may store.
     pub color_format: ColorFormat,
+}
+
+/// What one light's run allows ([`Judged::lights`]).
+#[derive(Clone, Debug)]
+pub struct JudgedLight {
+    /// Per pixel, what is legal (the colour terms: this light's, the ambient term in the
+    /// first light's only).
+    pub legal: Vec<PixelLegal>,
+    /// The step between the values the case's filter produces ([`lookup::quantum`]).
+    pub quantum: f32,
+    /// The profile the light's intervals are for (its effective profile).
+    pub profile: Profile,
     /// Per shadow-map texel, layer after layer, each top row first (as
     /// [`umbra_case::DepthMap`] holds them): the range of values a conformant implementation
     /// may store there ([`shadow_pass::Freedom`]). Empty when not kept.
     pub map: Vec<(f32, f32)>,
-    /// A case with several lights: each light's after the first, judged as its own run
-    /// ([`Prepared::lights`]); the fields above are the first light's, but for the frame,
-    /// whose colour is all lights' ([`add_lights`]). Empty for one light.
-    pub others: Vec<Judged>,
 }
 
 impl Judged {
-    /// How many lights the judged run has.
-    pub fn light_count(&self) -> usize {
-        1 + self.others.len()
-    }
-
-    /// Light `k`'s judged run (light 0: this one, with its frame).
-    pub fn for_light(&self, k: usize) -> &Judged {
-        if k == 0 { self } else { &self.others[k - 1] }
-    }
-
-    /// A case's judged run from its lights' (`each`, in the case's order, at least one): the
-    /// frame's colour all lights' ([`add_lights`]).
-    pub fn of_lights(each: Vec<Judged>, format: ColorFormat) -> Judged {
-        let frame = add_lights(each.iter().map(|j| j.frame.clone()).collect(), format);
-        let mut each = each.into_iter();
-        let first = each.next().expect("a case has a light");
+    /// A case's judged run from its lights' (`each`, in the case's order, each one light's
+    /// and at least one): every light's judged run, the frame's colour all lights'
+    /// ([`add_lights`]), judged for `profile`.
+    pub fn of_lights(each: Vec<Judged>, profile: Profile, format: ColorFormat) -> Judged {
+        let mut frames = Vec::with_capacity(each.len());
+        let mut lights = Vec::with_capacity(each.len());
+        for j in each {
+            frames.push(j.frame);
+            lights.extend(j.lights);
+        }
         Judged {
-            frame,
-            others: each.collect(),
-            ..first
+            frame: add_lights(frames, format),
+            lights,
+            profile,
+            color_format: format,
         }
     }
 }
@@ -190,7 +189,7 @@ pub fn explain(
         judged.push(j);
     }
     (
-        Judged::of_lights(judged, run.case().camera.color_format),
+        Judged::of_lights(judged, profile, run.case().camera.color_format),
         traces,
     )
 }
@@ -206,12 +205,14 @@ pub fn explain_light(
     (
         Judged {
             frame,
-            legal,
-            quantum: lookup::quantum(&run.case().shadow, &run.light),
+            lights: vec![JudgedLight {
+                legal,
+                quantum: lookup::quantum(&run.case().shadow, &run.light),
+                profile,
+                map,
+            }],
             profile,
             color_format: run.case().camera.color_format,
-            map,
-            others: Vec::new(),
         },
         trace,
     )
@@ -324,18 +325,19 @@ fn render_inner(
         width: w,
         height: h,
         color: top_first(lit.color, w as usize, 4, flip),
-        visibility: top_first(lit.visibility, w as usize, 1, flip),
-        surface: Some(top_first(lit.surface, w as usize, 1, flip)),
-        shadow_map: Some(DepthMap {
-            width: mw,
-            height: mh,
-            layers: faces,
-            format: case.shadow.format,
-            values,
-        }),
+        lights: vec![LightPlane {
+            visibility: top_first(lit.visibility, w as usize, 1, flip),
+            surface: Some(top_first(lit.surface, w as usize, 1, flip)),
+            shadow_map: Some(DepthMap {
+                width: mw,
+                height: mh,
+                layers: faces,
+                format: case.shadow.format,
+                values,
+            }),
+        }],
         visibility_storage: VisibilityStorage::Float32,
         timings: Timings::default(),
-        more_lights: Vec::new(),
     };
     let legal = top_first(lit.legal, w as usize, 1, flip);
     let end = Instant::now();

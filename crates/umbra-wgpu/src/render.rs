@@ -196,26 +196,21 @@ impl Gpu {
         let color = outputs
             .last_mut()
             .map(|o| std::mem::take(&mut o.color))
-            .unwrap_or_default();
-        let mut lights =
-            outputs
-                .into_iter()
-                .zip(stored)
-                .map(|(o, shadow_map)| umbra_case::LightPlane {
-                    visibility: o.visibility,
-                    shadow_map,
-                    surface: Some(o.surface),
-                });
-        let first = lights
-            .next()
             .ok_or_else(|| err("run", "a case without a light".to_string()))?;
+        let lights = outputs
+            .into_iter()
+            .zip(stored)
+            .map(|(o, shadow_map)| umbra_case::LightPlane {
+                visibility: o.visibility,
+                shadow_map,
+                surface: Some(o.surface),
+            })
+            .collect();
         Ok(Frame {
             width: w,
             height: h,
             color,
-            visibility: first.visibility,
-            surface: first.surface,
-            shadow_map: first.shadow_map,
+            lights,
             visibility_storage: self.visibility_storage(),
             timings: umbra_case::Timings {
                 shadow_pass,
@@ -224,7 +219,6 @@ impl Gpu {
                 total,
                 clock: Some(clock),
             },
-            more_lights: lights.collect(),
         })
     }
 

@@ -52,7 +52,7 @@ fn the_l_shaped_shadow_lands_where_the_reference_puts_it() {
             "{}: the shadow is displaced: {a:?}",
             kind.id()
         );
-        let e = umbra_compare::truth_error(&frame, &truth);
+        let e = umbra_compare::truth_error(frame.light(0).expect("a light"), &truth);
         assert_eq!(
             (
                 e.away_from_edges.false_shadow,

@@ -162,156 +162,182 @@ pub fn main(args: &RenderArgs) -> crate::exit::Outcome {
     Ok(Exit::pass_if(!failed))
 }
 
-fn value_ok_light(v: f32, l: &umbra_ref::PixelLegal, quantum: f32, eps: f32) -> bool {
-    umbra_compare::reference::value_ok(v, l.lo, l.hi, quantum, eps)
-}
-
 /// How many illegal pixels `render` lists.
 const LISTED: usize = 12;
 
-/// The first illegal pixels of a judged run, each with its value and what the specs allow
-/// there, and with `pixel` the reference's step-by-step trace of that pixel's judged lookup
-/// (why its interval is what it is).
+/// The first illegal pixels of a judged run, each with every light's value and what the specs
+/// allow there, the first illegal map texels, and with `pixel` the reference's step-by-step
+/// trace of that pixel's judged lookup in every light (why its interval is what it is).
 fn explain_pixels(
     j: &crate::judge::run::Judged,
     profile: umbra_case::Profile,
     pixel: Option<(u32, u32)>,
 ) -> String {
     use std::fmt::Write as _;
-    let profile = profile.effective_for(j.prepared.case());
-    let (basis, trace) = umbra_ref::explain(
-        &j.prepared,
-        umbra_case::ClipDepth::MinusOneToOne,
-        profile,
-        pixel,
-    );
-    let w = j.frame.width as usize;
+    // Each light judged for its own effective profile, as the judge judges it.
+    let mut each = Vec::new();
+    let mut trace = String::new();
+    for (k, light) in j.prepared.lights.iter().enumerate() {
+        let (judged, t) = umbra_ref::explain_light(
+            light,
+            umbra_case::ClipDepth::MinusOneToOne,
+            profile.effective_for(light.case()),
+            pixel,
+        );
+        if !t.is_empty() {
+            trace += &format!("light {k}:\n{t}");
+        }
+        each.push(judged);
+    }
+    let case = j.prepared.case();
+    let profile = profile.effective_for(case);
+    let basis = umbra_ref::Judged::of_lights(each, profile, case.camera.color_format);
     let mut s = String::new();
     let failed = &j.fingerprint.frame;
     if failed.total > 0 {
         let _ = writeln!(
             s,
-            "  illegal pixels ({} in all; x, y top-left, the backend's value, the interval a conformant {} implementation may return, why it is that wide):",
+            "  illegal pixels ({} in all; x, y top-left, each light's value, the interval a conformant {} implementation may return, why it is that wide):",
             failed.total,
             profile.name()
         );
     }
     for e in failed.entries.iter().take(LISTED) {
-        let i = (*e >> 1) as usize;
-        let l = basis.legal[i];
-        let v = j.frame.visibility[i];
-        let eps = j.frame.visibility_storage.tolerance();
-        let lights: Vec<(f32, umbra_ref::PixelLegal)> = (0..basis.light_count())
-            .filter(|&k| k < j.frame.light_count())
-            .map(|k| {
-                let b = basis.for_light(k);
-                (j.frame.for_light(k).visibility[i], b.legal[i])
-            })
-            .collect();
-        let all_legal = (0..lights.len()).all(|k| {
-            let (v, l) = lights[k];
-            value_ok_light(v, &l, basis.for_light(k).quantum, eps)
-        });
-        if lights.len() > 1 && all_legal {
-            // Every light's value legal, and a colour that is not the sum of their shadings.
-            let rgb = &j.frame.color[i * 4..i * 4 + 3];
-            let sum = |c: usize| {
-                lights
-                    .iter()
-                    .map(|(v, l)| l.c0[c] + (l.c1[c] - l.c0[c]) * v)
-                    .sum::<f32>()
-            };
-            let visibilities: Vec<f32> = lights.iter().map(|(v, _)| *v).collect();
+        s += &illegal_pixel(&j.frame, &basis, (*e >> 1) as usize);
+    }
+    s += &illegal_texels(&j.frame, &basis, j.fingerprint.map.as_ref());
+    if let Some((x, y)) = pixel {
+        let i = y as usize * j.frame.width as usize + x as usize;
+        if i >= (j.frame.width * j.frame.height) as usize || x >= j.frame.width {
             let _ = writeln!(
                 s,
-                "    ({}, {}): the lights' visibilities {visibilities:?} are legal, but the colour {rgb:?} is not the sum of their shadings {:?} (×255: {:?}; each light's tolerance, and each pass after the first its stored code)",
-                i % w,
-                i / w,
-                [sum(0), sum(1), sum(2)],
-                [sum(0) * 255.0, sum(1) * 255.0, sum(2) * 255.0],
+                "  pixel ({x}, {y}) is outside the {}x{} frame",
+                j.frame.width, j.frame.height
             );
-            continue;
+            return s;
         }
-        if umbra_compare::reference::value_ok(v, l.lo, l.hi, basis.quantum, eps)
-            && lights.len() == 1
-        {
-            // A legal value with a colour that is not its shading (or another surface).
-            let rgb = &j.frame.color[i * 4..i * 4 + 3];
-            let shade = |c: usize| l.c0[c] + (l.c1[c] - l.c0[c]) * v;
+        for (k, l) in basis.lights.iter().enumerate() {
+            let v = j.frame.light(k).map_or(f32::NAN, |f| f.visibility[i]);
+            let l = l.legal[i];
             let _ = writeln!(
                 s,
-                "    ({}, {}): visibility {v} is legal, but the colour {rgb:?} is not its shading {:?} ± {} per channel (×255: {:?})",
-                i % w,
-                i / w,
-                [shade(0), shade(1), shade(2)],
-                l.ctol,
-                [shade(0) * 255.0, shade(1) * 255.0, shade(2) * 255.0],
+                "  pixel ({x}, {y}), light {k}: the backend gives {v}, legal [{}, {}] ({})",
+                l.lo,
+                l.hi,
+                flag_names(l.flags)
             );
-            continue;
         }
+        let _ = writeln!(s, "  the reference's judged lookup:");
+        for line in trace.lines() {
+            let _ = writeln!(s, "    {line}");
+        }
+    }
+    s
+}
+
+/// One illegal pixel's line: every light's value legal and a colour that is not the sum of
+/// their shadings, or each light's value outside its interval.
+fn illegal_pixel(frame: &umbra_case::Frame, basis: &umbra_ref::Judged, i: usize) -> String {
+    use std::fmt::Write as _;
+    let w = frame.width as usize;
+    let eps = frame.visibility_storage.tolerance();
+    let lights: Vec<(f32, &umbra_ref::JudgedLight)> = basis
+        .lights
+        .iter()
+        .enumerate()
+        .map(|(k, l)| (frame.light(k).map_or(f32::NAN, |f| f.visibility[i]), l))
+        .collect();
+    let legal = |(v, l): &(f32, &umbra_ref::JudgedLight)| {
+        let p = l.legal[i];
+        umbra_compare::reference::value_ok(*v, p.lo, p.hi, l.quantum, eps)
+    };
+    let mut s = String::new();
+    if lights.iter().all(legal) {
+        // Every light's value legal, and a colour that is not the sum of their shadings
+        // (each light's tolerance, and each pass after the first its stored code).
+        let rgb = &frame.color[i * 4..i * 4 + 3];
+        let sum = |c: usize| {
+            lights
+                .iter()
+                .map(|(v, l)| l.legal[i].c0[c] + (l.legal[i].c1[c] - l.legal[i].c0[c]) * v)
+                .sum::<f32>()
+        };
+        let visibilities: Vec<f32> = lights.iter().map(|(v, _)| *v).collect();
+        let tolerance: f32 = lights.iter().map(|(_, l)| l.legal[i].ctol).sum();
         let _ = writeln!(
             s,
-            "    ({}, {}): {v} not in [{}, {}] ({}); the reference gives {}",
+            "    ({}, {}): the visibilities {visibilities:?} are legal, but the colour {rgb:?} is not their shading {:?} ± {tolerance} per channel (×255: {:?})",
             i % w,
             i / w,
-            l.lo,
-            l.hi,
-            flag_names(l.flags),
-            basis.frame.visibility[i],
+            [sum(0), sum(1), sum(2)],
+            [sum(0) * 255.0, sum(1) * 255.0, sum(2) * 255.0],
+        );
+        return s;
+    }
+    for (k, (v, l)) in lights.iter().enumerate().filter(|(_, x)| !legal(x)) {
+        let p = l.legal[i];
+        let _ = writeln!(
+            s,
+            "    ({}, {}), light {k}: {v} not in [{}, {}] ({}); the reference gives {}",
+            i % w,
+            i / w,
+            p.lo,
+            p.hi,
+            flag_names(p.flags),
+            basis.frame.light(k).map_or(f32::NAN, |f| f.visibility[i]),
         );
     }
-    if let (Some(map), Some(failed)) = (&j.frame.shadow_map, &j.fingerprint.map) {
-        if failed.total > 0 {
-            let _ = writeln!(
-                s,
-                "  illegal shadow-map texels ({} in all; layer, x, y top-left, the stored value, the range a conformant implementation may store):",
-                failed.total
-            );
+    s
+}
+
+/// The first illegal map texels (`failed`, every light's texels numbered on from the previous
+/// lights', [`umbra_compare::reference::map_failures`]), each with its light, layer and range.
+fn illegal_texels(
+    frame: &umbra_case::Frame,
+    basis: &umbra_ref::Judged,
+    failed: Option<&umbra_compare::consensus::Failed>,
+) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let Some(failed) = failed.filter(|f| f.total > 0) else {
+        return s;
+    };
+    let _ = writeln!(
+        s,
+        "  illegal shadow-map texels ({} in all; light, layer, x, y top-left, the stored value, the range a conformant implementation may store):",
+        failed.total
+    );
+    for e in failed.entries.iter().take(LISTED) {
+        // The light whose texels the index falls in.
+        let mut k = (*e >> 1) as usize;
+        let mut light = 0;
+        while light < basis.lights.len() && k >= basis.lights[light].map.len() {
+            k -= basis.lights[light].map.len();
+            light += 1;
         }
+        let (Some(map), Some(judged)) = (
+            frame.light(light).and_then(|f| f.shadow_map),
+            basis.lights.get(light),
+        ) else {
+            continue;
+        };
         let per_layer = (map.width * map.height) as usize;
-        for e in failed.entries.iter().take(LISTED) {
-            let k = (*e >> 1) as usize;
-            let (layer, t) = (k / per_layer, k % per_layer);
-            let (lo, hi) = basis.map.get(k).copied().unwrap_or((f32::NAN, f32::NAN));
-            let _ = writeln!(
-                s,
-                "    layer {layer} ({}, {}): {} not in [{lo}, {hi}]; the reference stores {}",
-                t % map.width as usize,
-                t / map.width as usize,
-                map.values[k],
-                basis
-                    .frame
-                    .shadow_map
-                    .as_ref()
-                    .and_then(|m| m.values.get(k))
-                    .copied()
-                    .unwrap_or(f32::NAN),
-            );
-        }
-    }
-    if let Some((x, y)) = pixel {
-        let i = y as usize * w + x as usize;
-        match (j.frame.visibility.get(i), basis.legal.get(i)) {
-            (Some(v), Some(l)) => {
-                let _ = writeln!(
-                    s,
-                    "  pixel ({x}, {y}): the backend gives {v}, legal [{}, {}] ({}); the reference's judged lookup:",
-                    l.lo,
-                    l.hi,
-                    flag_names(l.flags)
-                );
-                for line in trace.lines() {
-                    let _ = writeln!(s, "    {line}");
-                }
-            }
-            _ => {
-                let _ = writeln!(
-                    s,
-                    "  pixel ({x}, {y}) is outside the {}x{} frame",
-                    j.frame.width, j.frame.height
-                );
-            }
-        }
+        let (layer, t) = (k / per_layer, k % per_layer);
+        let (lo, hi) = judged.map.get(k).copied().unwrap_or((f32::NAN, f32::NAN));
+        let _ = writeln!(
+            s,
+            "    light {light} layer {layer} ({}, {}): {} not in [{lo}, {hi}]; the reference stores {}",
+            t % map.width as usize,
+            t / map.width as usize,
+            map.values.get(k).copied().unwrap_or(f32::NAN),
+            basis
+                .frame
+                .light(light)
+                .and_then(|f| f.shadow_map)
+                .and_then(|m| m.values.get(k))
+                .copied()
+                .unwrap_or(f32::NAN),
+        );
     }
     s
 }

@@ -107,7 +107,11 @@ pub fn measure(backend: &mut dyn Backend, point: CasePoint, repeat: u32) -> Meas
     let error = crate::judge::judge_cache::truth_error(&frame, &truths);
     // Edges and aliasing: the sweep's one light (its cases have one; of several, the first).
     let (truth, light) = (&truths[0], &prepared.lights[0]);
-    let edges = umbra_compare::edges::edge_displacement(&frame, truth);
+    let missing = vec![f32::NAN; (frame.width * frame.height) as usize];
+    let edges = umbra_compare::edges::edge_displacement(
+        umbra_compare::reference::light_of(&frame, 0, &missing),
+        truth,
+    );
     let aliasing = umbra_ref::truth::aliasing::perspective_aliasing(light, truth);
     Measurement::Done(Measured {
         clock: clock.into(),

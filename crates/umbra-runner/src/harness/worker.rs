@@ -599,10 +599,12 @@ fn metrics_of(backend: &dyn umbra_case::Backend, j: &crate::judge::run::Judged) 
         twins_ms: j.twins_time.as_secs_f64() * 1e3,
         golden_ms: 0.0,
         color_hash: umbra_report::names::fnv64(j.frame.color.iter().copied()),
+        // Every light's visibility, light after light (one light's is the light's alone).
         visibility_hash: umbra_report::names::fnv64(
             j.frame
-                .visibility
+                .lights
                 .iter()
+                .flat_map(|p| &p.visibility)
                 .flat_map(|v| v.to_bits().to_le_bytes()),
         ),
     }

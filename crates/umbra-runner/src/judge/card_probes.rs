@@ -221,11 +221,15 @@ impl<'a> Prober<'a> {
     }
 }
 
-/// The visibility of every pixel a surface covers (NaN-free), what each probe reads.
+/// The visibility of every pixel a surface covers (NaN-free), every light's (a probe has one),
+/// what each probe reads.
 fn covered_values(f: &Frame) -> Vec<f64> {
-    (0..f.visibility.len())
-        .filter(|&i| f.covered(i) && f.visibility[i].is_finite())
-        .map(|i| f64::from(f.visibility[i]))
+    f.each_light()
+        .flat_map(|l| {
+            (0..l.visibility.len())
+                .filter(move |&i| l.covered(i) && l.visibility[i].is_finite())
+                .map(move |i| f64::from(l.visibility[i]))
+        })
         .collect()
 }
 

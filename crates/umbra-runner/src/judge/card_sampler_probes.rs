@@ -50,8 +50,11 @@ fn centre_lit(f: &Frame, r: u32) -> Option<f64> {
     for y in cy.saturating_sub(r)..(cy + r).min(f.height) {
         for x in cx.saturating_sub(r)..(cx + r).min(f.width) {
             let i = (y * f.width + x) as usize;
-            if f.covered(i) && f.visibility[i].is_finite() {
-                v.push(f64::from(f.visibility[i]));
+            // Every light's (a probe has one).
+            for l in f.each_light() {
+                if l.covered(i) && l.visibility[i].is_finite() {
+                    v.push(f64::from(l.visibility[i]));
+                }
             }
         }
     }
@@ -420,12 +423,16 @@ fn derivatives_case(h: f64) -> Value {
 /// The rows of frame `f`'s column `x` after which visibility steps from shadowed to lit
 /// or back (both neighbours covered and read clearly).
 fn level_steps(f: &Frame, x: u32) -> Vec<u32> {
-    let at = |y: u32| {
-        let i = (y * f.width + x) as usize;
-        (f.covered(i) && f.visibility[i].is_finite()).then(|| f.visibility[i] > 0.5)
-    };
-    (0..f.height.saturating_sub(1))
-        .filter(|&y| matches!((at(y), at(y + 1)), (Some(a), Some(b)) if a != b))
+    // Every light's steps (a probe has one).
+    f.each_light()
+        .flat_map(|l| {
+            let at = move |y: u32| {
+                let i = (y * f.width + x) as usize;
+                (l.covered(i) && l.visibility[i].is_finite()).then(|| l.visibility[i] > 0.5)
+            };
+            (0..f.height.saturating_sub(1))
+                .filter(move |&y| matches!((at(y), at(y + 1)), (Some(a), Some(b)) if a != b))
+        })
         .collect()
 }
 

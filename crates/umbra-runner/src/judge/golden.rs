@@ -584,13 +584,14 @@ mod release_tests {
 
     fn frame(color: [u8; 4]) -> Frame {
         Frame {
-            more_lights: Vec::new(),
             width: 4,
             height: 2,
             color: color.repeat(8),
-            visibility: vec![1.0; 8],
-            surface: None,
-            shadow_map: None,
+            lights: vec![umbra_case::LightPlane {
+                visibility: vec![1.0; 8],
+                surface: None,
+                shadow_map: None,
+            }],
             visibility_storage: Default::default(),
             timings: Default::default(),
         }

@@ -67,7 +67,7 @@ use std::time::Duration;
 use umbra_case::format::ColorFormat;
 use umbra_case::{ClipDepth, Frame, LightRun, Prepared, Profile};
 use umbra_ref::truth::{Class, Truth, ground_truth};
-use umbra_ref::{Judged, PixelLegal};
+use umbra_ref::{Judged, JudgedLight, PixelLegal};
 
 /// The environment variable naming the cache directory.
 pub const ENV: &str = "UMBRA_JUDGE_CACHE";
@@ -292,7 +292,8 @@ pub fn judged(prepared: &Prepared, profile: Profile) -> Judged {
         .iter()
         .map(|light| judged_light(light, profile))
         .collect();
-    Judged::of_lights(each, prepared.case().camera.color_format)
+    let case = prepared.case();
+    Judged::of_lights(each, profile.effective_for(case), case.camera.color_format)
 }
 
 /// One light's judged run for `profile` (its effective profile), cached like [`basis`]'s:
@@ -314,7 +315,7 @@ pub fn judged_light(prepared: &LightRun, profile: Profile) -> Judged {
             // (under their card's narrowing too).
             let uncalibrated = profile.with_calibration(Default::default());
             if uncalibrated != Profile::GL {
-                j.map = Vec::new();
+                j.lights.iter_mut().for_each(|l| l.map = Vec::new());
             }
             j
         },
@@ -763,27 +764,31 @@ fn write_judged(j: &Judged, key: u64) -> Vec<u8> {
     let n = (f.width * f.height) as usize;
     let mut out = Vec::with_capacity(32 + n * 50);
     header(&mut out, JUDGED_MAGIC, f.width, f.height, key);
-    out.extend_from_slice(&j.quantum.to_le_bytes());
     out.extend_from_slice(&f.color);
-    put_f32s(&mut out, &f.visibility);
-    match &f.surface {
-        Some(s) => {
-            out.push(1);
-            s.iter()
-                .for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
+    // Each light's plane and judged run (an entry is one light's run: one of each).
+    out.extend_from_slice(&(j.lights.len() as u32).to_le_bytes());
+    for (plane, light) in f.lights.iter().zip(&j.lights) {
+        out.extend_from_slice(&light.quantum.to_le_bytes());
+        put_f32s(&mut out, &plane.visibility);
+        match &plane.surface {
+            Some(s) => {
+                out.push(1);
+                s.iter()
+                    .for_each(|v| out.extend_from_slice(&v.to_le_bytes()));
+            }
+            None => out.push(0),
         }
-        None => out.push(0),
-    }
-    for l in &j.legal {
-        put_f32s(&mut out, &[l.lo, l.hi]);
-        out.push(l.flags);
-        put_f32s(&mut out, &l.c0);
-        put_f32s(&mut out, &l.c1);
-        put_f32s(&mut out, &[l.ctol]);
-    }
-    out.extend_from_slice(&(j.map.len() as u32).to_le_bytes());
-    for (lo, hi) in &j.map {
-        put_f32s(&mut out, &[*lo, *hi]);
+        for l in &light.legal {
+            put_f32s(&mut out, &[l.lo, l.hi]);
+            out.push(l.flags);
+            put_f32s(&mut out, &l.c0);
+            put_f32s(&mut out, &l.c1);
+            put_f32s(&mut out, &[l.ctol]);
+        }
+        out.extend_from_slice(&(light.map.len() as u32).to_le_bytes());
+        for (lo, hi) in &light.map {
+            put_f32s(&mut out, &[*lo, *hi]);
+        }
     }
     sealed(pack(&out))
 }
@@ -811,8 +816,38 @@ fn parse_judged(
     profile: Profile,
     color_format: ColorFormat,
 ) -> Option<Judged> {
-    let quantum = r.f32()?;
     let color = r.take(n * 4)?.to_vec();
+    let count = r.u32()? as usize;
+    let mut planes = Vec::new();
+    let mut lights = Vec::new();
+    for _ in 0..count {
+        let (plane, light) = parse_light(&mut r, n, profile)?;
+        planes.push(plane);
+        lights.push(light);
+    }
+    r.done()?;
+    Some(Judged {
+        frame: Frame {
+            width,
+            height,
+            color,
+            lights: planes,
+            visibility_storage: Default::default(),
+            timings: Default::default(),
+        },
+        lights,
+        profile,
+        color_format,
+    })
+}
+
+/// One light's plane and judged run in a judged entry ([`write_judged`]).
+fn parse_light(
+    r: &mut Reader,
+    n: usize,
+    profile: Profile,
+) -> Option<(umbra_case::LightPlane, JudgedLight)> {
+    let quantum = r.f32()?;
     let visibility = r.u32s(n)?.into_iter().map(f32::from_bits).collect();
     let surface = match r.take(1)?[0] {
         1 => Some(r.u32s(n)?),
@@ -839,26 +874,18 @@ fn parse_judged(
         .chunks_exact(8)
         .map(|b| (f(b, 0), f(b, 4)))
         .collect();
-    r.done()?;
-    Some(Judged {
-        frame: Frame {
-            more_lights: Vec::new(),
-            width,
-            height,
-            color,
-            visibility,
-            surface,
-            shadow_map: None,
-            visibility_storage: Default::default(),
-            timings: Default::default(),
-        },
+    let plane = umbra_case::LightPlane {
+        visibility,
+        surface,
+        shadow_map: None,
+    };
+    let light = JudgedLight {
         legal,
         quantum,
         profile,
-        color_format,
         map,
-        others: Vec::new(),
-    })
+    };
+    Some((plane, light))
 }
 
 struct Reader<'a> {
@@ -1008,11 +1035,17 @@ mod tests {
         let back = read_judged(&bytes, kj, profile, ColorFormat::Rgba8).expect("judged");
         assert_eq!(back.frame.color, judged.frame.color);
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&back.frame.visibility), bits(&judged.frame.visibility));
-        assert_eq!(back.frame.surface, judged.frame.surface);
-        assert_eq!(back.legal, judged.legal);
-        assert_eq!(back.quantum.to_bits(), judged.quantum.to_bits());
-        assert_eq!(back.map, judged.map);
+        assert_eq!(back.lights.len(), judged.lights.len());
+        assert_eq!(back.frame.lights.len(), judged.frame.lights.len());
+        for (b, j) in back.frame.lights.iter().zip(&judged.frame.lights) {
+            assert_eq!(bits(&b.visibility), bits(&j.visibility));
+            assert_eq!(b.surface, j.surface);
+        }
+        for (b, j) in back.lights.iter().zip(&judged.lights) {
+            assert_eq!(b.legal, j.legal);
+            assert_eq!(b.quantum.to_bits(), j.quantum.to_bits());
+            assert_eq!(b.map, j.map);
+        }
         // Another key (another case or profile) is refused, and so is a truncated file.
         assert!(read_judged(&bytes, kj ^ 1, profile, ColorFormat::Rgba8).is_err());
         assert!(read_judged(&bytes[..bytes.len() - 1], kj, profile, ColorFormat::Rgba8).is_err());

@@ -21,14 +21,22 @@ pub fn write_images(
         f.height,
         image::ColorType::Rgba8,
     )?;
-    heatmap::visibility_map(&f.visibility, f.width, f.height)
-        .save_png(&dir.join("visibility.png"))?;
-    judging_pictures(dir, j, None)?;
-    if let Some(m) = &f.shadow_map {
-        // Layers stacked top to bottom (cube faces +x, −x, +y, −y, +z, −z).
-        heatmap::depth_map(&m.values, m.width, m.height * m.layers)
-            .save_png(&dir.join("shadow_map.png"))?;
+    // Each light's visibility and map: light 0's as `visibility.png` and `shadow_map.png`,
+    // light k's with `-k` before the extension.
+    for (k, plane) in f.lights.iter().enumerate() {
+        let name = |stem: &str| match k {
+            0 => format!("{stem}.png"),
+            k => format!("{stem}-{k}.png"),
+        };
+        heatmap::visibility_map(&plane.visibility, f.width, f.height)
+            .save_png(&dir.join(name("visibility")))?;
+        if let Some(m) = &plane.shadow_map {
+            // Layers stacked top to bottom (cube faces +x, −x, +y, −y, +z, −z).
+            heatmap::depth_map(&m.values, m.width, m.height * m.layers)
+                .save_png(&dir.join(name("shadow_map")))?;
+        }
     }
+    judging_pictures(dir, j, None)?;
     Ok(())
 }
 

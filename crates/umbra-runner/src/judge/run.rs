@@ -258,7 +258,10 @@ fn rendered(backend: &mut dyn Backend, prepared: &Prepared) -> Result<Frame, Out
         Err(e) => return Err(Outcome::Error(e.to_string())),
     };
     if (frame.width, frame.height) != (prepared.camera.size[0], prepared.camera.size[1])
-        || frame.visibility.len() != (frame.width * frame.height) as usize
+        || frame
+            .lights
+            .iter()
+            .any(|p| p.visibility.len() != (frame.width * frame.height) as usize)
     {
         return Err(Outcome::Error(format!(
             "the backend returned a {}x{} frame for a {:?} camera",
@@ -396,12 +399,11 @@ fn run_twins(
             let twin = match backend.render_twin(&twin_prepared, prepared) {
                 // A twin may change the shadow pass on purpose (another frustum, a moved
                 // scene): only its frame is held to the case, not its map.
-                Ok((f, shared)) => {
+                Ok((mut f, shared)) => {
                     m.shared_shadow_pass = shared;
-                    Frame {
-                        shadow_map: None,
-                        ..f
-                    }
+                    // Every light's map (only the first light's was dropped once).
+                    f.lights.iter_mut().for_each(|p| p.shadow_map = None);
+                    f
                 }
                 Err(e) => {
                     m.ok = false;
@@ -430,11 +432,15 @@ fn run_twins(
                 TwinAgree::Identical => {
                     // Bit-identical visibility wherever either frame covers a surface.
                     failed = Failed::default();
-                    for i in 0..frame.visibility.len() {
-                        if (frame.covered(i) || twin.covered(i))
-                            && frame.visibility[i].to_bits() != twin.visibility[i].to_bits()
-                        {
-                            failed.push(i, umbra_compare::is_shadowed(twin.visibility[i]));
+                    let n = (frame.width * frame.height) as usize;
+                    for i in (0..n).filter(|&i| frame.covered(i) || twin.covered(i)) {
+                        // The first light (of every light's planes) whose value differs.
+                        let differs =
+                            frame.lights.iter().zip(&twin.lights).find(|(a, b)| {
+                                a.visibility[i].to_bits() != b.visibility[i].to_bits()
+                            });
+                        if let Some((_, b)) = differs {
+                            failed.push(i, umbra_compare::is_shadowed(b.visibility[i]));
                         }
                     }
                     let differ = failed.total;

@@ -83,14 +83,16 @@ pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> Outcome {
     // deterministic on this case and the probes would test another frame than umbra judged.
     let frame = frame.unwrap_or_else(|| judged.frame.clone());
     let same = frame.color == judged.frame.color
-        && frame.visibility.iter().map(|v| v.to_bits()).eq(judged
-            .frame
-            .visibility
-            .iter()
-            .map(|v| v.to_bits()))
-        && frame.surface == judged.frame.surface
-        && frame.shadow_map.as_ref().map(|m| &m.values)
-            == judged.frame.shadow_map.as_ref().map(|m| &m.values);
+        && frame.lights.len() == judged.frame.lights.len()
+        && frame.lights.iter().zip(&judged.frame.lights).all(|(a, b)| {
+            a.visibility
+                .iter()
+                .map(|v| v.to_bits())
+                .eq(b.visibility.iter().map(|v| v.to_bits()))
+                && a.surface == b.surface
+                && a.shadow_map.as_ref().map(|m| &m.values)
+                    == b.shadow_map.as_ref().map(|m| &m.values)
+        });
     let (_, pixels) = umbra_compare::reference::judge(&basis, &frame);
     let probes = probes::select(&basis, &frame, &pixels);
     if probes.is_empty() && program.is_some() {

@@ -15,7 +15,7 @@
 use std::fmt::Write as _;
 
 use umbra_case::Frame;
-use umbra_compare::reference::{PixelJudgement, map_range};
+use umbra_compare::reference::{PixelJudgement, light_of, map_range};
 use umbra_gl::record::hex_f32;
 use umbra_ref::Judged;
 
@@ -103,7 +103,12 @@ fn spread<T: Clone>(v: &[T], n: usize) -> Vec<T> {
 /// The probes of `frame`, judged by `basis` into `pixels`.
 pub fn select(basis: &Judged, frame: &Frame, pixels: &[PixelJudgement]) -> Probes {
     let w = frame.width;
-    let reference = &basis.frame;
+    // The program probes the first light's pass, which draws the colour target first: a
+    // reduced case keeps one light, where its failure allows (light-swap keeps two).
+    let missing = vec![f32::NAN; (w * frame.height) as usize];
+    let reference = light_of(&basis.frame, 0, &missing);
+    let frame_light = light_of(frame, 0, &missing);
+    let judged = &basis.lights[0];
     let illegal: Vec<usize> = pixels
         .iter()
         .enumerate()
@@ -111,12 +116,12 @@ pub fn select(basis: &Judged, frame: &Frame, pixels: &[PixelJudgement]) -> Probe
         .map(|(i, _)| i)
         .collect();
     let pixel = |i: usize| {
-        let l = basis.legal[i];
+        let l = judged.legal[i];
         PixelProbe {
             x: i as u32 % w,
             y: i as u32 / w,
             surface: if reference.covered(i) {
-                reference.surface.as_ref().map_or(ANY_SURFACE, |s| s[i])
+                reference.surface.map_or(ANY_SURFACE, |s| s[i])
             } else {
                 0
             },
@@ -127,21 +132,21 @@ pub fn select(basis: &Judged, frame: &Frame, pixels: &[PixelJudgement]) -> Probe
             c1: l.c1,
             ctol: l.ctol,
             got: (
-                frame.visibility[i],
-                frame.surface.as_ref().map_or(0, |s| s[i]),
+                frame_light.visibility[i],
+                frame_light.surface.map_or(0, |s| s[i]),
             ),
         }
     };
     let mut texels = Vec::new();
     let mut texels_total = 0;
     let mut map = [0, 0];
-    if let Some(m) = frame.shadow_map.as_ref() {
-        if m.values.len() == basis.map.len() && !basis.map.is_empty() {
+    if let Some(m) = frame_light.shadow_map {
+        if m.values.len() == judged.map.len() && !judged.map.is_empty() {
             map = [m.width, m.height];
             let bad: Vec<usize> = m
                 .values
                 .iter()
-                .zip(&basis.map)
+                .zip(&judged.map)
                 .enumerate()
                 .filter(|(_, (v, (lo, hi)))| {
                     let (lo, hi) = map_range(*lo, *hi);
@@ -154,7 +159,7 @@ pub fn select(basis: &Judged, frame: &Frame, pixels: &[PixelJudgement]) -> Probe
             texels = spread(&bad, MAX_PROBES)
                 .into_iter()
                 .map(|k| {
-                    let (lo, hi) = map_range(basis.map[k].0, basis.map[k].1);
+                    let (lo, hi) = map_range(judged.map[k].0, judged.map[k].1);
                     let at = k % per_layer;
                     TexelProbe {
                         layer: (k / per_layer) as u32,
@@ -177,7 +182,7 @@ pub fn select(basis: &Judged, frame: &Frame, pixels: &[PixelJudgement]) -> Probe
         texels,
         texels_total,
         eps: frame.visibility_storage.tolerance(),
-        quantum: basis.quantum,
+        quantum: judged.quantum,
         srgb: basis.color_format == umbra_case::format::ColorFormat::Srgb8Alpha8,
         frame: [frame.width, frame.height],
         map,
