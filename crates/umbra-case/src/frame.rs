@@ -79,19 +79,25 @@ impl Frame {
     /// Whether pixel `i` (row-major, top row first) shows a surface in any light's pass
     /// ([`LightFrame::covered`]; every pass draws the same triangles).
     pub fn covered(&self, i: usize) -> bool {
-        self.each_light().any(|l| l.covered(i))
+        self.lights
+            .iter()
+            .any(|p| covered(p.surface.as_deref(), &p.visibility, i))
+    }
+}
+
+/// Whether pixel `i` shows a surface: its surface id where there are ids (so that a NaN
+/// visibility on a covered pixel is seen as what it is), else a visibility that is a number.
+fn covered(surface: Option<&[u32]>, visibility: &[f32], i: usize) -> bool {
+    match surface {
+        Some(s) => s[i] != 0,
+        None => !visibility[i].is_nan(),
     }
 }
 
 impl LightFrame<'_> {
-    /// Whether pixel `i` (row-major, top row first) shows a surface: its surface id where the
-    /// frame has them (so that a NaN visibility on a covered pixel is seen as what it is),
-    /// else a visibility that is a number.
+    /// Whether pixel `i` (row-major, top row first) shows a surface in this light's pass.
     pub fn covered(&self, i: usize) -> bool {
-        match self.surface {
-            Some(s) => s[i] != 0,
-            None => !self.visibility[i].is_nan(),
-        }
+        covered(self.surface, self.visibility, i)
     }
 }
 

@@ -294,6 +294,9 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
         }
     }
     let eps = frame.visibility_storage.tolerance();
+    // Each light's value and legal terms at the pixel, refilled pixel by pixel (one
+    // allocation for the frame, not one a pixel).
+    let mut values: Vec<(f32, &umbra_ref::PixelLegal)> = Vec::with_capacity(lights.len());
     for (i, j) in px.iter_mut().enumerate() {
         let rgb = &frame.color[i * 4..i * 4 + 3];
         let (ref_cov, b_cov) = (basis.frame.covered(i), frame.covered(i));
@@ -327,10 +330,12 @@ pub fn judge(basis: &Judged, frame: &Frame) -> (RefAgreement, Vec<PixelJudgement
         if !ref_cov || !b_cov || !same_surface {
             continue;
         }
-        let values: Vec<(f32, &umbra_ref::PixelLegal)> = lights
-            .iter()
-            .map(|(_, f, l)| (f.visibility[i], &l.legal[i]))
-            .collect();
+        values.clear();
+        values.extend(
+            lights
+                .iter()
+                .map(|(_, f, l)| (f.visibility[i], &l.legal[i])),
+        );
         if values.iter().any(|(v, _)| v.is_nan()) {
             continue;
         }

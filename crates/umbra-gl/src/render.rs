@@ -30,7 +30,8 @@ use glow::HasContext;
 use umbra_case::fault::Fault;
 use umbra_case::format::MipSource;
 use umbra_case::{
-    BackendError, Clock, Convention, Frame, LightRun, Prepared, Timings, VisibilityStorage,
+    BackendError, Clock, Convention, Frame, LightRun, Prepared, Technique, Timings,
+    VisibilityStorage,
 };
 
 use crate::api::Api;
@@ -41,6 +42,8 @@ use crate::record::{Gl, Recorder, Recording};
 mod lit_pass;
 mod readback;
 mod shadow_pass;
+
+use shadow_pass::ShadowPrograms;
 
 /// Floats per vertex of `Geometry::interleaved`.
 const STRIDE: usize = umbra_case::Geometry::VERTEX_FLOATS;
@@ -443,24 +446,17 @@ impl Renderer {
             .map(|p| self.shadow_programs(p))
             .collect::<Result<Vec<_>, _>>()?;
         let (timer, shadow_start) = self.begin_stages(run, res)?;
-        let mut maps = Vec::new();
+        let maps = self.shadow_passes(&mut plans, &shadow_programs, res, reuse)?;
+        let shadow_wall = self.end_stage(timer.as_ref(), shadow_start);
+        // Each map read back after the timed stage (GL 3.3; none for a twin's kept maps).
         let mut stored = Vec::new();
-        for (k, (p, programs)) in plans.iter_mut().zip(&shadow_programs).enumerate() {
-            if p.layered {
-                // A later light's layer of the array the first light's pass allocated.
-                p.array_map = maps.first().copied();
-            }
-            let p = &*p;
-            let kept = reuse.get(k).copied();
-            let map = self.shadow_map(p, programs, res, kept)?;
-            stored.push(if p.api == Api::Gl33 && kept.is_none() {
-                Some(self.read_map(p, map)?)
+        for (k, p) in plans.iter().enumerate() {
+            stored.push(if p.api == Api::Gl33 && reuse.get(k).is_none() {
+                Some(self.read_map(p, maps[k])?)
             } else {
                 None
             });
-            maps.push(map);
         }
-        let shadow_wall = self.end_stage(timer.as_ref(), shadow_start);
         let lit_programs = plans
             .iter()
             .map(|p| self.lit_program(p))
@@ -469,27 +465,7 @@ impl Renderer {
         if let Some(t) = &timer {
             t.begin(&self.g(), 1);
         }
-        let mut planes = Vec::new();
-        let mut target = None;
-        for (k, (p, (technique, program))) in plans.iter().zip(lit_programs).enumerate() {
-            // The map light k reads: its own, unless the self-test mixes the lights up (in an
-            // array, the layer is the shader's: Technique::layer).
-            let read = if p.layered {
-                maps[k]
-            } else {
-                maps[Fault::map_of_light(p.fault, k, maps.len(), false, |j| plans[j].cube)]
-            };
-            match target {
-                None => {
-                    let (fbo, vis) = self.lit_pass(p, &technique, program, read, res)?;
-                    target = Some(fbo);
-                    planes.push(vis);
-                }
-                Some(fbo) => planes.push(self.add_light(p, &technique, program, read, fbo, res)?),
-            }
-        }
-        let target = target.ok_or_else(|| BackendError::Other("a case without a light".into()))?;
-        let color = self.read_colour(&plans[0], target)?;
+        let (color, planes) = self.lit_passes(&plans, lit_programs, &maps, res)?;
         let lit_wall = self.end_stage(timer.as_ref(), lit_start);
         let (shadow_pass, lit_pass, clock) =
             self.stage_times(timer.as_ref(), shadow_wall, lit_wall)?;
@@ -518,6 +494,59 @@ impl Renderer {
             },
         };
         Ok((frame, maps))
+    }
+
+    /// Every light's shadow pass, in order: its map (a layer of the array the first light's
+    /// pass allocated, where the maps share one), or the map kept for it (`reuse`). Each
+    /// light's map texture.
+    fn shadow_passes(
+        &mut self,
+        plans: &mut [RunPlan],
+        programs: &[ShadowPrograms],
+        res: &mut Resources,
+        reuse: &[glow::Texture],
+    ) -> Result<Vec<glow::Texture>, BackendError> {
+        let mut maps: Vec<glow::Texture> = Vec::new();
+        for (k, (p, programs)) in plans.iter_mut().zip(programs).enumerate() {
+            if p.layered {
+                p.array_map = maps.first().copied();
+            }
+            maps.push(self.shadow_map(p, programs, res, reuse.get(k).copied())?);
+        }
+        Ok(maps)
+    }
+
+    /// Every light's lit pass over its map: the first into a fresh colour target, each later
+    /// one added into it ([`Renderer::add_light`]), each light's visibility read back on its
+    /// own; the colour read once, after the last. The colour and each light's visibility.
+    fn lit_passes(
+        &self,
+        plans: &[RunPlan],
+        programs: Vec<(Technique, glow::Program)>,
+        maps: &[glow::Texture],
+        res: &mut Resources,
+    ) -> Result<(Vec<u8>, Vec<Vec<u8>>), BackendError> {
+        let mut planes = Vec::new();
+        let mut target = None;
+        for (k, (p, (technique, program))) in plans.iter().zip(programs).enumerate() {
+            // The map light k reads: its own, unless the self-test mixes the lights up (in an
+            // array, the layer is the shader's: Technique::layer).
+            let read = if p.layered {
+                maps[k]
+            } else {
+                maps[Fault::map_of_light(p.fault, k, maps.len(), false, |j| plans[j].cube)]
+            };
+            match target {
+                None => {
+                    let (fbo, vis) = self.lit_pass(p, &technique, program, read, res)?;
+                    target = Some(fbo);
+                    planes.push(vis);
+                }
+                Some(fbo) => planes.push(self.add_light(p, &technique, program, read, fbo, res)?),
+            }
+        }
+        let target = target.ok_or_else(|| BackendError::Other("a case without a light".into()))?;
+        Ok((self.read_colour(&plans[0], target)?, planes))
     }
 
     /// The stages' timer (where the context has timer queries), begun on the shadow pass,

@@ -143,21 +143,7 @@ impl Gpu {
                     count: 4 * plans.len() as u32,
                 })
             });
-        let shadow: Vec<_> = plans
-            .iter()
-            .map(|p| (self.shadow_pipelines(p), self.dummy_views(p)))
-            .collect();
-        let shadow_start = Instant::now();
-        let mut enc = self.encoding("shadow", &vbo, timestamps.as_ref());
-        // What the recorded passes reference, kept until they are submitted.
-        let mut recorded = Vec::new();
-        for (k, (p, (pipelines, dummy_views))) in plans.iter().zip(&shadow).enumerate() {
-            recorded.push(self.encode_shadow(p, map_of(k), pipelines, dummy_views, &mut enc));
-        }
-        self.queue.submit([enc.encoder.finish()]);
-        self.wait()?;
-        let shadow_wall = shadow_start.elapsed();
-        drop(recorded);
+        let shadow_wall = self.shadow_passes(&plans, &vbo, &map_of, timestamps.as_ref())?;
         let targets = self.lit_targets(&plans[0]);
         let mut lit_wall = std::time::Duration::ZERO;
         let mut outputs = Vec::new();
@@ -220,6 +206,34 @@ impl Gpu {
                 clock: Some(clock),
             },
         })
+    }
+
+    /// Every light's shadow pass (its map `map_of(k)`), all in one submission, waited for:
+    /// the wall time from the submission's recording to its end. Pipelines are made before
+    /// the clock starts.
+    fn shadow_passes<'m>(
+        &self,
+        plans: &[RunPlan],
+        vbo: &wgpu::Buffer,
+        map_of: &dyn Fn(usize) -> &'m wgpu::Texture,
+        timestamps: Option<&wgpu::QuerySet>,
+    ) -> Result<std::time::Duration, BackendError> {
+        let shadow: Vec<_> = plans
+            .iter()
+            .map(|p| (self.shadow_pipelines(p), self.dummy_views(p)))
+            .collect();
+        let shadow_start = Instant::now();
+        let mut enc = self.encoding("shadow", vbo, timestamps);
+        // What the recorded passes reference, kept until they are submitted.
+        let mut recorded = Vec::new();
+        for (k, (p, (pipelines, dummy_views))) in plans.iter().zip(&shadow).enumerate() {
+            recorded.push(self.encode_shadow(p, map_of(k), pipelines, dummy_views, &mut enc));
+        }
+        self.queue.submit([enc.encoder.finish()]);
+        self.wait()?;
+        let shadow_wall = shadow_start.elapsed();
+        drop(recorded);
+        Ok(shadow_wall)
     }
 
     /// Every light's timestamps (`q`) resolved into a buffer, in a submission of its own.
