@@ -927,6 +927,23 @@ pub fn bias_forms(b: &Bias) -> String {
     }
 }
 
+/// Writes the `count` cases of `seed` as `DIR/soak-SEED-K.json`, removing any other case
+/// file there first (a smaller soak into the same directory must not run a larger one's).
+pub fn write_cases(dir: &std::path::Path, seed: u64, count: usize) -> std::io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    for e in std::fs::read_dir(dir)? {
+        let p = e?.path();
+        if p.extension().is_some_and(|x| x == "json") {
+            std::fs::remove_file(p)?;
+        }
+    }
+    for case in cases(seed, count) {
+        let text = to_json(&case);
+        std::fs::write(dir.join(format!("{}.json", case.name)), text + "\n")?;
+    }
+    Ok(())
+}
+
 /// The JSON text of a generated case, as a user would write it (defaults included).
 pub fn to_json(case: &Case) -> String {
     serde_json::to_string_pretty(case).unwrap_or_default()

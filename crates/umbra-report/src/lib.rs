@@ -27,6 +27,7 @@ pub mod model;
 pub mod names;
 pub mod pareto;
 
+pub use json::{DriverRow, Header, Report, ReportRun};
 pub use model::{
     Diagnosis, FailedCheck, GoldenChange, Metrics, RunResult, Status, TimeBudget, TwinMetric,
 };
@@ -42,15 +43,15 @@ pub fn write_conformance(
     pictures: &Path,
     results: &[RunResult],
     drivers: &str,
-    header: &serde_json::Value,
+    header: json::Header,
     budget: &TimeBudget,
 ) -> std::io::Result<()> {
     let tables = csv::tables(results);
-    let report = json::report(results, header, budget);
-    let junit = junit::junit(results);
     let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let report = json::Report::new(results, header, budget, command.clone());
+    let junit = junit::junit(results);
     let html = html::report(results, drivers, failures, pictures, &command, budget);
-    let json = serde_json::to_string_pretty(&report).map_err(std::io::Error::other)?;
+    let json = report.to_json().map_err(std::io::Error::other)?;
     std::fs::create_dir_all(dir)?;
     for (name, text) in [
         ("results.csv", tables.results.as_str()),

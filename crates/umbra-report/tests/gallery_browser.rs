@@ -331,7 +331,7 @@ fn hostile_strings_leave_every_section_and_the_script_intact_in_chromium() {
         &pictures,
         &results,
         &format!("gl33/llvmpipe: Mesa | {HOSTILE} | 4.5"),
-        &serde_json::json!({}),
+        umbra_report::Header::default(),
         &TimeBudget::default(),
     )
     .expect("write reports");

@@ -9,6 +9,7 @@ pub mod atomic_file;
 pub mod case_size;
 pub mod cli;
 pub mod commands;
+pub mod conformance;
 pub mod exit;
 pub mod glob;
 pub mod harness;

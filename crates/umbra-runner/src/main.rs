@@ -6,8 +6,8 @@ use std::process::ExitCode;
 
 use umbra_runner::cli::{self, Command};
 use umbra_runner::commands::{
-    backends, bisect, card, conformance, deqp, drivers, merge, reduce, render, repro,
-    selftest_modes, soak, sweep,
+    backends, bisect, card, conformance, deqp, drivers, merge, reduce, render, repro, selftest,
+    soak, sweep,
 };
 use umbra_runner::exit::{self, Error, Exit};
 use umbra_runner::harness;
@@ -62,7 +62,7 @@ fn dispatch(command: &Command) -> exit::Outcome {
         Command::Render(a) => render::main(a),
         Command::Conformance(a) => conformance::main(a),
         Command::Merge(a) => merge::main(a),
-        Command::Selftest(a) => selftest_modes::main(a),
+        Command::Selftest(a) => selftest::main(a),
         Command::Soak(a) => soak::main(a),
         Command::Sweep(a) => sweep::main(a),
         Command::Drivers(a) => drivers::main(a),

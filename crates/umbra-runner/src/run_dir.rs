@@ -20,6 +20,10 @@ pub const INCOMPLETE: &str = "INCOMPLETE";
 /// shows and any run still in progress.
 pub const KEEP: usize = 5;
 
+/// `umbra soak`'s default output directory (the self-test's generated cases go beside its
+/// own, under `selftest-cases`).
+pub const SOAK_OUT: &str = "target/umbra/soak";
+
 /// A run's own directory.
 #[derive(Debug)]
 pub struct RunDir {

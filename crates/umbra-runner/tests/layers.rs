@@ -1,11 +1,13 @@
 //! The runner's layers, checked from its sources (as rust-analyzer's `tidy` checks its tree):
-//! the leaves (`exit`, `glob`, `atomic_file`, `run_dir`, `case_size`, `version`) know nothing above them, `judge` (one
-//! point judged, goldens, expectations) knows neither the harness nor a command, `harness`
-//! (workers, pool, registry, Mesa builds), `shards` and `repro` know no command, and no two
-//! modules import each other in a circle. Every module has a layer ([`layer`]): a new one that
-//! is not given one fails here. Imports are read through `crate::` and `super::` paths alike.
-//! Reporting is its own crate (`umbra-report`) and never names the runner. A `use` that points
-//! up a layer fails here with the file and the import.
+//! the leaves (`exit`, `glob`, `atomic_file`, `run_dir`, `case_size`, `version`) know nothing
+//! above them, `judge` (one point judged, goldens, expectations, cards) knows neither the
+//! harness nor a command, `harness` (workers, pool, registry, Mesa builds), `shards` and
+//! `repro` know no command, `conformance` (a run as a library) is called by the commands and
+//! calls none, a command imports no other command, and no two modules import each other in a
+//! circle. Every module has a layer ([`layer`]): a new one that is not given one fails here.
+//! Imports are read through `crate::` and `super::` paths alike. Reporting is its own crate
+//! (`umbra-report`) and never names the runner. A `use` that points up a layer fails here
+//! with the file and the import.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -55,7 +57,8 @@ fn imports(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
                     .collect();
                 let target = match path.as_slice() {
                     [
-                        layer @ ("judge" | "harness" | "commands" | "shards" | "repro"),
+                        layer @ ("judge" | "harness" | "commands" | "conformance" | "shards"
+                        | "repro"),
                         m,
                         ..,
                     ] if !m.is_empty() && *m != "*" => {
@@ -111,8 +114,14 @@ fn known_layer(module: &str) -> Option<u8> {
         "exit" | "glob" | "atomic_file" | "run_dir" | "case_size" | "version" => 0,
         "judge" => 1,
         "harness" | "shards" | "repro" => 2,
-        // The command line's tables name the commands' help only; `commands` run it all.
-        "cli" | "commands" => 3,
+        // The command line's tables name the commands' help only.
+        "cli" => 3,
+        // A conformance run as a library (plan, execution, gathering, summary), which the
+        // commands call.
+        "conformance" => 4,
+        // The commands: each calls the layers below, none another command
+        // ([`commands_import_no_command`]).
+        "commands" => 5,
         _ => return None,
     })
 }
@@ -179,6 +188,11 @@ fn the_import_graph() {
     for u in &upward {
         println!("  {u}");
     }
+    let among = between_commands(&graph);
+    println!("arrows between commands: {}", among.len());
+    for a in &among {
+        println!("  {a}");
+    }
     for tree in [
         src.clone(),
         src.join("../../umbra-case/src"),
@@ -225,7 +239,37 @@ fn layers_point_one_way() {
     }
     assert!(
         upward.is_empty(),
-        "imports up a layer (leaves < judge < harness, shards, repro < cli, commands): {upward:#?}"
+        "imports up a layer (leaves < judge < harness, shards, repro < cli < conformance < commands): {upward:#?}"
+    );
+}
+
+/// The command a module belongs to (`commands::selftest::thresholds` → `selftest`), if any.
+fn command_of(module: &str) -> Option<&str> {
+    module.strip_prefix("commands::")?.split("::").next()
+}
+
+/// Every import from one command's modules into another command's.
+fn between_commands(graph: &BTreeMap<String, BTreeSet<String>>) -> Vec<String> {
+    graph
+        .iter()
+        .flat_map(|(m, named)| named.iter().map(move |t| (m, t)))
+        .filter(|(m, t)| matches!((command_of(m), command_of(t)), (Some(a), Some(b)) if a != b))
+        .map(|(m, t)| format!("{m} imports {t}"))
+        .collect()
+}
+
+/// A command imports no command: what two commands share is a library module below them
+/// (`conformance`, `harness::cards`, `judge::card_row`), and a command's own parts sit in
+/// its folder (`commands/selftest/thresholds.rs`).
+#[test]
+fn commands_import_no_command() {
+    let src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src");
+    let graph = imports(&src);
+    assert!(graph.contains_key("commands::selftest::thresholds"));
+    let among = between_commands(&graph);
+    assert!(
+        among.is_empty(),
+        "commands import commands; move what they share below them: {among:#?}"
     );
 }
 

@@ -334,9 +334,11 @@ fn say_first_bad(
         .join(&short)
         .join("latest")
         .join("report.json");
-    let Some(r) = std::fs::read_to_string(&report)
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+    let Some(r) = report
+        .exists()
+        .then(|| umbra_report::Report::read(&report))
+        .transpose()
+        .map_err(|e| Error::new(format!("bisect: the first bad commit's report: {e}")))?
     else {
         if args.repro.is_some() {
             return Err(Error::new(format!(
@@ -347,21 +349,16 @@ fn say_first_bad(
         return Ok(Exit::Pass);
     };
     println!("bisect: the case's failure on it ({}):", report.display());
-    for run in r["runs"].as_array().into_iter().flatten() {
-        let status = run["status"].as_str().unwrap_or("");
+    for run in &r.runs {
+        let status = run.status.as_str();
         if matches!(
             status,
             "Fail" | "Crash" | "Timeout" | "UnexpectedPass" | "OrderDependent"
         ) {
             println!(
                 "  {status} {}: {}",
-                run["name"].as_str().unwrap_or(""),
-                run["reason"]
-                    .as_str()
-                    .unwrap_or("")
-                    .lines()
-                    .next()
-                    .unwrap_or("")
+                run.name,
+                run.reason.lines().next().unwrap_or("")
             );
         }
     }
@@ -396,7 +393,7 @@ fn say_card_changes(src: &Path, work: &Path, short: &str, good: &str) {
         println!("bisect: no behaviour cards of a good commit to compare with");
         return;
     };
-    let lines = crate::commands::card::changes_between(&old, &bad);
+    let lines = crate::judge::card::changes_between(&old, &bad);
     println!(
         "bisect: behaviour-card changes from {before} to {short}: {}",
         if lines.is_empty() { "none" } else { "" }
@@ -410,18 +407,17 @@ fn say_card_changes(src: &Path, work: &Path, short: &str, good: &str) {
 /// its prefix), its issue.md naming the commit and carrying the bisection log.
 fn repro_first_bad(
     args: &BisectArgs,
-    report: &serde_json::Value,
+    report: &umbra_report::Report,
     sha: &str,
     prefix: &Path,
     log: &Path,
     dir: &str,
 ) -> Outcome {
-    let Some(run) = report["runs"]
-        .as_array()
-        .into_iter()
-        .flatten()
-        .find(|r| r["status"] == "Fail")
-        .and_then(|r| r["name"].as_str())
+    let Some(run) = report
+        .runs
+        .iter()
+        .find(|r| r.status == "Fail")
+        .map(|r| r.name.as_str())
     else {
         return Err(Error::new(
             "--repro: the first bad commit's report has no failed run to reproduce (a crash or timeout has no frame to probe)",
@@ -584,7 +580,7 @@ pub fn step(args: &BisectStepArgs) -> Outcome {
     let report = work.join("reports").join(&sha);
     // Every step's cards, so the end can name what changed at the first bad commit.
     let cards =
-        crate::commands::card::measure_in_child(&exe, prefix.as_os_str(), &args.selection.backend);
+        crate::harness::cards::measure_in_child(&exe, prefix.as_os_str(), &args.selection.backend);
     if let Ok(c) = &cards {
         let _ = std::fs::create_dir_all(&report);
         let _ = std::fs::write(

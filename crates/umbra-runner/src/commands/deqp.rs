@@ -153,7 +153,7 @@ pub fn main(argv: &[String]) -> Outcome {
     known_flags(argv).map_err(|e| Error::new(format!("umbra deqp: {e}\n{HELP}")))?;
     let cases = PathBuf::from(values(argv, "cases").first().copied().unwrap_or("cases"));
     if let Some(pictures) = values(argv, "umbra-pictures").first() {
-        if let Err(e) = crate::commands::conformance::outside_cases(Path::new(pictures), &cases) {
+        if let Err(e) = crate::conformance::plan::outside_cases(Path::new(pictures), &cases) {
             return Err(Error::new(format!(
                 "umbra deqp: --umbra-pictures={pictures}: {e}"
             )));

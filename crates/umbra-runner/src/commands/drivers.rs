@@ -31,7 +31,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use serde_json::Value;
+use umbra_report::{Metrics, Report, ReportRun};
 
 use crate::cli::DriversArgs;
 use crate::exit::{Error, Exit, Outcome};
@@ -48,31 +48,27 @@ pub struct Verdict {
 
 impl Verdict {
     /// From a report.json run: expectations undone (ExpectedFail is a failure, UnexpectedPass
-    /// and Flake a pass).
-    pub fn of(run: &Value) -> Verdict {
-        let status = run["status"].as_str().unwrap_or("");
-        let kind = match status {
+    /// and Flake a pass); `absent` where the side has no such run.
+    pub fn of(run: Option<&ReportRun>) -> Verdict {
+        let Some(run) = run else {
+            return Verdict {
+                kind: "absent".into(),
+                signature: String::new(),
+            };
+        };
+        let kind = match run.status.as_str() {
             "Pass" | "UnexpectedPass" | "Flake" => "pass",
             "Skip" => "skip",
             "Crash" => "crash",
             "Timeout" => "timeout",
             _ => "fail",
         };
-        let signature = run["failed"]
-            .as_array()
-            .map(|f| {
-                f.iter()
-                    .map(|c| {
-                        format!(
-                            "{}={}",
-                            c["check"].as_str().unwrap_or(""),
-                            c["count"].as_u64().unwrap_or(0)
-                        )
-                    })
-                    .collect::<Vec<_>>()
-                    .join("+")
-            })
-            .unwrap_or_default();
+        let signature = run
+            .failed
+            .iter()
+            .map(|c| format!("{}={}", c.check, c.count))
+            .collect::<Vec<_>>()
+            .join("+");
         Verdict {
             kind: kind.into(),
             signature,
@@ -141,76 +137,42 @@ impl std::fmt::Display for PictureDiff {
 }
 
 /// Joins two report.json run lists and lists what changed.
-pub fn compare(baseline: &Value, candidate: &Value) -> Vec<Change> {
-    let runs = |r: &Value| -> BTreeMap<String, Value> {
-        r["runs"]
-            .as_array()
-            .map(|a| {
-                a.iter()
-                    .filter_map(|x| Some((x["name"].as_str()?.to_string(), x.clone())))
-                    .collect()
-            })
-            .unwrap_or_default()
+pub fn compare(baseline: &Report, candidate: &Report) -> Vec<Change> {
+    let runs = |r: &'_ Report| -> BTreeMap<String, ReportRun> {
+        r.runs.iter().map(|x| (x.name.clone(), x.clone())).collect()
     };
     let (a, b) = (runs(baseline), runs(candidate));
     let mut names: Vec<&String> = a.keys().chain(b.keys()).collect();
     names.sort();
     names.dedup();
     let mut out = Vec::new();
-    let none = Value::Null;
     for name in names {
-        let (ra, rb) = (a.get(name).unwrap_or(&none), b.get(name).unwrap_or(&none));
+        let (ra, rb) = (a.get(name), b.get(name));
         let (va, vb) = (Verdict::of(ra), Verdict::of(rb));
-        let (va, vb) = (
-            if ra.is_null() {
-                Verdict {
-                    kind: "absent".into(),
-                    signature: String::new(),
-                }
-            } else {
-                va
-            },
-            if rb.is_null() {
-                Verdict {
-                    kind: "absent".into(),
-                    signature: String::new(),
-                }
-            } else {
-                vb
-            },
-        );
         let mut detail = Vec::new();
-        let m = |r: &Value, k: &str| r["metrics"][k].clone();
-        let num = |r: &Value, k: &str| m(r, k).as_u64();
-        for (k, what) in [
-            ("false_shadow", "false shadow"),
-            ("false_light", "false light"),
-        ] {
-            if num(ra, k) != num(rb, k) {
-                detail.push(format!(
-                    "{what} {} → {} px",
-                    opt(num(ra, k)),
-                    opt(num(rb, k))
-                ));
+        let (ma, mb) = (
+            ra.and_then(|r| r.metrics.as_ref()),
+            rb.and_then(|r| r.metrics.as_ref()),
+        );
+        type Count = fn(&Metrics) -> Option<u64>;
+        let counts: [(&str, Count); 4] = [
+            ("false shadow", |m| Some(m.false_shadow)),
+            ("false light", |m| Some(m.false_light)),
+            ("illegal", |m| m.reference.as_ref().map(|r| r.illegal)),
+            ("differ from the reference", |m| {
+                m.reference.as_ref().map(|r| r.differ)
+            }),
+        ];
+        for (what, count) in counts {
+            let (x, y) = (ma.and_then(count), mb.and_then(count));
+            if x != y {
+                detail.push(format!("{what} {} → {} px", opt(x), opt(y)));
             }
         }
-        let refc = |r: &Value, k: &str| r["metrics"]["reference"][k].as_u64();
-        for (k, what) in [
-            ("illegal", "illegal"),
-            ("differ", "differ from the reference"),
-        ] {
-            if refc(ra, k) != refc(rb, k) {
-                detail.push(format!(
-                    "{what} {} → {} px",
-                    opt(refc(ra, k)),
-                    opt(refc(rb, k))
-                ));
-            }
-        }
-        let hash = |r: &Value, k: &str| m(r, k).as_str().map(str::to_string);
-        let picture = hash(ra, "color_hash") != hash(rb, "color_hash")
-            || hash(ra, "visibility_hash") != hash(rb, "visibility_hash");
-        if picture && !ra.is_null() && !rb.is_null() && va.kind != "skip" && vb.kind != "skip" {
+        let picture = ma.map(|m| (&m.color_hash, &m.visibility_hash))
+            != mb.map(|m| (&m.color_hash, &m.visibility_hash));
+        let both = ra.is_some() && rb.is_some();
+        if picture && both && va.kind != "skip" && vb.kind != "skip" {
             detail.push("picture changed".into());
         }
         let kind = if va.kind == "pass" && vb.failing() {
@@ -228,16 +190,18 @@ pub fn compare(baseline: &Value, candidate: &Value) -> Vec<Change> {
         } else {
             continue;
         };
-        let pick = if rb.is_null() { ra } else { rb };
+        let Some(pick) = rb.or(ra) else {
+            continue;
+        };
         out.push(Change {
             name: name.clone(),
             kind,
             baseline: va,
             candidate: vb,
             detail: detail.join("; "),
-            file: pick["file"].as_str().unwrap_or("").to_string(),
-            point: pick["case"].as_str().unwrap_or("").to_string(),
-            backend: pick["backend"].as_str().unwrap_or("").to_string(),
+            file: pick.file.clone(),
+            point: pick.case.clone(),
+            backend: pick.backend.clone(),
             measured: None,
         });
     }
@@ -290,16 +254,8 @@ pub fn main(args: &DriversArgs) -> Outcome {
         reports.push(run_side(args, &exe, &out, side, mesa)?);
     }
     let mut changes = compare(&reports[0], &reports[1]);
-    let label = |r: &Value, mesa: &str| {
-        let versions: Vec<String> = r["drivers"]
-            .as_array()
-            .map(|d| {
-                d.iter()
-                    .filter_map(|x| x["mesa"].as_str().map(str::to_string))
-                    .collect()
-            })
-            .unwrap_or_default();
-        let mut v = versions;
+    let label = |r: &Report, mesa: &str| {
+        let mut v: Vec<&str> = r.drivers.iter().filter_map(|d| d.mesa.as_deref()).collect();
         v.sort();
         v.dedup();
         format!(
@@ -329,7 +285,7 @@ pub fn main(args: &DriversArgs) -> Outcome {
             out.display()
         )));
     }
-    let compared = reports[1]["runs"].as_array().map_or(0, Vec::len);
+    let compared = reports[1].runs.len();
     let count = |k: &str| changes.iter().filter(|c| c.kind == k).count();
     println!("\ndrivers: baseline {la} vs candidate {lb}");
     match &card_changes {
@@ -404,7 +360,7 @@ fn side_cards(
     let mut sides = Vec::new();
     for (side, mesa) in [("baseline", base), ("candidate", cand)] {
         println!("drivers: measuring the {side}'s behaviour cards ({mesa})");
-        let cards = crate::commands::card::measure_in_child(
+        let cards = crate::harness::cards::measure_in_child(
             exe,
             std::ffi::OsStr::new(mesa),
             &args.selection.backend,
@@ -418,7 +374,7 @@ fn side_cards(
         );
         sides.push(cards);
     }
-    let lines = crate::commands::card::changes_between(&sides[0], &sides[1]);
+    let lines = crate::judge::card::changes_between(&sides[0], &sides[1]);
     let _ = std::fs::write(out.join("card-changes.txt"), lines.join("\n") + "\n");
     Ok(lines)
 }
@@ -431,7 +387,7 @@ fn run_side(
     out: &Path,
     side: &str,
     mesa: &str,
-) -> Result<Value, Error> {
+) -> Result<Report, Error> {
     let dir = out.join(side);
     let _ = std::fs::create_dir_all(&dir);
     let mut cmd = Command::new(exe);
@@ -477,15 +433,14 @@ fn run_side(
             log.display()
         )));
     }
-    std::fs::read_to_string(dir.join("latest").join("report.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str::<Value>(&t).ok())
-        .ok_or_else(|| {
-            Error::new(format!(
-                "the {side} run wrote no report.json under {}",
-                dir.display()
-            ))
-        })
+    let report = dir.join("latest").join("report.json");
+    if !report.exists() {
+        return Err(Error::new(format!(
+            "the {side} run wrote no report.json under {}",
+            dir.display()
+        )));
+    }
+    Report::read(&report).map_err(|e| Error::new(format!("the {side} run's report: {e}")))
 }
 
 /// The directory of one change's pictures.
@@ -631,7 +586,7 @@ fn write_outputs(
     changes: &[Change],
     (la, lb): (&str, &str),
     cards: &Result<Vec<String>, String>,
-    reports: &[Value],
+    reports: &[Report],
     candidate: &str,
 ) -> std::io::Result<()> {
     write_tables(out, changes)?;
@@ -667,24 +622,18 @@ fn write_outputs(
             h,
             "<h3>{side}: drivers</h3><table><tr><th>backend</th><th>version</th><th>build</th><th>expectations applied</th></tr>"
         );
-        for d in r["drivers"].as_array().into_iter().flatten() {
+        for d in &r.drivers {
             let _ = write!(
                 h,
                 "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                esc(d["backend"].as_str().unwrap_or("")),
-                esc(d["version"]
-                    .as_str()
-                    .or(d["unavailable"].as_str())
+                esc(&d.backend),
+                esc(d
+                    .version
+                    .as_deref()
+                    .or(d.unavailable.as_deref())
                     .unwrap_or("")),
-                esc(d["build"].as_str().unwrap_or("system")),
-                esc(&d["expectations"]
-                    .as_array()
-                    .map(|a| a
-                        .iter()
-                        .filter_map(Value::as_str)
-                        .collect::<Vec<_>>()
-                        .join(", "))
-                    .unwrap_or_default())
+                esc(d.build.as_deref().unwrap_or("system")),
+                esc(&d.expectations.join(", "))
             );
         }
         h.push_str("</table>");
@@ -751,33 +700,78 @@ fn write_outputs(
 mod tests {
     use super::*;
 
-    fn run(name: &str, status: &str, failed: &[(&str, u64)], hash: &str, fs: u64) -> Value {
-        serde_json::json!({
-            "name": name, "status": status, "case": "c", "backend": "b", "file": "cases/c.json",
-            "failed": failed.iter().map(|(c, n)| serde_json::json!({"check": c, "count": n})).collect::<Vec<_>>(),
-            "metrics": {"false_shadow": fs, "false_light": 0, "color_hash": hash, "visibility_hash": hash,
-                        "reference": {"illegal": failed.first().map_or(0, |f| f.1), "differ": 0}}
-        })
+    fn run(name: &str, status: &str, failed: &[(&str, u64)], hash: &str, fs: u64) -> ReportRun {
+        let failed: Vec<umbra_report::FailedCheck> = failed
+            .iter()
+            .map(|(c, n)| umbra_report::FailedCheck {
+                check: umbra_report::check::Check::parse(c).expect("a check"),
+                count: *n,
+            })
+            .collect();
+        let reference = umbra_compare::reference::RefAgreement {
+            illegal: failed.first().map_or(0, |f| f.count),
+            ..Default::default()
+        };
+        ReportRun {
+            name: name.into(),
+            case: "c".into(),
+            file: "cases/c.json".into(),
+            backend: "b".into(),
+            golden: None,
+            status: status.into(),
+            reason: String::new(),
+            false_shadow: None,
+            false_light: None,
+            agreement: None,
+            ssim: None,
+            ssim_golden: None,
+            time_ms: 1.0,
+            metrics: Some(Metrics {
+                false_shadow: fs,
+                color_hash: hash.into(),
+                visibility_hash: hash.into(),
+                reference: Some(reference),
+                ..Metrics::default()
+            }),
+            failed,
+            diagnosis: None,
+            reproduce: String::new(),
+            stderr: None,
+        }
+    }
+
+    fn report(runs: Vec<ReportRun>) -> Report {
+        Report {
+            schema: umbra_report::json::SCHEMA,
+            wall_s: 0.0,
+            time_budget: umbra_report::TimeBudget::default(),
+            harness_overhead_share: 0.0,
+            command: String::new(),
+            mesa_build: serde_json::Value::Null,
+            drivers: Vec::new(),
+            runs,
+            shards: None,
+        }
     }
 
     #[test]
     fn changes_are_classified_on_raw_verdicts() {
-        let a = serde_json::json!({"runs": [
+        let a = report(vec![
             run("b/same", "Pass", &[], "1", 0),
             run("b/regressed", "Pass", &[], "1", 0),
             run("b/fixed", "ExpectedFail", &[("value", 9)], "1", 0),
             run("b/other-failure", "ExpectedFail", &[("value", 9)], "1", 0),
             run("b/picture", "Pass", &[], "1", 3),
             run("b/now-supported", "Skip", &[], "", 0),
-        ]});
-        let b = serde_json::json!({"runs": [
+        ]);
+        let b = report(vec![
             run("b/same", "Pass", &[], "1", 0),
             run("b/regressed", "Fail", &[("value", 4)], "2", 0),
             run("b/fixed", "UnexpectedPass", &[], "2", 0),
             run("b/other-failure", "Fail", &[("map", 2)], "1", 0),
             run("b/picture", "Pass", &[], "2", 5),
             run("b/now-supported", "Pass", &[], "1", 0),
-        ]});
+        ]);
         let c = compare(&a, &b);
         let kinds: Vec<(&str, &str)> = c.iter().map(|c| (c.name.as_str(), c.kind)).collect();
         assert_eq!(

@@ -82,21 +82,24 @@ pub fn main(args: &MergeArgs) -> Outcome {
         )));
     }
     // The run's wall time is the slowest shard's (shards run side by side).
-    let regressions = super::conformance::print_summary(
+    let regressions = crate::conformance::summary::print_summary(
         &results,
         &budget,
         &out,
         &run_dir,
         std::time::Duration::from_secs_f64(budget.wall_s),
     );
-    println!("{}", super::conformance::closing_line("merge", &results));
+    println!(
+        "{}",
+        crate::conformance::summary::closing_line("merge", &results)
+    );
     let refused: Vec<String> = shards
         .iter()
         .flat_map(|s| s.record.refused.iter().cloned())
         .collect::<BTreeSet<_>>()
         .into_iter()
         .collect();
-    super::conformance::outcome(
+    crate::conformance::summary::outcome(
         &refused,
         shards.iter().map(|s| s.record.unavailable_runs).sum(),
         results.len(),
@@ -462,8 +465,15 @@ fn disjoint(shards: &[Shard]) -> Result<(), String> {
 /// vector width on AVX2 and AVX-512 runners, another GPU of one kind): kept, with each
 /// variant and its shards added to the backend's drivers.txt lines and printed.
 fn drivers(shards: &[Shard]) -> Result<Vec<DriverRecord>, String> {
-    const SAME: [&str; 3] = ["vendor", "version", "mesa"];
-    const NOTED: [&str; 2] = ["renderer", "device"];
+    type Field = fn(&umbra_report::DriverRow) -> &Option<String>;
+    const SAME: [(&str, Field); 3] = [
+        ("vendor", |r| &r.vendor),
+        ("version", |r| &r.version),
+        ("mesa", |r| &r.mesa),
+    ];
+    const NOTED: [(&str, Field); 2] = [("renderer", |r| &r.renderer), ("device", |r| &r.device)];
+    // As the file writes a value: a string quoted, none as null.
+    let shown = |v: &Option<String>| serde_json::json!(v).to_string();
     let mut by_backend: BTreeMap<String, (DriverRecord, &Shard)> = BTreeMap::new();
     let mut notes: BTreeMap<String, Vec<String>> = BTreeMap::new();
     for s in shards {
@@ -472,23 +482,23 @@ fn drivers(shards: &[Shard]) -> Result<Vec<DriverRecord>, String> {
                 by_backend.insert(d.backend.clone(), (d.clone(), s));
                 continue;
             };
-            if let Some(k) = SAME.iter().find(|k| first.row[**k] != d.row[**k]) {
+            if let Some((k, f)) = SAME.iter().find(|(_, f)| f(&first.row) != f(&d.row)) {
                 return Err(format!(
                     "{} ran on different drivers: {} has {k} {}, {} has {}; give each kind of machine its own backend ids, or merge shards of one kind",
                     d.backend,
                     owner.label(),
-                    first.row[*k],
+                    shown(f(&first.row)),
                     s.label(),
-                    d.row[*k]
+                    shown(f(&d.row))
                 ));
             }
-            for k in NOTED {
-                if first.row[k] != d.row[k] {
+            for (k, f) in NOTED {
+                if f(&first.row) != f(&d.row) {
                     notes.entry(d.backend.clone()).or_default().push(format!(
                         "  also {k} {} (shard {}), beside {} (shard {})\n",
-                        d.row[k],
+                        shown(f(&d.row)),
                         s.label(),
-                        first.row[k],
+                        shown(f(&first.row)),
                         owner.label()
                     ));
                 }
@@ -582,27 +592,32 @@ fn write(
         .iter()
         .map(|d| (d.backend.clone(), d.text.clone()))
         .collect();
-    let text = super::conformance::drivers_text(&shards[0].record.mesa_line, &lines);
-    let header = serde_json::json!({
-        "mesa_build": shards[0].record.mesa_build,
-        "drivers": drivers.iter().map(|d| d.row.clone()).collect::<Vec<_>>(),
-        "shards": shards.iter().map(|s| serde_json::json!({
-            "index": s.record.shard.index,
-            "count": s.record.shard.count,
-            "by": s.record.shard.by,
-            "runs": s.runs.len(),
-            "wall_s": s.record.budget.wall_s,
-            "worker_s": s.record.budget.runs_s + s.record.budget.worker_start_s,
-            "dir": s.given.display().to_string(),
-        })).collect::<Vec<_>>(),
-    });
+    let text = crate::conformance::summary::drivers_text(&shards[0].record.mesa_line, &lines);
+    let header = umbra_report::Header {
+        mesa_build: shards[0].record.mesa_build.clone(),
+        drivers: drivers.iter().map(|d| d.row.clone()).collect(),
+        shards: Some(serde_json::json!(
+            shards
+                .iter()
+                .map(|s| serde_json::json!({
+                    "index": s.record.shard.index,
+                    "count": s.record.shard.count,
+                    "by": s.record.shard.by,
+                    "runs": s.runs.len(),
+                    "wall_s": s.record.budget.wall_s,
+                    "worker_s": s.record.budget.runs_s + s.record.budget.worker_start_s,
+                    "dir": s.given.display().to_string(),
+                }))
+                .collect::<Vec<_>>()
+        )),
+    };
     umbra_report::write_conformance(
         &run_dir.dir,
         &failures,
         &pictures,
         results,
         &text,
-        &header,
+        header,
         budget,
     )?;
     run_dir.publish()

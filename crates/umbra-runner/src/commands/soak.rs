@@ -22,9 +22,6 @@ use crate::cli::{ConformanceArgs, Output, Selection, SoakArgs};
 use crate::exit::{Error, Exit, Outcome};
 use umbra_report::{RunResult, Status};
 
-/// The default output directory.
-pub const DEFAULT_OUT: &str = "target/umbra/soak";
-
 /// Runs the command; returns its outcome.
 pub fn main(args: &SoakArgs) -> Outcome {
     let seed = match args.seed.as_deref().map(str::parse::<u64>).transpose() {
@@ -45,7 +42,12 @@ pub fn main(args: &SoakArgs) -> Outcome {
         }
         Ok(c) => c.unwrap_or(100),
     };
-    let out = PathBuf::from(args.output.out.as_deref().unwrap_or(DEFAULT_OUT));
+    let out = PathBuf::from(
+        args.output
+            .out
+            .as_deref()
+            .unwrap_or(crate::run_dir::SOAK_OUT),
+    );
     // The cases live in the run's own directory: two soaks into one --out never share them,
     // and the report's reproduce commands keep pointing at them.
     let run_dir = match crate::run_dir::RunDir::create(&out) {
@@ -58,7 +60,7 @@ pub fn main(args: &SoakArgs) -> Outcome {
         }
     };
     let dir = run_dir.dir.join("cases");
-    if let Err(e) = write_cases(&dir, seed, count) {
+    if let Err(e) = umbra_case::generate::write_cases(&dir, seed, count) {
         run_dir.abandon(&format!(
             "cannot write the generated cases under {}: {e}",
             dir.display()
@@ -89,7 +91,7 @@ pub fn main(args: &SoakArgs) -> Outcome {
     let soak_csv = |dir: &Path, results: &[RunResult]| {
         std::fs::write(dir.join("soak.csv"), Table::of(results).csv())
     };
-    let finished = super::conformance::run_in(&run_args, Some(run_dir), Some(&soak_csv));
+    let finished = crate::conformance::run_in(&run_args, Some(run_dir), Some(&soak_csv));
     // An error is said here, where the conformance run ends, before the soak's table.
     let outcome = finished.outcome.map_err(|e| Error::said(e.report()));
     if finished.results.is_empty() {
@@ -103,23 +105,6 @@ pub fn main(args: &SoakArgs) -> Outcome {
         table.text(seed, count, started.elapsed().as_secs_f64())
     );
     outcome
-}
-
-/// Writes the `count` cases of `seed` as `DIR/soak-SEED-K.json`, removing any other case
-/// file there first (a smaller soak into the same directory must not run a larger one's).
-pub fn write_cases(dir: &Path, seed: u64, count: usize) -> std::io::Result<()> {
-    std::fs::create_dir_all(dir)?;
-    for e in std::fs::read_dir(dir)? {
-        let p = e?.path();
-        if p.extension().is_some_and(|x| x == "json") {
-            std::fs::remove_file(p)?;
-        }
-    }
-    for case in umbra_case::generate::cases(seed, count) {
-        let text = umbra_case::generate::to_json(&case);
-        std::fs::write(dir.join(format!("{}.json", case.name)), text + "\n")?;
-    }
-    Ok(())
 }
 
 /// The soak's counts per backend, and its failures by class.

@@ -2,9 +2,10 @@
 //! build a worker runs on ([`mesa_build`], and its own C library where it carries one:
 //! [`own_libc`]), one process per backend ([`worker`], [`child`]), which dies with its parent
 //! ([`orphan`]) and says where a fault killed it ([`crash_report`]), kept in a [`pool`] under a memory limit ([`memory_limit`]) and fed by the one
-//! [`scheduler`] every command uses (sessions that restart a dead worker, reruns, queues), sweep timings ([`measure`]) and the
+//! [`scheduler`] every command uses (sessions that restart a dead worker, reruns, queues), behaviour cards measured in a worker of their own ([`cards`]), sweep timings ([`measure`]) and the
 //! terminal's progress line ([`progress`]). Uses the judge; knows no command.
 
+pub mod cards;
 pub mod child;
 pub mod crash_report;
 pub mod fake;

@@ -362,6 +362,27 @@ fn release_distance(a: &str, b: &str) -> u64 {
     d
 }
 
+/// Every entry that changed from `old` to `new`, per backend both measured, as
+/// `backend: change` lines in `new`'s order; then each backend measured on one side only.
+pub fn changes_between(old: &[Card], new: &[Card]) -> Vec<String> {
+    let find = |cards: &[Card], b: &str| cards.iter().position(|c| c.backend == b);
+    let mut lines: Vec<String> = new
+        .iter()
+        .filter_map(|n| Some((n, &old[find(old, &n.backend)?])))
+        .flat_map(|(n, o)| {
+            n.changes_since(o)
+                .into_iter()
+                .map(move |c| format!("{}: {}", n.backend, c.line()))
+        })
+        .collect();
+    for (cards, other, side) in [(new, old, "the new side"), (old, new, "the old side")] {
+        for c in cards.iter().filter(|c| find(other, &c.backend).is_none()) {
+            lines.push(format!("{}: measured on {side} only", c.backend));
+        }
+    }
+    lines
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

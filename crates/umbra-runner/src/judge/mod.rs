@@ -4,7 +4,7 @@
 //! compares with the other drivers' runs of its point ([`consensus`]), and the check
 //! across one backend's runs of a sweep ([`falls_along`]); and the backend's behaviour card
 //! ([`card`], measured by [`card_probes`], read as a narrowing of the judge by
-//! [`calibration`]). Depends on nothing else in the
+//! [`calibration`], and as conformance's card row by [`card_row`]). Depends on nothing else in the
 //! runner but the glob matcher.
 
 pub mod basis_key;
@@ -12,6 +12,7 @@ pub mod blessings;
 pub mod calibration;
 pub mod card;
 pub mod card_probes;
+pub mod card_row;
 pub mod card_sampler_probes;
 pub mod consensus;
 pub mod expectations;

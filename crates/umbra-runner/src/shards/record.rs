@@ -179,7 +179,7 @@ pub struct DriverRecord {
     /// Its lines in drivers.txt.
     pub text: String,
     /// Its row in report.json's `drivers`.
-    pub row: serde_json::Value,
+    pub row: umbra_report::DriverRow,
 }
 
 impl Record {

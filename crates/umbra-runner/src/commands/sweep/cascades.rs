@@ -18,7 +18,7 @@ use std::fmt::Write as _;
 
 use serde_json::{Value, json};
 
-use super::sweep_matrix::{Row, Technique};
+use super::matrix::{Row, Technique};
 use umbra_case::format::{Cascades, Light, SplitScheme};
 use umbra_report::escape::esc;
 

@@ -25,7 +25,7 @@ use umbra_case::fault::{Fault, Param};
 
 use crate::exit::{Exit, Outcome};
 
-use super::selftest::{Faulted, How, Seen, aimed_at, applies, exercises, sample_order};
+use super::{Faulted, How, Seen, aimed_at, applies, exercises, sample_order};
 
 /// The errors tried, largest first: relative for a parameter, texels for a shift. The steps
 /// between 50 % and 90 % read a parameter whose spec leaves a factor-of-two freedom (the

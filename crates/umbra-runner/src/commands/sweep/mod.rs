@@ -19,14 +19,17 @@ use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
 
-use super::sweep_matrix::{FIXED_ORTHO, matrix};
-pub use super::sweep_matrix::{Row, Technique};
+pub mod cascades;
+pub mod matrix;
+
 use crate::cli::SweepArgs;
 use crate::exit::{Error, Exit, Outcome};
 use crate::harness::measure::Measured;
 use crate::harness::pool::Reply;
 use crate::harness::scheduler::{NotReady, Session};
 use crate::harness::worker::{Request, RunVerdict};
+use matrix::{FIXED_ORTHO, matrix};
+pub use matrix::{Row, Technique};
 use umbra_report::escape::esc;
 
 /// Backends swept when none is named: the reference and one of each GPU API family.
@@ -136,8 +139,7 @@ pub fn main(args: &SweepArgs) -> Outcome {
         },
     };
     // A cascaded light sweeps its cascades instead (`sweep_cascades`).
-    let techniques =
-        super::sweep_cascades::matrix(&point.case).unwrap_or_else(|| matrix(&point.case));
+    let techniques = cascades::matrix(&point.case).unwrap_or_else(|| matrix(&point.case));
     let (file, plan) = write_case(&point, &techniques, &out)
         .map_err(|e| Error::new(format!("cannot generate the sweep case: {e}")))?;
     let started = Instant::now();
@@ -438,8 +440,8 @@ fn write_outputs(
         umbra_report::pareto::png(&plotted, &title).map_err(std::io::Error::other)?,
     )?;
     let mut section = section(rows, &front, scene, command, wall, out);
-    if super::sweep_cascades::matrix(&point.case).is_some() {
-        section += &super::sweep_cascades::section(rows, &point.case);
+    if cascades::matrix(&point.case).is_some() {
+        section += &cascades::section(rows, &point.case);
     }
     std::fs::write(out.join("section.html"), &section)?;
     std::fs::write(

@@ -98,7 +98,7 @@ pub const UNFAULTED: [(&str, &str); 10] = [
 fn applies(fault: Fault, backend: &str) -> bool {
     let es2 =
         crate::harness::registry::Descriptor::of(backend).is_some_and(|d| d.gles2_technique());
-    super::selftest::applies(fault, backend) && (fault != Fault::BilinearCoarse || es2)
+    super::applies(fault, backend) && (fault != Fault::BilinearCoarse || es2)
 }
 
 /// One backend's card with `fault` on (none: clean).
@@ -111,7 +111,7 @@ fn card(backend: &str, fault: Option<Fault>, limit: Duration) -> Result<Card, St
         ]);
     }
     let mut session = Session::start(backend, &env, limit);
-    super::card::of_session(&mut session)
+    crate::harness::cards::of_session(&mut session)
 }
 
 /// Runs `umbra selftest cards` over `backends`; exit 1 when a fault's entry did not move.
@@ -121,7 +121,7 @@ pub fn main(backends: &[String], limit: Duration) -> Outcome {
         "selftest cards: each card fault on each backend it applies to; caught = its own entry changed"
     );
     for b in backends {
-        if !super::selftest::applies(Fault::NoBias, b) {
+        if !super::applies(Fault::NoBias, b) {
             continue; // the reference: faults are a driver's.
         }
         let clean = match card(b, None, limit) {

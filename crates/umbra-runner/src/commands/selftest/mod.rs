@@ -20,6 +20,10 @@
 //!   instead, every exercising point of each, and reports the catch rate per fault: how far
 //!   the judge's sensitivity carries beyond the cases it was developed against.
 
+pub mod cards;
+pub mod orientations;
+pub mod thresholds;
+
 use crate::harness::registry::Descriptor;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -33,6 +37,28 @@ use crate::harness::pool::Reply;
 use crate::harness::scheduler::{NotReady, Session};
 use crate::harness::worker::Request;
 use crate::judge::expectations::Expectations;
+
+/// Runs `umbra selftest` in the mode asked for ([`SelftestArgs::mode`]) over one setup
+/// ([`setup`]): the hunt of every fault on every backend (the default, `faults`),
+/// `thresholds` (the smallest error of each parameter each backend's judge catches:
+/// [`thresholds`]), `orientations` (the face/orientation table: [`orientations`]) and
+/// `cards` (each card probe's fault caught: [`cards`]).
+pub fn main(args: &SelftestArgs) -> Outcome {
+    let setup = setup(args)?;
+    match args.mode() {
+        SelftestMode::Orientations => {
+            let points: Vec<umbra_case::CasePoint> =
+                setup.points.iter().map(|p| p.2.clone()).collect();
+            orientations::main(&points)
+        }
+        SelftestMode::Thresholds => {
+            let chosen = setup.chosen.then_some(&setup.backends[..]);
+            thresholds::main(&setup.points, chosen, &setup.how(), setup.jobs)
+        }
+        SelftestMode::Faults => hunt_all(&setup),
+        SelftestMode::Cards => cards::main(&setup.backends, setup.how().timeout),
+    }
+}
 
 /// How many exercising points each fault × backend pair runs at least.
 pub const SAMPLE: usize = 6;
@@ -300,8 +326,8 @@ fn clean_calibrations(backends: &[String], timeout: Duration) -> BTreeMap<String
     let mut out = BTreeMap::new();
     for b in backends {
         let env = crate::harness::registry::worker_env(b);
-        let live = crate::commands::card::measured_alone(b, &env, timeout);
-        if let Some(c) = crate::commands::card::calibration_of(b, Some(&live), true) {
+        let live = crate::harness::cards::measured_alone(b, &env, timeout);
+        if let Some(c) = crate::judge::card_row::calibration_of(b, Some(&live), true) {
             out.insert(b.clone(), c);
         }
     }
@@ -460,10 +486,10 @@ fn soak_cases(args: &SelftestArgs) -> Result<Option<PathBuf>, String> {
         args.output
             .out
             .as_deref()
-            .unwrap_or(super::soak::DEFAULT_OUT),
+            .unwrap_or(crate::run_dir::SOAK_OUT),
     )
     .join("selftest-cases");
-    super::soak::write_cases(&dir, seed, count).map_err(|e| {
+    umbra_case::generate::write_cases(&dir, seed, count).map_err(|e| {
         format!(
             "cannot write the generated cases under {}: {e}",
             dir.display()
