@@ -70,6 +70,14 @@ impl Error {
         }
     }
 
+    /// An error with its own exit (a reduction whose point does not fail: [`Exit::Fail`]).
+    pub fn with(exit: Exit, message: impl Into<String>) -> Error {
+        Error {
+            exit,
+            message: message.into(),
+        }
+    }
+
     /// An error whose details the command has already written to stderr.
     pub fn said(exit: Exit) -> Error {
         Error {

@@ -14,6 +14,7 @@ pub mod exit;
 pub mod glob;
 pub mod harness;
 pub mod judge;
+pub mod reduction;
 pub mod repro;
 pub mod run_dir;
 pub mod shards;

@@ -2,12 +2,12 @@
 //! the leaves (`exit`, `glob`, `atomic_file`, `run_dir`, `case_size`, `version`) know nothing
 //! above them, `judge` (one point judged, goldens, expectations, cards) knows neither the
 //! harness nor a command, `harness` (workers, pool, registry, Mesa builds), `shards` and
-//! `repro` know no command, `conformance` (a run as a library) is called by the commands and
-//! calls none, a command imports no other command, and no two modules import each other in a
-//! circle. Every module has a layer ([`layer`]): a new one that is not given one fails here.
-//! Imports are read through `crate::` and `super::` paths alike. Reporting is its own crate
-//! (`umbra-report`) and never names the runner. A `use` that points up a layer fails here
-//! with the file and the import.
+//! `repro` know no command, `conformance` and `reduction` (a run and a reduction as
+//! libraries) are called by the commands and call none, a command imports no other command,
+//! and no two modules import each other in a circle. Every module has a layer ([`layer`]): a
+//! new one that is not given one fails here. Imports are read through `crate::` and `super::`
+//! paths alike. Reporting is its own crate (`umbra-report`) and never names the runner. A
+//! `use` that points up a layer fails here with the file and the import.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -116,9 +116,9 @@ fn known_layer(module: &str) -> Option<u8> {
         "harness" | "shards" | "repro" => 2,
         // The command line's tables name the commands' help only.
         "cli" => 3,
-        // A conformance run as a library (plan, execution, gathering, summary), which the
-        // commands call.
-        "conformance" => 4,
+        // A conformance run and a reduction as libraries (plan, execution, gathering,
+        // summary; the reducer), which the commands call.
+        "conformance" | "reduction" => 4,
         // The commands: each calls the layers below, none another command
         // ([`commands_import_no_command`]).
         "commands" => 5,

@@ -1,10 +1,11 @@
 //! `umbra repro RUN -o DIR`: a failing run (`backend/case@point`, as conformance names it)
 //! becomes a bundle a driver developer can use without umbra (see [`crate::repro`]):
 //!
-//! 1. the point is found under `--cases` (or `--case FILE`) and reduced by `umbra reduce`
-//!    (same failed checks, still passing on the reference) into `case.json`; a case of several
-//!    lights becomes a one-light case when the failure needs only one, and is refused, naming
-//!    the reduced case, when it needs several;
+//! 1. the point is found under `--cases` (or `--case FILE`) and reduced by the reducer
+//!    ([`crate::reduction`]: same failed checks, still passing on the reference; its log in
+//!    `reduce.log`) into `case.json`; a case of several lights becomes a one-light case when
+//!    the failure needs only one, and is refused, naming the reduced case, when it needs
+//!    several;
 //! 2. in the driver's process, the reduced run is rendered judged and recorded, and
 //!    `repro.c`, the probes, the pictures and `facts.json` are written ([`crate::repro::emit`]);
 //! 3. `repro.c` is compiled with `cc` and run on the driver and on a conforming control
@@ -18,6 +19,7 @@
 //! Exit: 0 a bundle that reproduces, 1 nothing to reproduce (the run passes) or a program
 //! that does not reproduce, 125 could not run.
 
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Duration;
@@ -137,57 +139,45 @@ fn target(args: &ReproArgs) -> Result<Target, Error> {
     })
 }
 
-/// `umbra reduce` into `case.json` (its log into `reduce.log`): the reduced file and the
-/// reducer's before → after line. A point that passes fails the command, "nothing to
-/// reproduce".
+/// The reducer ([`crate::reduction`]) into `case.json`, its log into `reduce.log`: the
+/// reduced file and the reducer's before → after line. A point that passes fails the
+/// command, "nothing to reproduce".
 fn reduce_step(args: &ReproArgs, t: &Target) -> Result<(PathBuf, String), Error> {
     let reduced = t.out.join("case.json");
-    // Values as `--flag=VALUE`, the file as an operand: no case name or path reads as an
-    // option in the child (a case point `-rf` once did).
-    let mut reduce: Vec<String> = vec![
-        "reduce".into(),
-        format!("--point={}", t.point),
-        format!("--backend={}", t.backend),
-        format!("--out={}", reduced.display()),
-        "--".into(),
-        t.case_file.display().to_string(),
-    ];
-    for c in &args.check {
-        reduce.insert(1, format!("--check={c}"));
-    }
-    for (flag, value) in [("mesa", &args.mesa), ("timeout", &args.timeout)] {
-        if let Some(v) = value {
-            reduce.insert(1, format!("--{flag}={v}"));
+    let reduce = crate::cli::ReduceArgs {
+        positional: t.case_file.display().to_string(),
+        point: t.point.clone(),
+        backend: vec![t.backend.clone()],
+        check: args.check.clone(),
+        output: crate::cli::Output {
+            out: Some(reduced.display().to_string()),
+            ..Default::default()
+        },
+        timeout: args.timeout.clone(),
+        mesa: args.mesa.clone(),
+    };
+    let log_path = t.out.join("reduce.log");
+    let mut log = std::fs::File::create(&log_path)
+        .map_err(|e| Error::new(format!("cannot write {}: {e}", log_path.display())))?;
+    let done = crate::reduction::reduce(&reduce, &mut log);
+    match done {
+        Ok(r) => {
+            println!("  reduced: {}", r.file.display());
+            Ok((r.file, r.summary))
+        }
+        Err(e) => {
+            // The log ends as the command's would, with the error.
+            let _ = writeln!(log, "error: {e}");
+            if e.exit() == Exit::Fail {
+                eprintln!(
+                    "error: nothing to reproduce: {e}\n(umbra repro takes a run whose frame or shadow map fails the judge, as `umbra conformance` lists them; the reducer's log is in {})",
+                    log_path.display()
+                );
+                return Err(Error::said(Exit::Fail));
+            }
+            Err(Error::new(format!("the reducer could not run: {e}")))
         }
     }
-    let (code, log) =
-        run_self(&reduce).map_err(|e| Error::new(format!("cannot start the reducer: {e}")))?;
-    save(&t.out.join("reduce.log"), &log)?;
-    if code != Some(0) {
-        let last = log
-            .lines()
-            .rev()
-            .find(|l| l.starts_with("error:"))
-            .unwrap_or("the reducer failed")
-            .trim_start_matches("error: ");
-        if code == Some(1) {
-            eprintln!(
-                "error: nothing to reproduce: {last}\n(umbra repro takes a run whose frame or shadow map fails the judge, as `umbra conformance` lists them; the reducer's log is in {})",
-                t.out.join("reduce.log").display()
-            );
-            return Err(Error::said(Exit::Fail));
-        }
-        return Err(Error::new(format!("the reducer could not run: {last}")));
-    }
-    let summary = log
-        .lines()
-        .rev()
-        .find(|l| l.contains("→"))
-        .unwrap_or("")
-        .trim()
-        .to_string();
-    println!("  reduced: {}", reduced.display());
-    Ok((reduced, summary))
 }
 
 /// Refuses a reduced case that still has several lights: the standalone program's probes
@@ -397,19 +387,6 @@ fn default_control(backend: &str) -> Option<String> {
     let (api, driver) = backend.split_once('/')?;
     let gl = registry::Descriptor::of(backend).is_some_and(|d| d.umbra_makes_the_gl_calls());
     (gl && driver != "llvmpipe").then(|| format!("{api}/llvmpipe"))
-}
-
-/// Runs this executable with `args`, returning its exit code and its stdout and stderr
-/// together.
-fn run_self(args: &[String]) -> std::io::Result<(Option<i32>, String)> {
-    let exe = crate::harness::own_libc::self_exe()?;
-    let mut cmd = Command::new(exe);
-    cmd.args(args);
-    crate::harness::pool::without_inherited_insta(&mut cmd);
-    let o = cmd.output()?;
-    let mut text = String::from_utf8_lossy(&o.stdout).into_owned();
-    text.push_str(&String::from_utf8_lossy(&o.stderr));
-    Ok((o.status.code(), text))
 }
 
 /// `cc repro.c -o repro -lEGL -lm`, as the README says.
