@@ -2,7 +2,8 @@
 //! of answer, so that any sub-block's one definite answer (if it has one) or the hull of
 //! what its texels may answer costs a few reads. Castano's filter asks this of nine taps for
 //! every base texel the coordinate may take, and a coordinate uncertain by several texels
-//! takes many (soak-47-898: minutes per frame when each tap read its block itself).
+//! takes many: with each tap reading its block itself, a frame whose coordinate is uncertain
+//! by several texels took minutes.
 
 use std::ops::RangeInclusive;
 

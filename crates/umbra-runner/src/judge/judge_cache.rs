@@ -45,7 +45,7 @@
 //! could inflate to the very bytes it held: 28 % of the single-bit flips of a packed truth
 //! did, measured over 20 secrets. The entry was then right but used without a word, and a
 //! test that damages one bit failed at random, the secret's bytes being part of what was
-//! deflated: stop 54's CI, 2026-11-29.) The judged renders
+//! deflated.) The judged renders
 //! are mostly runs of equal values (background, uniformly lit or shadowed floor, the map's
 //! cleared texels), and unpacked the catalogue's entries took 11 GB of one CI job's disk
 //! (2,324 judged entries, 6 GB of them the GL profile's map ranges) and filled it; packed
