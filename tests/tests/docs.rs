@@ -3,8 +3,9 @@
 //! README, the book and the folders' READMEs reaches a file, and every `#anchor` a heading
 //! (GitHub's and mdBook's slugs: lower case, spaces to `-`, punctuation dropped); every page
 //! of the book is in its table of contents (`docs/SUMMARY.md`, mdBook's format); and every
-//! cite of the catalogue in the sources (`docs/catalogue.md §N`) names a numbered entry there.
-//! No tool is needed: a forge renders these pages as they are, and CI pays for no book build.
+//! cite of the catalogue in the sources (`docs/catalogue.md §N`) names a numbered entry there;
+//! and each recipe's file list is what its own `grep` finds. No tool but `sh` and `grep` is
+//! needed: a forge renders these pages as they are, and CI pays for no book build.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -250,4 +251,85 @@ fn the_checker_reads_links_and_headings_as_a_forge_does() {
     );
     assert_eq!(slug("`--shard` and [merge](ci.md)"), "--shard-and-merge");
     assert_eq!(slug("Sharded in CI: `--shard`"), "sharded-in-ci---shard");
+}
+
+/// Each recipe's `grep -rn …` block, run as written from the repository's root: the source
+/// files it finds. A recipe whose text after the block says "As of this writing" lists its
+/// hits as bullets (`- \`path\``), and that list must be exactly what the grep finds; any
+/// other recipe must name every source file its grep finds (a precedent that now touches a
+/// file the recipe does not name is a recipe that drifted).
+#[test]
+fn each_recipes_file_list_is_what_its_own_grep_finds() {
+    let root = root();
+    let mut greps = 0;
+    let mut drift = Vec::new();
+    for recipe in files_under(&root.join("docs/recipes"), &[".md"]) {
+        let text = std::fs::read_to_string(&recipe).expect("recipe");
+        let lines: Vec<&str> = text.lines().collect();
+        let name = recipe.file_name().map(|n| n.to_string_lossy().into_owned());
+        for (at, line) in lines.iter().enumerate() {
+            if !line.starts_with("grep -rn ") || lines.get(at.wrapping_sub(1)) != Some(&"```sh") {
+                continue;
+            }
+            greps += 1;
+            let out = std::process::Command::new("sh")
+                .arg("-c")
+                .arg(line)
+                .current_dir(&root)
+                .output()
+                .expect("sh runs the recipe's grep");
+            let hits: BTreeSet<String> = String::from_utf8_lossy(&out.stdout)
+                .lines()
+                .filter_map(|l| l.split(':').next())
+                .filter(|f| f.ends_with(".rs"))
+                .map(str::to_string)
+                .collect();
+            assert!(!hits.is_empty(), "{name:?}: `{line}` finds nothing");
+            // The bullets right after "As of this writing", if the recipe lists its hits.
+            let after = &lines[at + 1..];
+            let listed: Option<BTreeSet<String>> = after
+                .iter()
+                .take_while(|l| !l.starts_with("## "))
+                .position(|l| l.contains("As of this writing"))
+                .map(|p| {
+                    after[p + 1..]
+                        .iter()
+                        .skip_while(|l| !l.starts_with("- "))
+                        .take_while(|l| l.starts_with("- ") || l.starts_with("  "))
+                        .filter(|l| l.starts_with("- "))
+                        .flat_map(|l| {
+                            // Every backticked path before the item's first colon.
+                            let head = l.split("`:").next().unwrap_or(l);
+                            head.split('`')
+                                .skip(1)
+                                .step_by(2)
+                                .filter(|p| p.ends_with(".rs"))
+                                .map(str::to_string)
+                                .collect::<Vec<_>>()
+                        })
+                        .collect()
+                });
+            let named = |hit: &str| match &listed {
+                Some(list) => list.iter().any(|l| hit.ends_with(&format!("/{l}"))),
+                None => text.contains(hit),
+            };
+            for hit in &hits {
+                if !named(hit) {
+                    drift.push(format!(
+                        "{name:?}: its grep finds {hit}, which it does not name"
+                    ));
+                }
+            }
+            for l in listed.iter().flatten() {
+                if !hits.iter().any(|h| h.ends_with(&format!("/{l}"))) {
+                    drift.push(format!("{name:?}: lists {l}, which its grep does not find"));
+                }
+            }
+        }
+    }
+    assert!(greps >= 2, "only {greps} recipe greps found");
+    assert!(
+        drift.is_empty(),
+        "recipes drifted from their code: {drift:#?}"
+    );
 }

@@ -52,6 +52,30 @@ impl fmt::Display for BackendId {
     }
 }
 
+/// What a family of backends can do, as its own crate declares it (`umbra_gl::Api::capabilities`,
+/// `umbra_wgpu::Kind::capabilities`): the runner's registry reads these rather than parsing
+/// an id, and the self-test's faults, the repro's capture and `umbra backends` follow it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Capabilities {
+    /// Draws through a driver, whose shaders a self-test fault can be injected into.
+    pub driver: bool,
+    /// umbra makes the GL calls itself, so a repro can capture and replay them as C.
+    pub umbra_makes_gl_calls: bool,
+    /// Samples the map through GL texture units and picks a texture component (GL's binding
+    /// model; wgpu binds by group).
+    pub gl_texture_units: bool,
+    /// Clip depth in [0, 1], where GL's [-1, 1] mapping is a fault.
+    pub zero_to_one_depth: bool,
+    /// Takes the depth bias's constant as a whole number of units (wgpu's `DepthBiasState`),
+    /// so a fractional offset is rounded.
+    pub integer_depth_bias: bool,
+    /// Can compare in the shader, with its own LINEAR filter.
+    pub manual_compare: bool,
+    /// The technique GLES 2 forces: no float depth, no mipmapped compare, every compare done
+    /// by hand in the shader (which clamps the reference itself).
+    pub gles2_technique: bool,
+}
+
 /// What the driver says about itself, verbatim.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DriverInfo {

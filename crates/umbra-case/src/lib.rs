@@ -53,7 +53,9 @@ pub mod technique;
 pub mod twin;
 pub mod validate;
 
-pub use backend::{Backend, BackendError, BackendId, DriverInfo, Needs, ReproProgram, Support};
+pub use backend::{
+    Backend, BackendError, BackendId, Capabilities, DriverInfo, Needs, ReproProgram, Support,
+};
 pub use calibration::Calibration;
 pub use conventions::{ClipDepth, Convention, LookupMatrices, ShadowCoord};
 pub use error::{CaseError, CaseErrors};

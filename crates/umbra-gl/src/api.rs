@@ -17,6 +17,21 @@ impl Api {
     /// Every flavour, in report order.
     pub const ALL: [Api; 3] = [Api::Gl33, Api::Gles3, Api::Gles2];
 
+    /// What umbra-gl can do on this API: it makes every GL call itself (texture units, a
+    /// shader compare on every API), in GL's [-1, 1] clip depth; GLES 2 forces its own
+    /// technique.
+    pub fn capabilities(self) -> umbra_case::Capabilities {
+        umbra_case::Capabilities {
+            driver: true,
+            umbra_makes_gl_calls: true,
+            gl_texture_units: true,
+            zero_to_one_depth: false,
+            integer_depth_bias: false,
+            manual_compare: true,
+            gles2_technique: self == Api::Gles2,
+        }
+    }
+
     /// The id prefix: `gl33`, `gles3`, `gles2`.
     pub fn name(self) -> &'static str {
         match self {

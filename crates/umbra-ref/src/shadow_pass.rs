@@ -9,7 +9,9 @@
 //!
 //! A judged render also computes, per texel, the range of values *any* conformant
 //! implementation may store there ([`DepthLayer::lo`], [`DepthLayer::hi`]); see
-//! [`Freedom`] for each term and the clause it comes from.
+//! [`Freedom`] for each term and the clause it comes from. The spec's range is computed
+//! first; a driver's modelled deviations (a profile that names one) then widen it, each in
+//! one function of one block (`Freedom::deviant_unit`, `deviant_offset`, `deviant_stored`).
 
 use glam::Vec4;
 use umbra_case::format::{DepthFormat, Shadow};
@@ -133,13 +135,9 @@ impl Freedom {
             ((m_max - snap - diff).max(0.0), m_max + snap + diff, r, r)
         } else {
             let c = self.calibration;
-            let (r_lo, mut r_hi) = c.offset_unit(self.format, self.format.offset_unit_range(z));
-            if self.deviations.has(umbra_case::Deviation::OffsetUnitX4) {
-                // The deviation's unit, where the format has codes (module note of Deviation).
-                if let Some(n) = self.format.fixed_bits() {
-                    r_hi = r_hi.max(4.0 / f64::from((1u32 << n) - 1));
-                }
-            }
+            // The unit's range: the spec's (a card may narrow it), then a deviation's.
+            let spec = c.offset_unit(self.format, self.format.offset_unit_range(z));
+            let (r_lo, r_hi) = self.deviant_unit(spec);
             let exact = umbra_case::math::hypot(dx, dy);
             // The slope form a card read picks one end: max, or the exact gradient.
             let (m_lo, m_hi) = match c.slope {
@@ -161,22 +159,8 @@ impl Freedom {
         } else if self.clamp < 0.0 {
             (lo, hi) = (lo.max(self.clamp), hi.max(self.clamp));
         }
-        if self
-            .deviations
-            .has(umbra_case::Deviation::OffsetVertexClamp)
-        {
-            // A vertex whose offset depth leaves [0, 1] keeps none of it; the fragments
-            // between keep part: anything from no offset to the whole.
-            let away = f64::from(self.conv.toward_far());
-            let leaves = t.z.iter().any(|&z| {
-                let moved = f64::from(z) + away * hi;
-                !(0.0..=1.0).contains(&moved)
-            });
-            if leaves {
-                (lo, hi) = (lo.min(0.0), hi.max(0.0));
-            }
-        }
-        (lo, hi)
+        // The spec's offset, then what a modelled deviation adds to it.
+        self.deviant_offset(t, (lo, hi))
     }
 
     /// The range of stored values triangle `t` may leave at a centre with edge values `e`.
@@ -191,7 +175,7 @@ impl Freedom {
             + 4.0 * f64::from(umbra_case::depth::f32_spacing(z as f32));
         let away = f64::from(self.conv.toward_far());
         let (o1, o2) = (away * offset.0, away * offset.1);
-        let (mut lo, mut hi) = (z - err + o1.min(o2), z + err + o1.max(o2));
+        let (lo, hi) = (z - err + o1.min(o2), z + err + o1.max(o2));
         if self.packed {
             let pack = |d: f64| 2f64.powi(-24) * d.abs() * (1.0 + 1.0 / 254.0) + 255f64.powi(-4);
             let (lo, hi) = (lo.clamp(0.0, 1.0), hi.clamp(0.0, 1.0));
@@ -205,6 +189,71 @@ impl Freedom {
             let step = 1.0 / f64::from((1u32 << bits) - 1);
             return (lo - pack(lo) - step, hi + pack(hi) + step);
         }
+        // The spec's value, then what a modelled deviation adds to it, before the format
+        // stores it.
+        let (lo, hi) = self.deviant_stored(t, e, err, (o1, o2), (lo, hi));
+        // Depth clamp clamps every format's value on both APIs (GL 4.6, "Depth Buffer Test":
+        // to the depth range; Vulkan, "Depth Clamping and Range Adjustment": to the
+        // viewport's).
+        let (lo, hi) = if self.format.is_fixed() || self.depth_clamp {
+            (lo.clamp(0.0, 1.0), hi.clamp(0.0, 1.0))
+        } else {
+            (lo.min(lo.clamp(0.0, 1.0)), hi.max(hi.clamp(0.0, 1.0)))
+        };
+        self.format
+            .code_range_rounded(lo, hi, self.calibration.rounding_of(self.format))
+    }
+}
+
+/// The modelled deviations ([`umbra_case::Deviation`]), in one place: each takes a range the
+/// spec gave (above) and widens it by what the driver is known to do outside it, for a
+/// profile that names the deviation; without one, each returns the range it was given.
+impl Freedom {
+    /// The offset unit's range `spec`, widened by `OffsetUnitX4`: the deviation's unit, where
+    /// the format has codes (module note of Deviation).
+    fn deviant_unit(&self, spec: (f64, f64)) -> (f64, f64) {
+        let (lo, mut hi) = spec;
+        if self.deviations.has(umbra_case::Deviation::OffsetUnitX4) {
+            if let Some(n) = self.format.fixed_bits() {
+                hi = hi.max(4.0 / f64::from((1u32 << n) - 1));
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Triangle `t`'s offset range `spec`, widened by `OffsetVertexClamp`: a vertex whose
+    /// offset depth leaves [0, 1] keeps none of it; the fragments between keep part:
+    /// anything from no offset to the whole.
+    fn deviant_offset(&self, t: &Tri, spec: (f64, f64)) -> (f64, f64) {
+        let (mut lo, mut hi) = spec;
+        if self
+            .deviations
+            .has(umbra_case::Deviation::OffsetVertexClamp)
+        {
+            let away = f64::from(self.conv.toward_far());
+            let leaves = t.z.iter().any(|&z| {
+                let moved = f64::from(z) + away * hi;
+                !(0.0..=1.0).contains(&moved)
+            });
+            if leaves {
+                (lo, hi) = (lo.min(0.0), hi.max(0.0));
+            }
+        }
+        (lo, hi)
+    }
+
+    /// The range `spec` of values triangle `t` may leave at a centre with edge values `e`
+    /// (its own freedom `err`, its offsets `o`), before the format stores it, widened by the
+    /// deviations of the stored value.
+    fn deviant_stored(
+        &self,
+        t: &Tri,
+        e: [i64; 3],
+        err: f64,
+        o: (f64, f64),
+        spec: (f64, f64),
+    ) -> (f64, f64) {
+        let (mut lo, mut hi) = spec;
         if self.depth_clamp
             && (self.factor != 0.0 || self.units != 0.0)
             && self
@@ -216,7 +265,7 @@ impl Freedom {
             // between the clamped corners is what the pass interpolates; as wide as the
             // corners' own freedom around it.
             let a = t.area as f64;
-            for o in [o1, o2] {
+            for o in [o.0, o.1] {
                 let v: f64 = (0..3)
                     .map(|i| e[i] as f64 / a * (f64::from(t.z[i]) + o).clamp(0.0, 1.0))
                     .sum();
@@ -237,16 +286,7 @@ impl Freedom {
                 hi += lag;
             }
         }
-        // Depth clamp clamps every format's value on both APIs (GL 4.6, "Depth Buffer Test":
-        // to the depth range; Vulkan, "Depth Clamping and Range Adjustment": to the
-        // viewport's).
-        let (lo, hi) = if self.format.is_fixed() || self.depth_clamp {
-            (lo.clamp(0.0, 1.0), hi.clamp(0.0, 1.0))
-        } else {
-            (lo.min(lo.clamp(0.0, 1.0)), hi.max(hi.clamp(0.0, 1.0)))
-        };
-        self.format
-            .code_range_rounded(lo, hi, self.calibration.rounding_of(self.format))
+        (lo, hi)
     }
 }
 

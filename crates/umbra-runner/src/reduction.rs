@@ -43,7 +43,7 @@ use crate::cli::ReduceArgs;
 use crate::exit::{Error, Exit};
 use crate::harness::pool::Reply;
 use crate::harness::scheduler::{NotReady, Session};
-use crate::harness::worker::{Request, RunVerdict};
+use crate::judge::protocol::{JudgeRequest, Request, RunVerdict};
 
 /// How a run ended, in the terms "fails the same way" compares.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -125,18 +125,7 @@ impl Judge {
         let Some(w) = slot.as_mut() else {
             return Verdict::Other("no worker".into());
         };
-        let req = Request {
-            file: file.clone(),
-            index: 0,
-            failures: None,
-            golden: None,
-            repeat: None,
-            no_twins: true,
-            gallery: None,
-            deviation: None,
-            card: false,
-            calibration: None,
-        };
+        let req = Request::Judge(JudgeRequest::bare(file.clone(), 0, true));
         // A worker that crashed or timed out is started again by the session, for the next
         // candidate.
         let v = match w.reply(&req).map(|(reply, _)| reply) {
@@ -285,7 +274,7 @@ impl<'l> Reducer<'l> {
     ) -> Result<Reducer<'l>, Error> {
         let file = args.positional.clone();
         let point_id = point.id();
-        let timeout = crate::cli::timeout_secs("reduce", args.timeout.as_deref(), 120)?;
+        let timeout = args.timeout.duration();
         let required = args
             .check
             .iter()

@@ -31,6 +31,21 @@ impl Kind {
     /// Both kinds, in report order.
     pub const ALL: [Kind; 2] = [Kind::Vulkan, Kind::Gl];
 
+    /// What umbra-wgpu can do on this kind: [0, 1] clip depth and a whole-unit depth-bias
+    /// constant on both; a shader compare only on Vulkan (naga's GLSL output has no
+    /// `textureLoad` from a depth texture).
+    pub fn capabilities(self) -> umbra_case::Capabilities {
+        umbra_case::Capabilities {
+            driver: true,
+            umbra_makes_gl_calls: false,
+            gl_texture_units: false,
+            zero_to_one_depth: true,
+            integer_depth_bias: true,
+            manual_compare: self == Kind::Vulkan,
+            gles2_technique: false,
+        }
+    }
+
     /// The id's first part.
     pub fn prefix(self) -> &'static str {
         match self {

@@ -8,10 +8,6 @@ use crate::harness::cards::of_session;
 use crate::harness::scheduler::Session;
 use crate::judge::card::Card;
 
-/// The default time limit of one backend's probes (they take 0.1 to 2 s on this machine's
-/// software drivers; a slow hardware driver's shader compiles may take far longer).
-const DEFAULT_TIMEOUT_S: u64 = 300;
-
 /// Runs `umbra card`; returns its outcome.
 pub fn main(args: &CardArgs) -> Outcome {
     if let [old, new] = &args.diff[..] {
@@ -27,11 +23,7 @@ pub fn main(args: &CardArgs) -> Outcome {
     let named: Vec<&str> = args.backend.iter().map(String::as_str).collect();
     let ids = crate::harness::registry::selected(&named, crate::harness::registry::known())
         .map_err(|e| crate::cli::usage_error("card", &e))?;
-    let limit = crate::cli::timeout_secs(
-        "card",
-        args.timeout.map(|t| t.to_string()).as_deref(),
-        DEFAULT_TIMEOUT_S,
-    )?;
+    let limit = args.timeout.duration();
     let mut cards = Vec::new();
     let mut could_not = Vec::new();
     for id in &ids {

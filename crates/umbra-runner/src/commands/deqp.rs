@@ -45,7 +45,7 @@ use umbra_report::Status;
 
 use crate::exit::{Error, Exit, Outcome};
 use crate::harness::scheduler;
-use crate::harness::worker::Request;
+use crate::judge::protocol::{JudgeRequest, Request};
 use crate::judge::expectations::{Expectations, Expected};
 
 /// A test's name for deqp-runner.
@@ -378,18 +378,11 @@ impl Runs {
             .map(|f| opts.expectations.for_driver(f))
             .unwrap_or_default();
         let run = format!("{backend}/{id}");
-        let req = Request {
-            file,
-            index: k,
+        let req = Request::Judge(JudgeRequest {
             failures: opts.pictures.as_ref().map(|p| p.join(name)),
-            golden: None,
-            repeat: None,
-            no_twins: false,
-            gallery: None,
             deviation: Some(expectations.deviations(&run, json).names()).filter(|n| !n.is_empty()),
-            card: false,
-            calibration: None,
-        };
+            ..JudgeRequest::bare(file, k, false)
+        });
         let a = session.attempt(&req);
         let raw = deqp_status(&a.status);
         let (status, why) = expectations.apply(

@@ -231,15 +231,7 @@ pub fn main(args: &DriversArgs) -> Outcome {
             }
         }
     }
-    let pictures: usize = match args.pictures.as_deref().map(str::parse).transpose() {
-        Ok(n) => n.unwrap_or(200),
-        Err(_) => {
-            return Err(crate::cli::usage_error(
-                "drivers",
-                "--pictures takes a number",
-            ));
-        }
-    };
+    let pictures = args.pictures;
     let out = PathBuf::from(args.out.as_deref().unwrap_or("target/umbra/drivers"));
     // The last comparison is replaced; a directory umbra did not make is refused.
     umbra_owned::fresh(&out, "umbra drivers").map_err(|e| Error::new(format!("--out: {e}")))?;
@@ -394,10 +386,11 @@ fn run_side(
     cmd.args(["conformance", "--mesa", mesa, "--golden", "none", "--out"])
         .arg(&dir)
         .args(args.selection.argv());
-    for (flag, value) in [("--jobs", &args.jobs), ("--timeout", &args.timeout)] {
-        if let Some(v) = value {
-            cmd.arg(flag).arg(v);
-        }
+    if let Some(j) = args.jobs {
+        cmd.arg("--jobs").arg(j.to_string());
+    }
+    if let Some(t) = args.timeout {
+        cmd.arg("--timeout").arg(t.to_string());
     }
     let log = dir.join("conformance.log");
     let Ok(file) = std::fs::File::create(&log) else {

@@ -153,7 +153,7 @@ fn reduce_step(args: &ReproArgs, t: &Target) -> Result<(PathBuf, String), Error>
             out: Some(reduced.display().to_string()),
             ..Default::default()
         },
-        timeout: args.timeout.clone(),
+        timeout: args.timeout,
         mesa: args.mesa.clone(),
     };
     let log_path = t.out.join("reduce.log");

@@ -24,24 +24,7 @@ use umbra_report::{RunResult, Status};
 
 /// Runs the command; returns its outcome.
 pub fn main(args: &SoakArgs) -> Outcome {
-    let seed = match args.seed.as_deref().map(str::parse::<u64>).transpose() {
-        Ok(s) => s.unwrap_or(1),
-        Err(_) => {
-            return Err(crate::cli::usage_error(
-                "soak",
-                "--seed takes a whole number",
-            ));
-        }
-    };
-    let count = match args.count.as_deref().map(str::parse::<usize>).transpose() {
-        Ok(Some(0)) | Err(_) => {
-            return Err(crate::cli::usage_error(
-                "soak",
-                "--count takes a positive number of cases",
-            ));
-        }
-        Ok(c) => c.unwrap_or(100),
-    };
+    let (seed, count) = (args.seed, args.count.get());
     let out = PathBuf::from(
         args.output
             .out

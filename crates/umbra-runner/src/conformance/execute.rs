@@ -11,7 +11,8 @@ use std::time::Instant;
 use super::{Planned, Settings, first_line};
 use crate::exit::Error;
 use crate::harness::scheduler::{Attempt, NotReady, Session};
-use crate::harness::worker::{Hello, Request};
+use crate::harness::worker::Hello;
+use crate::judge::protocol::{JudgeRequest, PointRef, Request};
 use crate::judge::expectations::Expectations;
 use umbra_report::escape::shell_word;
 use umbra_report::{RunResult, Status};
@@ -310,22 +311,22 @@ impl Group<'_> {
         match self.not_run() {
             Some(a) => a,
             None => {
-                let req = Request {
-                    file: p.file.clone(),
-                    index: p.index,
+                let req = Request::Judge(JudgeRequest {
+                    point: PointRef {
+                        file: p.file.clone(),
+                        index: p.index,
+                    },
                     failures: Some(settings.failures.clone()),
                     golden: settings
                         .golden
                         .clone()
                         .filter(|_| !settings.no_goldens.contains(self.backend)),
-                    repeat: None,
                     no_twins: false,
                     gallery: Some(settings.gallery.clone()),
                     deviation: Some(self.expectations.deviations(&p.name(), &p.case).names())
                         .filter(|n| !n.is_empty()),
-                    card: false,
                     calibration: self.calibration.clone(),
-                };
+                });
                 session.attempt_or_rerun(&req, &p.name())
             }
         }

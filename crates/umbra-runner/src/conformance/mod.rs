@@ -220,8 +220,8 @@ pub(crate) fn settings(
         &args
             .execution
             .judge_cache
-            .as_deref()
-            .map_or_else(|| opts.out.join("cache").join("judge"), PathBuf::from),
+            .clone()
+            .unwrap_or_else(|| opts.out.join("cache").join("judge")),
     );
     Settings {
         judge_cache: judge_cache.to_string_lossy().into_owned(),

@@ -46,14 +46,10 @@ impl Options {
         let backends =
             crate::harness::registry::selected(&named, crate::harness::registry::known())
                 .map_err(fail)?;
-        let shard = args
-            .shard
-            .as_deref()
-            .map(parse_shard)
-            .transpose()
-            .map_err(|e| crate::cli::usage_error("conformance", e))?
-            .unwrap_or((0, 1));
-        let (jobs, timeout) = crate::cli::limits("conformance", execution, 300)?;
+        let shard = args.shard.unwrap_or(crate::cli::Shard::WHOLE);
+        let shard = (shard.index, shard.count);
+        let limits = execution.resolve("conformance")?;
+        let (jobs, timeout) = (limits.jobs, limits.timeout);
         let golden = golden_dir(args.golden.as_deref())?;
         if let Some(warning) = golden
             .as_deref()
@@ -421,12 +417,3 @@ pub(crate) fn duplicate_names(points: &[(PathBuf, Vec<PointPlan>)]) -> Option<St
     None
 }
 
-pub(crate) fn parse_shard(s: &str) -> Result<(usize, usize), String> {
-    let bad = || format!("--shard takes I/N with 0 ≤ I < N, got {s:?}");
-    let (i, n) = s.split_once('/').ok_or_else(bad)?;
-    let (i, n): (usize, usize) = (i.parse().map_err(|_| bad())?, n.parse().map_err(|_| bad())?);
-    if n == 0 || i >= n {
-        return Err(bad());
-    }
-    Ok((i, n))
-}

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use crate::harness::scheduler::Session;
-use crate::harness::worker::Request;
+use crate::judge::protocol::Request;
 use crate::judge::card::Card;
 
 /// The card of `session`'s backend, measured by its worker; `Err`: why there is none (the
@@ -16,7 +16,7 @@ pub fn of_session(session: &mut Session) -> Result<Card, String> {
     if let Err(why) = session.ready() {
         return Err(format!("{why:?}"));
     }
-    match session.reply(&Request::card())? {
+    match session.reply(&Request::Card)? {
         (crate::harness::pool::Reply::Report(r), _) => r
             .card
             .ok_or_else(|| format!("the worker answered without a card: {}", r.reason)),

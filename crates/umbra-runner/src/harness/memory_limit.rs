@@ -22,13 +22,12 @@ pub const POLL: Duration = Duration::from_millis(100);
 
 static BUDGET: OnceLock<u64> = OnceLock::new();
 
-/// Sets this process's budget from `--max-memory` (else the environment, else the default for
-/// `workers` at once). Returns it, or an error naming the flag.
-pub fn select(arg: Option<&str>, workers: usize) -> Result<u64, String> {
+/// Sets this process's budget from `--max-memory` (bytes, as clap read it; else the
+/// environment, else the default for `workers` at once). Returns it, or an error naming the
+/// variable.
+pub fn select(arg: Option<u64>, workers: usize) -> Result<u64, String> {
     let explicit = match arg {
-        Some(a) => {
-            Some(umbra_case::memory::parse_size(a).map_err(|e| format!("--max-memory {e}"))?)
-        }
+        Some(a) => Some(a),
         None => match std::env::var(ENV) {
             Ok(v) => Some(umbra_case::memory::parse_size(&v).map_err(|e| format!("{ENV}: {e}"))?),
             Err(_) => None,

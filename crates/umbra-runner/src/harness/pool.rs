@@ -10,7 +10,8 @@ use std::sync::mpsc::{Receiver, RecvTimeoutError, channel};
 use std::time::{Duration, Instant};
 
 use crate::harness::stderr_log::StderrLog;
-use crate::harness::worker::{Hello, Request, RunReport};
+use crate::harness::worker::Hello;
+use crate::judge::protocol::{Request, RunReport};
 
 /// What a worker answered for one run.
 pub enum Reply {

@@ -68,29 +68,31 @@ impl Descriptor {
         })
     }
 
-    /// The GL API, for a GL backend.
-    fn gl_api(&self) -> Option<umbra_gl::Api> {
+    /// What the family can do, as its crate declares it (the reference and the test doubles
+    /// draw through no driver: nothing).
+    pub fn capabilities(&self) -> umbra_case::Capabilities {
         match self.family {
-            Family::Gl(api) => Some(api),
-            _ => None,
+            Family::Gl(api) => api.capabilities(),
+            Family::Wgpu(kind) => kind.capabilities(),
+            Family::Reference | Family::Fake => umbra_case::Capabilities::default(),
         }
     }
 
     /// A driver's backend (GL or wgpu), whose shaders a fault can be injected into.
     pub fn renders_on_a_driver(&self) -> bool {
-        matches!(self.family, Family::Gl(_) | Family::Wgpu(_))
+        self.capabilities().driver
     }
 
     /// Draws through GL calls umbra makes itself (umbra-gl), which a repro can capture and
     /// replay as a C program.
     pub fn umbra_makes_the_gl_calls(&self) -> bool {
-        matches!(self.family, Family::Gl(_))
+        self.capabilities().umbra_makes_gl_calls
     }
 
     /// Samples the map through GL texture units and picks a texture component (GL's binding
     /// model; wgpu binds by group).
     pub fn binds_gl_texture_units(&self) -> bool {
-        self.umbra_makes_the_gl_calls()
+        self.capabilities().gl_texture_units
     }
 
     /// Runs on Vulkan (wgpu's Vulkan backend).
@@ -98,27 +100,25 @@ impl Descriptor {
         self.family == Family::Wgpu(umbra_wgpu::Kind::Vulkan)
     }
 
-    /// The technique GLES 2 forces: no float depth, no mipmapped compare, every compare
-    /// done by hand in the shader (which clamps the reference itself).
+    /// The technique GLES 2 forces ([`umbra_case::Capabilities::gles2_technique`]).
     pub fn gles2_technique(&self) -> bool {
-        self.gl_api() == Some(umbra_gl::Api::Gles2)
+        self.capabilities().gles2_technique
     }
 
-    /// Depth in [0, 1] clip space (wgpu, both kinds), where GL's [-1, 1] mapping is a fault.
+    /// Depth in [0, 1] clip space, where GL's [-1, 1] mapping is a fault.
     pub fn zero_to_one_depth(&self) -> bool {
-        matches!(self.family, Family::Wgpu(_))
+        self.capabilities().zero_to_one_depth
     }
 
-    /// Takes the depth bias's constant as a whole number of units (wgpu's `DepthBiasState`),
-    /// so a fractional offset is rounded.
+    /// Takes the depth bias's constant as a whole number of units, so a fractional offset is
+    /// rounded.
     pub fn integer_depth_bias(&self) -> bool {
-        matches!(self.family, Family::Wgpu(_))
+        self.capabilities().integer_depth_bias
     }
 
-    /// Can compare in the shader, with its own LINEAR filter (every GL API; wgpu's GL backend
-    /// has no manual compare).
+    /// Can compare in the shader, with its own LINEAR filter.
     pub fn manual_compare(&self) -> bool {
-        self.umbra_makes_the_gl_calls() || self.vulkan()
+        self.capabilities().manual_compare
     }
 
     /// How the id is reached, in words (`umbra backends`).

@@ -30,7 +30,8 @@ use std::time::{Duration, Instant};
 use umbra_report::{Metrics, Status};
 
 use crate::harness::pool::{Reply, Worker};
-use crate::harness::worker::{Hello, Request, RunReport, RunVerdict};
+use crate::harness::worker::Hello;
+use crate::judge::protocol::{Request, RunReport, RunVerdict};
 
 /// Worker start-up (spawn to hello), summed over every session of this process, in µs.
 static WORKER_START_US: AtomicU64 = AtomicU64::new(0);

@@ -13,8 +13,9 @@
 //!
 //! An expected failure says *what* fails, as wgpu's `FailureCase` names the reasons it
 //! expects: `Fail:CHECK<=N[+CHECK<=N]...`, each CHECK one of the judge's checks (`value`,
-//! `nan`, `coverage`, `colour`, `map`, `interior`, `twin:NAME`, `golden`, `falls-along`) and
-//! N the most pixels (texels for `map`, 1 for the others) it may fail on. A run that fails a
+//! `nan`, `coverage`, `colour`, `map`, `interior`, `twin:NAME`, `golden`, `falls-along`,
+//! `memory`, `render`, `card`: `umbra_report::check::FIXED`) and N the most pixels (texels
+//! for `map`, 1 for the others) it may fail on. A run that fails a
 //! check not listed, or more pixels than the bound, fails *differently* and is a regression;
 //! one that fails less is still the expected failure. Every failing run's reason ends with
 //! its signature (`failed: value=29+twin:bias-order=29`), ready to copy.

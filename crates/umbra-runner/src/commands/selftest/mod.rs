@@ -35,7 +35,7 @@ use crate::cli::{SelftestArgs, SelftestMode};
 use crate::exit::{Error, Exit, Outcome};
 use crate::harness::pool::Reply;
 use crate::harness::scheduler::{NotReady, Session};
-use crate::harness::worker::Request;
+use crate::judge::protocol::{JudgeRequest, Request};
 use crate::judge::expectations::Expectations;
 
 /// Runs `umbra selftest` in the mode asked for ([`SelftestArgs::mode`]) over one setup
@@ -66,180 +66,10 @@ pub const SAMPLE: usize = 6;
 /// How many points must catch each fault × backend pair.
 pub const MIN_POINTS: usize = 3;
 
-/// Whether `fault` means anything on backend `id`: asked of the backend's descriptor (its
-/// family's technique and capabilities), never of the id's spelling.
+/// Whether `fault` means anything on backend `id`: asked of what the backend's family can do
+/// ([`Descriptor::capabilities`], [`Fault::applies`]), never of the id's spelling.
 pub fn applies(fault: Fault, id: &str) -> bool {
-    Descriptor::of(id).is_some_and(|b| applies_to(fault, &b))
-}
-
-/// [`applies`], for a backend already described.
-fn applies_to(fault: Fault, b: &Descriptor) -> bool {
-    if !b.renders_on_a_driver() {
-        return false;
-    }
-    match fault {
-        // GL's [-1, 1] depth mapping is wrong only where clip depth is [0, 1].
-        Fault::GlDepthRange => b.zero_to_one_depth(),
-        Fault::WrongComponent | Fault::WrongTextureUnit => b.binds_gl_texture_units(),
-        // The GLES 2 path has no float depth, and is the only one that clamps in the shader.
-        Fault::ClampFloat => !b.gles2_technique(),
-        Fault::NoClamp => b.gles2_technique(),
-        // GLES 2 has no mipmapped compare (it skips every mipmapped case).
-        Fault::MipBaseOnly | Fault::MipLevelCoarse => !b.gles2_technique(),
-        // A manual LINEAR filter; wgpu's GL backend has no manual compare.
-        Fault::BilinearCoarse
-        | Fault::Scaled {
-            param: Param::FilterWeights,
-            ..
-        } => b.manual_compare(),
-        _ => true,
-    }
-}
-
-/// Whether case `c` exercises `fault` on a backend with (`es2`) or without GLES 2's technique
-/// ([`Descriptor::gles2_technique`]) at all: only such points are run for it.
-pub fn exercises(fault: Fault, c: &umbra_case::Case, es2: bool) -> bool {
-    use umbra_case::format::{
-        ColorFormat, Compare, DepthFormat, Filter, Light, Outside, Placement, ShadingModel,
-    };
-    let s = &c.shadow;
-    // A light's kind, cascades and colour: the first light's decide, as they always have
-    // (a fault's applicability light by light is for its place beside the fault).
-    let light = &c.lights[0];
-    match fault {
-        // GLES 2 compares by hand whatever the case says.
-        Fault::WrongComponent => s.compare == Compare::Manual || es2,
-        Fault::Repeat => s.outside != Outside::Lit,
-        Fault::NoGuard => !matches!(light, Light::Directional(_)) && s.guard_behind_light,
-        Fault::NoDivide => !matches!(light, Light::Directional(_)),
-        Fault::ShadowViewport => s.size != c.camera.size,
-        Fault::ClampFloat => s.format == DepthFormat::Depth32f && s.compare == Compare::Hardware,
-        Fault::NoClamp => s.format.is_fixed() && s.compare == Compare::Hardware,
-        Fault::QuarterTexel => !matches!(light, Light::Point(_)),
-        Fault::NormalOffsetShort => s.bias.normal_offset != 0.0,
-        // A normal short of unit length between the vertices of a curved receiver, read by
-        // whatever bias reads the normal.
-        Fault::NormalUnnormalized => {
-            let curved = c.scene.objects.iter().any(|o| {
-                matches!(
-                    o,
-                    umbra_case::format::Object::Sphere(_) | umbra_case::format::Object::Cylinder(_)
-                )
-            });
-            let b = &s.bias;
-            curved
-                && (b.normal_offset != 0.0
-                    || b.normal_offset_texels != 0.0
-                    || b.n_dot_l.is_some()
-                    || b.slope.is_some())
-        }
-        Fault::OffsetUnitsLow => s.bias.polygon_offset[1] != 0.0,
-        Fault::SlopeShort => s.bias.slope.is_some(),
-        Fault::PcfOffCentre | Fault::PcfDoubleCentre => matches!(s.filter, Filter::Pcf(_)),
-        Fault::BilinearCoarse => {
-            s.filter == Filter::Linear && (s.compare == Compare::Manual || es2)
-        }
-        Fault::Vis4Bit => s.filter != Filter::Nearest,
-        Fault::DimmingOff => c.shading.model == ShadingModel::Dimmed && c.shading.dimming > 0.0,
-        Fault::SpecularUnshadowed => {
-            c.shading.model == ShadingModel::Dimmed && c.shading.specular > 0.0
-        }
-        Fault::Oriented { face, .. } => face.is_some() == matches!(light, Light::Point(_)),
-        Fault::MipBaseOnly | Fault::MipLevelCoarse => s.mipmaps.is_some(),
-        Fault::ClampIgnored => s.depth_clamp,
-        Fault::ClampForced => !s.depth_clamp,
-        Fault::LayerShift | Fault::CascadeByDistance => {
-            matches!(light, Light::Directional(d) if d.cascades.as_ref().is_some_and(|k| k.count > 1))
-        }
-        Fault::BlendIgnored => matches!(light, Light::Directional(d)
-            if d.cascades.as_ref().is_some_and(|k| k.count > 1 && k.blend > 0.0)),
-        Fault::BandOfRange => matches!(light, Light::Directional(d)
-            if d.cascades.as_ref().is_some_and(|k| k.count > 1 && k.blend > 0.0
-                && k.blend_of == umbra_case::format::BlendOf::Far)),
-        Fault::WorldOffsetsDropped => {
-            s.bias.normal_offset_texels != 0.0 || s.bias.light_offset != 0.0
-        }
-        Fault::LightColourIgnored => light.radiance() != [1.0; 3],
-        Fault::ClearIgnored => c.camera.clear != [0.0; 3],
-        Fault::LitCullFlipped => !c.camera.cull.is_none(),
-        Fault::DepthFuncSwapped => s.depth_test().inclusive(),
-        Fault::SrgbIgnored => c.camera.color_format == ColorFormat::Srgb8Alpha8,
-        Fault::LightSwap => c.lights.len() > 1,
-        Fault::ArrayLayerZero => c.lights.len() > 1 && s.placement != Placement::Separate,
-        Fault::Scaled { param, .. } => {
-            let b = &s.bias;
-            match param {
-                Param::OffsetUnits => b.polygon_offset[1] != 0.0,
-                Param::OffsetFactor => b.polygon_offset[0] != 0.0,
-                Param::OffsetClamp => {
-                    b.polygon_offset_clamp != 0.0 && b.polygon_offset != [0.0, 0.0]
-                }
-                Param::ConstantBias => b.constant != 0.0,
-                Param::SlopeScale | Param::SlopeCap => b.slope.is_some(),
-                Param::NormalOffset => b.normal_offset != 0.0,
-                Param::NdotLScale | Param::NdotLMin => b.n_dot_l.is_some(),
-                Param::LookupU | Param::LookupV => !matches!(light, Light::Point(_)),
-                Param::ShadowShiftU | Param::ShadowShiftV => true,
-                // GLES 2 compares (and so filters) in the shader whatever the case says.
-                Param::FilterWeights => {
-                    s.filter == Filter::Linear && (s.compare == Compare::Manual || es2)
-                }
-            }
-        }
-        _ => true,
-    }
-}
-
-/// The cases built to see `fault` (magnified views, exact ties, the guard's own case): their
-/// points are tried first, so a subtle fault is not left to whichever points a spread over
-/// the catalogue happens to pick.
-pub fn aimed_at(fault: Fault, c: &umbra_case::Case) -> bool {
-    let cases: &[&str] = match fault {
-        Fault::CompareStrict | Fault::ClampFloat | Fault::NoClamp => &["far-clamp", "beyond-far"],
-        Fault::QuarterTexel | Fault::ShadowHalfTexel => {
-            &["contact", "filters-magnified", "guard-magnified"]
-        }
-        Fault::NormalOffsetShort | Fault::OffsetUnitsLow | Fault::SlopeShort => {
-            &["bias-forms-magnified", "contact", "grazing"]
-        }
-        Fault::NormalUnnormalized => &["engine-curved", "bias-forms-curved-magnified"],
-        Fault::PcfOffCentre | Fault::PcfDoubleCentre | Fault::BilinearCoarse | Fault::Vis4Bit => {
-            &["filters-magnified", "filters"]
-        }
-        Fault::NoGuard => &["guard-magnified", "behind-spot", "bias-matrix"],
-        Fault::Repeat => &["outside"],
-        Fault::ClampIgnored => &["pancake", "near-crossing-clamped"],
-        Fault::ClampForced => &["pancake", "near-crossing"],
-        Fault::LayerShift | Fault::CascadeByDistance => &["street", "on-split", "blend"],
-        Fault::BlendIgnored => &["blend", "bevy-forms"],
-        Fault::BandOfRange | Fault::WorldOffsetsDropped => &["bevy-forms"],
-        Fault::LightColourIgnored | Fault::ClearIgnored => &["tinted"],
-        Fault::LitCullFlipped => &["lit-cull"],
-        Fault::DepthFuncSwapped => &["depth-func"],
-        Fault::SrgbIgnored => &["srgb"],
-        Fault::LightSwap | Fault::ArrayLayerZero => &["two-lights", "two-points"],
-        Fault::Oriented { face: Some(_), .. } => &["point-faces"],
-        Fault::Scaled { param, .. } if param.in_texels() => {
-            &["contact", "filters-magnified", "guard-magnified"]
-        }
-        Fault::Scaled {
-            param: Param::FilterWeights,
-            ..
-        } => &["filters-magnified", "filters", "outside-filtered"],
-        Fault::Scaled { .. } => &[
-            "bias-forms-magnified",
-            "bias-forms-curved-magnified",
-            "offset-magnified",
-            "offset-clamp-magnified",
-            "offset-boundary",
-            "far-boundary",
-            "contact",
-            "grazing",
-        ],
-        Fault::Oriented { face: None, .. } => &["l-occluder"],
-        _ => &[],
-    };
-    cases.contains(&c.name.as_str())
+    Descriptor::of(id).is_some_and(|b| fault.applies(&b.capabilities()))
 }
 
 /// What one fault did on one backend.
@@ -346,7 +176,8 @@ pub(crate) fn setup(args: &SelftestArgs) -> Result<Setup, Error> {
         Some(dir) => dir.clone(),
         None => PathBuf::from(args.cases.as_deref().unwrap_or("cases")),
     };
-    let (jobs, timeout) = crate::cli::limits("selftest", &args.execution, 120)?;
+    let limits = args.execution.resolve("selftest")?;
+    let (jobs, timeout) = (limits.jobs, limits.timeout);
     let expectations = Expectations::load(Path::new(
         args.expectations.as_deref().unwrap_or("expectations"),
     ))
@@ -396,12 +227,12 @@ pub(crate) fn setup(args: &SelftestArgs) -> Result<Setup, Error> {
     let cache = if args.mode() == SelftestMode::Orientations {
         PathBuf::new()
     } else {
-        crate::judge::judge_cache::prepare(std::path::Path::new(
+        crate::judge::judge_cache::prepare(
             args.execution
                 .judge_cache
                 .as_deref()
-                .unwrap_or(crate::judge::judge_cache::DEFAULT_ROOT),
-        ))
+                .unwrap_or(std::path::Path::new(crate::judge::judge_cache::DEFAULT_ROOT)),
+        )
     };
     let calibrations = if args.execution.spec_only || args.mode() != SelftestMode::Faults {
         BTreeMap::new()
@@ -470,18 +301,11 @@ pub(crate) fn hunt_all(setup: &Setup) -> Outcome {
 
 /// With `--seed` and `--count`, the directory the generated cases were written to.
 fn soak_cases(args: &SelftestArgs) -> Result<Option<PathBuf>, String> {
-    let (seed, count) = match (args.seed.as_deref(), args.count.as_deref()) {
+    let (seed, count) = match (args.seed, args.count) {
         (None, None) => return Ok(None),
-        (s, c) => (s.unwrap_or("1"), c.unwrap_or("20")),
+        // One given, the other has its default (the help says which).
+        (s, c) => (s.unwrap_or(1), c.map_or(20, crate::cli::values::Count::get)),
     };
-    let seed: u64 = seed
-        .parse()
-        .map_err(|_| format!("--seed takes a whole number, got {seed:?}"))?;
-    let count: usize = count
-        .parse()
-        .ok()
-        .filter(|n| *n > 0)
-        .ok_or_else(|| format!("--count takes a positive number, got {count:?}"))?;
     let dir = PathBuf::from(
         args.output
             .out
@@ -783,19 +607,12 @@ impl Faulted {
     pub(crate) fn run(&mut self, file: &Path, index: usize, point: &umbra_case::CasePoint) -> Seen {
         let name = format!("{}/{}", self.backend, point.id());
         let case = umbra_case::schema::condition_json(&point.case);
-        let req = Request {
-            file: file.to_path_buf(),
-            index,
-            failures: None,
-            golden: None,
-            repeat: None,
-            no_twins: true,
-            gallery: None,
+        let req = Request::Judge(JudgeRequest {
             deviation: Some(self.expectations.deviations(&name, &case).names())
                 .filter(|n| !n.is_empty()),
-            card: false,
             calibration: self.calibration.clone(),
-        };
+            ..JudgeRequest::bare(file.to_path_buf(), index, true)
+        });
         // A crash or a timeout is a catch; the session starts a fresh worker for the next
         // point, and one that does not come up ends the hunt.
         let reply = match self.session.reply(&req) {
@@ -803,7 +620,7 @@ impl Faulted {
             Err(_) => return Seen::Gone,
         };
         match reply {
-            Reply::Report(r) if r.outcome == crate::harness::worker::RunVerdict::Fail => {
+            Reply::Report(r) if r.outcome == crate::judge::protocol::RunVerdict::Fail => {
                 let (status, _) = self.expectations.apply(
                     &name,
                     &case,
@@ -834,7 +651,7 @@ impl Faulted {
                     Seen::Passed
                 }
             }
-            Reply::Report(r) if r.outcome == crate::harness::worker::RunVerdict::Skip => {
+            Reply::Report(r) if r.outcome == crate::judge::protocol::RunVerdict::Skip => {
                 Seen::Skipped(r.reason)
             }
             Reply::Report(r) => {
@@ -871,7 +688,7 @@ fn hunt(
     let es2 = Descriptor::of(backend).is_some_and(|b| b.gles2_technique());
     let candidates: Vec<&(PathBuf, usize, umbra_case::CasePoint)> = points
         .iter()
-        .filter(|(_, _, p)| exercises(fault, &p.case, es2))
+        .filter(|(_, _, p)| fault.exercises(&p.case, es2))
         .collect();
     h.exercising = candidates.len();
     if candidates.is_empty() {
@@ -914,7 +731,7 @@ pub(crate) fn sample_order(
     candidates: &[&(PathBuf, usize, umbra_case::CasePoint)],
 ) -> Vec<usize> {
     let (aimed, others): (Vec<usize>, Vec<usize>) =
-        (0..candidates.len()).partition(|&i| aimed_at(fault, &candidates[i].2.case));
+        (0..candidates.len()).partition(|&i| fault.aimed_at(&candidates[i].2.case));
     let spread = |v: &[usize]| -> Vec<usize> {
         let step = (v.len() / SAMPLE).max(1);
         v.iter().copied().step_by(step).take(SAMPLE).collect()
@@ -943,7 +760,7 @@ pub(crate) fn sample_order(
 fn order_sampled(fault: Fault, candidates: &[&(PathBuf, usize, umbra_case::CasePoint)]) -> usize {
     let aimed = candidates
         .iter()
-        .filter(|c| aimed_at(fault, &c.2.case))
+        .filter(|c| fault.aimed_at(&c.2.case))
         .count();
     aimed.min(SAMPLE) + (candidates.len() - aimed).min(SAMPLE)
 }

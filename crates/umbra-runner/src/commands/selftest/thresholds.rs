@@ -25,7 +25,7 @@ use umbra_case::fault::{Fault, Param};
 
 use crate::exit::{Exit, Outcome};
 
-use super::{Faulted, How, Seen, aimed_at, applies, exercises, sample_order};
+use super::{Faulted, How, Seen, applies, sample_order};
 
 /// The errors tried, largest first: relative for a parameter, texels for a shift. The steps
 /// between 50 % and 90 % read a parameter whose spec leaves a factor-of-two freedom (the
@@ -67,7 +67,7 @@ fn sweep(backend: &str, param: Param, sign: f64, points: &[Point], how: &How) ->
         crate::harness::registry::Descriptor::of(backend).is_some_and(|b| b.gles2_technique());
     let candidates: Vec<&Point> = points
         .iter()
-        .filter(|(_, _, p)| exercises(probe, &p.case, es2))
+        .filter(|(_, _, p)| probe.exercises(&p.case, es2))
         .collect();
     t.exercising = candidates.len();
     if candidates.is_empty() {
@@ -77,17 +77,17 @@ fn sweep(backend: &str, param: Param, sign: f64, points: &[Point], how: &How) ->
     // Every point built for the parameter, then a spread of the others.
     let aimed = candidates
         .iter()
-        .filter(|c| aimed_at(probe, &c.2.case))
+        .filter(|c| probe.aimed_at(&c.2.case))
         .count();
     let base = sample_order(probe, &candidates);
     let mut base: Vec<usize> = base
         .iter()
         .copied()
-        .filter(|&i| aimed_at(probe, &candidates[i].2.case))
+        .filter(|&i| probe.aimed_at(&candidates[i].2.case))
         .chain(
             base.iter()
                 .copied()
-                .filter(|&i| !aimed_at(probe, &candidates[i].2.case)),
+                .filter(|&i| !probe.aimed_at(&candidates[i].2.case)),
         )
         .collect();
     base.truncate(aimed + TRIES);

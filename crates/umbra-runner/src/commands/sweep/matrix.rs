@@ -7,7 +7,7 @@
 
 use serde_json::{Value, json};
 
-use crate::harness::measure::Measured;
+use crate::judge::measure::Measured;
 
 /// The fixed frustum a program without fitting would pick for a directional light: a
 /// generous hand-set box.

@@ -24,10 +24,10 @@ pub mod matrix;
 
 use crate::cli::SweepArgs;
 use crate::exit::{Error, Exit, Outcome};
-use crate::harness::measure::Measured;
+use crate::judge::measure::Measured;
 use crate::harness::pool::Reply;
 use crate::harness::scheduler::{NotReady, Session};
-use crate::harness::worker::{Request, RunVerdict};
+use crate::judge::protocol::{MeasureRequest, PointRef, Request, RunVerdict};
 use matrix::{FIXED_ORTHO, matrix};
 pub use matrix::{Row, Technique};
 use umbra_report::escape::esc;
@@ -97,20 +97,13 @@ fn write_case(
 /// Runs the command; returns its outcome.
 pub fn main(args: &SweepArgs) -> Outcome {
     crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
-    crate::harness::memory_limit::select(args.max_memory.as_deref(), 1)
+    crate::harness::memory_limit::select(args.max_memory.map(|b| b.0), 1)
         .map_err(|e| crate::cli::usage_error("sweep", e))?;
     let scene = PathBuf::from(args.scene.as_deref().unwrap_or(DEFAULT_SCENE.0));
-    // `--repeat 0` once ran once and `--timeout 0` gave every run no time, without a word.
-    let repeat = match args.repeat.as_deref().map(str::parse::<u32>).transpose() {
-        Ok(Some(0)) | Err(_) => {
-            return Err(crate::cli::usage_error(
-                "sweep",
-                "--repeat takes a positive number of renders per point (default 5)",
-            ));
-        }
-        Ok(r) => r.unwrap_or(5),
-    };
-    let timeout = crate::cli::timeout_secs("sweep", args.timeout.as_deref(), 600)?;
+    // Both 1 or more (clap refuses 0: `--repeat 0` once ran once and `--timeout 0` gave
+    // every run no time, without a word).
+    let repeat = u32::try_from(args.repeat.get()).unwrap_or(u32::MAX);
+    let timeout = args.timeout.duration();
     let out = PathBuf::from(args.out.as_deref().unwrap_or("target/umbra/sweep"));
     let default = DEFAULT_BACKENDS.iter().map(|s| s.to_string()).collect();
     let named: Vec<&str> = args.backend.iter().map(String::as_str).collect();
@@ -147,11 +140,11 @@ pub fn main(args: &SweepArgs) -> Outcome {
     let mut rows: Vec<Row> = Vec::new();
     let mut done = 0;
     // The truth of each technique point is cached per build of umbra, as conformance's is.
-    let judge_cache = crate::judge::judge_cache::prepare(Path::new(
+    let judge_cache = crate::judge::judge_cache::prepare(
         args.judge_cache
             .as_deref()
-            .unwrap_or(crate::judge::judge_cache::DEFAULT_ROOT),
-    ));
+            .unwrap_or(Path::new(crate::judge::judge_cache::DEFAULT_ROOT)),
+    );
     let sweep = Sweep {
         file: &file,
         plan: &plan,
@@ -237,18 +230,13 @@ impl Sweep<'_> {
                 });
                 continue;
             }
-            let req = Request {
-                file: self.file.to_path_buf(),
-                index,
-                failures: None,
-                golden: None,
-                repeat: Some(self.repeat),
-                no_twins: false,
-                gallery: None,
-                deviation: None,
-                card: false,
-                calibration: None,
-            };
+            let req = Request::Measure(MeasureRequest {
+                point: PointRef {
+                    file: self.file.to_path_buf(),
+                    index,
+                },
+                repeat: self.repeat,
+            });
             let (result, skipped) = match session.reply(&req) {
                 Ok((Reply::Report(r), _)) => match (r.outcome, r.measured) {
                     (RunVerdict::Pass, Some(m)) => (Ok(m), false),
@@ -312,18 +300,13 @@ pub fn measure_backends(
                         return Err(format!("refused the Mesa build: {why}"));
                     }
                 }
-                let req = Request {
-                    file: file.to_path_buf(),
-                    index,
-                    failures: None,
-                    golden: None,
-                    repeat: Some(repeat),
-                    no_twins: false,
-                    gallery: None,
-                    deviation: None,
-                    card: false,
-                    calibration: None,
-                };
+                let req = Request::Measure(MeasureRequest {
+                    point: PointRef {
+                        file: file.to_path_buf(),
+                        index,
+                    },
+                    repeat,
+                });
                 match session.reply(&req)?.0 {
                     Reply::Report(r) => r.measured.ok_or(r.reason),
                     Reply::Crashed(why) => Err(format!("the worker crashed: {why}")),

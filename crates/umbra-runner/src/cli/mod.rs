@@ -4,12 +4,17 @@
 //! derives from them the parser, the `--help` of every subcommand, the errors (which name the
 //! flag and suggest the near miss) and the shell completions (`umbra completions bash`).
 //!
-//! The structs hold what was typed (a glob, a backend id, a size stay strings here): each
-//! command validates what clap cannot, with errors that name the flag and the fix.
+//! Numbers, durations, sizes and shards are typed ([`values`]): clap refuses a bad one the
+//! same way for every command, and a default sits on its flag's declaration, from which clap
+//! writes the help's `[default: …]`. A glob, a backend id and a Mesa build stay strings
+//! here: what only the machine can check is checked when the shared groups are resolved
+//! ([`resolve`]) or when the command sets up, with errors that name the flag and the fix.
 //!
 //! Exit codes ([`crate::exit::Exit`]): a command line clap refuses exits 125 ("could not
 //! run", as every other set-up error), so `git bisect run cargo xtask conformance …` skips
 //! instead of marking a commit bad; `--help` and `--version` exit 0.
+
+use std::path::PathBuf;
 
 use clap::{Args, CommandFactory, Parser, Subcommand, ValueEnum};
 
@@ -113,125 +118,12 @@ pub enum Command {
     Completions(CompletionsArgs),
 }
 
-/// Each flag's one line of help, shared by every command that takes the flag.
-pub mod help {
-    /// `--backend` of a command that runs one backend (render).
-    pub const BACKEND_ONE: &str = "the one backend to run (once): ref, gl33|gles3|gles2/llvmpipe|softpipe|zink, wgpu-vk/lavapipe, wgpu-gl/llvmpipe, or a device of this machine (`umbra backends` lists them) [default: ref]";
-    /// `--backend`.
-    pub const BACKEND: &str = "backend id: ref, gl33|gles3|gles2/llvmpipe|softpipe|zink, wgpu-vk/lavapipe, wgpu-gl/llvmpipe, a device of this machine (gl33/radeonsi, gl33/nvidia, wgpu-vk/radv …: `umbra backends` lists them), and, where a command takes several, the aliases hw (every hardware device) and all (this build's ids and every hardware device) (repeatable; default: this build's ids)";
-    /// `--cases`.
-    pub const CASES: &str = "directory of case files (*.json) [default: cases]";
-    /// `--filter`.
-    pub const FILTER: &str =
-        "run only case points whose id or run name (backend/case@point) matches [default: *]";
-    /// `--expectations`.
-    pub const EXPECTATIONS: &str =
-        "directory of expectation files (expectations/*.txt) [default: expectations]";
-    /// `--golden`.
-    pub const GOLDEN: &str =
-        "golden image directory, or `none` to skip golden checks [default: golden]";
-    /// `--out`.
-    pub const OUT: &str = "where to write results (a directory; for reduce, the reduced case file)";
-    /// `--shard`.
-    pub const SHARD: &str = "run shard I of N (0 ≤ I < N), for CI jobs or machines: every N-th planned run from I, or split by --durations; `umbra merge` puts the shards back together";
-    /// `--durations`.
-    pub const DURATIONS: &str = "with --shard: split the plan by a previous run's durations (its results.csv), longest runs first to the least loaded shard; prints the predicted imbalance";
-    /// `--jobs`.
-    pub const JOBS: &str = "worker processes at once [default: available cores]";
-    /// `--timeout`.
-    pub const TIMEOUT: &str =
-        "per-run time limit; a run past it is killed and reported as Timeout [default: 300]";
-    /// `--mesa`.
-    pub const MESA: &str = "Mesa to run on: an install prefix, a meson build directory, unpacked Debian packages (cargo xtask fetch-mesa), or `system` [env: UMBRA_MESA]";
-    /// `--max-memory`.
-    pub const MAX_MEMORY: &str = "memory budget per worker, e.g. 4GiB or 512MiB; runs estimated above it are refused and workers above it are stopped [env: UMBRA_MAX_MEMORY; default: half of MemAvailable / jobs]";
-    /// `--judge-cache`.
-    pub const JUDGE_CACHE: &str = "where the judging basis (truth, reference) is cached, per build of umbra, for the next run [default: OUT/cache/judge, target/umbra/cache/judge for selftest and sweep]";
-    /// `--verbose`.
-    pub const VERBOSE: &str = "print every run's details, not just the ones that need a look";
-    /// `--bless`.
-    pub const BLESS: &str = "accept every changed or new golden (what `cargo xtask bless` runs; refused under CI=true); review with `git diff golden/` before committing";
-    /// `--point`.
-    pub const POINT: &str = "case point id (or glob over the ids) within the case file";
-    /// `--fault`.
-    pub const FAULT: &str = "inject only this fault (repeatable; default: every fault in Fault::ALL): a named fault, face<0-5>-<orientation> or map-<orientation> (rot90, rot180, rot270, mirror-x, mirror-y, transpose, anti-transpose), or PARAM@E, a parameter off by E (relative, or texels for a shift), e.g. offset-units@-0.05";
-    /// `--scene`.
-    pub const SCENE: &str = "the case whose scene the technique matrix is measured on";
-    /// `--repeat`.
-    pub const REPEAT: &str =
-        "timed renders per point after one warm-up (median reported) [default: 5]";
-    /// `--baseline`.
-    pub const BASELINE: &str = "the Mesa build compared against (see --mesa for the forms)";
-    /// `--candidate`.
-    pub const CANDIDATE: &str = "the Mesa build under test (see --mesa for the forms)";
-    /// `--pictures`.
-    pub const PICTURES: &str =
-        "at most N changed points get baseline | candidate | reference pictures [default: 200]";
-    /// `--mesa-src`.
-    pub const MESA_SRC: &str = "a Mesa git work tree (clean)";
-    /// `--good`.
-    pub const GOOD: &str = "a commit known to pass";
-    /// `--bad`.
-    pub const BAD: &str = "a commit known to fail";
-    /// `--work`.
-    pub const WORK: &str =
-        "working directory for builds, prefixes, logs and steps.csv [default: target/umbra/bisect]";
-    /// `--build-script`.
-    pub const BUILD_SCRIPT: &str =
-        "script run as `SCRIPT SRC PREFIX` instead of meson + ninja to build and install a commit";
-    /// `--meson-option`.
-    pub const MESON_OPTION: &str = "extra `-Dkey=value` for meson setup (repeatable)";
-    /// `--no-check-ends`.
-    pub const NO_CHECK_ENDS: &str = "do not test --good and --bad before bisecting";
-    /// `--check`.
-    pub const CHECK: &str = "keep failing this check while reducing (value, nan, coverage, colour, map, interior, golden, falls-along, memory, render, card (a backend's behaviour card, which no case point fails) and twin:NAME; repeatable) [default: a subset of the failed checks]";
-    /// `--src`.
-    pub const SRC: &str = "Mesa source tree at the commit to test";
-    /// `--explain`.
-    pub const EXPLAIN: &str = "print the judged lookup of the pixel at X,Y (top-left origin) step by step: point, face, coordinate, reference value, every tap's stored range";
-    /// `--seed`.
-    pub const SEED: &str =
-        "seed of the generated cases: the same seed gives the same cases everywhere [default: 1]";
-    /// `--thresholds`.
-    pub const THRESHOLDS: &str = "selftest: instead of the faults, sweep the magnitude of each continuous mistake (polygon offset, shader biases, normal offset, lookup and shadow-pass shifts, filter weights) per backend family and report the smallest error the catalogue catches, and which point catches it";
-    /// `umbra selftest MODE`.
-    pub const MODE: &str = "faults: inject each known fault into each backend and check that the judge catches it; thresholds: instead of the faults, sweep the magnitude of each continuous mistake (polygon offset, shader biases, normal offset, lookup and shadow-pass shifts, filter weights) per backend family and report the smallest error the catalogue catches, and which point catches it; orientations: instead of the faults on the backends, the face/orientation table: every cube face and the 2D map drawn with each of the seven wrong orientations by the reference, and the catalogue points that catch each; cards: each behaviour-card entry against a fault that moves the choice it measures (the card must name it)";
-    /// `--orientations`.
-    pub const ORIENTATIONS: &str = "selftest: instead of the faults on the backends, the face/orientation table: every cube face and the 2D map drawn with each of the seven wrong orientations by the reference, and the catalogue points that catch each";
-    /// `--json`.
-    pub const JSON: &str = "print JSON for scripts instead of text";
-    /// `--spec-only`.
-    pub const SPEC_ONLY: &str = "judge every run by the specs alone: measure no behaviour card to narrow the judgement. By default each backend's card is measured once, before its runs, and every run is judged twice: against the specs (a failure there is a failure) and against the spec's freedom narrowed to what the card read (check `card`: the driver chose differently in the scene than in the probes); report.json and report.html give the blind area under both";
-    /// `--diff` (card).
-    pub const CARD_DIFF: &str = "compare two stored cards (card-RELEASE.json files, e.g. golden/gl33_zink/card-mesa-22.3.6.json and …-26.2.6.json) and name every entry that changed, old and new value and the spec, instead of measuring";
-    /// `--card` (bisect).
-    pub const BISECT_CARD: &str = "bisect a behaviour: a commit is good when every selected backend's card entry KEY has VALUE (e.g. 'offset-unit.depth16.z0.375=4 codes', as `umbra card` or `cargo xtask drivers` names it), instead of when the chosen cases pass";
-    /// `--keep` (card).
-    pub const CARD_KEEP: &str = "keep each measured card as its backend's baseline for this driver release in golden directory DIR (DIR/<backend>/card-<release>.json), as `cargo xtask bless` does; refused under CI=true";
-    /// `--timeout` (card).
-    pub const CARD_TIMEOUT: &str = "time limit of one backend's probes, in seconds [default: 300]";
-    /// `--ids`.
-    pub const IDS: &str = "backends: print only this machine's device ids, one JSON object per line (what --backend hw and all expand to)";
-    /// `--case`.
-    pub const CASE: &str = "the case file holding the run's point [default: found under --cases]";
-    /// `--control`.
-    pub const CONTROL: &str =
-        "a conforming backend the repro must pass on [default: the run's API on llvmpipe]";
-    /// `--repro`.
-    pub const REPRO: &str =
-        "write the `umbra repro` bundle of the first bad commit's first failed run into DIR";
-    /// `--bisect-log`.
-    pub const BISECT_LOG: &str =
-        "a bisection's log, carried into issue.md with its first bad commit";
-    /// `--first-bad`.
-    pub const FIRST_BAD: &str =
-        "the first bad commit a bisection found (for issue.md's \"regression?\")";
-    /// `--emit`.
-    pub const EMIT: &str = "internal: write the bundle's program and pictures for an already reduced case (in the driver's process)";
-    /// `--count`.
-    pub const COUNT: &str =
-        "how many cases to generate (case K of a seed is the same in every count) [default: 100]";
-}
+pub mod help;
+pub mod resolve;
+pub mod values;
+
+pub use resolve::Limits;
+pub use values::{Bytes, Count, Jobs, Seconds, Shard};
 
 /// What to run: the backends, the case points, the catalogue and its expectations (conformance, drivers, bisect).
 #[derive(Args, Debug, Clone, Default)]
@@ -250,23 +142,24 @@ pub struct Selection {
     pub expectations: Option<String>,
 }
 /// How runs execute: workers, time and memory limits, the Mesa build, the judging cache (conformance, selftest, soak).
-#[derive(Args, Debug, Clone, Default)]
+#[derive(Args, Debug, Clone)]
 pub struct Execution {
-    /// `--jobs`: worker processes at once.
+    /// `--jobs`: worker processes at once (default: the core count, [`Execution::resolve`]).
     #[arg(long, value_name = "N", help = help::JOBS)]
-    pub jobs: Option<String>,
-    /// `--timeout`: per-run time limit, in seconds.
-    #[arg(long, value_name = "SECS", help = help::TIMEOUT)]
-    pub timeout: Option<String>,
+    pub jobs: Option<Jobs>,
+    /// `--timeout`: per-run time limit: conformance's and soak's default here, the
+    /// self-test's on [`SelftestArgs`].
+    #[arg(long, value_name = "SECS", help = help::TIMEOUT, default_value = "300")]
+    pub timeout: Seconds,
     /// `--mesa`: the Mesa to run on.
     #[arg(long, value_name = "PREFIX|BUILD_DIR|system", help = help::MESA)]
     pub mesa: Option<String>,
     /// `--max-memory`: the memory budget per worker.
     #[arg(long, value_name = "SIZE", help = help::MAX_MEMORY)]
-    pub max_memory: Option<String>,
+    pub max_memory: Option<Bytes>,
     /// `--judge-cache`: where the judging basis is cached.
     #[arg(long, value_name = "DIR", help = help::JUDGE_CACHE)]
-    pub judge_cache: Option<String>,
+    pub judge_cache: Option<PathBuf>,
     /// `--spec-only`: no calibrated judging.
     #[arg(long, help = help::SPEC_ONLY)]
     pub spec_only: bool,
@@ -303,7 +196,7 @@ pub struct RenderArgs {
     pub mesa: Option<String>,
     /// `--max-memory`: the memory budget per worker.
     #[arg(long, value_name = "SIZE", help = help::MAX_MEMORY)]
-    pub max_memory: Option<String>,
+    pub max_memory: Option<Bytes>,
     /// `--explain`.
     #[arg(long, value_name = "X,Y", help = help::EXPLAIN)]
     pub explain: Option<String>,
@@ -317,7 +210,7 @@ pub struct ConformanceArgs {
     pub selection: Selection,
     /// `--shard`.
     #[arg(long, value_name = "I/N", help = help::SHARD)]
-    pub shard: Option<String>,
+    pub shard: Option<Shard>,
     /// `--durations`.
     #[arg(long, value_name = "results.csv", help = help::DURATIONS)]
     pub durations: Option<String>,
@@ -346,8 +239,9 @@ pub struct MergeArgs {
     pub out: String,
 }
 
-/// `umbra selftest`.
+/// `umbra selftest`: each run's time limit is 120 s (one point, no twins).
 #[derive(Args, Debug, Clone, Default)]
+#[command(mut_arg("timeout", |a| a.default_value("120")))]
 pub struct SelftestArgs {
     /// `MODE`: faults (the default), thresholds or orientations.
     #[arg(
@@ -373,12 +267,12 @@ pub struct SelftestArgs {
     /// `--thresholds`.
     #[arg(long, hide = true, help = help::THRESHOLDS)]
     pub thresholds: bool,
-    /// `--seed`.
-    #[arg(long, value_name = "S", help = help::SEED)]
-    pub seed: Option<String>,
+    /// `--seed`: with `--count`, the self-test runs on generated cases.
+    #[arg(long, value_name = "S", help = help::SELFTEST_SEED)]
+    pub seed: Option<u64>,
     /// `--count`.
-    #[arg(long, value_name = "N", help = help::COUNT)]
-    pub count: Option<String>,
+    #[arg(long, value_name = "N", help = help::SELFTEST_COUNT)]
+    pub count: Option<Count>,
     /// Output flags.
     #[command(flatten)]
     pub output: Output,
@@ -391,14 +285,14 @@ pub struct SelftestArgs {
 }
 
 /// `umbra soak`.
-#[derive(Args, Debug, Clone, Default)]
+#[derive(Args, Debug, Clone)]
 pub struct SoakArgs {
     /// `--seed`.
-    #[arg(long, value_name = "S", help = help::SEED)]
-    pub seed: Option<String>,
+    #[arg(long, value_name = "S", help = help::SEED, default_value_t = 1)]
+    pub seed: u64,
     /// `--count`.
-    #[arg(long, value_name = "N", help = help::COUNT)]
-    pub count: Option<String>,
+    #[arg(long, value_name = "N", help = help::COUNT, default_value = "100")]
+    pub count: Count,
     /// `--backend`: backend ids and aliases, as given.
     #[arg(long, value_name = "ID", help = help::BACKEND)]
     pub backend: Vec<String>,
@@ -417,7 +311,7 @@ pub struct SoakArgs {
 }
 
 /// `umbra sweep`.
-#[derive(Args, Debug, Clone, Default)]
+#[derive(Args, Debug, Clone)]
 pub struct SweepArgs {
     /// `--scene`.
     #[arg(long, value_name = "CASE.json", help = help::SCENE)]
@@ -429,11 +323,11 @@ pub struct SweepArgs {
     #[arg(long, value_name = "ID", help = help::BACKEND)]
     pub backend: Vec<String>,
     /// `--repeat`.
-    #[arg(long, value_name = "N", help = help::REPEAT)]
-    pub repeat: Option<String>,
-    /// `--timeout`: per-run time limit, in seconds.
-    #[arg(long, value_name = "SECS", help = help::TIMEOUT)]
-    pub timeout: Option<String>,
+    #[arg(long, value_name = "N", help = help::REPEAT, default_value = "5")]
+    pub repeat: Count,
+    /// `--timeout`: per-run time limit (a point's every technique, timed `--repeat` times).
+    #[arg(long, value_name = "SECS", help = help::TIMEOUT, default_value = "600")]
+    pub timeout: Seconds,
     /// `--out`: where results go.
     #[arg(short = 'o', long, value_name = "PATH", help = help::OUT)]
     pub out: Option<String>,
@@ -442,10 +336,10 @@ pub struct SweepArgs {
     pub mesa: Option<String>,
     /// `--max-memory`: the memory budget per worker.
     #[arg(long, value_name = "SIZE", help = help::MAX_MEMORY)]
-    pub max_memory: Option<String>,
+    pub max_memory: Option<Bytes>,
     /// `--judge-cache`: where the judging basis is cached.
     #[arg(long, value_name = "DIR", help = help::JUDGE_CACHE)]
-    pub judge_cache: Option<String>,
+    pub judge_cache: Option<PathBuf>,
 }
 
 /// `umbra drivers`.
@@ -464,14 +358,15 @@ pub struct DriversArgs {
     #[arg(short = 'o', long, value_name = "PATH", help = help::OUT)]
     pub out: Option<String>,
     /// `--pictures`.
-    #[arg(long, value_name = "N", help = help::PICTURES)]
-    pub pictures: Option<String>,
-    /// `--jobs`: worker processes at once.
+    #[arg(long, value_name = "N", help = help::PICTURES, default_value_t = 200)]
+    pub pictures: usize,
+    /// `--jobs`: worker processes at once, handed to each side's conformance run.
     #[arg(long, value_name = "N", help = help::JOBS)]
-    pub jobs: Option<String>,
-    /// `--timeout`: per-run time limit, in seconds.
-    #[arg(long, value_name = "SECS", help = help::TIMEOUT)]
-    pub timeout: Option<String>,
+    pub jobs: Option<Jobs>,
+    /// `--timeout`: per-run time limit, handed to each side's conformance run (its default
+    /// there).
+    #[arg(long, value_name = "SECS", help = help::TIMEOUT_CONFORMANCE)]
+    pub timeout: Option<Seconds>,
 }
 
 /// `umbra bisect`.
@@ -510,7 +405,7 @@ pub struct BisectArgs {
 }
 
 /// `umbra reduce`.
-#[derive(Args, Debug, Clone, Default)]
+#[derive(Args, Debug, Clone)]
 pub struct ReduceArgs {
     /// The positional argument.
     #[arg(value_name = "CASE.json", help = "the case file")]
@@ -527,16 +422,16 @@ pub struct ReduceArgs {
     /// Output flags.
     #[command(flatten)]
     pub output: Output,
-    /// `--timeout`: per-run time limit, in seconds.
-    #[arg(long, value_name = "SECS", help = help::TIMEOUT)]
-    pub timeout: Option<String>,
+    /// `--timeout`: per-run time limit (one candidate).
+    #[arg(long, value_name = "SECS", help = help::TIMEOUT, default_value = "120")]
+    pub timeout: Seconds,
     /// `--mesa`: the Mesa to run on.
     #[arg(long, value_name = "PREFIX|BUILD_DIR|system", help = help::MESA)]
     pub mesa: Option<String>,
 }
 
 /// `umbra repro`.
-#[derive(Args, Debug, Clone, Default)]
+#[derive(Args, Debug, Clone)]
 pub struct ReproArgs {
     /// The positional argument.
     #[arg(value_name = "RUN", help = "the failing run, backend/case@point")]
@@ -556,9 +451,9 @@ pub struct ReproArgs {
     /// `--mesa`: the Mesa to run on.
     #[arg(long, value_name = "PREFIX|BUILD_DIR|system", help = help::MESA)]
     pub mesa: Option<String>,
-    /// `--timeout`: per-run time limit, in seconds.
-    #[arg(long, value_name = "SECS", help = help::TIMEOUT)]
-    pub timeout: Option<String>,
+    /// `--timeout`: per-run time limit of the reduction's candidates.
+    #[arg(long, value_name = "SECS", help = help::TIMEOUT, default_value = "120")]
+    pub timeout: Seconds,
     /// `--check`.
     #[arg(long, value_name = "CHECK", help = help::CHECK)]
     pub check: Vec<String>,
@@ -594,7 +489,7 @@ pub struct BackendsArgs {
 }
 
 /// `umbra card`.
-#[derive(Args, Debug, Clone, Default)]
+#[derive(Args, Debug, Clone)]
 pub struct CardArgs {
     /// `--backend`: which backends to measure (default: this build's ids).
     #[arg(long, value_name = "ID", help = help::BACKEND)]
@@ -608,9 +503,11 @@ pub struct CardArgs {
     /// `--mesa`: the Mesa to run on.
     #[arg(long, value_name = "PREFIX|BUILD_DIR|system", help = help::MESA)]
     pub mesa: Option<String>,
-    /// `--timeout`: the time limit of one backend's probes, in seconds.
-    #[arg(long, value_name = "SECONDS", help = help::CARD_TIMEOUT)]
-    pub timeout: Option<u64>,
+    /// `--timeout`: the time limit of one backend's probes (they take 0.1 to 2 s on this
+    /// machine's software drivers; a slow hardware driver's shader compiles may take far
+    /// longer).
+    #[arg(long, value_name = "SECS", help = help::CARD_TIMEOUT, default_value = "300")]
+    pub timeout: Seconds,
     /// `--keep DIR`: keep each card as the reviewed baseline in golden directory DIR.
     #[arg(long, value_name = "DIR", help = help::CARD_KEEP)]
     pub keep: Option<String>,
@@ -656,6 +553,20 @@ fn push(argv: &mut Vec<String>, name: &str, values: impl IntoIterator<Item = imp
     for v in values {
         argv.push(format!("--{name}"));
         argv.push(v.as_ref().to_string());
+    }
+}
+
+impl Default for Execution {
+    /// What a command line without these flags gives conformance.
+    fn default() -> Execution {
+        Execution {
+            jobs: None,
+            timeout: Seconds(300),
+            mesa: None,
+            max_memory: None,
+            judge_cache: None,
+            spec_only: false,
+        }
     }
 }
 
@@ -726,69 +637,6 @@ pub fn usage_error(command: &str, message: impl std::fmt::Display) -> crate::exi
     crate::exit::Error::new(format!("{message}\nusage: {}", usage(command)))
 }
 
-/// `--timeout SECS` of `command`: whole seconds, 1 or more, `default` when not given.
-pub fn timeout_secs(
-    command: &str,
-    value: Option<&str>,
-    default: u64,
-) -> Result<std::time::Duration, crate::exit::Error> {
-    match value.map(str::parse::<u64>).transpose() {
-        Ok(Some(0)) => Err(usage_error(
-            command,
-            format!(
-                "--timeout 0: no run can finish in no time; give whole seconds, 1 or more (default {default})"
-            ),
-        )),
-        Ok(t) => Ok(std::time::Duration::from_secs(t.unwrap_or(default))),
-        Err(_) => Err(usage_error(
-            command,
-            format!("--timeout takes whole seconds, 1 or more (default {default})"),
-        )),
-    }
-}
-
-/// `--jobs`, `--timeout` and `--max-memory`, read strictly and the budget selected: one
-/// reading for every command that runs workers (selftest once ran `--timeout 10s` silently
-/// with its default, and a budget below one run's base counted every fault as caught). A
-/// value that is not whole and positive is a usage error of `command`.
-pub fn limits(
-    command: &str,
-    execution: &Execution,
-    default_timeout: u64,
-) -> Result<(usize, std::time::Duration), crate::exit::Error> {
-    let jobs = match execution
-        .jobs
-        .as_deref()
-        .map(str::parse::<usize>)
-        .transpose()
-    {
-        Ok(Some(0)) => {
-            return Err(usage_error(
-                command,
-                "--jobs 0: at least one worker must run; give --jobs 1 or more (default: the core count)",
-            ));
-        }
-        Ok(j) => j.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
-        Err(_) => {
-            return Err(usage_error(command, "--jobs takes a positive number"));
-        }
-    };
-    let timeout = timeout_secs(command, execution.timeout.as_deref(), default_timeout)?;
-    crate::harness::memory_limit::check_jobs(jobs).map_err(|e| usage_error(command, e))?;
-    match crate::harness::memory_limit::select(execution.max_memory.as_deref(), jobs) {
-        Ok(b) if b < umbra_case::memory::BASE_BYTES => Err(usage_error(
-            command,
-            format!(
-                "the memory budget per worker, {}, is below one run's base ({}: a worker with its driver, before any case; umbra_case::memory::BASE_BYTES); give --max-memory 1GiB or more, or fewer --jobs",
-                umbra_case::memory::gib(b),
-                umbra_case::memory::gib(umbra_case::memory::BASE_BYTES)
-            ),
-        )),
-        Ok(_) => Ok((jobs, timeout)),
-        Err(e) => Err(usage_error(command, e)),
-    }
-}
-
 /// Writes the completion script for `shell` to stdout.
 pub fn completions(args: &CompletionsArgs) -> crate::exit::Outcome {
     clap_complete::generate(args.shell, &mut command(), "umbra", &mut std::io::stdout());
@@ -852,7 +700,7 @@ mod tests {
         let Ok(Command::Soak(a)) = c else {
             panic!("soak parses: {c:?}");
         };
-        assert_eq!(a.execution.jobs.as_deref(), Some("2"));
+        assert_eq!(a.execution.jobs.map(Jobs::get), Some(2));
         assert_eq!(a.execution.mesa.as_deref(), Some("system"));
         assert_eq!(a.output.out.as_deref(), Some("o"));
         assert!(a.output.verbose);
@@ -876,6 +724,66 @@ mod tests {
             };
             assert_eq!(a.mode(), mode, "{words:?}");
         }
+    }
+
+    /// A bad number is refused by clap, the same way whichever command takes the flag, and
+    /// each command's help states the default it uses (selftest's --timeout once said 300 and
+    /// ran 120; `--timeout 10s` once ran with the default without a word).
+    #[test]
+    fn values_are_refused_alike_and_defaults_are_the_declared_ones() {
+        for words in [
+            &["umbra", "conformance", "--timeout", "ten"][..],
+            &["umbra", "selftest", "--timeout", "ten"],
+            &["umbra", "soak", "--timeout", "ten"],
+            &["umbra", "sweep", "--timeout", "ten"],
+            &["umbra", "card", "--timeout", "ten"],
+            &["umbra", "reduce", "c.json", "--point", "p", "--backend", "b", "--timeout", "ten"],
+            &["umbra", "drivers", "--baseline", "a", "--candidate", "b", "--timeout", "ten"],
+        ] {
+            let e = parse(&argv(words)).expect_err("refused").to_string();
+            assert!(
+                e.contains("invalid value 'ten' for '--timeout <SECS>'")
+                    && e.contains("give whole seconds"),
+                "{words:?}: {e}"
+            );
+        }
+        let timeout = |words: &[&str]| match parse(&argv(words)) {
+            Ok(Command::Conformance(a)) => a.execution.timeout,
+            Ok(Command::Selftest(a)) => a.execution.timeout,
+            Ok(Command::Sweep(a)) => a.timeout,
+            Ok(Command::Card(a)) => a.timeout,
+            other => panic!("{words:?}: {other:?}"),
+        };
+        assert_eq!(timeout(&["umbra", "conformance"]), Seconds(300));
+        assert_eq!(timeout(&["umbra", "selftest"]), Seconds(120));
+        assert_eq!(timeout(&["umbra", "selftest", "--timeout", "10s"]), Seconds(10));
+        assert_eq!(timeout(&["umbra", "sweep"]), Seconds(600));
+        assert_eq!(timeout(&["umbra", "card"]), Seconds(300));
+        let mut root = command();
+        root.build();
+        for (name, default) in [("conformance", "300"), ("selftest", "120"), ("sweep", "600")] {
+            let help = root
+                .find_subcommand_mut(name)
+                .expect("a command")
+                .render_help()
+                .to_string();
+            assert!(
+                help.contains(&format!("[default: {default}]")),
+                "{name}'s help: {help}"
+            );
+        }
+        for words in [
+            &["umbra", "conformance", "--jobs", "0"][..],
+            &["umbra", "soak", "--jobs", "0"],
+            &["umbra", "selftest", "--jobs", "0"],
+        ] {
+            let e = parse(&argv(words)).expect_err("refused").to_string();
+            assert!(e.contains("at least one worker"), "{words:?}: {e}");
+        }
+        let e = parse(&argv(&["umbra", "conformance", "--shard", "4/4"]))
+            .expect_err("refused")
+            .to_string();
+        assert!(e.contains("0 ≤ I < N"), "{e}");
     }
 
     #[test]

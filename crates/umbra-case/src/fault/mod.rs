@@ -9,6 +9,8 @@
 //! colour ([`Subtlety`]): a harness that catches only the first family passes most real
 //! driver bugs.
 
+mod applies;
+
 /// How small a fault's effect is (for the self-test's report).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Subtlety {
