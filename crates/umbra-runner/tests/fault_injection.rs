@@ -774,8 +774,14 @@ fn usage_run(out: &Path, extra: &[&str]) -> Output {
 fn flags_out_of_range_are_usage_errors(out: &Path) {
     let nowhere = out.join("nowhere");
     for (extra, says) in [
-        (vec!["--timeout", "0"], "invalid value '0' for '--timeout <SECS>'"),
-        (vec!["--timeout", "10m"], "invalid value '10m' for '--timeout <SECS>'"),
+        (
+            vec!["--timeout", "0"],
+            "invalid value '0' for '--timeout <SECS>'",
+        ),
+        (
+            vec!["--timeout", "10m"],
+            "invalid value '10m' for '--timeout <SECS>'",
+        ),
         (vec!["--jobs", "0"], "invalid value '0' for '--jobs <N>'"),
         (vec!["--jobs", "99999"], "--jobs 99999"),
         (vec!["--max-memory", "1KiB"], "--max-memory"),

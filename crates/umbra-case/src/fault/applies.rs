@@ -11,10 +11,10 @@ impl Fault {
     /// capabilities): a fault of a driver's shaders on a driver's backend, each where the
     /// mistake it makes can happen.
     pub fn applies(self, b: &Capabilities) -> bool {
-            if !b.driver {
-                return false;
-            }
-            match self {
+        if !b.driver {
+            return false;
+        }
+        match self {
             // GL's [-1, 1] depth mapping is wrong only where clip depth is [0, 1].
             Fault::GlDepthRange => b.zero_to_one_depth,
             Fault::WrongComponent | Fault::WrongTextureUnit => b.gl_texture_units,
@@ -50,7 +50,9 @@ impl Fault {
             Fault::NoGuard => !matches!(light, Light::Directional(_)) && s.guard_behind_light,
             Fault::NoDivide => !matches!(light, Light::Directional(_)),
             Fault::ShadowViewport => s.size != c.camera.size,
-            Fault::ClampFloat => s.format == DepthFormat::Depth32f && s.compare == Compare::Hardware,
+            Fault::ClampFloat => {
+                s.format == DepthFormat::Depth32f && s.compare == Compare::Hardware
+            }
             Fault::NoClamp => s.format.is_fixed() && s.compare == Compare::Hardware,
             Fault::QuarterTexel => !matches!(light, Light::Point(_)),
             Fault::NormalOffsetShort => s.bias.normal_offset != 0.0,
@@ -132,7 +134,9 @@ impl Fault {
     /// the catalogue happens to pick.
     pub fn aimed_at(self, c: &Case) -> bool {
         let cases: &[&str] = match self {
-            Fault::CompareStrict | Fault::ClampFloat | Fault::NoClamp => &["far-clamp", "beyond-far"],
+            Fault::CompareStrict | Fault::ClampFloat | Fault::NoClamp => {
+                &["far-clamp", "beyond-far"]
+            }
             Fault::QuarterTexel | Fault::ShadowHalfTexel => {
                 &["contact", "filters-magnified", "guard-magnified"]
             }
@@ -140,9 +144,10 @@ impl Fault {
                 &["bias-forms-magnified", "contact", "grazing"]
             }
             Fault::NormalUnnormalized => &["engine-curved", "bias-forms-curved-magnified"],
-            Fault::PcfOffCentre | Fault::PcfDoubleCentre | Fault::BilinearCoarse | Fault::Vis4Bit => {
-                &["filters-magnified", "filters"]
-            }
+            Fault::PcfOffCentre
+            | Fault::PcfDoubleCentre
+            | Fault::BilinearCoarse
+            | Fault::Vis4Bit => &["filters-magnified", "filters"],
             Fault::NoGuard => &["guard-magnified", "behind-spot", "bias-matrix"],
             Fault::Repeat => &["outside"],
             Fault::ClampIgnored => &["pancake", "near-crossing-clamped"],

@@ -47,15 +47,13 @@ pub const FAULT: &str = "inject only this fault (repeatable; default: every faul
 /// `--scene`.
 pub const SCENE: &str = "the case whose scene the technique matrix is measured on";
 /// `--repeat`.
-pub const REPEAT: &str =
-    "timed renders per point after one warm-up (median reported)";
+pub const REPEAT: &str = "timed renders per point after one warm-up (median reported)";
 /// `--baseline`.
 pub const BASELINE: &str = "the Mesa build compared against (see --mesa for the forms)";
 /// `--candidate`.
 pub const CANDIDATE: &str = "the Mesa build under test (see --mesa for the forms)";
 /// `--pictures`.
-pub const PICTURES: &str =
-    "at most N changed points get baseline | candidate | reference pictures";
+pub const PICTURES: &str = "at most N changed points get baseline | candidate | reference pictures";
 /// `--mesa-src`.
 pub const MESA_SRC: &str = "a Mesa git work tree (clean)";
 /// `--good`.
@@ -79,8 +77,7 @@ pub const SRC: &str = "Mesa source tree at the commit to test";
 /// `--explain`.
 pub const EXPLAIN: &str = "print the judged lookup of the pixel at X,Y (top-left origin) step by step: point, face, coordinate, reference value, every tap's stored range";
 /// `--seed`.
-pub const SEED: &str =
-    "seed of the generated cases: the same seed gives the same cases everywhere";
+pub const SEED: &str = "seed of the generated cases: the same seed gives the same cases everywhere";
 /// `--seed` of the self-test.
 pub const SELFTEST_SEED: &str = "run the faults on generated cases of this seed instead of the catalogue (1 when only --count is given)";
 /// `--thresholds`.
@@ -112,15 +109,13 @@ pub const CONTROL: &str =
 pub const REPRO: &str =
     "write the `umbra repro` bundle of the first bad commit's first failed run into DIR";
 /// `--bisect-log`.
-pub const BISECT_LOG: &str =
-    "a bisection's log, carried into issue.md with its first bad commit";
+pub const BISECT_LOG: &str = "a bisection's log, carried into issue.md with its first bad commit";
 /// `--first-bad`.
 pub const FIRST_BAD: &str =
     "the first bad commit a bisection found (for issue.md's \"regression?\")";
 /// `--emit`.
 pub const EMIT: &str = "internal: write the bundle's program and pictures for an already reduced case (in the driver's process)";
 /// `--count`.
-pub const COUNT: &str =
-    "how many cases to generate (case K of a seed is the same in every count)";
+pub const COUNT: &str = "how many cases to generate (case K of a seed is the same in every count)";
 /// `--count` of the self-test.
 pub const SELFTEST_COUNT: &str = "run the faults on this many generated cases instead of the catalogue (20 when only --seed is given)";

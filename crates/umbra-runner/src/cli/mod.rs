@@ -737,8 +737,27 @@ mod tests {
             &["umbra", "soak", "--timeout", "ten"],
             &["umbra", "sweep", "--timeout", "ten"],
             &["umbra", "card", "--timeout", "ten"],
-            &["umbra", "reduce", "c.json", "--point", "p", "--backend", "b", "--timeout", "ten"],
-            &["umbra", "drivers", "--baseline", "a", "--candidate", "b", "--timeout", "ten"],
+            &[
+                "umbra",
+                "reduce",
+                "c.json",
+                "--point",
+                "p",
+                "--backend",
+                "b",
+                "--timeout",
+                "ten",
+            ],
+            &[
+                "umbra",
+                "drivers",
+                "--baseline",
+                "a",
+                "--candidate",
+                "b",
+                "--timeout",
+                "ten",
+            ],
         ] {
             let e = parse(&argv(words)).expect_err("refused").to_string();
             assert!(
@@ -756,12 +775,19 @@ mod tests {
         };
         assert_eq!(timeout(&["umbra", "conformance"]), Seconds(300));
         assert_eq!(timeout(&["umbra", "selftest"]), Seconds(120));
-        assert_eq!(timeout(&["umbra", "selftest", "--timeout", "10s"]), Seconds(10));
+        assert_eq!(
+            timeout(&["umbra", "selftest", "--timeout", "10s"]),
+            Seconds(10)
+        );
         assert_eq!(timeout(&["umbra", "sweep"]), Seconds(600));
         assert_eq!(timeout(&["umbra", "card"]), Seconds(300));
         let mut root = command();
         root.build();
-        for (name, default) in [("conformance", "300"), ("selftest", "120"), ("sweep", "600")] {
+        for (name, default) in [
+            ("conformance", "300"),
+            ("selftest", "120"),
+            ("sweep", "600"),
+        ] {
             let help = root
                 .find_subcommand_mut(name)
                 .expect("a command")

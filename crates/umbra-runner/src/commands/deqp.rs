@@ -45,8 +45,8 @@ use umbra_report::Status;
 
 use crate::exit::{Error, Exit, Outcome};
 use crate::harness::scheduler;
-use crate::judge::protocol::{JudgeRequest, Request};
 use crate::judge::expectations::{Expectations, Expected};
+use crate::judge::protocol::{JudgeRequest, Request};
 
 /// A test's name for deqp-runner.
 pub fn test_name(backend: &str, case: &str, index: usize) -> String {

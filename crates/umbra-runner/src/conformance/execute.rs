@@ -12,8 +12,8 @@ use super::{Planned, Settings, first_line};
 use crate::exit::Error;
 use crate::harness::scheduler::{Attempt, NotReady, Session};
 use crate::harness::worker::Hello;
-use crate::judge::protocol::{JudgeRequest, PointRef, Request};
 use crate::judge::expectations::Expectations;
+use crate::judge::protocol::{JudgeRequest, PointRef, Request};
 use umbra_report::escape::shell_word;
 use umbra_report::{RunResult, Status};
 

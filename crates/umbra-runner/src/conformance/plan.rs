@@ -416,4 +416,3 @@ pub(crate) fn duplicate_names(points: &[(PathBuf, Vec<PointPlan>)]) -> Option<St
     }
     None
 }
-

@@ -7,8 +7,8 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use crate::harness::scheduler::Session;
-use crate::judge::protocol::Request;
 use crate::judge::card::Card;
+use crate::judge::protocol::Request;
 
 /// The card of `session`'s backend, measured by its worker; `Err`: why there is none (the
 /// backend is unavailable here, or its worker died or timed out).

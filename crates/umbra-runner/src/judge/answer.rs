@@ -74,16 +74,16 @@ fn measured(
 ) -> RunReport {
     use crate::judge::measure::{Measurement, measure};
     match measure(backend, point, n) {
-            Measurement::Done(m) => RunReport {
-                outcome: RunVerdict::Pass,
-                measured: Some(m),
-                ..Default::default()
-            },
-            Measurement::Skip(why) => RunReport {
-                outcome: RunVerdict::Skip,
-                reason: why,
-                ..Default::default()
-            },
+        Measurement::Done(m) => RunReport {
+            outcome: RunVerdict::Pass,
+            measured: Some(m),
+            ..Default::default()
+        },
+        Measurement::Skip(why) => RunReport {
+            outcome: RunVerdict::Skip,
+            reason: why,
+            ..Default::default()
+        },
         Measurement::Error(e) => RunReport {
             outcome: RunVerdict::Fail,
             reason: e,
@@ -206,7 +206,9 @@ fn judged_again(
 }
 
 /// The deviations and the calibration a request names, or why they are not ones.
-fn judging_of(req: &JudgeRequest) -> Result<(umbra_case::Deviations, umbra_case::Calibration), String> {
+fn judging_of(
+    req: &JudgeRequest,
+) -> Result<(umbra_case::Deviations, umbra_case::Calibration), String> {
     let deviations = umbra_case::Deviations::parse(req.deviation.as_deref().unwrap_or(""))
         .map_err(|d| format!("unknown deviation {d:?} in the request"))?;
     let calibration = umbra_case::Calibration::parse(req.calibration.as_deref().unwrap_or(""))

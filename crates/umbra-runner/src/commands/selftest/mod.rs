@@ -35,8 +35,8 @@ use crate::cli::{SelftestArgs, SelftestMode};
 use crate::exit::{Error, Exit, Outcome};
 use crate::harness::pool::Reply;
 use crate::harness::scheduler::{NotReady, Session};
-use crate::judge::protocol::{JudgeRequest, Request};
 use crate::judge::expectations::Expectations;
+use crate::judge::protocol::{JudgeRequest, Request};
 
 /// Runs `umbra selftest` in the mode asked for ([`SelftestArgs::mode`]) over one setup
 /// ([`setup`]): the hunt of every fault on every backend (the default, `faults`),
@@ -227,12 +227,9 @@ pub(crate) fn setup(args: &SelftestArgs) -> Result<Setup, Error> {
     let cache = if args.mode() == SelftestMode::Orientations {
         PathBuf::new()
     } else {
-        crate::judge::judge_cache::prepare(
-            args.execution
-                .judge_cache
-                .as_deref()
-                .unwrap_or(std::path::Path::new(crate::judge::judge_cache::DEFAULT_ROOT)),
-        )
+        crate::judge::judge_cache::prepare(args.execution.judge_cache.as_deref().unwrap_or(
+            std::path::Path::new(crate::judge::judge_cache::DEFAULT_ROOT),
+        ))
     };
     let calibrations = if args.execution.spec_only || args.mode() != SelftestMode::Faults {
         BTreeMap::new()
@@ -804,7 +801,7 @@ mod tests {
     fn flags_the_command_line_would_ignore_are_refused() {
         let cases_and_seed = SelftestArgs {
             cases: Some("cases".into()),
-            seed: Some("3".into()),
+            seed: Some(3),
             ..SelftestArgs::default()
         };
         assert!(conflicts(&cases_and_seed).is_err_and(|e| e.contains("give one")));
@@ -857,14 +854,14 @@ mod tests {
             .flat_map(|f| umbra_case::load_file(f).expect("a valid case"))
             .collect();
         for f in Fault::ALL {
-            let aimed: Vec<_> = points.iter().filter(|p| aimed_at(f, &p.case)).collect();
+            let aimed: Vec<_> = points.iter().filter(|p| f.aimed_at(&p.case)).collect();
             if aimed.is_empty() {
                 continue;
             }
             assert!(
                 aimed
                     .iter()
-                    .any(|p| exercises(f, &p.case, false) || exercises(f, &p.case, true)),
+                    .any(|p| f.exercises(&p.case, false) || f.exercises(&p.case, true)),
                 "{}: no aimed point exercises it",
                 f.name()
             );
@@ -891,7 +888,7 @@ mod tests {
             Fault::ArrayLayerZero,
         ] {
             assert!(
-                points.iter().any(|p| aimed_at(f, &p.case)),
+                points.iter().any(|p| f.aimed_at(&p.case)),
                 "{}: its aimed cases are gone",
                 f.name()
             );

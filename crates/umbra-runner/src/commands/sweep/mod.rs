@@ -24,9 +24,9 @@ pub mod matrix;
 
 use crate::cli::SweepArgs;
 use crate::exit::{Error, Exit, Outcome};
-use crate::judge::measure::Measured;
 use crate::harness::pool::Reply;
 use crate::harness::scheduler::{NotReady, Session};
+use crate::judge::measure::Measured;
 use crate::judge::protocol::{MeasureRequest, PointRef, Request, RunVerdict};
 use matrix::{FIXED_ORTHO, matrix};
 pub use matrix::{Row, Technique};
