@@ -927,16 +927,12 @@ pub fn bias_forms(b: &Bias) -> String {
     }
 }
 
-/// Writes the `count` cases of `seed` as `DIR/soak-SEED-K.json`, removing any other case
-/// file there first (a smaller soak into the same directory must not run a larger one's).
+/// Writes the `count` cases of `seed` as `DIR/soak-SEED-K.json`, making `dir` if it is not
+/// there. It removes nothing: the caller gives it a directory of its own (a soak's new run
+/// directory, the self-test's `umbra_owned::fresh` one), so no other case is run beside
+/// them and no file of a user's is touched.
 pub fn write_cases(dir: &std::path::Path, seed: u64, count: usize) -> std::io::Result<()> {
     std::fs::create_dir_all(dir)?;
-    for e in std::fs::read_dir(dir)? {
-        let p = e?.path();
-        if p.extension().is_some_and(|x| x == "json") {
-            std::fs::remove_file(p)?;
-        }
-    }
     for case in cases(seed, count) {
         let text = to_json(&case);
         std::fs::write(dir.join(format!("{}.json", case.name)), text + "\n")?;

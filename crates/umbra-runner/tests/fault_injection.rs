@@ -1214,3 +1214,41 @@ fn a_golden_that_cannot_be_decoded_is_said() {
     );
     assert!(!t.contains("differs from its golden"), "{t}");
 }
+
+/// `umbra selftest --seed S --count N --out DIR` writes its generated cases into
+/// `DIR/selftest-cases` only where umbra made that directory: a user's files there are left
+/// as they are and the command cannot run (it once removed every `*.json` there).
+#[test]
+fn generated_cases_never_empty_a_directory_umbra_did_not_make() {
+    let root = scratch("fi-selftest-out");
+    let dir = root.join("selftest-cases");
+    std::fs::create_dir_all(&dir).expect("dir");
+    std::fs::write(dir.join("mine.json"), "{}").expect("a user's file");
+    let o = umbra(
+        &[
+            "selftest",
+            "--seed",
+            "1",
+            "--count",
+            "1",
+            "--backend",
+            "gl33/llvmpipe",
+            "--out",
+            s(&root),
+        ],
+        &[],
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(
+        t.contains("selftest-cases") && t.contains("only a directory it made"),
+        "{t}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("mine.json"))
+            .ok()
+            .as_deref(),
+        Some("{}"),
+        "the user's file is untouched"
+    );
+}

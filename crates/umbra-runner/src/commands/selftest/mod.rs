@@ -310,6 +310,10 @@ fn soak_cases(args: &SelftestArgs) -> Result<Option<PathBuf>, String> {
             .unwrap_or(crate::run_dir::SOAK_OUT),
     )
     .join("selftest-cases");
+    // A directory of umbra's own, emptied: one that holds anything umbra did not write (a
+    // user's cases under a path they gave as --out) is refused, never emptied.
+    umbra_owned::fresh(&dir, "umbra selftest --seed/--count (generated cases)")
+        .map_err(|e| e.to_string())?;
     umbra_case::generate::write_cases(&dir, seed, count).map_err(|e| {
         format!(
             "cannot write the generated cases under {}: {e}",
