@@ -5,7 +5,7 @@
 //!
 //! `umbra drivers` and `umbra bisect` read the reports of the conformance runs they start
 //! through [`Report::read`]: a missing or mistyped field is an error that names the file and
-//! the field, not an empty string. The document is written through a `serde_json::Value`,
+//! the field's path (`runs[12].status`), not an empty string. The document is written through a `serde_json::Value`,
 //! whose keys are sorted, so its text is what it always was.
 
 use std::path::Path;
@@ -185,8 +185,8 @@ impl Report {
         serde_json::to_string_pretty(&serde_json::to_value(self)?)
     }
 
-    /// Reads a report.json; an error names the file, and the field where one is wrong
-    /// (`runs[12].status: invalid type …`), or the schema it has.
+    /// Reads a report.json; an error names the file, and the path of the field where one is
+    /// wrong (`runs[12].status: invalid type …`), or the schema it has.
     pub fn read(path: &Path) -> Result<Report, String> {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
         Report::parse(&text).map_err(|e| format!("{}: {e}", path.display()))
@@ -205,30 +205,8 @@ impl Report {
                 ));
             }
         }
-        let runs = v.get("runs").and_then(serde_json::Value::as_array);
-        // Name the run whose field is wrong: serde's own error gives a line and column only.
-        for (k, run) in runs.into_iter().flatten().enumerate() {
-            if let Err(e) = ReportRun::deserialize(run) {
-                return Err(format!("runs[{k}]: {e}"));
-            }
-        }
-        for (k, d) in v
-            .get("drivers")
-            .and_then(serde_json::Value::as_array)
-            .into_iter()
-            .flatten()
-            .enumerate()
-        {
-            if let Err(e) = DriverRow::deserialize(d) {
-                return Err(format!("drivers[{k}]: {e}"));
-            }
-        }
-        serde_json::from_value(v).map_err(|e| format!("not a report ({e})"))
-    }
-
-    /// The run named `name`, if the report has it.
-    pub fn run(&self, name: &str) -> Option<&ReportRun> {
-        self.runs.iter().find(|r| r.name == name)
+        // The path to a wrong field (`runs[12].status`), as case files name theirs.
+        serde_path_to_error::deserialize(&v).map_err(|e| format!("{}: {}", e.path(), e.inner()))
     }
 }
 
@@ -292,7 +270,7 @@ mod tests {
     }
 
     #[test]
-    fn a_wrong_field_is_named_with_its_run() {
+    fn a_wrong_field_is_named_by_its_path() {
         let report = Report::new(
             &[result("ref/c", Status::Pass)],
             Header::default(),
@@ -303,7 +281,7 @@ mod tests {
         v["runs"][0]["status"] = serde_json::json!(3);
         let e = Report::parse(&v.to_string()).expect_err("refused");
         assert!(
-            e.starts_with("runs[0]: invalid type") && e.contains("string"),
+            e.starts_with("runs[0].status: invalid type") && e.contains("string"),
             "{e}"
         );
         v["schema"] = serde_json::json!(2);

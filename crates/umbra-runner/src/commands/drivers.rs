@@ -138,16 +138,13 @@ impl std::fmt::Display for PictureDiff {
 
 /// Joins two report.json run lists and lists what changed.
 pub fn compare(baseline: &Report, candidate: &Report) -> Vec<Change> {
-    let runs = |r: &'_ Report| -> BTreeMap<String, ReportRun> {
-        r.runs.iter().map(|x| (x.name.clone(), x.clone())).collect()
-    };
-    let (a, b) = (runs(baseline), runs(candidate));
-    let mut names: Vec<&String> = a.keys().chain(b.keys()).collect();
+    let (a, b) = (by_name(baseline), by_name(candidate));
+    let mut names: Vec<&str> = a.keys().chain(b.keys()).copied().collect();
     names.sort();
     names.dedup();
     let mut out = Vec::new();
     for name in names {
-        let (ra, rb) = (a.get(name), b.get(name));
+        let (ra, rb) = (a.get(name).copied(), b.get(name).copied());
         let (va, vb) = (Verdict::of(ra), Verdict::of(rb));
         let mut detail = Vec::new();
         let (ma, mb) = (
@@ -194,7 +191,7 @@ pub fn compare(baseline: &Report, candidate: &Report) -> Vec<Change> {
             continue;
         };
         out.push(Change {
-            name: name.clone(),
+            name: name.to_string(),
             kind,
             baseline: va,
             candidate: vb,
@@ -215,6 +212,11 @@ pub fn compare(baseline: &Report, candidate: &Report) -> Vec<Change> {
     };
     out.sort_by(|x, y| (rank(x.kind), &x.name).cmp(&(rank(y.kind), &y.name)));
     out
+}
+
+/// A report's runs by name.
+fn by_name(r: &Report) -> BTreeMap<&str, &ReportRun> {
+    r.runs.iter().map(|x| (x.name.as_str(), x)).collect()
 }
 
 fn opt(v: Option<u64>) -> String {
