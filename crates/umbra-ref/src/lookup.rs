@@ -19,14 +19,16 @@
 //!    directional light's eye), as LearnOpenGL writes it for its orthographic light.
 //! 7. Filter: NEAREST texel floor(u·size); LINEAR = 2x2 at floor(u·size − ½) with bilinear
 //!    weights of the compare results (never of depths); PCF N = N×N NEAREST compares at
-//!    offsets (k − (N−1)/2) texels, averaged.
+//!    offsets (k − (N−1)/2) texels, averaged; Castano's filter = nine weighted LINEAR
+//!    compares ([`castano_taps`]).
 //! 8. Texels beyond the map: border (clear depth), clamp to edge (also for `lit`), or repeat.
 //!    Cube faces: the sampler clamps to the face; taps the shader addresses itself go through
 //!    the direction of their texel's centre, so a PCF tap beyond a face's edge reads the
 //!    neighbouring face (hardware compare) while a manual fetch clamps its indices first.
 //!
 //! Manual compare uses the same texel selection and weights as hardware compare: the shader
-//! fetches the texels and compares them itself, so the two differ only in the clamp of 6.
+//! fetches the texels and compares them itself, so the two differ only in the clamp of 6
+//! and, on a cube, in where a PCF tap beyond a face's edge reads (8).
 //!
 //! **Judged lookups** ([`Lookup::judged`]) also return the interval of values any conformant
 //! implementation of the given [`Profile`] may return there ([`Legal`]), dEQP-style: each
@@ -119,7 +121,7 @@ pub struct Lookup<'a> {
     /// One layer per face.
     pub layers: &'a [DepthLayer],
     /// The case's reach, for the position freedom: the largest of the scene's extent and the
-    /// camera's and the light's distances from the origin (per axis).
+    /// camera's distance from the origin (per axis), and each light view's eye distance.
     pub reach: f32,
     /// The profile the legal intervals are computed for (judged renders).
     pub profile: Profile,
@@ -208,8 +210,8 @@ impl Legal {
 }
 
 /// The step between the values a filter can produce: NEAREST returns 0 or 1, PCF N sums of
-/// N² results over N², LINEAR anything (0); a blend of two mip levels anything too, and so
-/// does a blend of two cascades (`light`'s blend band).
+/// N² results over N², LINEAR and Castano's filter anything (0); a blend of two mip levels
+/// anything too, and so does a blend of two cascades (`light`'s blend band).
 pub fn quantum(shadow: &Shadow, light: &LightSetup) -> f32 {
     // A band exists where there are two cascades or more.
     let blends_cascades = light
@@ -395,8 +397,9 @@ impl Lookup<'_> {
     /// position freedom ([`position_freedom`], a box along the world axes) and `snap`, the
     /// two world-space vectors the point moves by when the camera's vertex snapping moves the
     /// surface under the pixel by the snapping's reach along screen x and y (the point is then
-    /// anywhere in the parallelogram they span). See [`Lookup::legal_at`] for how a region of
-    /// points is judged as a whole.
+    /// anywhere in the parallelogram they span), and `turn`, the normal's turn across that
+    /// region, which swings the normal-offset point and frees N·L. See [`Lookup::legal_at`]
+    /// for how a region of points is judged as a whole.
     pub fn judged(&self, p: Vec3, n: Vec3, snap: [Vec3; 2], turn: Turn) -> (f32, Legal) {
         let vis = self.visibility(p, n);
         let d = position_freedom(p, self.reach) + self.offsets_reach() * 16.0 * f32::EPSILON;
@@ -429,8 +432,8 @@ impl Lookup<'_> {
 
     /// The hull of [`Lookup::legal_at`] over the four quarters of the parallelogram `snap`
     /// spans around `p` (each with the arithmetic moves too), split again `depth − 1` times
-    /// where a quarter's interval is still wider than its centre's; `None` when nothing
-    /// narrows (a quarter already as wide as the whole).
+    /// where a quarter's interval is still wider than its centre's; never `None` (there are
+    /// always four quarters).
     pub(super) fn legal_split(
         &self,
         p: Vec3,
@@ -474,7 +477,9 @@ impl Lookup<'_> {
     /// scenes: the soak's largest class). The guard (w ≤ 0) and the `lit` outside test are
     /// undecided when w or (u, v) lie within that reach of their bound. Where the region
     /// reaches another cube face, each face's share is judged in that face's projection and
-    /// the intervals are hulled.
+    /// the intervals are hulled. Across the region the normal turns by up to `turn` (see
+    /// [`Lookup::reference_range`]); a cascaded light's interval is
+    /// [`Lookup::legal_cascaded`]'s.
     pub(super) fn legal_at(&self, p: Vec3, n: Vec3, moves: &[Vec3], turn: f32) -> Legal {
         if let Some(c) = &self.light.cascading {
             return self.legal_cascaded(c, p, n, moves, turn);

@@ -77,8 +77,9 @@ pub struct DepthLayer {
 /// The GLES 2 path ([`Profile::packed_depth`]) applies umbra's own offset formula in the
 /// shader (m from dFdx/dFdy: the differences of two f32 depths, ±2 ULP(z) per pixel; r fixed),
 /// packs the offset depth into RGBA8 with error ≤ u·d·(1 + 1/254) + 255⁻⁴ each way (see
-/// `umbra-gl`'s packing), and its depth test runs on a 24-bit buffer: the nearest surface may
-/// lose to one within a D24 step.
+/// `umbra-gl`'s packing), and its depth test runs on a 16-bit buffer for depth16 and a 24-bit
+/// one otherwise (`umbra-gl`'s `es2_depth`): the nearest surface may lose to one within a step
+/// of that buffer.
 ///
 /// Over candidates: the stored value is the nearest of what covers the texel. Every triangle
 /// that certainly covers the centre competes; one that only may cover it (within δ of an

@@ -24,7 +24,8 @@ pub(super) enum Texel {
 impl Lookup<'_> {
     /// How the lookup's taps address a cube map: the sampler itself for hardware NEAREST and
     /// LINEAR (clamped to the face in the value; seams are the judged interval's business),
-    /// the texel centre's direction for hardware PCF taps, clamped indices for manual fetches.
+    /// the texel centre's direction for hardware PCF taps, clamped indices for manual fetches;
+    /// a 2D map's taps take its wrap policy.
     pub(super) fn tap_addressing(&self) -> Addressing {
         if !self.cube() {
             return Addressing::Wrap;
@@ -89,7 +90,8 @@ impl Lookup<'_> {
 
     /// One LINEAR tap of the sampler: within the map (or its wrap), or on a cube, within the
     /// face, across a seam (seamless profiles: the neighbouring face's texel; per-face
-    /// filtering: clamped), or None at a corner where both coordinates leave the face.
+    /// filtering: clamped), or, on a seamless profile, None at a corner where both
+    /// coordinates leave the face.
     pub(super) fn linear_tap(
         &self,
         face: usize,

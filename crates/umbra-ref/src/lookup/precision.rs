@@ -5,9 +5,9 @@
 use super::*;
 
 impl Lookup<'_> {
-    /// The point a lookup transforms (after the normal offset), as f64 (p, 1), and the
-    /// matrix it goes through on `face` (texture matrix, or light matrix when the bias matrix
-    /// comes after the divide): what the error bounds below are computed from.
+    /// The point a lookup transforms (after the normal offset), in f32 and as f64 (p, 1),
+    /// and the matrix it goes through on `face` (texture matrix, or light matrix when the bias
+    /// matrix comes after the divide): what the error bounds below are computed from.
     pub(super) fn lookup_point(
         &self,
         p: Vec3,
@@ -33,7 +33,8 @@ impl Lookup<'_> {
     /// How far the texel coordinates (u·size, v·size) another implementation computes for
     /// this point may lie from ours: like the reference value's depth, each of t.x, t.y and
     /// t.w is a 4-term f32 dot product of the same uploaded matrix row with (p, 1), rounded
-    /// within γ₄·Σ|mᵢ·pᵢ| on either side, then divided (2.5 ULP); then scaled by the size.
+    /// within γ₄·Σ|mᵢ·pᵢ| on either side, then divided (2.5 ULP); the bias matrix after the
+    /// divide halves that and adds a product and a sum; then scaled by the size.
     pub(super) fn coord_error(&self, p: Vec3, n: Vec3, st: &Setup) -> (f64, f64) {
         let s = self.shadow;
         let (_, p4, m) = self.lookup_point(p, n, st.face);
@@ -62,7 +63,8 @@ impl Lookup<'_> {
     /// - the bias: the constant is exact; the slope and N·L biases move with c = N·L, whose error is
     ///   the normal's interpolation and normalisation (≈ 12u), the light direction's (4u, plus
     ///   the position freedom over the light's distance for a positional light) and the dot
-    ///   product's (3u); then sqrt, a division and a product (8u relative);
+    ///   product's (3u), and `turn`, how far the normal turns across the region; then sqrt,
+    ///   a division and a product (8u relative);
     /// - `extra`: the point's own freedom, measured by the caller;
     /// - a hardware compare on a fixed-point format clamps the result to [0,1], and may
     ///   compare in the format's own fixed point: the reference value rounded to a code

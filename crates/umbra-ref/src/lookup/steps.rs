@@ -19,9 +19,10 @@ impl Lookup<'_> {
     }
 
     /// [`Lookup::visibility`] of every point of a run (`out[k]` for point k of `surfaces`), the
-    /// same steps with the same operations: on one 2D map without per-point bias terms, the
-    /// coordinates of the whole run first (a loop the compiler vectorises: one matrix, no
-    /// branches), then each point's guard, outside test and filter; otherwise point by point.
+    /// same steps with the same operations: on one 2D map without per-point bias terms or
+    /// `beyond_far: lit`, the coordinates of the whole run first (a loop the compiler
+    /// vectorises: one matrix, no branches), then each point's guard, outside test and
+    /// filter; otherwise point by point.
     pub fn visibility_run(
         &self,
         surfaces: &Surfaces,
@@ -169,7 +170,9 @@ impl Lookup<'_> {
         self.setup_on(p, n, self.probe(p, n).0)
     }
 
-    /// [`Lookup::setup`] in face `face`.
+    /// [`Lookup::setup`] in face `face`: where the lookup reads there, the reference clamped
+    /// as the compare clamps it; `None` where the guard, the `lit` outside test or
+    /// `beyond_far: lit` reads lit.
     pub(super) fn setup_on(&self, p: Vec3, n: Vec3, face: usize) -> Option<Setup> {
         let s = self.shadow;
         let (c, mut reference) = self.probe_on(p, n, face);

@@ -103,9 +103,6 @@ fn castanos_taps_are_one_continuous_filter() {
     }
 }
 
-/// Judges `tries` random surface points of `run` with snapping-like moves and checks the
-/// reference's value at 24 points of each region against the region's interval; returns
-/// how many values it checked.
 /// [`region_checks`] on every light's run of `point`.
 fn every_light(
     point: umbra_case::CasePoint,
@@ -119,6 +116,9 @@ fn every_light(
         .sum()
 }
 
+/// Judges `tries` random surface points of `run` with snapping-like moves and checks the
+/// reference's value at 24 points of each region against the region's interval; returns
+/// how many values it checked.
 fn region_checks(
     run: &umbra_case::LightRun,
     rand: &mut impl FnMut() -> f32,
