@@ -9,8 +9,9 @@ use serde_json::Value;
 use crate::error::CaseError;
 use crate::format::{Case, LightsError};
 
-/// One runnable point of a case: the case with its sweep values applied.
-#[derive(Clone, Debug)]
+/// One runnable point of a case: the case with its sweep values applied. It travels to a
+/// worker as it is (serde), so a point is loaded, validated and expanded once, by the parent.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CasePoint {
     /// The file it came from.
     pub file: PathBuf,

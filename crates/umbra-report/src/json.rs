@@ -39,7 +39,26 @@ pub struct Report {
     pub runs: Vec<ReportRun>,
     /// A merged run (`umbra merge`): the shards it was put together from.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub shards: Option<serde_json::Value>,
+    pub shards: Option<Vec<ShardRow>>,
+}
+
+/// One shard a merged run was put together from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ShardRow {
+    /// Its index I of `--shard I/N`.
+    pub index: usize,
+    /// N.
+    pub count: usize,
+    /// How the plan was split: `stride` or by durations.
+    pub by: String,
+    /// The runs it made.
+    pub runs: usize,
+    /// Its wall time, seconds.
+    pub wall_s: f64,
+    /// Its workers' time (runs and starts), seconds.
+    pub worker_s: f64,
+    /// Its directory, as given to `umbra merge`.
+    pub dir: String,
 }
 
 /// What the orchestrator found out about the run besides the runs themselves.
@@ -50,7 +69,7 @@ pub struct Header {
     /// [`Report::drivers`].
     pub drivers: Vec<DriverRow>,
     /// [`Report::shards`].
-    pub shards: Option<serde_json::Value>,
+    pub shards: Option<Vec<ShardRow>>,
 }
 
 /// One backend's driver (fields in the order the file has always listed them).

@@ -30,15 +30,15 @@ fn main() {
         .iter()
         .position(|p| p.id() == DEFAULT_SCENE.1)
         .expect("the standard point");
-    every_backend(exe, &file, index);
+    every_backend(exe, &points[index]);
     largest_frames(exe, &root);
-    reference_per_thread_count(exe, &file, index, &points[index]);
+    reference_per_thread_count(exe, &points[index]);
     latest_conformance_stages(&root);
 }
 
 /// The standard point on every backend, side by side, with each one's ratio to the reference
 /// and to gl33/llvmpipe.
-fn every_backend(exe: &Path, file: &Path, index: usize) {
+fn every_backend(exe: &Path, point: &umbra_case::CasePoint) {
     // Every backend, each in a worker with its driver's environment (a backend whose driver is
     // missing says so in its row).
     let backends: Vec<String> = umbra_runner::harness::registry::known();
@@ -46,15 +46,7 @@ fn every_backend(exe: &Path, file: &Path, index: usize) {
         "{} on every backend, median of 9 after a warm-up:",
         DEFAULT_SCENE.1
     );
-    let results = measure_backends(
-        exe,
-        file,
-        index,
-        &backends,
-        9,
-        Duration::from_secs(600),
-        &[],
-    );
+    let results = measure_backends(exe, point, &backends, 9, Duration::from_secs(600), &[]);
     let total = |b: &str| {
         results
             .iter()
@@ -97,16 +89,12 @@ fn every_backend(exe: &Path, file: &Path, index: usize) {
     }
 }
 
-/// The catalogue's points as (file, index in it, view pixels, map texels over every face, id).
-fn catalogue_sizes(root: &Path) -> Vec<(std::path::PathBuf, usize, u64, u64, String)> {
-    let mut catalogue: Vec<(std::path::PathBuf, usize, u64, u64, String)> = Vec::new();
+/// The catalogue's points as (the point, view pixels, map texels over every face, id).
+fn catalogue_sizes(root: &Path) -> Vec<(umbra_case::CasePoint, u64, u64, String)> {
+    let mut catalogue: Vec<(umbra_case::CasePoint, u64, u64, String)> = Vec::new();
     let files = umbra_case::case_files(&root.join("cases")).unwrap_or_default();
     for f in &files {
-        for (k, p) in umbra_case::load_file(f)
-            .unwrap_or_default()
-            .iter()
-            .enumerate()
-        {
+        for p in umbra_case::load_file(f).unwrap_or_default() {
             let [w, h] = p.case.camera.size;
             let [mw, mh] = p.case.shadow.size;
             // Every light's map: a cube's six faces, else one.
@@ -122,12 +110,12 @@ fn catalogue_sizes(root: &Path) -> Vec<(std::path::PathBuf, usize, u64, u64, Str
                     }
                 })
                 .sum();
+            let id = p.id();
             catalogue.push((
-                f.clone(),
-                k,
+                p,
                 u64::from(w) * u64::from(h),
                 u64::from(mw) * u64::from(mh) * faces,
-                p.id(),
+                id,
             ));
         }
     }
@@ -139,19 +127,18 @@ fn catalogue_sizes(root: &Path) -> Vec<(std::path::PathBuf, usize, u64, u64, Str
 fn largest_frames(exe: &Path, root: &Path) {
     // The catalogue's largest frames: most view pixels, most map texels (every face).
     let catalogue = catalogue_sizes(root);
-    let largest_view = catalogue.iter().max_by_key(|p| (p.2, p.3));
-    let largest_map = catalogue.iter().max_by_key(|p| (p.3, p.2));
+    let largest_view = catalogue.iter().max_by_key(|p| (p.1, p.2));
+    let largest_map = catalogue.iter().max_by_key(|p| (p.2, p.1));
     for (what, p) in [
         ("most view pixels", largest_view),
         ("most map texels", largest_map),
     ] {
-        let Some((file, k, view, texels, id)) = p else {
+        let Some((point, view, texels, id)) = p else {
             continue;
         };
         let r = measure_backends(
             exe,
-            file,
-            *k,
+            point,
             &["ref".to_string(), "gl33/llvmpipe".to_string()],
             9,
             Duration::from_secs(600),
@@ -188,12 +175,7 @@ fn largest_frames(exe: &Path, root: &Path) {
 }
 
 /// The reference's passes on 1 thread and on every core, in Mpixels/s of the map and the view.
-fn reference_per_thread_count(
-    exe: &Path,
-    file: &Path,
-    index: usize,
-    point: &umbra_case::CasePoint,
-) {
+fn reference_per_thread_count(exe: &Path, point: &umbra_case::CasePoint) {
     // The reference's passes per thread count, in the same run: its worker inherits
     // RAYON_NUM_THREADS (the judged variant is not timed here: see judging in the time budget).
     let view = {
@@ -209,8 +191,7 @@ fn reference_per_thread_count(
         let env = [("RAYON_NUM_THREADS".to_string(), threads.to_string())];
         let r = measure_backends(
             exe,
-            file,
-            index,
+            point,
             &["ref".to_string()],
             9,
             Duration::from_secs(600),

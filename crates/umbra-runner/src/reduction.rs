@@ -125,7 +125,16 @@ impl Judge {
         let Some(w) = slot.as_mut() else {
             return Verdict::Other("no worker".into());
         };
-        let req = Request::Judge(JudgeRequest::bare(file.clone(), 0, true));
+        // The candidate is loaded here, as conformance loads a case, and sent whole; a
+        // candidate that does not load is an error, as the worker once reported it.
+        let point = match umbra_case::load_file(&file).map(Vec::into_iter) {
+            Ok(mut points) => match points.next() {
+                Some(p) => p,
+                None => return Verdict::Other(format!("error: {} has no point", file.display())),
+            },
+            Err(e) => return Verdict::Other(format!("error: {e}")),
+        };
+        let req = Request::Judge(JudgeRequest::bare(point, true));
         // A worker that crashed or timed out is started again by the session, for the next
         // candidate.
         let v = match w.reply(&req).map(|(reply, _)| reply) {
@@ -201,7 +210,7 @@ pub fn reduce(args: &ReduceArgs, log: &mut dyn Write) -> Result<Reduced, Error> 
 
 /// The point to reduce and its backend, checked: a usage error names what is wrong.
 fn target(args: &ReduceArgs) -> Result<(umbra_case::CasePoint, String), Error> {
-    let (file, point_id) = (&args.positional, args.point.as_str());
+    let (file, point_id) = (args.positional.display(), args.point.as_str());
     let backend = match args.backend.as_slice() {
         [one] => one.as_str(),
         many => {
@@ -209,7 +218,7 @@ fn target(args: &ReduceArgs) -> Result<(umbra_case::CasePoint, String), Error> {
                 "reduce",
                 format!(
                     "--backend {}: a reduction keeps one backend's failure; give --backend once (run umbra reduce once per backend)",
-                    many.join(" --backend ")
+                    crate::cli::values::names(many).join(" --backend ")
                 ),
             ));
         }
@@ -221,7 +230,7 @@ fn target(args: &ReduceArgs) -> Result<(umbra_case::CasePoint, String), Error> {
             crate::harness::registry::known().join(", ")
         )));
     }
-    let points = umbra_case::load_file(Path::new(file)).map_err(|e| Error::new(e.to_string()))?;
+    let points = umbra_case::load_file(&args.positional).map_err(|e| Error::new(e.to_string()))?;
     // An id, or a glob over the ids (as --help offers) that selects exactly one.
     let exact: Vec<&umbra_case::CasePoint> = points.iter().filter(|p| p.id() == point_id).collect();
     let matching = if exact.is_empty() {
@@ -272,7 +281,7 @@ impl<'l> Reducer<'l> {
         backend: &str,
         log: &'l mut dyn Write,
     ) -> Result<Reducer<'l>, Error> {
-        let file = args.positional.clone();
+        let file = args.positional.display().to_string();
         let point_id = point.id();
         let timeout = args.timeout.duration();
         let required = args

@@ -7,16 +7,17 @@ pub const BACKEND_ONE: &str = "the one backend to run (once): ref, gl33|gles3|gl
 /// `--backend`.
 pub const BACKEND: &str = "backend id: ref, gl33|gles3|gles2/llvmpipe|softpipe|zink, wgpu-vk/lavapipe, wgpu-gl/llvmpipe, a device of this machine (gl33/radeonsi, gl33/nvidia, wgpu-vk/radv …: `umbra backends` lists them), and, where a command takes several, the aliases hw (every hardware device) and all (this build's ids and every hardware device) (repeatable; default: this build's ids)";
 /// `--cases`.
-pub const CASES: &str = "directory of case files (*.json) [default: cases]";
+pub const CASES: &str = "directory of case files (*.json)";
+/// `--cases` (selftest, where it is one of two ways to choose the cases).
+pub const SELFTEST_CASES: &str =
+    "directory of case files (*.json); not with --seed/--count [default: cases]";
 /// `--filter`.
 pub const FILTER: &str =
     "run only case points whose id or run name (backend/case@point) matches [default: *]";
 /// `--expectations`.
-pub const EXPECTATIONS: &str =
-    "directory of expectation files (expectations/*.txt) [default: expectations]";
+pub const EXPECTATIONS: &str = "directory of expectation files (expectations/*.txt)";
 /// `--golden`.
-pub const GOLDEN: &str =
-    "golden image directory, or `none` to skip golden checks [default: golden]";
+pub const GOLDEN: &str = "golden image directory, or `none` to skip golden checks";
 /// `--out`.
 pub const OUT: &str = "where to write results (a directory; for reduce, the reduced case file)";
 /// `--shard`.
@@ -61,8 +62,7 @@ pub const GOOD: &str = "a commit known to pass";
 /// `--bad`.
 pub const BAD: &str = "a commit known to fail";
 /// `--work`.
-pub const WORK: &str =
-    "working directory for builds, prefixes, logs and steps.csv [default: target/umbra/bisect]";
+pub const WORK: &str = "working directory for builds, prefixes, logs and steps.csv";
 /// `--build-script`.
 pub const BUILD_SCRIPT: &str =
     "script run as `SCRIPT SRC PREFIX` instead of meson + ninja to build and install a commit";

@@ -122,24 +122,41 @@ pub mod help;
 pub mod resolve;
 pub mod values;
 
-pub use resolve::Limits;
-pub use values::{Bytes, Count, Jobs, Seconds, Shard};
+pub use resolve::{Limits, Selected};
+pub use values::{BackendName, Bytes, Count, Jobs, Seconds, Shard};
 
 /// What to run: the backends, the case points, the catalogue and its expectations (conformance, drivers, bisect).
-#[derive(Args, Debug, Clone, Default)]
+#[derive(Args, Debug, Clone)]
 pub struct Selection {
     /// `--cases`: the directory of case files.
-    #[arg(long, value_name = "DIR", help = help::CASES)]
-    pub cases: Option<String>,
+    #[arg(long, value_name = "DIR", help = help::CASES, default_value = CASES_DIR)]
+    pub cases: PathBuf,
     /// `--filter`: the glob over case points and run names.
     #[arg(long, value_name = "GLOB", help = help::FILTER)]
     pub filter: Option<String>,
-    /// `--backend`: backend ids and aliases, as given.
+    /// `--backend`: backend ids and aliases, each checked by clap ([`BackendName`]).
     #[arg(long, value_name = "ID", help = help::BACKEND)]
-    pub backend: Vec<String>,
+    pub backend: Vec<BackendName>,
     /// `--expectations`: the directory of expectation files.
-    #[arg(long, value_name = "DIR", help = help::EXPECTATIONS)]
-    pub expectations: Option<String>,
+    #[arg(long, value_name = "DIR", help = help::EXPECTATIONS, default_value = EXPECTATIONS_DIR)]
+    pub expectations: PathBuf,
+}
+
+/// `--cases`' default: the catalogue, relative to where umbra runs.
+pub const CASES_DIR: &str = "cases";
+/// `--expectations`' default.
+pub const EXPECTATIONS_DIR: &str = "expectations";
+
+impl Default for Selection {
+    /// What a command line with no selection flag parses to.
+    fn default() -> Selection {
+        Selection {
+            cases: CASES_DIR.into(),
+            filter: None,
+            backend: Vec::new(),
+            expectations: EXPECTATIONS_DIR.into(),
+        }
+    }
 }
 /// How runs execute: workers, time and memory limits, the Mesa build, the judging cache (conformance, selftest, soak).
 #[derive(Args, Debug, Clone)]
@@ -169,7 +186,7 @@ pub struct Execution {
 pub struct Output {
     /// `--out`: where results go.
     #[arg(short = 'o', long, value_name = "PATH", help = help::OUT)]
-    pub out: Option<String>,
+    pub out: Option<PathBuf>,
     /// `--verbose`: every run's details.
     #[arg(long, help = help::VERBOSE)]
     pub verbose: bool,
@@ -180,14 +197,14 @@ pub struct Output {
 pub struct RenderArgs {
     /// The positional argument.
     #[arg(value_name = "CASE.json", help = "the case file")]
-    pub positional: String,
+    pub positional: PathBuf,
     /// `--backend`: the one backend render runs; given twice, refused by clap (a `Vec` here
     /// once took the last without a word).
     #[arg(long, value_name = "ID", help = help::BACKEND_ONE)]
-    pub backend: Option<String>,
+    pub backend: Option<BackendName>,
     /// `--out`: where results go.
-    #[arg(short = 'o', long, value_name = "PATH", help = help::OUT)]
-    pub out: Option<String>,
+    #[arg(short = 'o', long, value_name = "PATH", help = help::OUT, default_value = "target/umbra/render")]
+    pub out: PathBuf,
     /// `--point`.
     #[arg(long, value_name = "GLOB", help = help::POINT)]
     pub point: Option<String>,
@@ -213,13 +230,13 @@ pub struct ConformanceArgs {
     pub shard: Option<Shard>,
     /// `--durations`.
     #[arg(long, value_name = "results.csv", help = help::DURATIONS)]
-    pub durations: Option<String>,
+    pub durations: Option<PathBuf>,
     /// Execution flags.
     #[command(flatten)]
     pub execution: Execution,
     /// `--golden`.
-    #[arg(long, value_name = "DIR|none", help = help::GOLDEN)]
-    pub golden: Option<String>,
+    #[arg(long, value_name = "DIR|none", help = help::GOLDEN, default_value = "golden")]
+    pub golden: PathBuf,
     /// Output flags.
     #[command(flatten)]
     pub output: Output,
@@ -233,10 +250,10 @@ pub struct ConformanceArgs {
 pub struct MergeArgs {
     /// The positional arguments.
     #[arg(value_name = "DIR", help = "each shard's --out directory (or its runs/ID directory)", required = true, num_args = 1..)]
-    pub dirs: Vec<String>,
+    pub dirs: Vec<PathBuf>,
     /// `--out`: where results go.
     #[arg(short = 'o', long, value_name = "PATH", help = help::OUT)]
-    pub out: String,
+    pub out: PathBuf,
 }
 
 /// `umbra selftest`: each run's time limit is 120 s (one point, no twins).
@@ -252,15 +269,15 @@ pub struct SelftestArgs {
         help = help::MODE
     )]
     pub mode: SelftestMode,
-    /// `--backend`: backend ids and aliases, as given.
+    /// `--backend`: backend ids and aliases, each checked by clap.
     #[arg(long, value_name = "ID", help = help::BACKEND)]
-    pub backend: Vec<String>,
+    pub backend: Vec<BackendName>,
     /// `--fault`.
     #[arg(long, value_name = "NAME", help = help::FAULT)]
     pub fault: Vec<String>,
     /// `--cases`: the directory of case files.
-    #[arg(long, value_name = "DIR", help = help::CASES)]
-    pub cases: Option<String>,
+    #[arg(long, value_name = "DIR", help = help::SELFTEST_CASES)]
+    pub cases: Option<PathBuf>,
     /// `--orientations`.
     #[arg(long, hide = true, help = help::ORIENTATIONS)]
     pub orientations: bool,
@@ -277,8 +294,8 @@ pub struct SelftestArgs {
     #[command(flatten)]
     pub output: Output,
     /// `--expectations`: the directory of expectation files.
-    #[arg(long, value_name = "DIR", help = help::EXPECTATIONS)]
-    pub expectations: Option<String>,
+    #[arg(long, value_name = "DIR", help = help::EXPECTATIONS, default_value = EXPECTATIONS_DIR)]
+    pub expectations: PathBuf,
     /// Execution flags.
     #[command(flatten)]
     pub execution: Execution,
@@ -293,9 +310,9 @@ pub struct SoakArgs {
     /// `--count`.
     #[arg(long, value_name = "N", help = help::COUNT, default_value = "100")]
     pub count: Count,
-    /// `--backend`: backend ids and aliases, as given.
+    /// `--backend`: backend ids and aliases, each checked by clap.
     #[arg(long, value_name = "ID", help = help::BACKEND)]
-    pub backend: Vec<String>,
+    pub backend: Vec<BackendName>,
     /// `--filter`: the glob over case points and run names.
     #[arg(long, value_name = "GLOB", help = help::FILTER)]
     pub filter: Option<String>,
@@ -303,8 +320,8 @@ pub struct SoakArgs {
     #[command(flatten)]
     pub execution: Execution,
     /// `--expectations`: the directory of expectation files.
-    #[arg(long, value_name = "DIR", help = help::EXPECTATIONS)]
-    pub expectations: Option<String>,
+    #[arg(long, value_name = "DIR", help = help::EXPECTATIONS, default_value = EXPECTATIONS_DIR)]
+    pub expectations: PathBuf,
     /// Output flags.
     #[command(flatten)]
     pub output: Output,
@@ -315,13 +332,13 @@ pub struct SoakArgs {
 pub struct SweepArgs {
     /// `--scene`.
     #[arg(long, value_name = "CASE.json", help = help::SCENE)]
-    pub scene: Option<String>,
+    pub scene: Option<PathBuf>,
     /// `--point`.
     #[arg(long, value_name = "GLOB", help = help::POINT)]
     pub point: Option<String>,
-    /// `--backend`: backend ids and aliases, as given.
+    /// `--backend`: backend ids and aliases, each checked by clap.
     #[arg(long, value_name = "ID", help = help::BACKEND)]
-    pub backend: Vec<String>,
+    pub backend: Vec<BackendName>,
     /// `--repeat`.
     #[arg(long, value_name = "N", help = help::REPEAT, default_value = "5")]
     pub repeat: Count,
@@ -329,8 +346,8 @@ pub struct SweepArgs {
     #[arg(long, value_name = "SECS", help = help::TIMEOUT, default_value = "600")]
     pub timeout: Seconds,
     /// `--out`: where results go.
-    #[arg(short = 'o', long, value_name = "PATH", help = help::OUT)]
-    pub out: Option<String>,
+    #[arg(short = 'o', long, value_name = "PATH", help = help::OUT, default_value = "target/umbra/sweep")]
+    pub out: PathBuf,
     /// `--mesa`: the Mesa to run on.
     #[arg(long, value_name = "PREFIX|BUILD_DIR|system", help = help::MESA)]
     pub mesa: Option<String>,
@@ -355,8 +372,8 @@ pub struct DriversArgs {
     #[command(flatten)]
     pub selection: Selection,
     /// `--out`: where results go.
-    #[arg(short = 'o', long, value_name = "PATH", help = help::OUT)]
-    pub out: Option<String>,
+    #[arg(short = 'o', long, value_name = "PATH", help = help::OUT, default_value = "target/umbra/drivers")]
+    pub out: PathBuf,
     /// `--pictures`.
     #[arg(long, value_name = "N", help = help::PICTURES, default_value_t = 200)]
     pub pictures: usize,
@@ -374,7 +391,7 @@ pub struct DriversArgs {
 pub struct BisectArgs {
     /// `--mesa-src`.
     #[arg(long, value_name = "DIR", help = help::MESA_SRC)]
-    pub mesa_src: String,
+    pub mesa_src: PathBuf,
     /// `--good`.
     #[arg(long, value_name = "REV", help = help::GOOD)]
     pub good: String,
@@ -385,11 +402,11 @@ pub struct BisectArgs {
     #[command(flatten)]
     pub selection: Selection,
     /// `--work`.
-    #[arg(long, value_name = "DIR", help = help::WORK)]
-    pub work: Option<String>,
+    #[arg(long, value_name = "DIR", help = help::WORK, default_value = "target/umbra/bisect")]
+    pub work: PathBuf,
     /// `--build-script`.
     #[arg(long, value_name = "PATH", help = help::BUILD_SCRIPT)]
-    pub build_script: Option<String>,
+    pub build_script: Option<PathBuf>,
     /// `--meson-option`.
     #[arg(long, value_name = "OPT", help = help::MESON_OPTION)]
     pub meson_option: Vec<String>,
@@ -398,7 +415,7 @@ pub struct BisectArgs {
     pub no_check_ends: bool,
     /// `--repro`.
     #[arg(long, value_name = "DIR", help = help::REPRO)]
-    pub repro: Option<String>,
+    pub repro: Option<PathBuf>,
     /// `--card KEY=VALUE`: bisect a behaviour-card entry instead of case verdicts.
     #[arg(long, value_name = "KEY=VALUE", help = help::BISECT_CARD)]
     pub card: Option<String>,
@@ -409,13 +426,13 @@ pub struct BisectArgs {
 pub struct ReduceArgs {
     /// The positional argument.
     #[arg(value_name = "CASE.json", help = "the case file")]
-    pub positional: String,
+    pub positional: PathBuf,
     /// `--point`.
     #[arg(long, value_name = "GLOB", help = help::POINT)]
     pub point: String,
-    /// `--backend`: backend ids and aliases, as given.
+    /// `--backend`: backend ids and aliases, each checked by clap.
     #[arg(long, value_name = "ID", help = help::BACKEND, required = true)]
-    pub backend: Vec<String>,
+    pub backend: Vec<BackendName>,
     /// `--check`.
     #[arg(long, value_name = "CHECK", help = help::CHECK)]
     pub check: Vec<String>,
@@ -438,13 +455,13 @@ pub struct ReproArgs {
     pub positional: String,
     /// `--out`: where results go.
     #[arg(short = 'o', long, value_name = "PATH", help = help::OUT)]
-    pub out: String,
+    pub out: PathBuf,
     /// `--cases`: the directory of case files.
-    #[arg(long, value_name = "DIR", help = help::CASES)]
-    pub cases: Option<String>,
+    #[arg(long, value_name = "DIR", help = help::CASES, default_value = CASES_DIR)]
+    pub cases: PathBuf,
     /// `--case`.
     #[arg(long, value_name = "CASE.json", help = help::CASE)]
-    pub case: Option<String>,
+    pub case: Option<PathBuf>,
     /// `--control`.
     #[arg(long, value_name = "ID", help = help::CONTROL)]
     pub control: Option<String>,
@@ -459,16 +476,16 @@ pub struct ReproArgs {
     pub check: Vec<String>,
     /// `--bisect-log`.
     #[arg(long, value_name = "FILE", help = help::BISECT_LOG)]
-    pub bisect_log: Option<String>,
+    pub bisect_log: Option<PathBuf>,
     /// `--first-bad`.
     #[arg(long, value_name = "COMMIT", help = help::FIRST_BAD)]
     pub first_bad: Option<String>,
     /// `--expectations`: the directory of expectation files.
-    #[arg(long, value_name = "DIR", help = help::EXPECTATIONS)]
-    pub expectations: Option<String>,
+    #[arg(long, value_name = "DIR", help = help::EXPECTATIONS, default_value = EXPECTATIONS_DIR)]
+    pub expectations: PathBuf,
     /// `--backend`: the backend of `--emit`'s process (once).
     #[arg(long, value_name = "ID", help = help::BACKEND_ONE)]
-    pub backend: Option<String>,
+    pub backend: Option<BackendName>,
     /// `--emit`.
     #[arg(long, help = help::EMIT)]
     pub emit: bool,
@@ -493,13 +510,13 @@ pub struct BackendsArgs {
 pub struct CardArgs {
     /// `--backend`: which backends to measure (default: this build's ids).
     #[arg(long, value_name = "ID", help = help::BACKEND)]
-    pub backend: Vec<String>,
+    pub backend: Vec<BackendName>,
     /// `--json`.
     #[arg(long, help = help::JSON)]
     pub json: bool,
     /// `--diff OLD NEW`: compare two stored cards instead of measuring.
     #[arg(long, num_args = 2, value_names = ["OLD", "NEW"], help = help::CARD_DIFF)]
-    pub diff: Vec<String>,
+    pub diff: Vec<PathBuf>,
     /// `--mesa`: the Mesa to run on.
     #[arg(long, value_name = "PREFIX|BUILD_DIR|system", help = help::MESA)]
     pub mesa: Option<String>,
@@ -510,7 +527,7 @@ pub struct CardArgs {
     pub timeout: Seconds,
     /// `--keep DIR`: keep each card as the reviewed baseline in golden directory DIR.
     #[arg(long, value_name = "DIR", help = help::CARD_KEEP)]
-    pub keep: Option<String>,
+    pub keep: Option<PathBuf>,
 }
 
 /// `umbra worker`.
@@ -526,16 +543,16 @@ pub struct WorkerArgs {
 pub struct BisectStepArgs {
     /// `--src`.
     #[arg(long, value_name = "DIR", help = help::SRC)]
-    pub src: String,
+    pub src: PathBuf,
     /// `--work`.
     #[arg(long, value_name = "DIR", help = help::WORK)]
-    pub work: String,
+    pub work: PathBuf,
     /// Selection flags.
     #[command(flatten)]
     pub selection: Selection,
     /// `--build-script`.
     #[arg(long, value_name = "PATH", help = help::BUILD_SCRIPT)]
-    pub build_script: Option<String>,
+    pub build_script: Option<PathBuf>,
     /// `--card KEY=VALUE`.
     #[arg(long, value_name = "KEY=VALUE", help = help::BISECT_CARD)]
     pub card: Option<String>,
@@ -576,8 +593,12 @@ impl Selection {
     pub fn argv(&self) -> Vec<String> {
         let mut argv = Vec::new();
         push(&mut argv, "filter", &self.filter);
-        push(&mut argv, "cases", &self.cases);
-        push(&mut argv, "expectations", &self.expectations);
+        push(&mut argv, "cases", [self.cases.to_string_lossy()]);
+        push(
+            &mut argv,
+            "expectations",
+            [self.expectations.to_string_lossy()],
+        );
         push(&mut argv, "backend", &self.backend);
         argv
     }
@@ -646,6 +667,7 @@ pub fn completions(args: &CompletionsArgs) -> crate::exit::Outcome {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::Path;
 
     fn argv(words: &[&str]) -> Vec<String> {
         words.iter().map(|s| s.to_string()).collect()
@@ -679,9 +701,9 @@ mod tests {
         let Ok(Command::Render(a)) = c else {
             panic!("render parses: {c:?}");
         };
-        assert_eq!(a.positional, "c.json");
-        assert_eq!(a.out.as_deref(), Some("x"));
-        assert_eq!(a.backend.as_deref(), Some("ref"));
+        assert_eq!(a.positional, Path::new("c.json"));
+        assert_eq!(a.out, Path::new("x"));
+        assert_eq!(a.backend.as_ref().map(BackendName::as_str), Some("ref"));
     }
 
     #[test]
@@ -702,7 +724,7 @@ mod tests {
         };
         assert_eq!(a.execution.jobs.map(Jobs::get), Some(2));
         assert_eq!(a.execution.mesa.as_deref(), Some("system"));
-        assert_eq!(a.output.out.as_deref(), Some("o"));
+        assert_eq!(a.output.out.as_deref(), Some(Path::new("o")));
         assert!(a.output.verbose);
     }
 
@@ -744,7 +766,7 @@ mod tests {
                 "--point",
                 "p",
                 "--backend",
-                "b",
+                "gl33/llvmpipe",
                 "--timeout",
                 "ten",
             ],
@@ -764,6 +786,31 @@ mod tests {
                 e.contains("invalid value 'ten' for '--timeout <SECS>'")
                     && e.contains("give whole seconds"),
                 "{words:?}: {e}"
+            );
+        }
+        // A backend name is refused alike by every command that takes one; a device id's
+        // form and the aliases pass (whether this machine has the device is for the run).
+        for command in [
+            "conformance",
+            "selftest",
+            "soak",
+            "sweep",
+            "card",
+            "render",
+            "bisect",
+        ] {
+            let e = parse(&argv(&["umbra", command, "--backend", "vulkan/nvidia"]))
+                .expect_err("refused")
+                .to_string();
+            assert!(
+                e.contains("invalid value 'vulkan/nvidia' for '--backend <ID>': unknown backend"),
+                "{command}: {e}"
+            );
+        }
+        for name in ["gl33/radeonsi", "wgpu-vk/radv", "hw", "all", "gles2/zink"] {
+            assert!(
+                name.parse::<BackendName>().is_ok(),
+                "{name} is refused by clap"
             );
         }
         let timeout = |words: &[&str]| match parse(&argv(words)) {

@@ -1,8 +1,9 @@
 //! The command line's values as types, parsed by clap through `FromStr`: a bad value is
 //! refused by clap, the same way for every command that takes the flag (`error: invalid value
-//! '10x' for '--timeout <SECS>': …`, exit 125), before any command runs. What clap cannot
-//! check alone (a backend id against this machine, a glob, a directory's contents) is checked
-//! where the run is set up ([`super::resolve`]).
+//! '10x' for '--timeout <SECS>': …`, exit 125), before any command runs: numbers, durations,
+//! sizes, shards and backend names. What clap cannot check alone (whether this machine has
+//! the device a backend id names, a glob, a directory's contents, a Mesa build) is checked
+//! where the run is set up ([`super::resolve`]). Paths are `PathBuf`s.
 
 use std::fmt;
 use std::num::NonZeroUsize;
@@ -147,6 +148,52 @@ impl fmt::Display for Shard {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}/{}", self.index, self.count)
     }
+}
+
+/// A `--backend` value as the command line gives it: one of this build's ids, a device id's
+/// form (`gl33/radeonsi`, `wgpu-vk/radv`), or an alias (`all`, `hw`). clap refuses any other
+/// word here, the same way for every command; whether this machine has the device an id
+/// names, and what an alias stands for on it, is the registry's to say when the selection is
+/// resolved ([`crate::harness::registry::selected`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BackendName(pub String);
+
+impl BackendName {
+    /// The id or alias as given.
+    pub fn as_str(&self) -> &str {
+        &self.0
+    }
+}
+
+impl FromStr for BackendName {
+    type Err = String;
+    fn from_str(s: &str) -> Result<BackendName, String> {
+        if matches!(s, "all" | "hw") || crate::harness::registry::is_known(s) {
+            Ok(BackendName(s.to_string()))
+        } else {
+            Err(format!(
+                "unknown backend; this build has: {}, the aliases hw and all, and this machine's devices (`umbra backends`)",
+                crate::harness::registry::known().join(", ")
+            ))
+        }
+    }
+}
+
+impl AsRef<str> for BackendName {
+    fn as_ref(&self) -> &str {
+        &self.0
+    }
+}
+
+impl fmt::Display for BackendName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+/// The names as the registry takes them.
+pub fn names(backends: &[BackendName]) -> Vec<&str> {
+    backends.iter().map(BackendName::as_str).collect()
 }
 
 #[cfg(test)]

@@ -88,12 +88,11 @@ fn git(src: &Path, args: &[&str]) -> Result<String, String> {
     }
 }
 
-fn absolute(p: &str) -> PathBuf {
-    let p = PathBuf::from(p);
+fn absolute(p: &Path) -> PathBuf {
     if p.is_absolute() {
-        p
+        p.to_path_buf()
     } else {
-        std::env::current_dir().map(|d| d.join(&p)).unwrap_or(p)
+        std::env::current_dir().map_or_else(|_| p.to_path_buf(), |d| d.join(p))
     }
 }
 
@@ -116,7 +115,7 @@ pub fn main(args: &BisectArgs) -> Outcome {
     }
     let src = absolute(&args.mesa_src);
     check_tree(&src, good, bad)?;
-    let work = absolute(args.work.as_deref().unwrap_or("target/umbra/bisect"));
+    let work = absolute(&args.work);
     // The work directory is umbra's (its steps, prefixes and logs are replaced and removed):
     // a directory that holds anything else is refused, never emptied.
     umbra_owned::claim(&work, "umbra bisect").map_err(|e| Error::new(format!("--work: {e}")))?;
@@ -245,17 +244,11 @@ fn configure(
 /// The step's arguments (`umbra bisect-step …`), every path absolute (git bisect run works
 /// in the source tree), in the order git's `running …` lines have always shown them.
 fn step_argv(args: &BisectArgs, src: &Path, work: &Path, script: Option<&Path>) -> Vec<String> {
-    let full =
-        |p: Option<&str>, default: &str| Some(absolute(p.unwrap_or(default)).display().to_string());
     let selection = Selection {
-        cases: full(args.selection.cases.as_deref(), "cases"),
-        expectations: full(args.selection.expectations.as_deref(), "expectations"),
+        cases: absolute(&args.selection.cases),
+        expectations: absolute(&args.selection.expectations),
         filter: None,
         backend: args.selection.backend.clone(),
-    };
-    let filter = Selection {
-        filter: args.selection.filter.clone(),
-        ..Selection::default()
     };
     let mut step: Vec<String> = vec![
         "bisect-step".into(),
@@ -264,7 +257,9 @@ fn step_argv(args: &BisectArgs, src: &Path, work: &Path, script: Option<&Path>) 
         "--work".into(),
         work.display().to_string(),
     ];
-    step.extend(filter.argv());
+    if let Some(f) = &args.selection.filter {
+        step.extend(["--filter".into(), f.clone()]);
+    }
     if let Some(s) = script {
         step.extend(["--build-script".into(), s.display().to_string()]);
     }
@@ -411,7 +406,7 @@ fn repro_first_bad(
     sha: &str,
     prefix: &Path,
     log: &Path,
-    dir: &str,
+    dir: &Path,
 ) -> Outcome {
     let Some(run) = report
         .runs
@@ -423,13 +418,18 @@ fn repro_first_bad(
             "--repro: the first bad commit's report has no failed run to reproduce (a crash or timeout has no frame to probe)",
         ));
     };
-    println!("bisect: the repro bundle of {run} on {sha}: {dir}");
+    println!(
+        "bisect: the repro bundle of {run} on {sha}: {}",
+        dir.display()
+    );
     let Ok(exe) = crate::harness::own_libc::self_exe() else {
         // Not said, as before: this executable was found moments ago.
         return Err(Error::said(Exit::CouldNotRun));
     };
     let mut cmd = Command::new(exe);
-    cmd.args(["repro", run, "--out", dir, "--first-bad", sha])
+    cmd.args(["repro", run, "--out"])
+        .arg(dir)
+        .args(["--first-bad", sha])
         .arg("--mesa")
         .arg(prefix)
         .arg("--bisect-log")
@@ -440,9 +440,7 @@ fn repro_first_bad(
         ("--cases", &selection.cases),
         ("--expectations", &selection.expectations),
     ] {
-        if let Some(v) = v {
-            cmd.arg(flag).arg(absolute(v));
-        }
+        cmd.arg(flag).arg(absolute(v));
     }
     match cmd.status() {
         // umbra repro's own exit, passed on (a signal: could not run).

@@ -20,7 +20,7 @@ pub fn main(args: &CardArgs) -> Outcome {
         ));
     }
     crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
-    let named: Vec<&str> = args.backend.iter().map(String::as_str).collect();
+    let named = crate::cli::values::names(&args.backend);
     let ids = crate::harness::registry::selected(&named, crate::harness::registry::known())
         .map_err(|e| crate::cli::usage_error("card", &e))?;
     let limit = args.timeout.duration();
@@ -65,8 +65,8 @@ pub fn main(args: &CardArgs) -> Outcome {
 }
 
 /// `--diff OLD NEW`.
-fn diff(old: &str, new: &str, json: bool) -> Outcome {
-    let read = |f: &str| Card::read(std::path::Path::new(f)).map_err(Error::new);
+fn diff(old: &std::path::Path, new: &std::path::Path, json: bool) -> Outcome {
+    let read = |f: &std::path::Path| Card::read(f).map_err(Error::new);
     let (o, n) = (read(old)?, read(new)?);
     let changes = n.changes_since(&o);
     if json {

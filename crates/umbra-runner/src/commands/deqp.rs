@@ -215,7 +215,15 @@ fn load_expectations(argv: &[String]) -> Result<Expectations, Error> {
 
 /// Every case file's points by case name: the file, and each point's id and case as JSON
 /// (what expectations' `@when` conditions read).
-struct CaseIndex(BTreeMap<String, (PathBuf, Vec<(String, serde_json::Value)>)>);
+struct CaseIndex(BTreeMap<String, (PathBuf, Vec<Indexed>)>);
+
+/// One case point of the index: its id, the point as loaded (sent whole to the worker) and
+/// its case as JSON (what expectations read).
+struct Indexed {
+    id: String,
+    point: umbra_case::CasePoint,
+    json: serde_json::Value,
+}
 
 impl CaseIndex {
     fn load(dir: &Path) -> Result<CaseIndex, String> {
@@ -234,13 +242,21 @@ impl CaseIndex {
                         first.case.name
                     ));
                 }
+                let name = first.case.name.clone();
                 map.insert(
-                    first.case.name.clone(),
+                    name,
                     (
-                        abs,
+                        abs.clone(),
                         points
-                            .iter()
-                            .map(|p| (p.id(), umbra_case::schema::condition_json(&p.case)))
+                            .into_iter()
+                            .map(|point| Indexed {
+                                id: point.id(),
+                                json: umbra_case::schema::condition_json(&point.case),
+                                point: umbra_case::CasePoint {
+                                    file: abs.clone(),
+                                    ..point
+                                },
+                            })
                             .collect(),
                     ),
                 );
@@ -267,9 +283,8 @@ fn run(names: &[String], index: &CaseIndex, opts: &RunOptions) -> Outcome {
         let _ = out.flush();
         drop(out);
         let (status, detail) = match parse_test_name(name).and_then(|(backend, case, k)| {
-            let (file, points) = index.0.get(&case)?;
-            let (id, json) = points.get(k)?;
-            Some((backend, file.clone(), k, id.clone(), json))
+            let (_, points) = index.0.get(&case)?;
+            Some((backend, points.get(k)?))
         }) {
             None if name.starts_with("umbra.info.") => (
                 "NotSupported",
@@ -281,9 +296,7 @@ fn run(names: &[String], index: &CaseIndex, opts: &RunOptions) -> Outcome {
                     "{name} names no umbra test (umbra.API.DRIVER.CASE.K, `umbra deqp --list`)"
                 ),
             ),
-            Some((backend, file, k, id, json)) => {
-                session.test(name, &backend, file, k, &id, json, opts)
-            }
+            Some((backend, point)) => session.test(name, &backend, point, opts),
         };
         let detail = detail.lines().next().unwrap_or("").replace(['(', ')'], "");
         let detail = if detail.is_empty() {
@@ -331,12 +344,10 @@ impl Runs {
         &mut self,
         name: &str,
         backend: &str,
-        file: PathBuf,
-        k: usize,
-        id: &str,
-        json: &serde_json::Value,
+        indexed: &Indexed,
         opts: &RunOptions,
     ) -> (&'static str, String) {
+        let (id, json) = (&indexed.id, &indexed.json);
         let mut env = crate::harness::registry::worker_env(backend);
         env.push((
             crate::judge::judge_cache::ENV.into(),
@@ -381,7 +392,7 @@ impl Runs {
         let req = Request::Judge(JudgeRequest {
             failures: opts.pictures.as_ref().map(|p| p.join(name)),
             deviation: Some(expectations.deviations(&run, json).names()).filter(|n| !n.is_empty()),
-            ..JudgeRequest::bare(file, k, false)
+            ..JudgeRequest::bare(indexed.point.clone(), false)
         });
         let a = session.attempt(&req);
         let raw = deqp_status(&a.status);
@@ -440,7 +451,7 @@ fn list(argv: &[String], index: &CaseIndex) -> Outcome {
         };
         let expectations = expectations.for_driver(&facts);
         for (case, (_, points)) in &index.0 {
-            for (k, (id, json)) in points.iter().enumerate() {
+            for (k, Indexed { id, json, .. }) in points.iter().enumerate() {
                 let run = format!("{backend}/{id}");
                 let expected = match expectations.find(&run, json) {
                     None => "Pass",

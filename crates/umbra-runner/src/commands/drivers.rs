@@ -234,7 +234,7 @@ pub fn main(args: &DriversArgs) -> Outcome {
         }
     }
     let pictures = args.pictures;
-    let out = PathBuf::from(args.out.as_deref().unwrap_or("target/umbra/drivers"));
+    let out = args.out.clone();
     // The last comparison is replaced; a directory umbra did not make is refused.
     umbra_owned::fresh(&out, "umbra drivers").map_err(|e| Error::new(format!("--out: {e}")))?;
     let Ok(exe) = crate::harness::own_libc::self_exe() else {

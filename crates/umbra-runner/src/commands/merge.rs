@@ -52,7 +52,7 @@ impl Shard {
 
 /// Runs the command; returns its outcome.
 pub fn main(args: &MergeArgs) -> Outcome {
-    let out = PathBuf::from(&args.out);
+    let out = args.out.clone();
     let shards = read_all(&args.dirs).map_err(refuse)?;
     out_apart(&out, &shards)
         .and_then(|()| same_inputs(&shards))
@@ -113,10 +113,10 @@ fn refuse(e: String) -> Error {
 }
 
 /// Every DIR's shard; an error names the directory and what it lacks.
-fn read_all(dirs: &[String]) -> Result<Vec<Shard>, String> {
+fn read_all(dirs: &[PathBuf]) -> Result<Vec<Shard>, String> {
     let mut shards = Vec::new();
     for d in dirs {
-        let given = PathBuf::from(d);
+        let given = d.clone();
         let run = locate(&given)?;
         let record = Record::read(&run.join(FILE))?;
         let runs = record.own_runs();
@@ -596,20 +596,20 @@ fn write(
     let header = umbra_report::Header {
         mesa_build: shards[0].record.mesa_build.clone(),
         drivers: drivers.iter().map(|d| d.row.clone()).collect(),
-        shards: Some(serde_json::json!(
+        shards: Some(
             shards
                 .iter()
-                .map(|s| serde_json::json!({
-                    "index": s.record.shard.index,
-                    "count": s.record.shard.count,
-                    "by": s.record.shard.by,
-                    "runs": s.runs.len(),
-                    "wall_s": s.record.budget.wall_s,
-                    "worker_s": s.record.budget.runs_s + s.record.budget.worker_start_s,
-                    "dir": s.given.display().to_string(),
-                }))
-                .collect::<Vec<_>>()
-        )),
+                .map(|s| umbra_report::json::ShardRow {
+                    index: s.record.shard.index,
+                    count: s.record.shard.count,
+                    by: s.record.shard.by.clone(),
+                    runs: s.runs.len(),
+                    wall_s: s.record.budget.wall_s,
+                    worker_s: s.record.budget.runs_s + s.record.budget.worker_start_s,
+                    dir: s.given.display().to_string(),
+                })
+                .collect(),
+        ),
     };
     umbra_report::write_conformance(
         &run_dir.dir,

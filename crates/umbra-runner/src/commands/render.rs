@@ -5,8 +5,6 @@
 //! reference's judged lookup at one pixel step by step: the evidence for a bug report, or
 //! for a fix of umbra's model.
 
-use std::path::{Path, PathBuf};
-
 use crate::cli::RenderArgs;
 use crate::exit::{Error, Exit};
 use crate::judge::run::{Outcome, describe, run_point};
@@ -16,9 +14,12 @@ pub fn main(args: &RenderArgs) -> crate::exit::Outcome {
     let budget = crate::harness::memory_limit::select(args.max_memory.map(|b| b.0), 1)
         .map_err(|e| crate::cli::usage_error("render", e))?;
     let build = crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
-    let case = &args.positional;
-    let backend_id = args.backend.as_deref().unwrap_or("ref");
-    let out = PathBuf::from(args.out.as_deref().unwrap_or("target/umbra/render"));
+    let case = &args.positional.display();
+    let backend_id = args
+        .backend
+        .as_ref()
+        .map_or("ref", crate::cli::BackendName::as_str);
+    let out = args.out.clone();
     if !crate::harness::registry::is_known(backend_id) {
         return Err(crate::cli::usage_error(
             "render",
@@ -71,32 +72,7 @@ pub fn main(args: &RenderArgs) -> crate::exit::Outcome {
         .map_err(|e| Error::new(format!("{backend_id}: {e}")))?;
         println!("{backend_id} on the Mesa build {}", b.describe());
     }
-    // A case that cannot be read or is invalid: nothing could run, not a failure.
-    let points = umbra_case::load_file(Path::new(case)).map_err(|e| Error::new(e.to_string()))?;
-    let selected: Vec<_> = points
-        .into_iter()
-        .filter(|p| {
-            args.point
-                .as_deref()
-                .is_none_or(|g| crate::glob::matches(g, &p.id()))
-        })
-        .collect();
-    if selected.is_empty() {
-        return Err(Error::new(format!(
-            "--point {:?} matches no sweep point of {case}",
-            args.point.as_deref().unwrap_or("")
-        )));
-    }
-    // Refuse what cannot fit before anything renders, then watch what does.
-    let mut estimated = 0;
-    for p in &selected {
-        let triangles = umbra_case::tessellate(&p.case.scene).triangles.len();
-        let e = umbra_case::memory::estimate(&p.case, triangles);
-        if let Some(why) = e.refuse(budget) {
-            return Err(Error::new(format!("{case} point {}: {why}", p.id())));
-        }
-        estimated = estimated.max(e.total());
-    }
+    let (selected, estimated) = points_within(args, budget)?;
     let explain = args
         .explain
         .as_deref()
@@ -160,6 +136,41 @@ pub fn main(args: &RenderArgs) -> crate::exit::Outcome {
         )));
     }
     Ok(Exit::pass_if(!failed))
+}
+
+/// The case's points `--point` selects, each refused (before anything renders) if it cannot
+/// fit in `budget` bytes, and the largest estimate. A case that cannot be read or is invalid,
+/// or a `--point` that selects nothing: nothing could run, not a failure.
+fn points_within(
+    args: &RenderArgs,
+    budget: u64,
+) -> Result<(Vec<umbra_case::CasePoint>, u64), Error> {
+    let case = args.positional.display();
+    let points = umbra_case::load_file(&args.positional).map_err(|e| Error::new(e.to_string()))?;
+    let selected: Vec<_> = points
+        .into_iter()
+        .filter(|p| {
+            args.point
+                .as_deref()
+                .is_none_or(|g| crate::glob::matches(g, &p.id()))
+        })
+        .collect();
+    if selected.is_empty() {
+        return Err(Error::new(format!(
+            "--point {:?} matches no sweep point of {case}",
+            args.point.as_deref().unwrap_or("")
+        )));
+    }
+    let mut estimated = 0;
+    for p in &selected {
+        let triangles = umbra_case::tessellate(&p.case.scene).triangles.len();
+        let e = umbra_case::memory::estimate(&p.case, triangles);
+        if let Some(why) = e.refuse(budget) {
+            return Err(Error::new(format!("{case} point {}: {why}", p.id())));
+        }
+        estimated = estimated.max(e.total());
+    }
+    Ok((selected, estimated))
 }
 
 /// How many illegal pixels `render` lists.

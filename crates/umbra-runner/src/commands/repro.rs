@@ -57,9 +57,8 @@ pub fn main(args: &ReproArgs) -> Outcome {
     }
     // Read before the reduction, not after it: a damaged directory is said, not dropped from
     // issue.md.
-    let dir = args.expectations.as_deref().unwrap_or("expectations");
     let expectations =
-        crate::judge::expectations::Expectations::load(Path::new(dir)).map_err(Error::new)?;
+        crate::judge::expectations::Expectations::load(&args.expectations).map_err(Error::new)?;
     let t = target(args)?;
     println!(
         "repro: {} ({} point {})",
@@ -94,7 +93,7 @@ pub fn main(args: &ReproArgs) -> Outcome {
         let log = match args.bisect_log.as_deref() {
             Some(l) => {
                 let text = std::fs::read_to_string(l)
-                    .map_err(|e| Error::new(format!("--bisect-log {l}: {e}")))?;
+                    .map_err(|e| Error::new(format!("--bisect-log {}: {e}", l.display())))?;
                 save(&t.out.join("bisect.log"), &text)?;
                 Some(text)
             }
@@ -145,12 +144,12 @@ fn target(args: &ReproArgs) -> Result<Target, Error> {
 fn reduce_step(args: &ReproArgs, t: &Target) -> Result<(PathBuf, String), Error> {
     let reduced = t.out.join("case.json");
     let reduce = crate::cli::ReduceArgs {
-        positional: t.case_file.display().to_string(),
+        positional: t.case_file.clone(),
         point: t.point.clone(),
-        backend: vec![t.backend.clone()],
+        backend: vec![crate::cli::BackendName(t.backend.clone())],
         check: args.check.clone(),
         output: crate::cli::Output {
-            out: Some(reduced.display().to_string()),
+            out: Some(reduced.clone()),
             ..Default::default()
         },
         timeout: args.timeout,
@@ -206,7 +205,7 @@ fn one_light(reduced: &Path) -> Result<(), Error> {
 }
 
 /// The driver-side half ([`crate::repro::emit`]) in the backend's own process; its facts.
-fn emit_step(args: &ReproArgs, t: &Target, reduced: &Path) -> Result<serde_json::Value, Error> {
+fn emit_step(args: &ReproArgs, t: &Target, reduced: &Path) -> Result<crate::repro::Facts, Error> {
     let mut emit_args: Vec<String> = vec![
         "repro".into(),
         "--emit".into(),
@@ -226,15 +225,12 @@ fn emit_step(args: &ReproArgs, t: &Target, reduced: &Path) -> Result<serde_json:
     if emitted != Exit::Pass {
         return Err(Error::said(emitted));
     }
-    let facts: serde_json::Value = std::fs::read_to_string(t.out.join("facts.json"))
-        .map_err(|e| e.to_string())
-        .and_then(|s| serde_json::from_str(&s).map_err(|e| e.to_string()))
-        .map_err(|e| {
-            Error::new(format!(
-                "the driver process wrote no readable facts.json: {e}"
-            ))
-        })?;
-    if facts["deterministic"] == false {
+    let facts = crate::repro::Facts::read(&t.out).map_err(|e| {
+        Error::new(format!(
+            "the driver process wrote no readable facts.json: {e}"
+        ))
+    })?;
+    if !facts.deterministic {
         println!(
             "  warning: the recorded render differs from the judged one: the driver is not deterministic on this case, so the probes test a frame umbra judged once"
         );
@@ -246,12 +242,12 @@ fn emit_step(args: &ReproArgs, t: &Target, reduced: &Path) -> Result<serde_json:
 /// `repro-BACKEND.txt`).
 fn run_programs(
     t: &Target,
-    facts: &serde_json::Value,
+    facts: &crate::repro::Facts,
     binary: &Path,
     control: Option<&str>,
     m: &mut Measured,
 ) -> Result<(), Error> {
-    if facts["repro_c"] != true {
+    if !facts.repro_c {
         m.no_program = Some(format!(
             "{} records no GL calls (repro.c is written for the GL backends)",
             t.backend
@@ -278,7 +274,7 @@ fn run_programs(
 /// Writes issue.md and README.md; the outcome: it passes only when the program fails on the
 /// driver and passes on the control (or none was run), fails otherwise (could not run: a file
 /// not written).
-fn finish(out: &Path, facts: &serde_json::Value, m: &mut Measured) -> Outcome {
+fn finish(out: &Path, facts: &crate::repro::Facts, m: &mut Measured) -> Outcome {
     let reproduces = match (m.runs.first(), m.runs.get(1)) {
         (Some(d), c) => Some(d.code == Some(1) && c.is_none_or(|c| c.code == Some(0))),
         (None, _) => None,
@@ -336,7 +332,7 @@ fn finish(out: &Path, facts: &serde_json::Value, m: &mut Measured) -> Outcome {
 
 /// The driver-side step (in the backend's process).
 fn emit(args: &ReproArgs) -> Outcome {
-    let Some(backend) = args.backend.as_deref() else {
+    let Some(backend) = args.backend.as_ref().map(crate::cli::BackendName::as_str) else {
         return Err(usage("--emit takes the reduced case, --backend and --out"));
     };
     if !registry::hostable_here(backend) {
@@ -357,13 +353,10 @@ pub fn split_run(run: &str) -> Option<(String, String)> {
 
 /// The case file and point id of `case@point`.
 fn find_point(args: &ReproArgs, case_point: &str) -> Result<(PathBuf, String), String> {
-    let files = match args.case.as_deref() {
-        Some(f) => vec![PathBuf::from(f)],
-        None => {
-            let dir = args.cases.as_deref().unwrap_or("cases");
-            umbra_case::load::case_files(Path::new(dir))
-                .map_err(|e| format!("cannot list case files under {dir}: {e}"))?
-        }
+    let files = match &args.case {
+        Some(f) => vec![f.clone()],
+        None => umbra_case::load::case_files(&args.cases)
+            .map_err(|e| format!("cannot list case files under {}: {e}", args.cases.display()))?,
     };
     for f in &files {
         // A file that does not load is said (it once became "no case point").
@@ -375,9 +368,7 @@ fn find_point(args: &ReproArgs, case_point: &str) -> Result<(PathBuf, String), S
     }
     Err(format!(
         "no case point {case_point:?} in {} ({} files): give it as conformance names it, or --case FILE",
-        args.case
-            .as_deref()
-            .unwrap_or(args.cases.as_deref().unwrap_or("cases")),
+        args.case.as_ref().unwrap_or(&args.cases).display(),
         files.len()
     ))
 }

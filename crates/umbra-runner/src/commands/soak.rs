@@ -25,12 +25,11 @@ use umbra_report::{RunResult, Status};
 /// Runs the command; returns its outcome.
 pub fn main(args: &SoakArgs) -> Outcome {
     let (seed, count) = (args.seed, args.count.get());
-    let out = PathBuf::from(
-        args.output
-            .out
-            .as_deref()
-            .unwrap_or(crate::run_dir::SOAK_OUT),
-    );
+    let out = args
+        .output
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(crate::run_dir::SOAK_OUT));
     // The cases live in the run's own directory: two soaks into one --out never share them,
     // and the report's reproduce commands keep pointing at them.
     let run_dir = match crate::run_dir::RunDir::create(&out) {
@@ -57,15 +56,15 @@ pub fn main(args: &SoakArgs) -> Outcome {
     );
     let run_args = ConformanceArgs {
         selection: Selection {
-            cases: Some(dir.display().to_string()),
+            cases: dir.clone(),
             filter: args.filter.clone(),
             backend: args.backend.clone(),
             expectations: args.expectations.clone(),
         },
         execution: args.execution.clone(),
-        golden: Some("none".into()),
+        golden: "none".into(),
         output: Output {
-            out: Some(out.display().to_string()),
+            out: Some(out.clone()),
             verbose: args.output.verbose,
         },
         ..Default::default()

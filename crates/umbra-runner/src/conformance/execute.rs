@@ -13,7 +13,7 @@ use crate::exit::Error;
 use crate::harness::scheduler::{Attempt, NotReady, Session};
 use crate::harness::worker::Hello;
 use crate::judge::expectations::Expectations;
-use crate::judge::protocol::{JudgeRequest, PointRef, Request};
+use crate::judge::protocol::{JudgeRequest, Request};
 use umbra_report::escape::shell_word;
 use umbra_report::{RunResult, Status};
 
@@ -312,10 +312,7 @@ impl Group<'_> {
             Some(a) => a,
             None => {
                 let req = Request::Judge(JudgeRequest {
-                    point: PointRef {
-                        file: p.file.clone(),
-                        index: p.index,
-                    },
+                    point: (*p.point).clone(),
                     failures: Some(settings.failures.clone()),
                     golden: settings
                         .golden
@@ -387,7 +384,7 @@ impl Group<'_> {
             backend: p.backend.clone(),
             case: p.id.clone(),
             file: p.file.display().to_string(),
-            values: p.values.clone(),
+            values: p.point.values.clone(),
             status,
             reason,
             metrics,

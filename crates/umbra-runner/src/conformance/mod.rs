@@ -51,20 +51,23 @@ use plan::{Options, Plan, plan_runs, settle_goldens};
 use summary::{closing_line, outcome, print_summary};
 use umbra_report::{RunResult, TimeBudget};
 
-/// A point's swept values, `(path, value)` in axis order.
-pub(crate) type SweepValues = Vec<(String, serde_json::Value)>;
-
-/// A loaded point: its id, its swept values and its case as JSON.
-pub(crate) type PointPlan = (String, SweepValues, std::sync::Arc<serde_json::Value>);
+/// A loaded point: its id, the point as loaded (sent whole to the worker) and its case as
+/// JSON (what expectations' conditions read).
+pub(crate) type PointPlan = (
+    String,
+    std::sync::Arc<umbra_case::CasePoint>,
+    std::sync::Arc<serde_json::Value>,
+);
 
 /// One planned run.
 #[derive(Clone, Debug)]
 pub(crate) struct Planned {
     pub(crate) backend: String,
     pub(crate) file: PathBuf,
-    pub(crate) index: usize,
     pub(crate) id: String,
-    pub(crate) values: SweepValues,
+    /// The case point, loaded once here and sent whole in the worker's request (shared by the
+    /// point's runs on every backend).
+    pub(crate) point: std::sync::Arc<umbra_case::CasePoint>,
     /// The point's case as JSON, defaults included: what expectations' `@when` conditions
     /// read (shared by the point's runs on every backend).
     pub(crate) case: std::sync::Arc<serde_json::Value>,

@@ -42,15 +42,11 @@ impl Options {
         let fail = Error::new;
         let (selection, execution) = (&args.selection, &args.execution);
         let build = crate::harness::mesa_build::select(execution.mesa.as_deref()).map_err(fail)?;
-        let named: Vec<&str> = selection.backend.iter().map(String::as_str).collect();
-        let backends =
-            crate::harness::registry::selected(&named, crate::harness::registry::known())
-                .map_err(fail)?;
         let shard = args.shard.unwrap_or(crate::cli::Shard::WHOLE);
         let shard = (shard.index, shard.count);
         let limits = execution.resolve("conformance")?;
         let (jobs, timeout) = (limits.jobs, limits.timeout);
-        let golden = golden_dir(args.golden.as_deref())?;
+        let golden = golden_dir(&args.golden)?;
         if let Some(warning) = golden
             .as_deref()
             .and_then(crate::judge::golden::check_manifest)
@@ -60,9 +56,6 @@ impl Options {
         if let Some(dir) = golden.as_deref() {
             crate::judge::golden::check_confirmed(dir).map_err(fail)?;
         }
-        let expectations_dir =
-            Path::new(selection.expectations.as_deref().unwrap_or("expectations"));
-        let expectations = Expectations::load(expectations_dir).map_err(fail)?;
         let by = match args.durations.as_deref() {
             None => crate::shards::balance::By::Stride,
             Some(_) if shard.1 == 1 => {
@@ -72,31 +65,26 @@ impl Options {
                 ));
             }
             Some(f) => crate::shards::balance::By::Durations(
-                crate::shards::balance::Durations::read(Path::new(f))
+                crate::shards::balance::Durations::read(f)
                     .map_err(|e| crate::cli::usage_error("conformance", e))?,
             ),
         };
-        let cases_dir = PathBuf::from(selection.cases.as_deref().unwrap_or("cases"));
-        let out = PathBuf::from(args.output.out.as_deref().unwrap_or("target/umbra"));
-        outside_cases(&out, &cases_dir).map_err(|e| {
+        let out = args
+            .output
+            .out
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(OUT));
+        outside_cases(&out, &selection.cases).map_err(|e| {
             crate::cli::usage_error("conformance", format!("--out {}: {e}", out.display()))
         })?;
-        let files = match umbra_case::case_files(&cases_dir) {
-            Ok(f) if !f.is_empty() => f,
-            Ok(_) => {
-                return Err(fail(format!(
-                    "no *.json case under {}",
-                    cases_dir.display()
-                )));
-            }
-            Err(e) => return Err(fail(format!("cannot read {}: {e}", cases_dir.display()))),
-        };
+        let selected = selection.resolve(crate::harness::registry::known())?;
+        let (cases_dir, expectations_dir) = (&selected.cases, &selected.expectations_dir);
         let digest = |d: &Path| {
             crate::shards::record::Digest::of(d)
                 .map_err(|e| fail(format!("cannot read what the run's record names: {e}")))
         };
         let inputs = crate::shards::record::Inputs {
-            cases: digest(&cases_dir)?,
+            cases: digest(cases_dir)?,
             expectations: if expectations_dir.is_dir() {
                 digest(expectations_dir)?
             } else {
@@ -117,37 +105,40 @@ impl Options {
         Ok(Options {
             build,
             out,
-            filter: selection.filter.as_deref().unwrap_or("*").to_string(),
-            backends,
+            filter: selected.filter,
+            backends: selected.backends,
             shard,
             by,
             inputs,
             jobs,
             timeout,
             golden,
-            expectations,
-            files,
+            expectations: selected.expectations,
+            files: selected.files,
             bless: args.bless,
             stale_check: true,
         })
     }
 }
 
-/// `--golden`: the golden directory (`golden` by default), or none (`--golden none`).
-pub(crate) fn golden_dir(flag: Option<&str>) -> Result<Option<PathBuf>, Error> {
-    Ok(match flag {
-        Some("none") => None,
-        Some(dir) if !Path::new(dir).is_dir() => {
-            return Err(crate::cli::usage_error(
-                "conformance",
-                format!(
-                    "--golden {dir}: no such directory; give the golden directory (golden/), or --golden none to run without golden checks"
-                ),
-            ));
-        }
-        Some(dir) => Some(PathBuf::from(dir)),
-        None => Some(PathBuf::from("golden")),
-    })
+/// `--out`'s default for a conformance run.
+pub(crate) const OUT: &str = "target/umbra";
+
+/// `--golden`: the golden directory, or none (`--golden none`).
+pub(crate) fn golden_dir(flag: &Path) -> Result<Option<PathBuf>, Error> {
+    if flag == Path::new("none") {
+        return Ok(None);
+    }
+    if !flag.is_dir() {
+        return Err(crate::cli::usage_error(
+            "conformance",
+            format!(
+                "--golden {}: no such directory; give the golden directory (golden/), or --golden none to run without golden checks",
+                flag.display()
+            ),
+        ));
+    }
+    Ok(Some(flag.to_path_buf()))
 }
 
 /// The runs to make: the case files that did not load (each a failed result already), the
@@ -172,10 +163,10 @@ pub(crate) fn plan_runs(opts: &Options) -> Result<Plan, Error> {
                 falls_along.extend(FallsAlong::of(&p));
                 points.push((
                     f.clone(),
-                    p.iter()
+                    p.into_iter()
                         .map(|p| {
                             let case = umbra_case::schema::condition_json(&p.case);
-                            (p.id(), p.values.clone(), std::sync::Arc::new(case))
+                            (p.id(), std::sync::Arc::new(p), std::sync::Arc::new(case))
                         })
                         .collect(),
                 ));
@@ -189,13 +180,12 @@ pub(crate) fn plan_runs(opts: &Options) -> Result<Plan, Error> {
     let mut plan = Vec::new();
     for b in &opts.backends {
         for (file, ids) in &points {
-            for (index, (id, values, case)) in ids.iter().enumerate() {
+            for (id, point, case) in ids {
                 let p = Planned {
                     backend: b.clone(),
                     file: file.clone(),
-                    index,
                     id: id.clone(),
-                    values: values.clone(),
+                    point: point.clone(),
                     case: case.clone(),
                 };
                 if crate::glob::matches(&opts.filter, id)

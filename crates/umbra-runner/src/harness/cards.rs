@@ -76,12 +76,12 @@ pub fn measured_alone(
 pub fn measure_in_child(
     exe: &std::path::Path,
     mesa: &std::ffi::OsStr,
-    backends: &[String],
+    backends: &[impl AsRef<str>],
 ) -> Result<Vec<Card>, String> {
     let mut cmd = std::process::Command::new(exe);
     cmd.args(["card", "--json", "--mesa"]).arg(mesa);
     for b in backends {
-        cmd.args(["--backend", b]);
+        cmd.args(["--backend", b.as_ref()]);
     }
     let out = cmd
         .env_remove(crate::harness::mesa_build::ENV)

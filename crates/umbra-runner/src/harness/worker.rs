@@ -3,8 +3,9 @@
 //! Protocol, one JSON object per line:
 //! - worker → parent, once: a [`Hello`] (`{"ready": {...}}`, `{"unavailable": "reason"}` or
 //!   `{"refused": "reason"}`);
-//! - parent → worker: a [`Request`] (`{"judge": {"file": "cases/x.json", "index": 3, …}}`,
-//!   `{"measure": …}` or `"card"`);
+//! - parent → worker: a [`Request`] (`{"judge": {"point": {"file": …, "case": {…},
+//!   "values": […]}, …}}`, `{"measure": …}` or `"card"`): the case point whole, as the
+//!   parent loaded it, so a worker reads no case file;
 //! - worker → parent: a [`RunReport`].
 //!
 //! This file is the loop: hello, read, answer ([`crate::judge::answer`], where judging

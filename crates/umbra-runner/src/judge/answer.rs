@@ -1,11 +1,11 @@
-//! What a worker answers each [`Request`] with, in the worker's process: the point loaded
-//! from its file and refused if it cannot fit the memory budget; then judged (the frame
+//! What a worker answers each [`Request`] with, in the worker's process: the request's point
+//! (loaded by the parent) refused if it cannot fit the memory budget; else judged (the frame
 //! against truth, reference and twins, the golden, the gallery's and a failure's pictures, a
 //! failing run judged again under its expectation's deviations), measured for a sweep, or
 //! the backend's card measured. The worker loop ([`crate::harness::worker`]) only reads,
 //! answers and restores.
 
-use crate::judge::protocol::{JudgeRequest, PointRef, Request, RunReport, RunVerdict};
+use crate::judge::protocol::{JudgeRequest, Request, RunReport, RunVerdict};
 use crate::judge::run::{Outcome, describe, run_point_as};
 use umbra_report::Metrics;
 
@@ -14,46 +14,28 @@ use umbra_report::Metrics;
 pub fn answer(backend: &mut dyn umbra_case::Backend, req: &Request, budget: u64) -> RunReport {
     match req {
         Request::Card => card_of(backend),
-        Request::Measure(m) => match point_of(&m.point, budget) {
-            Ok(point) => measured(backend, point, m.repeat),
+        Request::Measure(m) => match fits(&m.point, budget) {
+            Ok(()) => measured(backend, m.point.clone(), m.repeat),
             Err(report) => *report,
         },
-        Request::Judge(j) => match point_of(&j.point, budget) {
-            Ok(point) => judged(backend, point, j),
+        Request::Judge(j) => match fits(&j.point, budget) {
+            Ok(()) => judged(backend, j.point.clone(), j),
             Err(report) => *report,
         },
     }
 }
 
-/// The point a request names, loaded and within the memory budget; else the failed run's
-/// report.
-fn point_of(at: &PointRef, budget: u64) -> Result<umbra_case::CasePoint, Box<RunReport>> {
-    let failed = |reason: String| {
-        Box::new(RunReport {
-            outcome: RunVerdict::Fail,
-            reason,
-            ..Default::default()
-        })
-    };
-    let points = match umbra_case::load_file(&at.file) {
-        Ok(p) => p,
-        Err(e) => return Err(failed(e.to_string())),
-    };
-    let Some(point) = points.into_iter().nth(at.index) else {
-        return Err(failed(format!(
-            "{} has no sweep point {}",
-            at.file.display(),
-            at.index
-        )));
-    };
-    // Refuse, before rendering, a run whose case cannot fit in the memory budget.
+/// `Ok` when `point` fits in the memory budget; else the refused run's report, made before
+/// anything is rendered.
+fn fits(point: &umbra_case::CasePoint, budget: u64) -> Result<(), Box<RunReport>> {
     let triangles = umbra_case::tessellate(&point.case.scene).triangles.len();
-    if let Some(why) = umbra_case::memory::estimate(&point.case, triangles).refuse(budget) {
-        return Err(Box::new(RunReport {
+    match umbra_case::memory::estimate(&point.case, triangles).refuse(budget) {
+        None => Ok(()),
+        Some(why) => Err(Box::new(RunReport {
             outcome: RunVerdict::Fail,
             reason: format!(
                 "{} point {}: refused before rendering: {why}",
-                at.file.display(),
+                point.file.display(),
                 point.id()
             ),
             failed: vec![umbra_report::FailedCheck {
@@ -61,9 +43,8 @@ fn point_of(at: &PointRef, budget: u64) -> Result<umbra_case::CasePoint, Box<Run
                 count: 1,
             }],
             ..Default::default()
-        }));
+        })),
     }
-    Ok(point)
 }
 
 /// A sweep's measurement of `point` ([`crate::judge::measure`]).

@@ -1,11 +1,13 @@
 //! The worker protocol's messages, one JSON object a line: the parent's [`Request`] (judge a
 //! point, measure it for a sweep, or measure the backend's card) and the worker's
-//! [`RunReport`]. The worker's hello is [`crate::harness::worker::Hello`]; what a request is
+//! [`RunReport`]. A request carries its case point whole: the parent loads, validates and
+//! expands each case file once, and the worker never reads one. The worker's hello is [`crate::harness::worker::Hello`]; what a request is
 //! answered with is [`crate::judge::answer`].
 
 use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
+use umbra_case::CasePoint;
 use umbra_report::Metrics;
 
 /// What the parent asks a worker, one request a line. On the wire, `{"judge": {...}}`,
@@ -23,21 +25,11 @@ pub enum Request {
     Card,
 }
 
-/// Which case point a request renders: point `index` of `file`'s expansion.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct PointRef {
-    /// The case file.
-    pub file: PathBuf,
-    /// The sweep point's index in the file's expansion.
-    pub index: usize,
-}
-
 /// A run to judge, and what to do with its judgement.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct JudgeRequest {
-    /// The case point.
-    #[serde(flatten)]
-    pub point: PointRef,
+    /// The case point, as the parent loaded it (the worker reads no case file).
+    pub point: CasePoint,
     /// Where to write the pictures of a failing run (none: do not write).
     pub failures: Option<PathBuf>,
     /// The golden directory (none: no golden check).
@@ -61,11 +53,11 @@ pub struct JudgeRequest {
 }
 
 impl JudgeRequest {
-    /// A request to judge point `index` of `file` and do nothing else with it: no pictures,
-    /// no golden, no deviation or calibration (twins as `no_twins` says).
-    pub fn bare(file: PathBuf, index: usize, no_twins: bool) -> JudgeRequest {
+    /// A request to judge `point` and do nothing else with it: no pictures, no golden, no
+    /// deviation or calibration (twins as `no_twins` says).
+    pub fn bare(point: CasePoint, no_twins: bool) -> JudgeRequest {
         JudgeRequest {
-            point: PointRef { file, index },
+            point,
             failures: None,
             golden: None,
             no_twins,
@@ -79,9 +71,8 @@ impl JudgeRequest {
 /// A sweep's measurement of one point.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct MeasureRequest {
-    /// The case point.
-    #[serde(flatten)]
-    pub point: PointRef,
+    /// The case point, as the parent loaded it.
+    pub point: CasePoint,
     /// Timed renders after one warm-up.
     pub repeat: u32,
 }
@@ -148,4 +139,37 @@ pub struct RunReport {
     /// The behaviour card ([`Request::Card`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub card: Option<crate::judge::card::Card>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every point a worker is sent arrives as the parent loaded it: the catalogue's and a soak's
+    /// generated points each cross the wire (a `Judge` request written and read back) equal to
+    /// themselves, to the last bit of every float, so judging it in the worker is judging
+    /// what was planned.
+    #[test]
+    fn a_point_crosses_the_wire_unchanged() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../cases");
+        let mut points = Vec::new();
+        for f in umbra_case::case_files(&root).expect("the catalogue") {
+            points.extend(umbra_case::load_file(&f).expect("a catalogue case loads"));
+        }
+        let generated = umbra_case::generate::cases(21, 60);
+        for (k, case) in generated.into_iter().enumerate() {
+            let file = PathBuf::from(format!("soak-21-{k}.json"));
+            let text = umbra_case::generate::to_json(&case);
+            points.extend(umbra_case::load_str(&text, &file).expect("a generated case loads"));
+        }
+        assert!(points.len() > 300, "{} points", points.len());
+        for point in points {
+            let req = Request::Judge(JudgeRequest::bare(point.clone(), false));
+            let line = serde_json::to_string(&req).expect("a request writes");
+            let Request::Judge(back) = serde_json::from_str(&line).expect("a request reads") else {
+                panic!("{line}: not a judge request");
+            };
+            assert_eq!(back.point, point, "{} changed on the wire", point.id());
+        }
+    }
 }

@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use serde_json::Value;
+use crate::repro::Facts;
 use umbra_case::DriverInfo;
 
 use crate::repro::probes::Probes;
@@ -100,38 +100,19 @@ pub fn c_header(backend: &str, env: &str, info: &DriverInfo, probes: &Probes) ->
     )
 }
 
-fn strs(v: &Value, key: &str) -> Vec<String> {
-    v[key]
-        .as_array()
-        .map(|a| {
-            a.iter()
-                .filter_map(|x| x.as_str().map(String::from))
-                .collect()
-        })
-        .unwrap_or_default()
-}
-
-fn s<'a>(v: &'a Value, key: &str) -> &'a str {
-    v[key].as_str().unwrap_or("")
-}
-
 /// The failed checks as words, with the clause each is held to
 /// ([`umbra_report::check::Check::counted`]).
-fn violated(facts: &Value) -> String {
-    let mut parts = Vec::new();
-    for f in facts["failed"].as_array().into_iter().flatten() {
-        let n = f["count"].as_u64().unwrap_or(0);
-        let name = f["check"].as_str().unwrap_or("");
-        parts.push(match umbra_report::check::Check::parse(name) {
-            Ok(c) => c.counted(n),
-            Err(_) => format!("{name} ({n})"),
-        });
-    }
+fn violated(facts: &Facts) -> String {
+    let parts: Vec<String> = facts
+        .failed
+        .iter()
+        .map(|f| f.check.counted(f.count))
+        .collect();
     parts.join("; ")
 }
 
 /// `issue.md`.
-pub fn issue_md(facts: &Value, m: &Measured) -> String {
+pub fn issue_md(facts: &Facts, m: &Measured) -> String {
     let mut o = String::new();
     issue_description(&mut o, facts, m);
     issue_system(&mut o, facts, m);
@@ -146,8 +127,8 @@ pub fn issue_md(facts: &Value, m: &Measured) -> String {
 
 /// `issue.md`'s title and `### Description`: what was violated, the diagnosis, and how umbra
 /// found and reduced it.
-fn issue_description(o: &mut String, facts: &Value, m: &Measured) {
-    let renderer = s(facts, "renderer");
+fn issue_description(o: &mut String, facts: &Facts, m: &Measured) {
+    let renderer = facts.renderer.as_str();
     let _ = writeln!(
         o,
         "# {renderer}: shadow map sampling breaks the spec's bounds: {}\n",
@@ -171,33 +152,30 @@ fn issue_description(o: &mut String, facts: &Value, m: &Measured) {
         m.run,
         m.case_file,
         m.point,
-        facts["triangles"],
-        facts["frame"][0],
-        facts["frame"][1],
-        match (
-            facts["cube"].as_bool(),
-            facts["faces"].as_u64().unwrap_or(1)
-        ) {
+        facts.triangles,
+        facts.frame[0],
+        facts.frame[1],
+        match (facts.cube, facts.faces) {
             // Bundles written before cascades carry no "cube": six faces were a cube.
             (Some(true), _) | (None, 6) => "cube ".to_string(),
             (_, 1) => String::new(),
             (_, n) => format!("{n}-cascade "),
         },
-        facts["map"][0],
-        facts["map"][1],
+        facts.map[0],
+        facts.map[1],
         m.reduced
     );
 }
 
 /// `issue.md`'s `### System information`: the driver's strings, the Mesa build, the platform.
-fn issue_system(o: &mut String, facts: &Value, m: &Measured) {
-    let backend = s(facts, "backend");
-    let renderer = s(facts, "renderer");
+fn issue_system(o: &mut String, facts: &Facts, m: &Measured) {
+    let backend = facts.backend.as_str();
+    let renderer = facts.renderer.as_str();
     let _ = writeln!(o, "### System information\n");
-    let _ = writeln!(o, "- GL_VENDOR: `{}`", s(facts, "vendor"));
+    let _ = writeln!(o, "- GL_VENDOR: `{}`", facts.vendor.as_str());
     let _ = writeln!(o, "- GL_RENDERER: `{renderer}`");
-    let _ = writeln!(o, "- GL_VERSION: `{}`", s(facts, "version"));
-    let exts = strs(facts, "extensions");
+    let _ = writeln!(o, "- GL_VERSION: `{}`", facts.version.as_str());
+    let exts = facts.extensions.clone();
     if let Some(egl) = exts.iter().find(|e| e.starts_with("EGL ")) {
         let _ = writeln!(o, "- EGL: `{}`", egl.trim_start_matches("EGL "));
     }
@@ -208,7 +186,7 @@ fn issue_system(o: &mut String, facts: &Value, m: &Measured) {
             .clone()
             .unwrap_or_else(|| "the system's (see GL_VERSION)".into())
     );
-    let device = s(facts, "device");
+    let device = facts.device.as_str();
     let platform = if device.starts_with("EGL device") {
         format!("{device} (`EGL_PLATFORM_DEVICE_EXT`)")
     } else {
@@ -221,8 +199,8 @@ fn issue_system(o: &mut String, facts: &Value, m: &Measured) {
 }
 
 /// `issue.md`'s `### Regression`: the first bad commit, or how to bisect.
-fn issue_regression(o: &mut String, facts: &Value, m: &Measured) {
-    let backend = s(facts, "backend");
+fn issue_regression(o: &mut String, facts: &Facts, m: &Measured) {
+    let backend = facts.backend.as_str();
     let _ = writeln!(o, "### Regression\n");
     match &m.bisect {
         Some((commit, log)) => {
@@ -260,8 +238,8 @@ fn issue_regression(o: &mut String, facts: &Value, m: &Measured) {
 
 /// `issue.md`'s `### Steps to reproduce`: the program's commands and exits, or why there is
 /// no program.
-fn issue_steps(o: &mut String, facts: &Value, m: &Measured) {
-    let backend = s(facts, "backend");
+fn issue_steps(o: &mut String, facts: &Facts, m: &Measured) {
+    let backend = facts.backend.as_str();
     let _ = writeln!(o, "### Steps to reproduce\n");
     if m.runs.is_empty() {
         let _ = writeln!(
@@ -284,7 +262,7 @@ fn issue_steps(o: &mut String, facts: &Value, m: &Measured) {
         let _ = writeln!(
             o,
             "`repro.c` needs only libEGL: it makes the exact GL calls umbra made (shaders, state, vertex data as hex floats), reads back the frame{} and tests each probe against the judge's interval. Exit 0: all inside; 1: a probe outside; 125: could not run.\n",
-            if facts["texels"].as_u64().unwrap_or(0) > 0 {
+            if facts.texels > 0 {
                 " and the shadow map"
             } else {
                 ""
@@ -295,19 +273,19 @@ fn issue_steps(o: &mut String, facts: &Value, m: &Measured) {
 
 /// `issue.md`'s `### Probes`: the probes as umbra read them, and the program's output on
 /// each driver.
-fn issue_probes(o: &mut String, facts: &Value, m: &Measured) {
-    let backend = s(facts, "backend");
+fn issue_probes(o: &mut String, facts: &Facts, m: &Measured) {
+    let backend = facts.backend.as_str();
     let _ = writeln!(o, "### Probes\n");
     let _ = writeln!(
         o,
         "{} of {} failing pixels and {} of {} failing texels are probed. As umbra read them on {backend}:\n",
-        facts["pixels"], facts["pixels_total"], facts["texels"], facts["texels_total"]
+        facts.pixels, facts.pixels_total, facts.texels, facts.texels_total
     );
     let _ = writeln!(o, "```");
-    for l in strs(facts, "probe_lines").iter().take(16) {
+    for l in facts.probe_lines.iter().take(16) {
         let _ = writeln!(o, "{l}");
     }
-    if strs(facts, "probe_lines").len() > 16 {
+    if facts.probe_lines.len() > 16 {
         let _ = writeln!(o, "... (all of them in repro.c)");
     }
     let _ = writeln!(o, "```\n");
@@ -323,19 +301,19 @@ fn issue_probes(o: &mut String, facts: &Value, m: &Measured) {
 }
 
 /// `issue.md`'s `### Screenshots`: the crop's table and where the full-size pictures are.
-fn issue_screenshots(o: &mut String, facts: &Value) {
-    let renderer = s(facts, "renderer");
+fn issue_screenshots(o: &mut String, facts: &Facts) {
+    let renderer = facts.renderer.as_str();
     let _ = writeln!(o, "### Screenshots\n");
-    let c = &facts["crop"];
+    let c = facts.crop.map(u64::from);
     let _ = writeln!(
         o,
         "The failing area (x {}..{}, y {}..{} of the {}×{} frame), magnified {}×. Expected: umbra's reference for this profile; actual: {renderer}; difference: red = outside the spec's bounds, amber = a legal difference, blue = any answer legal, grey = agrees.\n",
         c[0],
-        c[0].as_u64().unwrap_or(0) + c[2].as_u64().unwrap_or(1) - 1,
+        (c[0] + c[2]).saturating_sub(1),
         c[1],
-        c[1].as_u64().unwrap_or(0) + c[3].as_u64().unwrap_or(1) - 1,
-        facts["frame"][0],
-        facts["frame"][1],
+        (c[1] + c[3]).saturating_sub(1),
+        facts.frame[0],
+        facts.frame[1],
         c[4]
     );
     let _ = writeln!(
@@ -367,8 +345,8 @@ fn issue_capture(o: &mut String, m: &Measured) {
 
 /// `issue.md`'s last section, `### For umbra users`: the reduced case and the command that
 /// made the bundle.
-fn issue_for_umbra_users(o: &mut String, facts: &Value, m: &Measured) {
-    let backend = s(facts, "backend");
+fn issue_for_umbra_users(o: &mut String, facts: &Facts, m: &Measured) {
+    let backend = facts.backend.as_str();
     let _ = writeln!(o, "### For umbra users\n");
     let _ = writeln!(
         o,
@@ -413,7 +391,7 @@ fn tail(text: &str, n: usize) -> String {
 }
 
 /// `README.md`: what each file is and the commands.
-pub fn readme(facts: &Value, m: &Measured, files: &[(String, u64)]) -> String {
+pub fn readme(facts: &Facts, m: &Measured, files: &[(String, u64)]) -> String {
     let mut o = String::new();
     let _ = writeln!(
         o,
@@ -466,9 +444,9 @@ pub fn readme(facts: &Value, m: &Measured, files: &[(String, u64)]) -> String {
     let _ = writeln!(
         o,
         "Driver strings: {} / {} / {}.",
-        s(facts, "vendor"),
-        s(facts, "renderer"),
-        s(facts, "version")
+        facts.vendor.as_str(),
+        facts.renderer.as_str(),
+        facts.version.as_str()
     );
     o
 }

@@ -21,7 +21,7 @@ pub mod state;
 
 use std::path::Path;
 
-use serde_json::json;
+use serde::{Deserialize, Serialize};
 use umbra_case::{BackendError, Prepared};
 
 use crate::exit::{Error, Exit, Outcome};
@@ -133,36 +133,109 @@ pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> Outcome {
     })?;
     let size = crate::case_size::Size::of(&serde_json::to_value(&point.case).unwrap_or_default())
         .unwrap_or_default();
-    let facts = json!({
-        "backend": backend_id,
-        "profile": profile_name,
-        "vendor": info.vendor,
-        "renderer": info.renderer,
-        "version": info.version,
-        "extensions": info.extensions,
-        "device": info.device,
-        "failed": judged.failed.iter().map(|f| json!({"check": f.check, "count": f.count})).collect::<Vec<_>>(),
-        "problems": judged.problems,
-        "pixels": probes.pixels.len(),
-        "pixels_total": probes.pixels_total,
-        "texels": probes.texels.len(),
-        "texels_total": probes.texels_total,
-        "frame": probes.frame,
-        "map": point.case.shadow.size,
-        "faces": prepared.lights.iter().map(|l| l.light.views.len()).sum::<usize>(),
-        "cube": prepared.lights.iter().any(|l| l.light.is_cube()),
-        "triangles": size.triangles,
-        "crop": crop,
-        "deterministic": same,
-        "repro_c": wrote_c,
-        "probe_lines": probes_text(&probes),
-    });
+    let facts = Facts {
+        backend: backend_id.to_string(),
+        profile: profile_name.to_string(),
+        vendor: info.vendor.clone(),
+        renderer: info.renderer.clone(),
+        version: info.version.clone(),
+        extensions: info.extensions.clone(),
+        device: info.device.clone(),
+        failed: judged.failed.clone(),
+        problems: judged.problems.clone(),
+        pixels: probes.pixels.len(),
+        pixels_total: probes.pixels_total,
+        texels: probes.texels.len(),
+        texels_total: probes.texels_total,
+        frame: probes.frame,
+        map: point.case.shadow.size,
+        faces: prepared
+            .lights
+            .iter()
+            .map(|l| l.light.views.len())
+            .sum::<usize>(),
+        cube: Some(prepared.lights.iter().any(|l| l.light.is_cube())),
+        triangles: size.triangles,
+        crop,
+        deterministic: same,
+        repro_c: wrote_c,
+        probe_lines: probes_text(&probes),
+    };
     std::fs::write(
         out.join("facts.json"),
         serde_json::to_string_pretty(&facts).unwrap_or_default(),
     )
     .map_err(|e| Error::new(format!("cannot write facts.json: {e}")))?;
     Ok(Exit::Pass)
+}
+
+/// What the driver's process measured, for the parent's issue.md and README.md: written by
+/// [`emit`] as `facts.json` in the bundle, read back by `umbra repro` through [`Facts::read`]
+/// (one type on both sides of the process boundary).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Facts {
+    /// The backend id.
+    pub backend: String,
+    /// The judge's profile for it.
+    pub profile: String,
+    /// GL_VENDOR (or the adapter's vendor).
+    pub vendor: String,
+    /// GL_RENDERER.
+    pub renderer: String,
+    /// GL_VERSION.
+    pub version: String,
+    /// The extensions the driver lists.
+    pub extensions: Vec<String>,
+    /// The EGL device or adapter, where one was chosen.
+    pub device: String,
+    /// The checks the reduced case fails on the driver.
+    pub failed: Vec<umbra_report::FailedCheck>,
+    /// What the judge could not judge.
+    pub problems: Vec<String>,
+    /// Pixel probes written into repro.c, of `pixels_total` illegal pixels.
+    pub pixels: usize,
+    /// Illegal pixels in the frame.
+    pub pixels_total: usize,
+    /// Texel probes written into repro.c, of `texels_total` illegal texels.
+    pub texels: usize,
+    /// Illegal texels in the shadow maps.
+    pub texels_total: usize,
+    /// The frame's width and height.
+    pub frame: [u32; 2],
+    /// The shadow map's width and height.
+    pub map: [u32; 2],
+    /// Shadow map faces over every light (6 for a cube, one per cascade).
+    #[serde(default = "one")]
+    pub faces: usize,
+    /// Whether a light's map is a cube (none in bundles written before cascades).
+    #[serde(default)]
+    pub cube: Option<bool>,
+    /// Triangles of the reduced case.
+    pub triangles: usize,
+    /// The failing area's crop: x, y, width, height, magnification.
+    pub crop: [u32; 5],
+    /// Whether the recorded render equals the judged one.
+    pub deterministic: bool,
+    /// Whether repro.c was written (a GL backend).
+    pub repro_c: bool,
+    /// The probes as issue.md lists them.
+    pub probe_lines: Vec<String>,
+}
+
+fn one() -> usize {
+    1
+}
+
+impl Facts {
+    /// `facts.json` in `dir`, or an error naming the file and the field that does not read.
+    pub fn read(dir: &Path) -> Result<Facts, String> {
+        let file = dir.join("facts.json");
+        let text = std::fs::read_to_string(&file)
+            .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+        let de = &mut serde_json::Deserializer::from_str(&text);
+        serde_path_to_error::deserialize(de)
+            .map_err(|e| format!("{}: {} at {}", file.display(), e.inner(), e.path()))
+    }
 }
 
 /// The probes as umbra saw them on the driver's run, one line each (issue.md's table).

@@ -174,19 +174,19 @@ pub(crate) fn setup(args: &SelftestArgs) -> Result<Setup, Error> {
     let generated = soak_cases(args).map_err(|e| crate::cli::usage_error("selftest", e))?;
     let cases = match &generated {
         Some(dir) => dir.clone(),
-        None => PathBuf::from(args.cases.as_deref().unwrap_or("cases")),
+        None => args
+            .cases
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(crate::cli::CASES_DIR)),
     };
     let limits = args.execution.resolve("selftest")?;
     let (jobs, timeout) = (limits.jobs, limits.timeout);
-    let expectations = Expectations::load(Path::new(
-        args.expectations.as_deref().unwrap_or("expectations"),
-    ))
-    .map_err(Error::new)?;
+    let expectations = Expectations::load(&args.expectations).map_err(Error::new)?;
     let default = crate::harness::registry::known()
         .into_iter()
         .filter(|b| b != "ref")
         .collect();
-    let named: Vec<&str> = args.backend.iter().map(String::as_str).collect();
+    let named = crate::cli::values::names(&args.backend);
     let backends = crate::harness::registry::selected(&named, default).map_err(Error::new)?;
     let mut faults: Vec<Fault> = Vec::new();
     for name in &args.fault {
@@ -303,13 +303,12 @@ fn soak_cases(args: &SelftestArgs) -> Result<Option<PathBuf>, String> {
         // One given, the other has its default (the help says which).
         (s, c) => (s.unwrap_or(1), c.map_or(20, crate::cli::values::Count::get)),
     };
-    let dir = PathBuf::from(
-        args.output
-            .out
-            .as_deref()
-            .unwrap_or(crate::run_dir::SOAK_OUT),
-    )
-    .join("selftest-cases");
+    let dir = args
+        .output
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(crate::run_dir::SOAK_OUT))
+        .join("selftest-cases");
     // A directory of umbra's own, emptied: one that holds anything umbra did not write (a
     // user's cases under a path they gave as --out) is refused, never emptied.
     umbra_owned::fresh(&dir, "umbra selftest --seed/--count (generated cases)")
@@ -604,15 +603,15 @@ impl Faulted {
         })
     }
 
-    /// Runs point `index` of `file` and judges it as a conformance run would.
-    pub(crate) fn run(&mut self, file: &Path, index: usize, point: &umbra_case::CasePoint) -> Seen {
+    /// Runs `point` and judges it as a conformance run would.
+    pub(crate) fn run(&mut self, point: &umbra_case::CasePoint) -> Seen {
         let name = format!("{}/{}", self.backend, point.id());
         let case = umbra_case::schema::condition_json(&point.case);
         let req = Request::Judge(JudgeRequest {
             deviation: Some(self.expectations.deviations(&name, &case).names())
                 .filter(|n| !n.is_empty()),
             calibration: self.calibration.clone(),
-            ..JudgeRequest::bare(file.to_path_buf(), index, true)
+            ..JudgeRequest::bare(point.clone(), true)
         });
         // A crash or a timeout is a catch; the session starts a fresh worker for the next
         // point, and one that does not come up ends the hunt.
@@ -704,9 +703,9 @@ fn hunt(
         if k >= sampled && h.caught.len() >= MIN_POINTS && !how.every_point {
             break;
         }
-        let (file, index, point) = candidates[i];
+        let point = &candidates[i].2;
         h.tried += 1;
-        match faulted.run(file, *index, point) {
+        match faulted.run(point) {
             Seen::Caught(checks) => h.caught.push((point.id(), checks)),
             Seen::Passed => {}
             Seen::Skipped(reason) => {

@@ -107,11 +107,11 @@ fn sweep(backend: &str, param: Param, sign: f64, points: &[Point], how: &How) ->
             .collect();
         let mut hit = None;
         for i in order {
-            let (file, index, point) = candidates[i];
+            let point = &candidates[i].2;
             if !applied_as_asked(backend, fault, &point.case) {
                 continue;
             }
-            match faulted.run(file, *index, point) {
+            match faulted.run(point) {
                 Seen::Caught(checks) => {
                     hit = Some((i, point.id(), checks));
                     break;

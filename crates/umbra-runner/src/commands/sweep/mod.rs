@@ -27,7 +27,7 @@ use crate::exit::{Error, Exit, Outcome};
 use crate::harness::pool::Reply;
 use crate::harness::scheduler::{NotReady, Session};
 use crate::judge::measure::Measured;
-use crate::judge::protocol::{MeasureRequest, PointRef, Request, RunVerdict};
+use crate::judge::protocol::{MeasureRequest, Request, RunVerdict};
 use matrix::{FIXED_ORTHO, matrix};
 pub use matrix::{Row, Technique};
 use umbra_report::escape::esc;
@@ -99,14 +99,17 @@ pub fn main(args: &SweepArgs) -> Outcome {
     crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
     crate::harness::memory_limit::select(args.max_memory.map(|b| b.0), 1)
         .map_err(|e| crate::cli::usage_error("sweep", e))?;
-    let scene = PathBuf::from(args.scene.as_deref().unwrap_or(DEFAULT_SCENE.0));
+    let scene = args
+        .scene
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(DEFAULT_SCENE.0));
     // Both 1 or more (clap refuses 0: `--repeat 0` once ran once and `--timeout 0` gave
     // every run no time, without a word).
     let repeat = u32::try_from(args.repeat.get()).unwrap_or(u32::MAX);
     let timeout = args.timeout.duration();
-    let out = PathBuf::from(args.out.as_deref().unwrap_or("target/umbra/sweep"));
+    let out = args.out.clone();
     let default = DEFAULT_BACKENDS.iter().map(|s| s.to_string()).collect();
-    let named: Vec<&str> = args.backend.iter().map(String::as_str).collect();
+    let named = crate::cli::values::names(&args.backend);
     let backends = crate::harness::registry::selected(&named, default).map_err(Error::new)?;
     let points = umbra_case::load_file(&scene).map_err(|e| Error::new(e.to_string()))?;
     let wanted = match (args.point.as_deref(), args.scene.as_deref()) {
@@ -145,8 +148,15 @@ pub fn main(args: &SweepArgs) -> Outcome {
             .as_deref()
             .unwrap_or(Path::new(crate::judge::judge_cache::DEFAULT_ROOT)),
     );
+    // The generated file is loaded once here; each worker is sent its points whole.
+    let points = umbra_case::load_file(&file).map_err(|e| {
+        Error::new(format!(
+            "the generated sweep case {} does not load (a bug in umbra's sweep): {e}",
+            file.display()
+        ))
+    })?;
     let sweep = Sweep {
-        file: &file,
+        points: &points,
         plan: &plan,
         judge_cache: &judge_cache,
         repeat,
@@ -183,10 +193,10 @@ pub fn main(args: &SweepArgs) -> Outcome {
     Ok(Exit::pass_if(errors == 0))
 }
 
-/// What every backend of one sweep runs: the generated case file and its plan (a technique
-/// per index of the file's expansion), and how.
+/// What every backend of one sweep runs: the generated case file's points and its plan (a
+/// technique per point), and how.
 struct Sweep<'a> {
-    file: &'a Path,
+    points: &'a [umbra_case::CasePoint],
     plan: &'a [Option<Technique>],
     judge_cache: &'a Path,
     repeat: u32,
@@ -231,10 +241,7 @@ impl Sweep<'_> {
                 continue;
             }
             let req = Request::Measure(MeasureRequest {
-                point: PointRef {
-                    file: self.file.to_path_buf(),
-                    index,
-                },
+                point: self.points[index].clone(),
                 repeat: self.repeat,
             });
             let (result, skipped) = match session.reply(&req) {
@@ -274,12 +281,11 @@ impl Sweep<'_> {
     }
 }
 
-/// Measures point `index` of case `file` on each backend, one backend after the other, each
-/// in a worker started from `exe` (the `umbra` binary) with its driver's environment.
+/// Measures `point` on each backend, one backend after the other, each in a worker started
+/// from `exe` (the `umbra` binary) with its driver's environment.
 pub fn measure_backends(
     exe: &Path,
-    file: &Path,
-    index: usize,
+    point: &umbra_case::CasePoint,
     backends: &[String],
     repeat: u32,
     timeout: Duration,
@@ -301,10 +307,7 @@ pub fn measure_backends(
                     }
                 }
                 let req = Request::Measure(MeasureRequest {
-                    point: PointRef {
-                        file: file.to_path_buf(),
-                        index,
-                    },
+                    point: point.clone(),
                     repeat,
                 });
                 match session.reply(&req)?.0 {
