@@ -26,6 +26,7 @@ pub mod junit;
 pub mod model;
 pub mod names;
 pub mod pareto;
+pub mod summary;
 
 pub use json::{DriverRow, Header, Report, ReportRun};
 pub use model::{

@@ -248,6 +248,4 @@ pub(crate) fn settings(
     }
 }
 
-pub(crate) fn first_line(s: &str) -> &str {
-    s.lines().next().unwrap_or("")
-}
+pub(crate) use umbra_report::summary::first_line;
