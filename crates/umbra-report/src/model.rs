@@ -53,6 +53,24 @@ impl Status {
         }
     }
 
+    /// The status a name stands for ([`Status::name`]'s inverse; a skip's reason is not in
+    /// its name, so it reads back empty): how a status written to report.json or a CSV is
+    /// counted again.
+    pub fn of_name(name: &str) -> Option<Status> {
+        Some(match name {
+            "Pass" => Status::Pass,
+            "Fail" => Status::Fail,
+            "Crash" => Status::Crash,
+            "Timeout" => Status::Timeout,
+            "Skip" => Status::Skip(String::new()),
+            "ExpectedFail" => Status::ExpectedFail,
+            "UnexpectedPass" => Status::UnexpectedPass,
+            "OrderDependent" => Status::OrderDependent,
+            "Flake" => Status::Flake,
+            _ => return None,
+        })
+    }
+
     /// Whether the status makes the run a regression (exit code 1).
     pub fn is_regression(&self) -> bool {
         matches!(

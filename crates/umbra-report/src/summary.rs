@@ -194,13 +194,33 @@ pub fn golden_changes(results: &[RunResult], manifest: &str) -> String {
 /// The closing line, alone, in the form CI tools read: `COMMAND: P passed, F failed, S
 /// skipped` (passed counts expected failures and flakes; failed, the regressions).
 pub fn closing_line(command: &str, results: &[RunResult]) -> String {
-    let count = |f: fn(&Status) -> bool| results.iter().filter(|r| f(&r.status)).count();
-    format!(
-        "{command}: {} passed, {} failed, {} skipped",
-        count(|s| matches!(s, Status::Pass | Status::ExpectedFail | Status::Flake)),
-        count(Status::is_regression),
-        count(|s| matches!(s, Status::Skip(_)))
+    closing_of(command, results.iter().map(|r| r.status.clone()))
+}
+
+/// [`closing_line`] of a run read back from its report.json (`umbra drivers` reads each
+/// side's this way rather than from the child's terminal output). A status name the
+/// report should not hold counts as a failure.
+pub fn closing_line_of(command: &str, report: &crate::json::Report) -> String {
+    closing_of(
+        command,
+        report
+            .runs
+            .iter()
+            .map(|r| Status::of_name(&r.status).unwrap_or(Status::Fail)),
     )
+}
+
+fn closing_of(command: &str, statuses: impl Iterator<Item = Status>) -> String {
+    let (mut passed, mut failed, mut skipped) = (0, 0, 0);
+    for s in statuses {
+        match s {
+            Status::Pass | Status::ExpectedFail | Status::Flake => passed += 1,
+            Status::Skip(_) => skipped += 1,
+            s if s.is_regression() => failed += 1,
+            _ => {}
+        }
+    }
+    format!("{command}: {passed} passed, {failed} failed, {skipped} skipped")
 }
 
 #[cfg(test)]
@@ -261,6 +281,31 @@ mod tests {
             closing_line("conformance", &results),
             "conformance: 2 passed, 1 failed, 1 skipped"
         );
+        let report = crate::json::Report::new(
+            &results,
+            crate::json::Header::default(),
+            &budget,
+            "umbra conformance".into(),
+        );
+        let report =
+            crate::json::Report::parse(&report.to_json().expect("writes")).expect("reads back");
+        assert_eq!(
+            closing_line_of("conformance", &report),
+            closing_line("conformance", &results)
+        );
+        for s in [
+            Status::Pass,
+            Status::Fail,
+            Status::Crash,
+            Status::Timeout,
+            Status::Skip("why".into()),
+            Status::ExpectedFail,
+            Status::UnexpectedPass,
+            Status::OrderDependent,
+            Status::Flake,
+        ] {
+            assert_eq!(Status::of_name(s.name()).map(|b| b.name()), Some(s.name()));
+        }
         assert_eq!(
             drivers_text("Mesa: system", &[("ref".into(), "ref: umbra\n".into())]),
             "Mesa: system\nref: umbra\n"

@@ -636,6 +636,12 @@ fn the_drivers_page_offers_a_bug_report_for_each_regression() {
         &[("UMBRA_FAKE_BACKENDS", "1")],
     );
     let t = text(&o);
+    // Each side's closing line, as its report.json counts it.
+    assert!(
+        t.contains("): conformance: 1 passed, 0 failed, 0 skipped")
+            && t.contains("): conformance: 0 passed, 1 failed, 0 skipped"),
+        "{t}"
+    );
     let html = std::fs::read_to_string(out.join("report.html")).expect("report.html");
     assert!(
         html.contains(&format!(

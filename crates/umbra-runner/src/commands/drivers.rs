@@ -412,12 +412,13 @@ fn run_side(
         .ok()
         .and_then(|s| s.code())
         .unwrap_or(could_not_run);
-    let tail = std::fs::read_to_string(&log).unwrap_or_default();
-    let closing = tail
-        .lines()
-        .rev()
-        .find(|l| l.starts_with("conformance:"))
-        .unwrap_or("no closing line");
+    // The closing line is the child's report's, not read back from its terminal output.
+    let report = dir.join("latest").join("report.json");
+    let read = report.exists().then(|| Report::read(&report));
+    let closing = match &read {
+        Some(Ok(r)) => umbra_report::summary::closing_line_of("conformance", r),
+        _ => "no report".to_string(),
+    };
     println!(
         "drivers: {side} done in {:.0} s (exit {code}): {closing}",
         started.elapsed().as_secs_f64()
@@ -428,14 +429,13 @@ fn run_side(
             log.display()
         )));
     }
-    let report = dir.join("latest").join("report.json");
-    if !report.exists() {
+    let Some(read) = read else {
         return Err(Error::new(format!(
             "the {side} run wrote no report.json under {}",
             dir.display()
         )));
-    }
-    Report::read(&report).map_err(|e| Error::new(format!("the {side} run's report: {e}")))
+    };
+    read.map_err(|e| Error::new(format!("the {side} run's report: {e}")))
 }
 
 /// The directory of one change's pictures.
