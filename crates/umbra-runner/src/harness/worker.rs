@@ -103,75 +103,9 @@ pub fn main(id: &str) -> crate::exit::Outcome {
     crate::harness::crash_report::install();
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
-    let created = std::time::Instant::now();
-    // On a Mesa build (`--mesa`), a backend whose driver the build lacks is a skip, and one
-    // whose driver does not load, or loads from elsewhere, is refused: never a silent run
-    // on the system's Mesa.
-    let build = std::env::var(crate::harness::mesa_build::ENV)
-        .ok()
-        .filter(|_| crate::harness::mesa_build::is_mesa_backed(id))
-        .map(|root| crate::harness::mesa_build::MesaBuild::open(std::path::Path::new(&root)));
-    let say = |out: &mut std::io::StdoutLock, hello: Hello| {
-        let _ = writeln!(out, "{}", serde_json::to_string(&hello).unwrap_or_default());
-        let _ = out.flush();
-    };
-    let build = match build {
-        Some(Err(e)) => {
-            say(&mut out, Hello::Refused(format!("--mesa: {e}")));
-            return Ok(Exit::Pass);
-        }
-        Some(Ok(b)) => {
-            if let Some(why) = b.lacks(id) {
-                say(&mut out, Hello::Unavailable(why.to_string()));
-                return Ok(Exit::Pass);
-            }
-            // A build with its own C library: this process continues on it (re-executed).
-            if let Err(e) = b.enter() {
-                say(&mut out, Hello::Refused(format!("{id}: {e}")));
-                return Ok(Exit::Pass);
-            }
-            Some(b)
-        }
-        None => None,
-    };
-    let mut backend = match crate::harness::registry::create(id) {
-        Ok(b) => {
-            let i = b.info();
-            let create_ms = created.elapsed().as_secs_f64() * 1e3;
-            let libs = crate::harness::mesa_build::loaded_libs();
-            if let Some(build) = &build {
-                if build.layout != "fake (tests)" {
-                    if let Err(e) = crate::harness::mesa_build::check_loaded(&build.root, &libs) {
-                        say(&mut out, Hello::Refused(format!("{id}: {e}")));
-                        return Ok(Exit::Pass);
-                    }
-                }
-            }
-            let hello = Hello::Ready(Ready {
-                vendor: i.vendor,
-                renderer: i.renderer,
-                version: i.version,
-                extensions: i.extensions,
-                device: i.device,
-                create_ms,
-                build: build.as_ref().map(|b| b.describe()),
-                mesa_libs: libs,
-            });
-            say(&mut out, hello);
-            b
-        }
-        Err(e) => {
-            let v = match &build {
-                // The build has the driver (lacks() said so), yet it did not come up.
-                Some(b) => Hello::Refused(format!(
-                    "{id}: the driver of the Mesa build in {} did not load: {e}",
-                    b.root.display()
-                )),
-                None => Hello::Unavailable(e.to_string()),
-            };
-            say(&mut out, v);
-            return Ok(Exit::Pass);
-        }
+    // A backend that cannot come up has said why in its hello; the worker is done.
+    let Some(mut backend) = come_up(id, &mut out) else {
+        return Ok(Exit::Pass);
     };
     for line in std::io::stdin().lock().lines() {
         let Ok(line) = line else { break };
@@ -205,4 +139,82 @@ pub fn main(id: &str) -> crate::exit::Outcome {
         }
     }
     Ok(Exit::Pass)
+}
+
+/// The worker's hello: the Mesa build checked (a backend its build lacks is unavailable, one
+/// whose driver does not load, or loads from elsewhere, is refused: never a silent run on
+/// the system's Mesa), the backend created and its driver's strings said. `None` once a
+/// hello other than ready has been said.
+fn come_up(id: &str, out: &mut std::io::StdoutLock<'_>) -> Option<Box<dyn umbra_case::Backend>> {
+    let created = std::time::Instant::now();
+    // On a Mesa build (`--mesa`), a backend whose driver the build lacks is a skip, and one
+    // whose driver does not load, or loads from elsewhere, is refused: never a silent run
+    // on the system's Mesa.
+    let build = std::env::var(crate::harness::mesa_build::ENV)
+        .ok()
+        .filter(|_| crate::harness::mesa_build::is_mesa_backed(id))
+        .map(|root| crate::harness::mesa_build::MesaBuild::open(std::path::Path::new(&root)));
+    let say = |out: &mut std::io::StdoutLock, hello: Hello| {
+        let _ = writeln!(out, "{}", serde_json::to_string(&hello).unwrap_or_default());
+        let _ = out.flush();
+    };
+    let build = match build {
+        Some(Err(e)) => {
+            say(out, Hello::Refused(format!("--mesa: {e}")));
+            return None;
+        }
+        Some(Ok(b)) => {
+            if let Some(why) = b.lacks(id) {
+                say(out, Hello::Unavailable(why.to_string()));
+                return None;
+            }
+            // A build with its own C library: this process continues on it (re-executed).
+            if let Err(e) = b.enter() {
+                say(out, Hello::Refused(format!("{id}: {e}")));
+                return None;
+            }
+            Some(b)
+        }
+        None => None,
+    };
+    let backend = match crate::harness::registry::create(id) {
+        Ok(b) => {
+            let i = b.info();
+            let create_ms = created.elapsed().as_secs_f64() * 1e3;
+            let libs = crate::harness::mesa_build::loaded_libs();
+            if let Some(build) = &build {
+                if build.layout != "fake (tests)" {
+                    if let Err(e) = crate::harness::mesa_build::check_loaded(&build.root, &libs) {
+                        say(out, Hello::Refused(format!("{id}: {e}")));
+                        return None;
+                    }
+                }
+            }
+            let hello = Hello::Ready(Ready {
+                vendor: i.vendor,
+                renderer: i.renderer,
+                version: i.version,
+                extensions: i.extensions,
+                device: i.device,
+                create_ms,
+                build: build.as_ref().map(|b| b.describe()),
+                mesa_libs: libs,
+            });
+            say(out, hello);
+            b
+        }
+        Err(e) => {
+            let v = match &build {
+                // The build has the driver (lacks() said so), yet it did not come up.
+                Some(b) => Hello::Refused(format!(
+                    "{id}: the driver of the Mesa build in {} did not load: {e}",
+                    b.root.display()
+                )),
+                None => Hello::Unavailable(e.to_string()),
+            };
+            say(out, v);
+            return None;
+        }
+    };
+    Some(backend)
 }
