@@ -18,6 +18,8 @@ use std::path::PathBuf;
 
 use clap::{Args, CommandFactory, Parser, Subcommand, ValueEnum};
 
+pub use crate::harness::mesa_build::MesaChoice;
+
 /// The whole command line.
 #[derive(Parser, Debug)]
 #[command(
@@ -170,7 +172,7 @@ pub struct Execution {
     pub timeout: Seconds,
     /// `--mesa`: the Mesa to run on.
     #[arg(long, value_name = "PREFIX|BUILD_DIR|system", help = help::MESA)]
-    pub mesa: Option<String>,
+    pub mesa: Option<MesaChoice>,
     /// `--max-memory`: the memory budget per worker.
     #[arg(long, value_name = "SIZE", help = help::MAX_MEMORY)]
     pub max_memory: Option<Bytes>,
@@ -210,7 +212,7 @@ pub struct RenderArgs {
     pub point: Option<String>,
     /// `--mesa`: the Mesa to run on.
     #[arg(long, value_name = "PREFIX|BUILD_DIR|system", help = help::MESA)]
-    pub mesa: Option<String>,
+    pub mesa: Option<MesaChoice>,
     /// `--max-memory`: the memory budget per worker.
     #[arg(long, value_name = "SIZE", help = help::MAX_MEMORY)]
     pub max_memory: Option<Bytes>,
@@ -350,7 +352,7 @@ pub struct SweepArgs {
     pub out: PathBuf,
     /// `--mesa`: the Mesa to run on.
     #[arg(long, value_name = "PREFIX|BUILD_DIR|system", help = help::MESA)]
-    pub mesa: Option<String>,
+    pub mesa: Option<MesaChoice>,
     /// `--max-memory`: the memory budget per worker.
     #[arg(long, value_name = "SIZE", help = help::MAX_MEMORY)]
     pub max_memory: Option<Bytes>,
@@ -364,10 +366,10 @@ pub struct SweepArgs {
 pub struct DriversArgs {
     /// `--baseline`.
     #[arg(long, value_name = "PREFIX|system", help = help::BASELINE)]
-    pub baseline: String,
+    pub baseline: MesaChoice,
     /// `--candidate`.
     #[arg(long, value_name = "PREFIX|system", help = help::CANDIDATE)]
-    pub candidate: String,
+    pub candidate: MesaChoice,
     /// Selection flags.
     #[command(flatten)]
     pub selection: Selection,
@@ -444,7 +446,7 @@ pub struct ReduceArgs {
     pub timeout: Seconds,
     /// `--mesa`: the Mesa to run on.
     #[arg(long, value_name = "PREFIX|BUILD_DIR|system", help = help::MESA)]
-    pub mesa: Option<String>,
+    pub mesa: Option<MesaChoice>,
 }
 
 /// `umbra repro`.
@@ -467,7 +469,7 @@ pub struct ReproArgs {
     pub control: Option<String>,
     /// `--mesa`: the Mesa to run on.
     #[arg(long, value_name = "PREFIX|BUILD_DIR|system", help = help::MESA)]
-    pub mesa: Option<String>,
+    pub mesa: Option<MesaChoice>,
     /// `--timeout`: per-run time limit of the reduction's candidates.
     #[arg(long, value_name = "SECS", help = help::TIMEOUT, default_value = "120")]
     pub timeout: Seconds,
@@ -502,7 +504,7 @@ pub struct BackendsArgs {
     pub ids: bool,
     /// `--mesa`: the Mesa to run on.
     #[arg(long, value_name = "PREFIX|BUILD_DIR|system", help = help::MESA)]
-    pub mesa: Option<String>,
+    pub mesa: Option<MesaChoice>,
 }
 
 /// `umbra card`.
@@ -519,7 +521,7 @@ pub struct CardArgs {
     pub diff: Vec<PathBuf>,
     /// `--mesa`: the Mesa to run on.
     #[arg(long, value_name = "PREFIX|BUILD_DIR|system", help = help::MESA)]
-    pub mesa: Option<String>,
+    pub mesa: Option<MesaChoice>,
     /// `--timeout`: the time limit of one backend's probes (they take 0.1 to 2 s on this
     /// machine's software drivers; a slow hardware driver's shader compiles may take far
     /// longer).

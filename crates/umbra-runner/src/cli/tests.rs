@@ -58,7 +58,11 @@ fn shared_groups_are_the_same_flags_everywhere() {
         panic!("soak parses: {c:?}");
     };
     assert_eq!(a.execution.jobs.map(Jobs::get), Some(2));
-    assert_eq!(a.execution.mesa.as_deref(), Some("system"));
+    assert_eq!(a.execution.mesa, Some(MesaChoice::System));
+    let e = parse(&argv(&["umbra", "conformance", "--mesa", ""]))
+        .expect_err("an empty --mesa is refused")
+        .to_string();
+    assert!(e.contains("invalid value '' for '--mesa"), "{e}");
     assert_eq!(a.output.out.as_deref(), Some(Path::new("o")));
     assert!(a.output.verbose);
 }

@@ -35,7 +35,7 @@ pub fn main(args: &BackendsArgs) -> Outcome {
         }
         return Ok(Exit::Pass);
     }
-    crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
+    crate::harness::mesa_build::select(args.mesa.as_ref()).map_err(Error::new)?;
     let devices = registry::discover_here();
     let listing = json!({
         "backends": registry::known().iter().filter(|id| *id != "ref")

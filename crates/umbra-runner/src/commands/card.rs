@@ -19,7 +19,7 @@ pub fn main(args: &CardArgs) -> Outcome {
             "--keep writes baselines, which CI never does (CI=true): keep cards locally and commit them after review",
         ));
     }
-    crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
+    crate::harness::mesa_build::select(args.mesa.as_ref()).map_err(Error::new)?;
     let named = crate::cli::values::names(&args.backend);
     let ids = crate::harness::registry::selected(&named, crate::harness::registry::known())
         .map_err(|e| crate::cli::usage_error("card", &e))?;

@@ -225,14 +225,19 @@ fn opt(v: Option<u64>) -> String {
 
 /// Runs the command; returns its outcome.
 pub fn main(args: &DriversArgs) -> Outcome {
-    let (base, cand) = (args.baseline.as_str(), args.candidate.as_str());
-    for (flag, v) in [("--baseline", base), ("--candidate", cand)] {
-        if v != "system" {
-            if let Err(e) = crate::harness::mesa_build::MesaBuild::open(Path::new(v)) {
+    for (flag, v) in [
+        ("--baseline", &args.baseline),
+        ("--candidate", &args.candidate),
+    ] {
+        if let crate::cli::MesaChoice::Dir(dir) = v {
+            if let Err(e) = crate::harness::mesa_build::MesaBuild::open(dir) {
                 return Err(Error::new(format!("{flag} {v}: {e}")));
             }
         }
     }
+    // Each side's --mesa as its child conformance run is given it.
+    let (base, cand) = (args.baseline.to_string(), args.candidate.to_string());
+    let (base, cand) = (base.as_str(), cand.as_str());
     let pictures = args.pictures;
     let out = args.out.clone();
     // The last comparison is replaced; a directory umbra did not make is refused.

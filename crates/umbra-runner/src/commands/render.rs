@@ -13,7 +13,7 @@ use crate::judge::run::{Outcome, describe, run_point};
 pub fn main(args: &RenderArgs) -> crate::exit::Outcome {
     let budget = crate::harness::memory_limit::select(args.max_memory.map(|b| b.0), 1)
         .map_err(|e| crate::cli::usage_error("render", e))?;
-    let build = crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
+    let build = crate::harness::mesa_build::select(args.mesa.as_ref()).map_err(Error::new)?;
     let case = &args.positional.display();
     let backend_id = args
         .backend

@@ -46,7 +46,7 @@ struct Target {
 
 /// Runs `umbra repro`: the steps in order; an `Err` is the step that ended the command.
 pub fn main(args: &ReproArgs) -> Outcome {
-    crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
+    crate::harness::mesa_build::select(args.mesa.as_ref()).map_err(Error::new)?;
     if args.emit {
         return emit(args);
     }

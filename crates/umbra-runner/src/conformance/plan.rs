@@ -41,7 +41,7 @@ impl Options {
     pub(crate) fn read(args: &ConformanceArgs) -> Result<Options, Error> {
         let fail = Error::new;
         let (selection, execution) = (&args.selection, &args.execution);
-        let build = crate::harness::mesa_build::select(execution.mesa.as_deref()).map_err(fail)?;
+        let build = crate::harness::mesa_build::select(execution.mesa.as_ref()).map_err(fail)?;
         let shard = args.shard.unwrap_or(crate::cli::Shard::WHOLE);
         let shard = (shard.index, shard.count);
         let limits = execution.resolve("conformance")?;

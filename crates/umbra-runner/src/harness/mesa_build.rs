@@ -81,19 +81,58 @@ pub fn selected() -> Option<&'static MesaBuild> {
     SELECTED.get().and_then(Option::as_ref)
 }
 
-/// Selects the build from `--mesa VALUE`, else from `UMBRA_MESA`; `system` (or nothing)
-/// means the system's Mesa. Call once, before any worker starts.
-pub fn select(flag: Option<&str>) -> Result<Option<&'static MesaBuild>, String> {
-    let env = std::env::var(ENV).ok().filter(|v| !v.is_empty());
-    let (value, from) = match (flag, env.as_deref()) {
-        (Some(v), _) => (Some(v.to_string()), "--mesa"),
-        (None, Some(v)) => (Some(v.to_string()), ENV),
+/// A Mesa to run on, as `--mesa` (parsed by clap) or `UMBRA_MESA` gives it: the system's
+/// (`system`), or a directory (an install prefix, a meson build directory, unpacked Debian
+/// packages). Whether the directory holds a Mesa is [`select`]'s to say.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum MesaChoice {
+    /// The system's Mesa.
+    #[default]
+    System,
+    /// The Mesa under this directory.
+    Dir(PathBuf),
+}
+
+impl std::str::FromStr for MesaChoice {
+    type Err = String;
+    fn from_str(s: &str) -> Result<MesaChoice, String> {
+        match s {
+            "" => Err(
+                "give a Mesa install prefix, build directory or unpacked packages, or `system`"
+                    .into(),
+            ),
+            "system" => Ok(MesaChoice::System),
+            dir => Ok(MesaChoice::Dir(PathBuf::from(dir))),
+        }
+    }
+}
+
+impl std::fmt::Display for MesaChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            MesaChoice::System => f.write_str("system"),
+            MesaChoice::Dir(d) => write!(f, "{}", d.display()),
+        }
+    }
+}
+
+/// Selects the build from `--mesa`, else from `UMBRA_MESA`; `system` (or nothing) means the
+/// system's Mesa. Call once, before any worker starts.
+pub fn select(flag: Option<&MesaChoice>) -> Result<Option<&'static MesaBuild>, String> {
+    let env = std::env::var(ENV)
+        .ok()
+        .filter(|v| !v.is_empty())
+        .map(|v| v.parse::<MesaChoice>().unwrap_or(MesaChoice::Dir(v.into())));
+    let (value, from) = match (flag, env) {
+        (Some(v), _) => (Some(v.clone()), "--mesa"),
+        (None, Some(v)) => (Some(v), ENV),
         _ => (None, ""),
     };
-    let build = match value.as_deref() {
-        None | Some("system") => None,
-        Some(v) => {
-            let build = MesaBuild::open(Path::new(v)).map_err(|e| format!("{from} {v}: {e}"))?;
+    let build = match value {
+        None | Some(MesaChoice::System) => None,
+        Some(MesaChoice::Dir(dir)) => {
+            let v = dir.display();
+            let build = MesaBuild::open(&dir).map_err(|e| format!("{from} {v}: {e}"))?;
             if build.layout != "fake (tests)" {
                 crate::harness::own_libc::check_loadable(
                     &build.root,

@@ -229,7 +229,7 @@ fn target(args: &ReduceArgs) -> Result<(umbra_case::CasePoint, String), Error> {
             ));
         }
     };
-    crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
+    crate::harness::mesa_build::select(args.mesa.as_ref()).map_err(Error::new)?;
     if !crate::harness::registry::is_known(backend) || backend == "ref" {
         return Err(Error::new(format!(
             "--backend {backend:?}: give a backend other than ref; this build has: {}",

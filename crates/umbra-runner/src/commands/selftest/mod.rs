@@ -168,7 +168,7 @@ fn clean_calibrations(backends: &[String], timeout: Duration) -> BTreeMap<String
 /// ends with (could not run).
 pub(crate) fn setup(args: &SelftestArgs) -> Result<Setup, Error> {
     conflicts(args).map_err(|e| crate::cli::usage_error("selftest", e))?;
-    crate::harness::mesa_build::select(args.execution.mesa.as_deref()).map_err(Error::new)?;
+    crate::harness::mesa_build::select(args.execution.mesa.as_ref()).map_err(Error::new)?;
     // `--seed S --count N`: the faults on generated cases, every exercising point run, and
     // the catch rate reported (how the judge's sensitivity holds off the catalogue).
     let generated = soak_cases(args).map_err(|e| crate::cli::usage_error("selftest", e))?;

@@ -96,7 +96,7 @@ fn write_case(
 
 /// Runs the command; returns its outcome.
 pub fn main(args: &SweepArgs) -> Outcome {
-    crate::harness::mesa_build::select(args.mesa.as_deref()).map_err(Error::new)?;
+    crate::harness::mesa_build::select(args.mesa.as_ref()).map_err(Error::new)?;
     crate::harness::memory_limit::select(args.max_memory.map(|b| b.0), 1)
         .map_err(|e| crate::cli::usage_error("sweep", e))?;
     let scene = args
