@@ -600,26 +600,12 @@ mod tests {
             ..Default::default()
         };
         RunResult {
-            name: "ref/case".into(),
-            backend: "ref".into(),
-            case: "case".into(),
-            file: String::new(),
-            values: Vec::new(),
-            status: Status::Pass,
-            reason: String::new(),
             metrics: Some(crate::Metrics {
                 reference: spec.map(agreement),
                 reference_card: card.map(agreement),
                 ..Default::default()
             }),
-            failed: Vec::new(),
-            golden: None,
-            time_s: 0.0,
-            reproduce: String::new(),
-            diagnosis: None,
-            stderr: String::new(),
-            fingerprint: None,
-            details: String::new(),
+            ..RunResult::of_test("ref/case", Status::Pass)
         }
     }
 

@@ -236,26 +236,15 @@ mod tests {
 
     fn result(name: &str, status: Status) -> RunResult {
         RunResult {
-            name: name.into(),
-            backend: "ref".into(),
-            case: "c".into(),
             file: "cases/c.json".into(),
-            values: Vec::new(),
-            status,
-            reason: String::new(),
             metrics: Some(Metrics {
                 judged: 4,
                 false_shadow: 1,
                 ..Metrics::default()
             }),
-            failed: Vec::new(),
-            golden: None,
             time_s: 0.5,
             reproduce: "umbra render c.json".into(),
-            diagnosis: None,
-            stderr: String::new(),
-            fingerprint: None,
-            details: String::new(),
+            ..RunResult::of_test(name, status)
         }
     }
 

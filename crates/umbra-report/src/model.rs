@@ -350,6 +350,33 @@ pub struct RunResult {
     pub details: String,
 }
 
+#[cfg(test)]
+impl RunResult {
+    /// A run named `name` (`backend/case`) with `status` and nothing else: the reporting
+    /// tests' starting point, each setting what it looks at.
+    pub(crate) fn of_test(name: &str, status: Status) -> RunResult {
+        let (backend, case) = name.rsplit_once('/').unwrap_or(("ref", name));
+        RunResult {
+            name: name.into(),
+            backend: backend.into(),
+            case: case.into(),
+            file: String::new(),
+            values: Vec::new(),
+            status,
+            reason: String::new(),
+            metrics: None,
+            failed: Vec::new(),
+            golden: None,
+            time_s: 0.0,
+            reproduce: String::new(),
+            diagnosis: None,
+            stderr: String::new(),
+            fingerprint: None,
+            details: String::new(),
+        }
+    }
+}
+
 /// The consensus diagnosis of a failing run: whether the other drivers judged against the
 /// same legal intervals (the same case point and effective profile) fail the same way at the
 /// same pixels. Every correct implementation gives a legal answer, so when every driver of a

@@ -229,22 +229,8 @@ mod tests {
 
     fn result(name: &str, status: Status, reason: &str) -> RunResult {
         RunResult {
-            name: name.into(),
-            backend: "gl33/llvmpipe".into(),
-            case: "c".into(),
-            file: "cases/c.json".into(),
-            values: Vec::new(),
-            status,
             reason: reason.into(),
-            metrics: None,
-            failed: Vec::new(),
-            golden: None,
-            time_s: 0.5,
-            reproduce: String::new(),
-            diagnosis: None,
-            stderr: String::new(),
-            fingerprint: None,
-            details: String::new(),
+            ..RunResult::of_test(name, status)
         }
     }
 

@@ -383,7 +383,7 @@ impl Group<'_> {
             name,
             backend: p.backend.clone(),
             case: p.id.clone(),
-            file: p.file.display().to_string(),
+            file: p.point.file.display().to_string(),
             values: p.point.values.clone(),
             status,
             reason,
@@ -413,7 +413,7 @@ pub(crate) fn reproduce_command(p: &Planned) -> String {
     // called can be read as an option.
     format!(
         "{env}cargo run --bin umbra -- render {} --backend={} --point={}{}",
-        umbra_report::escape::operand(&p.file.display().to_string()),
+        umbra_report::escape::operand(&p.point.file.display().to_string()),
         shell_word(&p.backend),
         shell_word(&p.id),
         crate::harness::mesa_build::selected()

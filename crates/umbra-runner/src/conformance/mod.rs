@@ -63,7 +63,6 @@ pub(crate) type PointPlan = (
 #[derive(Clone, Debug)]
 pub(crate) struct Planned {
     pub(crate) backend: String,
-    pub(crate) file: PathBuf,
     pub(crate) id: String,
     /// The case point, loaded once here and sent whole in the worker's request (shared by the
     /// point's runs on every backend).

@@ -179,11 +179,10 @@ pub(crate) fn plan_runs(opts: &Options) -> Result<Plan, Error> {
     }
     let mut plan = Vec::new();
     for b in &opts.backends {
-        for (file, ids) in &points {
+        for (_, ids) in &points {
             for (id, point, case) in ids {
                 let p = Planned {
                     backend: b.clone(),
-                    file: file.clone(),
                     id: id.clone(),
                     point: point.clone(),
                     case: case.clone(),

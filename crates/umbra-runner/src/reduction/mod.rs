@@ -97,12 +97,8 @@ impl Judge {
     fn run_on(&mut self, reference: bool, case: &Value) -> Verdict {
         self.tried += 1;
         let file = self.dir.join(format!("candidate-{}.json", self.tried));
-        if std::fs::write(
-            &file,
-            serde_json::to_string_pretty(case).unwrap_or_default(),
-        )
-        .is_err()
-        {
+        let text = serde_json::to_string_pretty(case).unwrap_or_default();
+        if std::fs::write(&file, &text).is_err() {
             return Verdict::Other(format!("cannot write {}", file.display()));
         }
         let id = if reference {
@@ -131,9 +127,10 @@ impl Judge {
         let Some(w) = slot.as_mut() else {
             return Verdict::Other("no worker".into());
         };
-        // The candidate is loaded here, as conformance loads a case, and sent whole; a
+        // The candidate is loaded here from the text just written (kept in the file for a
+        // person), as conformance loads a case, and sent whole; a
         // candidate that does not load is an error, as the worker once reported it.
-        let point = match umbra_case::load_file(&file).map(Vec::into_iter) {
+        let point = match umbra_case::load_str(&text, &file).map(Vec::into_iter) {
             Ok(mut points) => match points.next() {
                 Some(p) => p,
                 None => return Verdict::Other(format!("error: {} has no point", file.display())),
