@@ -150,6 +150,140 @@ fn a_build_whose_driver_does_not_load_is_refused() {
     assert!(t.contains("no Mesa library") && t.contains("fix:"), "{t}");
 }
 
+/// The system Mesa's hardware drivers in a relocated prefix (hard links where the file system
+/// allows, else copies): Debian's packages carry radeonsi, iris and nouveau for GL and RADV
+/// and ANV for Vulkan, as a Mesa developer's own build would.
+fn relocated_mesa_with_hardware(name: &str) -> PathBuf {
+    let p = relocated_mesa(name, true);
+    let lib = p.join("usr/lib/x86_64-linux-gnu");
+    for f in [
+        "dri/radeonsi_dri.so",
+        "dri/iris_dri.so",
+        "dri/nouveau_dri.so",
+        "libvulkan_radeon.so",
+        "libvulkan_intel.so",
+    ] {
+        let from = std::fs::canonicalize(Path::new(SYSTEM_LIB).join(f)).unwrap_or_else(|e| {
+            panic!("{SYSTEM_LIB}/{f}: {e}; cargo xtask test installs Debian's Mesa drivers")
+        });
+        if std::fs::hard_link(&from, lib.join(f)).is_err() {
+            std::fs::copy(&from, lib.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+        }
+    }
+    p
+}
+
+/// Whether this machine has a DRM render node (then its driver's ids may run, not skip).
+fn has_render_node() -> bool {
+    std::fs::read_dir("/sys/class/drm").is_ok_and(|rd| {
+        rd.filter_map(Result::ok)
+            .any(|e| e.file_name().to_string_lossy().starts_with("renderD"))
+    })
+}
+
+#[test]
+fn a_build_with_hardware_drivers_serves_their_device_ids_and_names_the_missing_device() {
+    let prefix = relocated_mesa_with_hardware("mesa-hw");
+    let p = prefix.to_str().unwrap_or_default();
+    let want = [
+        ("gl33/radeonsi", "AMD Radeon"),
+        ("gles3/iris", "Intel GPU"),
+        ("gles2/nouveau", "NVIDIA GPU"),
+        ("wgpu-vk/radv", "AMD Radeon"),
+        ("wgpu-vk/anv", "Intel GPU"),
+    ];
+    // The listing: the build's hardware ids beside the software ones, each with its reason.
+    let o = umbra(&["backends", "--mesa", p, "--json"], &[]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    let listing: serde_json::Value =
+        serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{e}: {t}"));
+    let backends = listing["backends"].as_array().cloned().unwrap_or_default();
+    for (id, device) in want {
+        let b = backends
+            .iter()
+            .find(|b| b["id"] == id)
+            .unwrap_or_else(|| panic!("{id} not listed: {t}"));
+        assert_eq!(b["aliases"], "hw, all", "{b}");
+        if !has_render_node() {
+            let why = b["why"].as_str().unwrap_or_default();
+            assert!(
+                b["available"] == false
+                    && why.contains("this machine has no device for")
+                    && why.contains(device)
+                    && why.contains(
+                        &*std::fs::canonicalize(&prefix)
+                            .expect("canonical")
+                            .to_string_lossy()
+                    ),
+                "{b}"
+            );
+        }
+    }
+    // `hw` takes them; without a device each is a skip that names it, never a run on the
+    // system's driver and never an error that stops the others.
+    let out = scratch("mesa-hw-out");
+    let o = umbra(
+        &[
+            "conformance",
+            "--mesa",
+            p,
+            "--backend",
+            "hw",
+            "--filter",
+            "l-occluder",
+            "--golden",
+            "none",
+            "--out",
+            out.to_str().unwrap_or_default(),
+        ],
+        &[],
+    );
+    let t = text(&o);
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("latest/report.json"))
+            .unwrap_or_else(|e| panic!("{e}: {t}")),
+    )
+    .expect("json");
+    let runs = report["runs"].as_array().cloned().unwrap_or_default();
+    for (id, device) in want {
+        let run = runs
+            .iter()
+            .find(|r| r["backend"] == id)
+            .unwrap_or_else(|| panic!("no run of {id}: {t}"));
+        if !has_render_node() {
+            assert_eq!(run["status"], "Skip", "{run}");
+            assert!(
+                run["reason"].as_str().is_some_and(|r| r.contains(device)),
+                "{run}"
+            );
+        }
+    }
+    // Without the build, a device this machine lacks stays an error naming what it has.
+    if !has_render_node() {
+        let o = umbra(
+            &[
+                "conformance",
+                "--backend",
+                "gl33/radeonsi",
+                "--filter",
+                "l-occluder",
+                "--golden",
+                "none",
+                "--out",
+                out.to_str().unwrap_or_default(),
+            ],
+            &[],
+        );
+        assert_eq!(o.status.code(), Some(125), "{}", text(&o));
+        assert!(
+            text(&o).contains("no such device on this machine"),
+            "{}",
+            text(&o)
+        );
+    }
+}
+
 /// A fake build directory reporting `version`, rendering wrong when `fault`.
 fn fake_build(name: &str, version: &str, fault: bool) -> PathBuf {
     fake_build_with(name, version, fault.then_some("invert"))

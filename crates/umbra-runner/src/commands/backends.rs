@@ -4,7 +4,9 @@
 //! - **Backend ids** (what `--backend` takes): this build's ids and this machine's device ids
 //!   ([`crate::harness::registry`]), each opened in its own process, as a run would open it
 //!   (`umbra worker`), with its vendor, renderer and version strings and how it is reached,
-//!   or why it is unavailable; which of them the aliases `hw` and `all` take.
+//!   or why it is unavailable; which of them the aliases `hw` and `all` take. With `--mesa`,
+//!   also the device ids of the build's hardware drivers this machine has no device for,
+//!   each with the device it lacks.
 //! - **EGL devices** (EGL_EXT_device_enumeration): each with its backend-id name and the GL
 //!   3.3 core, GLES 3 and GLES 2 contexts it can make.
 //! - **wgpu adapters** on Vulkan and on wgpu's GL backend, as wgpu describes them.
@@ -35,8 +37,16 @@ pub fn main(args: &BackendsArgs) -> Outcome {
         }
         return Ok(Exit::Pass);
     }
-    crate::harness::mesa_build::select(args.mesa.as_ref()).map_err(Error::new)?;
+    let build = crate::harness::mesa_build::select(args.mesa.as_ref()).map_err(Error::new)?;
     let devices = registry::discover_here();
+    // A `--mesa` build's hardware drivers whose device this machine lacks: listed, with the
+    // worker's reason.
+    let carried: Vec<String> = build
+        .map(crate::harness::mesa_build::MesaBuild::hardware_ids)
+        .unwrap_or_default()
+        .into_iter()
+        .filter(|id| !devices.iter().any(|d| &d.id == id))
+        .collect();
     let listing = json!({
         "backends": registry::known().iter().filter(|id| *id != "ref")
             .map(|id| backend(id, "this build's", Some("all")))
@@ -45,6 +55,7 @@ pub fn main(args: &BackendsArgs) -> Outcome {
                 if d.hardware { "hardware device" } else { "software device" },
                 d.hardware.then_some("hw, all"),
             )))
+            .chain(carried.iter().map(|id| backend(id, "the --mesa build's hardware driver", Some("hw, all"))))
             .collect::<Vec<_>>(),
         "egl_devices": egl_devices(),
         "wgpu_adapters": umbra_wgpu::device::adapters().iter().map(|a| json!({

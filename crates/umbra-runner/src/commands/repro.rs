@@ -416,7 +416,7 @@ fn program_env(backend: &str) -> Vec<(String, String)> {
     if let Some(build) = crate::harness::mesa_build::selected()
         .filter(|_| crate::harness::mesa_build::is_mesa_backed(backend))
     {
-        env.extend(build.env());
+        env.extend(build.env(backend));
     }
     env.extend(registry::inherited_driver_env(backend));
     env

@@ -15,6 +15,12 @@
 //! really loaded ([`check_loaded`], from `/proc/self/maps`): a Mesa library from outside the
 //! build, or no Mesa driver at all, refuses the run with the path that was loaded. A backend
 //! whose driver the build does not have ([`MesaBuild::lacks`]) is a skip that says so.
+//!
+//! **Hardware drivers.** A build that carries Mesa's hardware drivers (`dri/radeonsi_dri.so`,
+//! `libvulkan_radeon.so`: [`crate::harness::hw_driver`]) serves the device ids they name
+//! (`gl33/radeonsi`, `wgpu-vk/radv`) the same way, each with its own ICD file; `hw` takes
+//! them. A driver the build has whose device the machine lacks is a skip that names the
+//! device, checked before anything loads.
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -43,6 +49,9 @@ pub struct MesaBuild {
     pub dri_drivers: Vec<String>,
     /// Lavapipe's ICD library.
     pub lavapipe: Option<PathBuf>,
+    /// The hardware drivers it carries (GL ones from `dri/`, Vulkan ICD libraries), with
+    /// their files.
+    pub hardware: Vec<Carried>,
     /// Directories for `LD_LIBRARY_PATH`.
     pub lib_dirs: Vec<PathBuf>,
     /// Where umbra's loader JSON files for this build live.
@@ -53,6 +62,15 @@ pub struct MesaBuild {
     pub loader: Option<PathBuf>,
     /// What `cargo xtask fetch-mesa` recorded of it ([`FETCHED`]), when it made it.
     pub fetched: Option<Fetched>,
+}
+
+/// A hardware driver a build carries, and its file.
+#[derive(Clone, Debug, Serialize)]
+pub struct Carried {
+    /// Which driver.
+    pub driver: &'static crate::harness::hw_driver::HwDriver,
+    /// Its library in the build.
+    pub lib: PathBuf,
 }
 
 /// The file `cargo xtask fetch-mesa` writes at the root of what it unpacks.
@@ -172,6 +190,7 @@ impl MesaBuild {
                 dri: None,
                 dri_drivers: Vec::new(),
                 lavapipe: None,
+                hardware: Vec::new(),
                 lib_dirs: Vec::new(),
                 generated,
                 loader: None,
@@ -185,8 +204,35 @@ impl MesaBuild {
                 "no Mesa library under it (looked for libEGL_mesa.so.0, dri/*_dri.so and libvulkan_lvp.so); fix: give the prefix or build directory that holds them".into(),
             );
         }
+        let mut hardware: Vec<Carried> = found
+            .hardware_vk
+            .iter()
+            .filter_map(|lib| {
+                let name = lib.file_name()?.to_string_lossy().into_owned();
+                let driver = crate::harness::hw_driver::of_vulkan_lib(&name)?;
+                Some(Carried {
+                    driver,
+                    lib: lib.clone(),
+                })
+            })
+            .collect();
+        if let Some(dri) = &found.dri {
+            hardware.extend(found.dri_drivers.iter().filter_map(|d| {
+                crate::harness::hw_driver::of_dri(d).map(|driver| Carried {
+                    driver,
+                    lib: dri.join(format!("{d}_dri.so")),
+                })
+            }));
+        }
+        hardware.sort_by_key(|c| (c.driver.vulkan, c.driver.name));
         let mut lib_dirs: Vec<PathBuf> = Vec::new();
-        for lib in found.egl.iter().chain(&found.lavapipe).chain(&found.shared) {
+        for lib in found
+            .egl
+            .iter()
+            .chain(&found.lavapipe)
+            .chain(&found.hardware_vk)
+            .chain(&found.shared)
+        {
             if let Some(d) = lib.parent() {
                 if !lib_dirs.iter().any(|x| x == d) {
                     lib_dirs.push(d.to_path_buf());
@@ -223,6 +269,7 @@ impl MesaBuild {
             dri: found.dri,
             dri_drivers: found.dri_drivers,
             lavapipe: found.lavapipe,
+            hardware,
             lib_dirs,
             generated,
             loader,
@@ -256,12 +303,20 @@ impl MesaBuild {
             });
             write("lvp_icd.json", json)?;
         }
+        for c in self.hardware.iter().filter(|c| c.driver.vulkan) {
+            let json = serde_json::json!({
+                "file_format_version": "1.0.0",
+                "ICD": { "library_path": c.lib, "api_version": icd_api.unwrap_or("1.3.0") }
+            });
+            write(&format!("{}_icd.json", c.driver.name), json)?;
+        }
         Ok(())
     }
 
-    /// The loader variables a worker needs to load this build (and `UMBRA_MESA`, so the
-    /// worker checks what it loaded).
-    pub fn env(&self) -> Vec<(String, String)> {
+    /// The loader variables a worker for backend `id` needs to load this build (and
+    /// `UMBRA_MESA`, so the worker checks what it loaded). A hardware Vulkan id's loader sees
+    /// its driver's ICD alone; every other id's sees lavapipe's (or none).
+    pub fn env(&self, id: &str) -> Vec<(String, String)> {
         let mut env = vec![(ENV.to_string(), self.root.to_string_lossy().into_owned())];
         // A build with its own C library is found through its loader's `--library-path`, which
         // no child inherits: in LD_LIBRARY_PATH its libc would meet the machine's loader.
@@ -287,7 +342,13 @@ impl MesaBuild {
         }
         // Without lavapipe in the build, point the Vulkan loader at nothing rather than at the
         // system's ICDs: wgpu-vk and zink then skip instead of silently using the system.
-        let icd = if self.lavapipe.is_some() {
+        let hardware_icd = self
+            .carried(id)
+            .filter(|c| c.driver.vulkan)
+            .map(|c| format!("{}_icd.json", c.driver.name));
+        let icd = if let Some(file) = hardware_icd {
+            self.generated.join(file).to_string_lossy().into_owned()
+        } else if self.lavapipe.is_some() {
             self.generated
                 .join("lvp_icd.json")
                 .to_string_lossy()
@@ -303,11 +364,51 @@ impl MesaBuild {
         env
     }
 
-    /// What backend `id` needs that this build lacks, if anything.
+    /// The hardware driver of device id `id` that this build carries, if it does.
+    pub fn carried(&self, id: &str) -> Option<&Carried> {
+        let driver = crate::harness::hw_driver::of_backend_id(id)?;
+        self.hardware.iter().find(|c| c.driver == driver)
+    }
+
+    /// The device ids of the hardware drivers this build carries, in order.
+    pub fn hardware_ids(&self) -> Vec<String> {
+        self.hardware
+            .iter()
+            .flat_map(|c| c.driver.backend_ids())
+            .collect()
+    }
+
+    /// What backend `id` needs that this build lacks, if anything: its driver, or (for a
+    /// hardware driver the build has) the device this machine lacks.
     pub fn lacks(&self, id: &str) -> Option<String> {
         if self.layout == "fake (tests)" {
             return (!id.starts_with("fake/"))
                 .then(|| format!("{} is a fake build (tests only)", self.root.display()));
+        }
+        if let Some(driver) = crate::harness::hw_driver::of_backend_id(id) {
+            return match self.carried(id) {
+                None => Some(format!(
+                    "the Mesa build in {} has no {} ({})",
+                    self.root.display(),
+                    driver.name,
+                    if driver.vulkan {
+                        driver.file.to_string()
+                    } else {
+                        format!("dri/{}", driver.file)
+                    }
+                )),
+                Some(c) => crate::harness::hw_driver::missing_device(
+                    driver,
+                    Path::new(crate::harness::hw_driver::SYS_DRM),
+                )
+                .map(|why| {
+                    format!(
+                        "{why}; the Mesa build in {} has the driver ({})",
+                        self.root.display(),
+                        c.lib.display()
+                    )
+                }),
+            };
         }
         let dri = |name: &str| self.dri_drivers.iter().any(|d| d == name);
         let need_lvp = || {
@@ -413,12 +514,14 @@ impl MesaBuild {
     }
 }
 
-/// Whether backend `id` runs on Mesa's software drivers (and so on the selected build). A
-/// device id's driver is whatever the machine's loader finds (another vendor's, perhaps):
-/// the build's loader variables would hide it, so `--mesa` leaves device ids alone.
+/// Whether backend `id` runs on Mesa (and so on the selected build): Mesa's software
+/// drivers, and the device ids of Mesa's hardware drivers ([`crate::harness::hw_driver`]).
+/// Any other device id's driver is another vendor's (`gl33/nvidia`): `--mesa` leaves it to
+/// the machine's loader, whose variables the build's would hide.
 pub fn is_mesa_backed(id: &str) -> bool {
     umbra_gl::parse_id(id).is_some()
         || umbra_wgpu::Target::parse(id).is_some_and(|t| t.is_software())
+        || crate::harness::hw_driver::of_backend_id(id).is_some()
         || id == crate::harness::fake::MESA
 }
 
@@ -428,6 +531,8 @@ struct Found {
     dri: Option<PathBuf>,
     dri_drivers: Vec<String>,
     lavapipe: Option<PathBuf>,
+    /// Mesa's hardware Vulkan ICD libraries (`libvulkan_radeon.so`, …).
+    hardware_vk: Vec<PathBuf>,
     icd_api: Option<String>,
     /// Mesa's other shared libraries (glapi, gbm, gallium): their directories join
     /// LD_LIBRARY_PATH.
@@ -484,6 +589,13 @@ fn walk(dir: &Path, depth: usize, found: &mut Found) {
             found.egl = Some(path);
         } else if name == "libvulkan_lvp.so" && found.lavapipe.is_none() {
             found.lavapipe = Some(path);
+        } else if crate::harness::hw_driver::of_vulkan_lib(&name).is_some()
+            && !found
+                .hardware_vk
+                .iter()
+                .any(|p| p.file_name() == path.file_name())
+        {
+            found.hardware_vk.push(path);
         } else if let Some(d) = name.strip_suffix("_dri.so") {
             if !d.starts_with("lib") {
                 drivers_here.push(d.to_string());
@@ -556,6 +668,7 @@ fn is_mesa_lib(p: &Path) -> bool {
         || name.starts_with("libvulkan_lvp")
         || name.starts_with("libdril")
         || name.ends_with("_dri.so")
+        || crate::harness::hw_driver::of_vulkan_lib(&name).is_some()
 }
 
 fn is_driver_lib(p: &Path) -> bool {
@@ -563,7 +676,10 @@ fn is_driver_lib(p: &Path) -> bool {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    name.ends_with("_dri.so") || name.starts_with("libgallium") || name.starts_with("libvulkan_lvp")
+    name.ends_with("_dri.so")
+        || name.starts_with("libgallium")
+        || name.starts_with("libvulkan_lvp")
+        || crate::harness::hw_driver::of_vulkan_lib(&name).is_some()
 }
 
 /// Checks that every Mesa library in `libs` lies under `root` and that a driver is among
@@ -615,6 +731,24 @@ mod tests {
         assert!(
             e.contains("fell back") && e.contains("/usr/lib/x86_64-linux-gnu/dri/swrast_dri.so"),
             "{e}"
+        );
+        // A hardware driver's fallback is refused the same way: RADV from the system, not
+        // the build.
+        let hw_fell_back = [
+            PathBuf::from("/opt/mesa/usr/lib/libEGL_mesa.so.0"),
+            PathBuf::from("/usr/lib/x86_64-linux-gnu/libvulkan_radeon.so"),
+        ];
+        let e = check_loaded(root, &hw_fell_back).expect_err("the system's RADV must be refused");
+        assert!(
+            e.contains("fell back") && e.contains("libvulkan_radeon.so"),
+            "{e}"
+        );
+        assert!(
+            check_loaded(
+                root,
+                &[PathBuf::from("/opt/mesa/usr/lib/libvulkan_intel.so")]
+            )
+            .is_ok()
         );
         let no_driver = [PathBuf::from("/opt/mesa/usr/lib/libEGL_mesa.so.0")];
         assert!(

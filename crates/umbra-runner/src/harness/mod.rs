@@ -1,5 +1,6 @@
 //! Orchestration: backends by id ([`registry`], with the test doubles in [`fake`]), the Mesa
-//! build a worker runs on ([`mesa_build`], and its own C library where it carries one:
+//! build a worker runs on ([`mesa_build`], with the hardware drivers it may carry:
+//! [`hw_driver`], and its own C library where it carries one:
 //! [`own_libc`]), one process per backend ([`worker`], [`child`]), which dies with its parent
 //! ([`orphan`]) and says where a fault killed it ([`crash_report`]), kept in a [`pool`] under a memory limit ([`memory_limit`]) and fed by the one
 //! [`scheduler`] every command uses (sessions that restart a dead worker, reruns, queues), behaviour cards measured in a worker of their own ([`cards`]) and the
@@ -9,6 +10,7 @@ pub mod cards;
 pub mod child;
 pub mod crash_report;
 pub mod fake;
+pub mod hw_driver;
 pub mod interrupt;
 pub mod memory_limit;
 pub mod mesa_build;

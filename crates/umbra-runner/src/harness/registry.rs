@@ -287,8 +287,10 @@ pub fn discover_here() -> Vec<Discovered> {
 
 /// The backends a command was asked for: the `--backend` values, `default` when there are
 /// none. The aliases: `all`, this build's ids and every hardware device of this machine;
-/// `hw`, every hardware device. An unknown id is an error naming the known ones; a device
-/// id this machine lacks is an error naming the devices it has.
+/// `hw`, every hardware device, and the device ids of the hardware drivers a `--mesa` build
+/// carries. An unknown id is an error naming the known ones; a device id this machine lacks
+/// is an error naming the devices it has, unless the build carries its driver (its worker
+/// then skips, naming the device).
 pub fn selected(named: &[&str], default: Vec<String>) -> Result<Vec<String>, String> {
     if named.is_empty() {
         return Ok(default);
@@ -301,11 +303,21 @@ pub fn selected(named: &[&str], default: Vec<String>) -> Result<Vec<String>, Str
     } else {
         Vec::new()
     };
-    let hardware: Vec<String> = devices
+    // A `--mesa` build's hardware drivers are hardware backends too, whether or not this
+    // machine has their device: one it lacks is the worker's skip, naming the device.
+    let carried: Vec<String> = crate::harness::mesa_build::selected()
+        .map(crate::harness::mesa_build::MesaBuild::hardware_ids)
+        .unwrap_or_default();
+    let mut hardware: Vec<String> = devices
         .iter()
         .filter(|d| d.hardware)
         .map(|d| d.id.clone())
         .collect();
+    for id in &carried {
+        if !hardware.contains(id) {
+            hardware.push(id.clone());
+        }
+    }
     let mut ids: Vec<String> = Vec::new();
     let add = |id: String, ids: &mut Vec<String>| {
         if !ids.contains(&id) {
@@ -336,6 +348,9 @@ pub fn selected(named: &[&str], default: Vec<String>) -> Result<Vec<String>, Str
                 ));
             }
             "hw" => hardware.iter().cloned().for_each(|i| add(i, &mut ids)),
+            id if is_device_id(id) && carried.iter().any(|c| c == id) => {
+                add(id.to_string(), &mut ids)
+            }
             id if is_device_id(id) && !devices.iter().any(|d| d.id == id) => {
                 let have: Vec<&str> = devices.iter().map(|d| d.id.as_str()).collect();
                 return Err(format!(
@@ -409,7 +424,7 @@ pub fn worker_env(id: &str) -> Vec<(String, String)> {
         .collect();
     if let Some(build) = crate::harness::mesa_build::selected() {
         if crate::harness::mesa_build::is_mesa_backed(id) {
-            env.extend(build.env());
+            env.extend(build.env(id));
         }
     }
     env.push((
