@@ -382,10 +382,48 @@ fn git(dir: &Path, args: &[&str]) -> String {
 /// into the prefix: commit k (1-based) reports version 1.0.k, renders wrong from
 /// `fault_from` on, and does not build when k is in `broken`. Returns the commits.
 fn fake_tree(src: &Path, n: usize, broken: &[usize], fault_from: usize) -> Vec<String> {
+    fake_tree_renaming(src, n, broken, fault_from, n + 1)
+}
+
+/// A miniature of Mesa's option files: before the rename, 22.3's words (`swrast`, a boolean
+/// glvnd); from it on, 25.x's (`llvmpipe` and `softpipe`, a feature glvnd, no osmesa).
+fn fake_options(renamed: bool) -> String {
+    let (drivers, glvnd, osmesa) = if renamed {
+        ("'llvmpipe', 'softpipe', 'zink'", "type : 'feature'", "")
+    } else {
+        (
+            "'swrast', 'zink'",
+            "type : 'boolean', value : false",
+            "option('osmesa', type : 'boolean', value : false)\n",
+        )
+    };
+    format!(
+        "option('gallium-drivers', type : 'array', choices : [{drivers}])\n\
+         option('vulkan-drivers', type : 'array', choices : ['swrast'])\n\
+         option('egl', type : 'feature')\noption('gles2', type : 'feature')\n\
+         option('llvm', type : 'feature')\noption('glvnd', {glvnd})\n{osmesa}"
+    )
+}
+
+/// [`fake_tree`], whose option file changes at commit `rename_at` ([`fake_options`]); its
+/// build script refuses, as meson does, a gallium driver or an option its tree does not
+/// declare.
+fn fake_tree_renaming(
+    src: &Path,
+    n: usize,
+    broken: &[usize],
+    fault_from: usize,
+    rename_at: usize,
+) -> Vec<String> {
     git(src, &["init", "-q"]);
     std::fs::write(
         src.join("build.sh"),
-        "#!/bin/sh\nset -e\nif [ -f \"$1/BROKEN\" ]; then echo 'build error' >&2; exit 1; fi\nmkdir -p \"$2\"\ncp \"$1/fake-mesa.json\" \"$2/umbra-fake-mesa.json\"\n",
+        "#!/bin/sh\nset -e\nsrc=\"$1\"; prefix=\"$2\"; shift 2\n\
+         for o in \"$@\"; do\n  case \"$o\" in\n\
+         -Dgallium-drivers=*) for d in $(echo \"${o#*=}\" | tr , ' '); do grep -q \"'$d'\" \"$src/meson.options\" || { echo \"meson: $d is not a gallium driver here\" >&2; exit 1; }; done ;;\n\
+         -D*) n=\"${o#-D}\"; n=\"${n%%=*}\"; case \"$n\" in b_*) ;; *) grep -q \"option('$n'\" \"$src/meson.options\" || { echo \"meson: unknown option $n\" >&2; exit 1; } ;; esac ;;\n\
+         esac\ndone\n\
+         if [ -f \"$src/BROKEN\" ]; then echo 'build error' >&2; exit 1; fi\nmkdir -p \"$prefix\"\ncp \"$src/fake-mesa.json\" \"$prefix/umbra-fake-mesa.json\"\n",
     )
     .expect("write");
     #[cfg(unix)]
@@ -401,6 +439,7 @@ fn fake_tree(src: &Path, n: usize, broken: &[usize], fault_from: usize) -> Vec<S
             "fault": (k >= fault_from).then_some("invert"),
         });
         std::fs::write(src.join("fake-mesa.json"), marker.to_string()).expect("write");
+        std::fs::write(src.join("meson.options"), fake_options(k >= rename_at)).expect("write");
         if broken.contains(&k) {
             std::fs::write(src.join("BROKEN"), "").expect("write");
         } else {
@@ -450,6 +489,82 @@ fn bisect_with(src: &Path, good: &str, bad: &str, work: &Path, extra: &[&str]) -
         .collect::<Vec<_>>(),
         &[("UMBRA_FAKE_BACKENDS", "1")],
     )
+}
+
+/// Mesa renamed `-Dgallium-drivers=swrast` (llvmpipe and softpipe) and dropped osmesa between
+/// 24.x and 25.0: a bisection across it needs each commit's own options. Commits 1–4 speak
+/// 22.3's options, 5–8 25.x's; the fault starts at 6.
+#[test]
+fn bisect_crosses_a_renamed_option_with_each_commits_own_options() {
+    let src = scratch("bisect-rename-src");
+    let commits = fake_tree_renaming(&src, 8, &[], 6, 5);
+    // First the check a user runs on their tree: both ends' options, then stop.
+    let work = scratch("bisect-rename-configure");
+    let o = bisect_with(&src, &commits[0], &commits[7], &work, &["--configure-only"]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(
+        t.contains("-Dgallium-drivers=swrast,zink")
+            && t.contains("-Dgallium-drivers=llvmpipe,softpipe,zink")
+            && t.contains("osmesa: not an option of this tree, left out")
+            && t.contains("--configure-only: both ends configure"),
+        "{t}"
+    );
+    assert!(
+        !work.join("steps.csv").exists(),
+        "--configure-only built nothing"
+    );
+    // A fixed option the far side lacks is refused before anything builds, naming the end,
+    // the file and the option.
+    let o = bisect_with(
+        &src,
+        &commits[0],
+        &commits[7],
+        &work,
+        &[
+            "--configure-only",
+            "--meson-option",
+            "-Dgallium-drivers=swrast,zink",
+        ],
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(125), "{t}");
+    assert!(
+        t.contains("--bad")
+            && t.contains("meson.options: meson would refuse")
+            && t.contains("\"swrast\""),
+        "{t}"
+    );
+    // The bisection: every commit builds with its own options, none is skipped.
+    let work = scratch("bisect-rename-work");
+    let o = bisect(&src, &commits[0], &commits[7], &work);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(
+        t.contains(&format!("first bad commit: {}", commits[5])),
+        "{t}"
+    );
+    let steps = std::fs::read_to_string(work.join("steps.csv")).expect("steps.csv");
+    assert!(!steps.contains("skip"), "{steps}");
+    // Each built commit's log names its options; the ends (1 and 8) are always built, so
+    // both sides of the rename are among them.
+    let mut sides = [0, 0];
+    for (k, c) in commits.iter().enumerate() {
+        let Ok(log) =
+            std::fs::read_to_string(work.join("logs").join(format!("{}-build.log", &c[..12])))
+        else {
+            continue;
+        };
+        let renamed = k + 1 >= 5;
+        let want = if renamed {
+            "llvmpipe,softpipe,zink"
+        } else {
+            "swrast,zink"
+        };
+        assert!(log.contains(want), "commit {}: {log}", k + 1);
+        sides[usize::from(renamed)] += 1;
+    }
+    assert!(sides[0] >= 1 && sides[1] >= 1, "{sides:?}");
 }
 
 #[test]

@@ -64,10 +64,11 @@ pub const BAD: &str = "a commit known to fail";
 /// `--work`.
 pub const WORK: &str = "working directory for builds, prefixes, logs and steps.csv";
 /// `--build-script`.
-pub const BUILD_SCRIPT: &str =
-    "script run as `SCRIPT SRC PREFIX` instead of meson + ninja to build and install a commit";
+pub const BUILD_SCRIPT: &str = "script run as `SCRIPT SRC PREFIX OPTIONS...` (the commit's derived meson options) instead of meson + ninja to build and install a commit";
 /// `--meson-option`.
-pub const MESON_OPTION: &str = "extra `-Dkey=value` for meson setup (repeatable)";
+pub const MESON_OPTION: &str = "extra `-Dkey=value` for meson setup, after the options derived from each commit's meson.options, and checked against them (repeatable)";
+/// `--configure-only`.
+pub const CONFIGURE_ONLY: &str = "derive the meson options of --good and --bad from their meson.options, check them and the meson version (bringing a newer meson with pip when the tree asks), configure, and stop: run it first on your tree";
 /// `--no-check-ends`.
 pub const NO_CHECK_ENDS: &str = "do not test --good and --bad before bisecting";
 /// `--check`.

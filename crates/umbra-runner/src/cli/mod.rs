@@ -410,11 +410,14 @@ pub struct BisectArgs {
     #[arg(long, value_name = "PATH", help = help::BUILD_SCRIPT)]
     pub build_script: Option<PathBuf>,
     /// `--meson-option`.
-    #[arg(long, value_name = "OPT", help = help::MESON_OPTION)]
+    #[arg(long, value_name = "OPT", help = help::MESON_OPTION, allow_hyphen_values = true)]
     pub meson_option: Vec<String>,
     /// `--no-check-ends`.
     #[arg(long, help = help::NO_CHECK_ENDS)]
     pub no_check_ends: bool,
+    /// `--configure-only`: derive and check both ends' options (and meson), configure, stop.
+    #[arg(long, help = help::CONFIGURE_ONLY)]
+    pub configure_only: bool,
     /// `--repro`.
     #[arg(long, value_name = "DIR", help = help::REPRO)]
     pub repro: Option<PathBuf>,
@@ -555,6 +558,9 @@ pub struct BisectStepArgs {
     /// `--build-script`.
     #[arg(long, value_name = "PATH", help = help::BUILD_SCRIPT)]
     pub build_script: Option<PathBuf>,
+    /// `--meson-option`: the user's own, after the derived ones.
+    #[arg(long, value_name = "OPT", help = help::MESON_OPTION, allow_hyphen_values = true)]
+    pub meson_option: Vec<String>,
     /// `--card KEY=VALUE`.
     #[arg(long, value_name = "KEY=VALUE", help = help::BISECT_CARD)]
     pub card: Option<String>,

@@ -1,12 +1,19 @@
 //! `umbra bisect --mesa-src DIR --good REV --bad REV`: finds the Mesa commit that broke a
 //! case, with `git bisect run` over a Mesa source tree.
 //!
-//! - **Configure once.** The build directory (default `target/umbra/bisect/build`) is set up
-//!   with meson the first time, for the drivers umbra runs: llvmpipe and softpipe (swrast),
-//!   zink, lavapipe, surfaceless EGL through glvnd, no GLX or window systems
-//!   ([`MESON_OPTIONS`]; add your own with `--meson-option`). Later commits rebuild
-//!   incrementally in the same directory (ninja rebuilds what changed; meson reconfigures
-//!   itself when a build file changed).
+//! - **Options from the tree.** Each commit's meson options are derived from that commit's
+//!   own `meson.options` (`meson_options.txt` before 25.0) ([`meson_options`]): the drivers
+//!   umbra runs (llvmpipe and softpipe, `swrast` before 24.3; zink; lavapipe), surfaceless
+//!   EGL through glvnd, no GLX or window systems, each in the form that tree declares, an
+//!   option it lacks or has deprecated left out. So one bisection crosses a renamed or
+//!   removed option. `--meson-option`s come after and are checked against the tree too.
+//! - **The meson it asks for.** A tree's `meson_version` newer than the machine's meson
+//!   brings one into `WORK/meson` with pip before anything builds ([`meson`]).
+//! - **Configure once per option set.** Each distinct option list has its build directory
+//!   (`WORK/build-HASH`), set up the first time a commit needs it; later commits rebuild
+//!   incrementally there (ninja rebuilds what changed; meson reconfigures itself when a
+//!   build file changed). `--configure-only` derives and checks both ends' options,
+//!   configures, and stops: the check to run first on a tree.
 //! - **Each commit into its own prefix**: `meson install --destdir PREFIXES/<commit>`, which
 //!   `--mesa` then loads (and checks it loaded). A commit that does not build is 125
 //!   (`git bisect skip`).
@@ -25,8 +32,9 @@
 //!   its build and test time (also in `WORK/steps.csv`, with the full transcript in
 //!   `WORK/bisect.log`).
 //!
-//! `--build-script PATH` replaces meson: it is run as `PATH SRC PREFIX` in the source tree
-//! and must install a Mesa (or, in umbra's own tests, a fake build) into PREFIX.
+//! `--build-script PATH` replaces meson: it is run as `PATH SRC PREFIX OPTION...` in the
+//! source tree (the commit's derived options) and must install a Mesa (or, in umbra's own
+//! tests, a fake build) into PREFIX.
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -36,39 +44,10 @@ use std::time::Instant;
 use crate::cli::{BisectArgs, BisectStepArgs, Selection};
 use crate::exit::{Error, Exit, Outcome};
 
-/// The one-time configuration: the smallest Mesa that holds every driver umbra runs.
-pub const MESON_OPTIONS: &[&str] = &[
-    "--prefix=/usr",
-    "--libdir=lib/x86_64-linux-gnu",
-    "--buildtype=release",
-    "-Db_ndebug=true",
-    "-Dplatforms=",
-    "-Dglx=disabled",
-    "-Degl=enabled",
-    "-Dgbm=disabled",
-    "-Dglvnd=true",
-    "-Dgles1=disabled",
-    "-Dgles2=enabled",
-    "-Dopengl=true",
-    "-Dshared-glapi=enabled",
-    "-Dgallium-drivers=swrast,zink",
-    "-Dvulkan-drivers=swrast",
-    "-Dllvm=enabled",
-    "-Dshared-llvm=enabled",
-    "-Ddri3=disabled",
-    "-Dgallium-va=disabled",
-    "-Dgallium-vdpau=disabled",
-    "-Dgallium-xa=disabled",
-    "-Dgallium-nine=false",
-    "-Dgallium-opencl=disabled",
-    "-Dosmesa=false",
-    "-Dvalgrind=disabled",
-    "-Dlibunwind=disabled",
-    "-Dbuild-tests=false",
-    "-Dvideo-codecs=",
-    "-Dvulkan-layers=",
-    "-Dtools=",
-];
+mod meson;
+pub mod meson_options;
+
+use meson::Version;
 
 fn git(src: &Path, args: &[&str]) -> Result<String, String> {
     let out = Command::new("git")
@@ -115,13 +94,37 @@ pub fn main(args: &BisectArgs) -> Outcome {
     }
     let src = absolute(&args.mesa_src);
     check_tree(&src, good, bad)?;
+    // The ends as commits, before any checkout moves HEAD (`--bad HEAD` names the commit
+    // the tree is on now, not wherever a step left it).
+    let resolve = |rev: &str| {
+        git(
+            &src,
+            &["rev-parse", "--verify", &format!("{rev}^{{commit}}")],
+        )
+    };
+    let (good_sha, bad_sha) = (
+        resolve(good).map_err(Error::new)?,
+        resolve(bad).map_err(Error::new)?,
+    );
+    let (good, bad) = (good_sha.as_str(), bad_sha.as_str());
     let work = absolute(&args.work);
     // The work directory is umbra's (its steps, prefixes and logs are replaced and removed):
     // a directory that holds anything else is refused, never emptied.
     umbra_owned::claim(&work, "umbra bisect").map_err(|e| Error::new(format!("--work: {e}")))?;
     let _ = std::fs::remove_file(work.join("steps.csv"));
     let script = args.build_script.as_deref().map(absolute);
-    configure(args, &src, &work, script.as_deref())?;
+    prepare(args, [good, bad], &src, &work, script.as_deref())?;
+    if args.configure_only {
+        println!(
+            "bisect: --configure-only: both ends configure{}; run without it to bisect",
+            if script.is_some() {
+                " (their options check against their trees; --build-script builds, so meson was not run)"
+            } else {
+                ""
+            }
+        );
+        return Ok(Exit::Pass);
+    }
     let exe = crate::harness::own_libc::self_exe()
         .map_err(|e| Error::new(format!("cannot find this executable: {e}")))?;
     let step = step_argv(args, &src, &work, script.as_deref());
@@ -199,9 +202,57 @@ fn check_tree(src: &Path, good: &str, bad: &str) -> Result<(), Error> {
     Ok(())
 }
 
-/// The build: `--build-script`, which must exist, or meson, configured once in `WORK/build`.
-fn configure(
+/// One commit's build configuration: its option file, the derived options (the user's
+/// `--meson-option`s after them) with the notes, and the meson it asks for.
+struct Configuration {
+    file: String,
+    args: Vec<String>,
+    notes: Vec<String>,
+    meson_min: Option<Version>,
+}
+
+impl Configuration {
+    /// `rev`'s configuration, read with git; `Err` names the revision, the file and what
+    /// meson would refuse in it.
+    fn at(src: &Path, rev: &str, extra: &[String]) -> Result<Configuration, String> {
+        let (text, file) = meson_options::at_revision(src, rev)?;
+        let tree = meson_options::parse(&text).map_err(|e| format!("{rev}:{file}: {e}"))?;
+        let derived = meson_options::derive(&tree).map_err(|e| format!("{rev}:{file}: {e}"))?;
+        let mut args = derived.args;
+        args.extend(extra.iter().cloned());
+        let problems = meson_options::check(&args, &tree);
+        if !problems.is_empty() {
+            return Err(format!(
+                "{rev}:{file}: meson would refuse these options:\n  {}\nfix: change or drop the --meson-option named (the others are derived from the tree)",
+                problems.join("\n  ")
+            ));
+        }
+        let meson_min = git(src, &["show", &format!("{rev}:meson.build")])
+            .ok()
+            .and_then(|t| meson::required(&t));
+        Ok(Configuration {
+            file,
+            args,
+            notes: derived.notes,
+            meson_min,
+        })
+    }
+
+    /// The build directory of this option list: one per distinct list, so each side of a
+    /// renamed option keeps its own incremental build.
+    fn build_dir(&self, work: &Path) -> PathBuf {
+        work.join(format!(
+            "build-{:08x}",
+            umbra_report::names::fnv1a(&self.args.join("\n"))
+        ))
+    }
+}
+
+/// Both ends' configurations, said; the meson they need found or brought (with meson, not
+/// `--build-script`), and with `--configure-only` each distinct option list set up.
+fn prepare(
     args: &BisectArgs,
+    [good, bad]: [&str; 2],
     src: &Path,
     work: &Path,
     script: Option<&Path>,
@@ -213,31 +264,128 @@ fn configure(
                 s.display()
             )));
         }
+    }
+    let mut ends = Vec::new();
+    for (flag, rev) in [("--good", good), ("--bad", bad)] {
+        let c = Configuration::at(src, rev, &args.meson_option)
+            .map_err(|e| Error::new(format!("{flag} {e}")))?;
+        println!(
+            "bisect: {flag} {rev}: {}{}; options: {}",
+            c.file,
+            c.meson_min
+                .as_ref()
+                .map_or(String::new(), |v| format!(", meson >= {v}")),
+            c.args.join(" ")
+        );
+        for n in &c.notes {
+            println!("bisect:   {n}");
+        }
+        ends.push(c);
+    }
+    if script.is_some() {
         return Ok(());
     }
-    let build = work.join("build");
+    let min = ends.iter().filter_map(|c| c.meson_min.clone()).max();
+    let meson = meson_for(work, min.as_ref())?;
+    if args.configure_only {
+        // meson reads the work tree: each end is set up at its own checkout, and the tree
+        // is left where it was.
+        let here = match git(src, &["symbolic-ref", "-q", "--short", "HEAD"]) {
+            Ok(branch) if !branch.is_empty() => branch,
+            _ => git(src, &["rev-parse", "HEAD"]).map_err(Error::new)?,
+        };
+        let mut outcome = Ok(());
+        for (c, rev) in ends.iter().zip([good, bad]) {
+            outcome = git(src, &["checkout", "-q", "--detach", rev])
+                .and_then(|_| setup(&meson, src, &c.build_dir(work), &c.args, None));
+            if outcome.is_err() {
+                break;
+            }
+        }
+        git(src, &["checkout", "-q", &here]).map_err(Error::new)?;
+        outcome.map_err(Error::new)?;
+    }
+    Ok(())
+}
+
+/// A meson of at least `min`: found, or brought into the work directory with pip.
+fn meson_for(work: &Path, min: Option<&Version>) -> Result<PathBuf, Error> {
+    match meson::find(work, min) {
+        Ok(m) => Ok(m),
+        Err(why) => {
+            let Some(min) = min else {
+                return Err(Error::new(format!(
+                    "{why}; fix: apt-get install meson ninja-build"
+                )));
+            };
+            println!(
+                "bisect: {why}: bringing meson >= {min} into {} with pip",
+                meson::brought_dir(work).display()
+            );
+            let m = meson::bring(work, min).map_err(Error::new)?;
+            println!(
+                "bisect: meson {} in {}",
+                meson::version_of(&m).map_or("?".into(), |v| v.to_string()),
+                m.display()
+            );
+            Ok(m)
+        }
+    }
+}
+
+/// `meson setup` of `build` (unless it is set up already), its output to `log` or the
+/// terminal.
+fn setup(
+    meson: &Path,
+    src: &Path,
+    build: &Path,
+    options: &[String],
+    log: Option<&Path>,
+) -> Result<(), String> {
     if build.join("build.ninja").is_file() {
         return Ok(());
     }
     let t = Instant::now();
-    let mut cmd = Command::new("meson");
-    cmd.arg("setup").arg(&build).arg(src).args(MESON_OPTIONS);
-    cmd.args(&args.meson_option);
-    println!("bisect: configuring once: {cmd:?}");
+    let mut cmd = meson::command("meson", meson);
+    cmd.arg("setup").arg(build).arg(src).args(options);
+    if let Some(f) = log.and_then(|l| {
+        std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(l)
+            .ok()
+    }) {
+        if let Ok(f2) = f.try_clone() {
+            cmd.stderr(Stdio::from(f2));
+        }
+        cmd.stdout(Stdio::from(f));
+    } else {
+        println!(
+            "bisect: configuring {}: {} setup {} {} {}",
+            build.display(),
+            meson.display(),
+            build.display(),
+            src.display(),
+            options.join(" ")
+        );
+    }
     match cmd.status() {
         Ok(s) if s.success() => {
             println!(
-                "bisect: configured in {:.0} s; the first build compiles all of Mesa's swrast, zink and lavapipe (about 40 min on 2 cores), later ones only what a commit touched",
+                "bisect: configured {} in {:.0} s; its first build compiles all of Mesa's llvmpipe, softpipe, zink and lavapipe (about 40 min on 2 cores), later ones only what a commit touched",
+                build.display(),
                 t.elapsed().as_secs_f64()
             );
             Ok(())
         }
-        Ok(s) => Err(Error::new(format!(
-            "meson setup failed ({s}); fix: install Mesa's build dependencies (README, \"Bisecting a Mesa tree\") and check that `python3` has mako"
-        ))),
-        Err(e) => Err(Error::new(format!(
-            "cannot run meson: {e}; fix: apt-get install meson ninja-build"
-        ))),
+        Ok(s) => Err(format!(
+            "meson setup {} failed ({s}); fix: install Mesa's build dependencies (docs/bisection.md, \"Bisecting a Mesa tree\") and check that `python3` has mako",
+            build.display()
+        )),
+        Err(e) => Err(format!(
+            "cannot run {}: {e}; fix: apt-get install meson ninja-build",
+            meson.display()
+        )),
     }
 }
 
@@ -262,6 +410,9 @@ fn step_argv(args: &BisectArgs, src: &Path, work: &Path, script: Option<&Path>) 
     }
     if let Some(s) = script {
         step.extend(["--build-script".into(), s.display().to_string()]);
+    }
+    for o in &args.meson_option {
+        step.extend(["--meson-option".into(), o.clone()]);
     }
     step.extend(selection.argv());
     if let Some(c) = &args.card {
@@ -535,16 +686,36 @@ pub fn step(args: &BisectStepArgs) -> Outcome {
             }
             cmd.status().is_ok_and(|s| s.success())
         };
-        match args.build_script.as_deref() {
-            Some(script) => run(Command::new(script).arg(&src).arg(&prefix)),
-            None => {
-                let build = work.join("build");
-                run(Command::new("ninja").arg("-C").arg(&build))
-                    && run(Command::new("meson")
-                        .args(["install", "--no-rebuild", "--quiet", "-C"])
-                        .arg(&build)
-                        .arg("--destdir")
-                        .arg(&prefix))
+        // This commit's options, from its own option file.
+        match Configuration::at(&src, "HEAD", &args.meson_option) {
+            Err(e) => {
+                let _ = std::fs::write(&build_log, format!("{e}\n"));
+                false
+            }
+            Ok(c) => {
+                let _ = std::fs::write(&build_log, format!("# {}: {}\n", c.file, c.args.join(" ")));
+                match args.build_script.as_deref() {
+                    Some(script) => run(Command::new(script).arg(&src).arg(&prefix).args(&c.args)),
+                    None => {
+                        let build = c.build_dir(&work);
+                        match meson::find(&work, c.meson_min.as_ref()).and_then(|m| {
+                            setup(&m, &src, &build, &c.args, Some(&build_log)).map(|()| m)
+                        }) {
+                            Err(e) => {
+                                let _ = std::fs::write(&build_log, format!("{e}\n"));
+                                false
+                            }
+                            Ok(meson) => {
+                                run(meson::command("ninja", &meson).arg("-C").arg(&build))
+                                    && run(meson::command("meson", &meson)
+                                        .args(["install", "--no-rebuild", "--quiet", "-C"])
+                                        .arg(&build)
+                                        .arg("--destdir")
+                                        .arg(&prefix))
+                            }
+                        }
+                    }
+                }
             }
         }
     };
