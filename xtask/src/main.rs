@@ -116,7 +116,9 @@ fn command() -> clap::Command {
             .arg(Arg::new("driver").long("driver").value_name("DRIVER").required(true).help("the driver: llvmpipe, softpipe, zink, lavapipe, or a device's name (radeonsi …)"))
             .arg(Arg::new("out").long("out").value_name("DIR").required(true).help("where to write the files (and results/ with --run)"))
             .arg(Arg::new("fraction").long("fraction").value_name("N").value_parser(clap::value_parser!(u32).range(1..)).help("with --run: run 1 test of every N (deqp-runner --fraction)"))
-            .arg(Arg::new("run").long("run").action(clap::ArgAction::SetTrue).help("run the suite with deqp-runner (installed with cargo when missing)")),
+            .arg(Arg::new("run").long("run").action(clap::ArgAction::SetTrue).help("run the suite with deqp-runner (installed with cargo when missing)"))
+            .arg(Arg::new("budget").long("budget").value_name("DURATION").help("only the tests of a pre-merge tier for this wall time (umbra tier --budget: 90s, 5m, premerge, smoke), chosen by what they catch"))
+            .arg(Arg::new("bundle").long("bundle").action(clap::ArgAction::SetTrue).help("make DIR self-contained for a CI job: umbra, its cases, expectations and tiers beside the suite, its paths filled in by DIR/run.sh where the job runs it (Mesa's pipeline: docs/ci/mesa/)")),
     )
     .subcommand(
         clap::Command::new("gpu-bundle")
@@ -193,6 +195,8 @@ fn main() -> ExitCode {
                         .unwrap_or_default(),
                     fraction: sub.get_one::<u32>("fraction").copied(),
                     run: sub.get_flag("run"),
+                    budget: sub.get_one::<String>("budget").cloned(),
+                    bundle: sub.get_flag("bundle"),
                 },
                 &workspace_root(),
             )

@@ -1,4 +1,4 @@
-//! `cargo xtask mesa-ci --driver DRIVER --out DIR [--fraction N] [--run]`: what a Mesa
+//! `cargo xtask mesa-ci --driver DRIVER --out DIR [--fraction N] [--budget D] [--bundle] [--run]`: what a Mesa
 //! driver's `ci/` directory would hold to run umbra under deqp-runner, beside its dEQP suites
 //! (umbra speaks dEQP's protocol: `umbra deqp`, crates/umbra-runner/src/commands/deqp.rs):
 //!
@@ -16,6 +16,13 @@
 //!   other as Fail. What deqp-runner cannot express (which checks fail, on how many pixels,
 //!   for a name-pinned expectation) stays in umbra's own check, `umbra conformance`.
 //!
+//! `--budget DURATION` keeps only the tests of a pre-merge tier (`umbra tier`, chosen by what
+//! they catch; the tier file is kept beside the suite). `--bundle` makes DIR self-contained
+//! for a CI job: umbra, its cases, expectations and tiers beside the suite, whose paths
+//! (`@BUNDLE@`, the Mesa install `@MESA@`, the results `@RESULTS@`) `DIR/run.sh` fills in
+//! where the job runs it; run.sh then runs deqp-runner and writes JUnit (Mesa's pipeline:
+//! docs/ci/mesa/).
+//!
 //! With `--run` it also installs deqp-runner 0.24.0 with cargo when none is on PATH (or in
 //! `DEQP_RUNNER`), runs the suite (`deqp-runner suite`, `--fraction N`), and writes JUnit
 //! from its failures.csv: `DIR/results` then holds results.csv, failures.csv, junit.xml and
@@ -30,6 +37,10 @@ pub struct Options {
     pub out: PathBuf,
     pub fraction: Option<u32>,
     pub run: bool,
+    /// `--budget`: a tier's tests only.
+    pub budget: Option<String>,
+    /// `--bundle`: a self-contained directory for a CI job.
+    pub bundle: bool,
 }
 
 /// Runs the command.
@@ -59,7 +70,28 @@ pub fn main(o: &Options, root: &Path) -> i32 {
             return 125;
         }
     };
-    if let Err(e) = write_files(&o.driver, &out, root, &umbra, &listed) {
+    let listed = match &o.budget {
+        None => listed,
+        Some(b) => match tier_of(&umbra, root, &out, &o.driver, b, listed) {
+            Ok(l) => l,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return 125;
+            }
+        },
+    };
+    let place = if o.bundle {
+        match bundle(&umbra, root, &out) {
+            Ok(()) => Place::Bundle,
+            Err(e) => {
+                eprintln!("error: --bundle: {e}");
+                return 125;
+            }
+        }
+    } else {
+        Place::Here
+    };
+    if let Err(e) = write_files(&o.driver, &out, root, &umbra, &listed, place) {
         eprintln!("error: cannot write under {}: {e}", out.display());
         return 125;
     }
@@ -130,6 +162,87 @@ fn list(umbra: &Path, root: &Path, backends: &[String]) -> Result<Vec<Listed>, S
         .collect())
 }
 
+/// The tests of the tier `umbra tier --budget BUDGET` chooses (its file kept in `out`).
+fn tier_of(
+    umbra: &Path,
+    root: &Path,
+    out: &Path,
+    driver: &str,
+    budget: &str,
+    listed: Vec<Listed>,
+) -> Result<Vec<Listed>, String> {
+    let file = out.join(format!("umbra-{driver}-tier.json"));
+    let status = Command::new(umbra)
+        .current_dir(root)
+        .args(["tier", "--budget", budget, "--out"])
+        .arg(&file)
+        .status()
+        .map_err(|e| format!("cannot run umbra tier: {e}"))?;
+    if !status.success() {
+        return Err(format!("umbra tier --budget {budget} failed ({status})"));
+    }
+    let text = std::fs::read_to_string(&file).map_err(|e| format!("{}: {e}", file.display()))?;
+    let tier: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", file.display()))?;
+    let runs: std::collections::BTreeSet<&str> = tier["runs"]
+        .as_array()
+        .map(|a| a.iter().filter_map(|r| r.as_str()).collect())
+        .unwrap_or_default();
+    let kept: Vec<Listed> = listed
+        .into_iter()
+        .filter(|t| runs.contains(t.run.as_str()))
+        .collect();
+    println!(
+        "mesa-ci: the {budget} tier keeps {} of {driver}'s tests ({})",
+        kept.len(),
+        file.display()
+    );
+    Ok(kept)
+}
+
+/// Where the suite's paths point.
+#[derive(Clone, Copy, PartialEq)]
+enum Place {
+    /// This checkout (absolute paths): for a run on this machine.
+    Here,
+    /// The bundle, wherever a job unpacks it: `@BUNDLE@`, which run.sh fills in.
+    Bundle,
+}
+
+/// The script a CI job runs from the bundle: fills in its paths, runs the suite with
+/// deqp-runner on the job's Mesa install, and writes JUnit.
+const RUN_SH: &str = r#"#!/bin/sh
+# umbra's suite under deqp-runner, in a CI job (made by `cargo xtask mesa-ci --bundle`).
+# Usage: run.sh [RESULTS_DIR] ; environment: MESA_INSTALL (default: install, the job's
+# freshly built Mesa), DEQP_RUNNER (default: deqp-runner on PATH), DEQP_FRACTION (default 1).
+set -eu
+B=$(cd "$(dirname "$0")" && pwd)
+RESULTS=${1:-results}
+MESA=$(cd "${MESA_INSTALL:-install}" && pwd)
+RUNNER=${DEQP_RUNNER:-deqp-runner}
+mkdir -p "$RESULTS"
+for f in "$B"/*.toml.in; do
+  sed -e "s|@BUNDLE@|$B|g" -e "s|@MESA@|$MESA|g" -e "s|@RESULTS@|$(cd "$RESULTS" && pwd)|g" "$f" > "${f%.in}"
+done
+status=0
+"$RUNNER" suite --suite "$B"/umbra-*.toml --output "$RESULTS" --fraction "${DEQP_FRACTION:-1}" || status=$?
+"$RUNNER" junit --testsuite umbra --results "$RESULTS/failures.csv" --output "$RESULTS/junit.xml" || true
+exit $status
+"#;
+
+/// `--bundle`: umbra, the cases, expectations and tiers, and run.sh, into `out`.
+fn bundle(umbra: &Path, root: &Path, out: &Path) -> Result<(), String> {
+    std::fs::copy(umbra, out.join("umbra"))
+        .map_err(|e| format!("cannot copy {}: {e}", umbra.display()))?;
+    for d in ["cases", "expectations", "tiers"] {
+        let _ = std::fs::remove_dir_all(out.join(d));
+        crate::gpu_bundle::copy_tree(&root.join(d), &out.join(d))?;
+    }
+    let script = out.join("run.sh");
+    std::fs::write(&script, RUN_SH).map_err(|e| format!("{}: {e}", script.display()))?;
+    crate::gpu_bundle::executable(&script)
+}
+
 /// An anchored regex matching exactly `name` (deqp-runner's skips and flakes are regexes).
 fn exact(name: &str) -> String {
     format!("^{}$", name.replace('.', "\\."))
@@ -141,6 +254,7 @@ fn write_files(
     root: &Path,
     umbra: &Path,
     listed: &[Listed],
+    place: Place,
 ) -> std::io::Result<()> {
     let file = |suffix: &str| out.join(format!("umbra-{driver}{suffix}"));
     let header = |what: &str| {
@@ -176,7 +290,36 @@ fn write_files(
     std::fs::write(file("-fails.txt"), fails)?;
     std::fs::write(file("-flakes.txt"), flakes)?;
     std::fs::write(file("-skips.txt"), skips)?;
-    let q = |p: &Path| format!("{:?}", p.display().to_string());
+    // In a bundle, every path is the bundle's, filled in by run.sh where the job runs it.
+    let here = |p: &Path| match place {
+        Place::Here => p.display().to_string(),
+        Place::Bundle => p.strip_prefix(out).map_or_else(
+            |_| p.display().to_string(),
+            |rel| format!("@BUNDLE@/{}", rel.display()),
+        ),
+    };
+    let q = |p: &Path| format!("{:?}", here(p));
+    let (umbra_at, cases, expectations, pictures, cache, mesa) = match place {
+        Place::Here => (
+            umbra.to_path_buf(),
+            root.join("cases").display().to_string(),
+            root.join("expectations").display().to_string(),
+            out.join("results/umbra-pictures").display().to_string(),
+            target_dir(root)
+                .join("umbra/cache/judge")
+                .display()
+                .to_string(),
+            String::new(),
+        ),
+        Place::Bundle => (
+            out.join("umbra"),
+            "@BUNDLE@/cases".into(),
+            "@BUNDLE@/expectations".into(),
+            "@RESULTS@/umbra-pictures".into(),
+            "@BUNDLE@/judge-cache".into(),
+            ", \"--umbra-mesa=@MESA@\"".into(),
+        ),
+    };
     let toml = format!(
         "# umbra's shadow-mapping conformance as a deqp-runner suite entry for {driver}\n\
          # (generated by `cargo xtask mesa-ci --driver {driver}`). umbra speaks dEQP's protocol\n\
@@ -188,18 +331,17 @@ fn write_files(
          skips = [{skips}]\n\
          flakes = [{flakes}]\n\
          timeout = 300.0\n\
-         deqp_args = [\"deqp\", \"--cases={cases}\", \"--umbra-expectations={expectations}\", \"--umbra-pictures={pictures}\", \"--umbra-judge-cache={cache}\"]\n",
-        umbra = q(umbra),
+         deqp_args = [\"deqp\", \"--cases={cases}\", \"--umbra-expectations={expectations}\", \"--umbra-pictures={pictures}\", \"--umbra-judge-cache={cache}\"{mesa}]\n",
+        umbra = q(&umbra_at),
         caselist = q(&file("-caselist.txt")),
         fails = q(&file("-fails.txt")),
         skips = q(&file("-skips.txt")),
         flakes = q(&file("-flakes.txt")),
-        cases = root.join("cases").display(),
-        expectations = root.join("expectations").display(),
-        pictures = out.join("results/umbra-pictures").display(),
-        cache = target_dir(root).join("umbra/cache/judge").display(),
     );
-    std::fs::write(file(".toml"), toml)
+    match place {
+        Place::Here => std::fs::write(file(".toml"), toml),
+        Place::Bundle => std::fs::write(file(".toml.in"), toml),
+    }
 }
 
 /// deqp-runner: `DEQP_RUNNER`, else on PATH, else in cargo's bin directory, else installed
@@ -283,4 +425,84 @@ fn run_suite(o: &Options, out: &Path) -> i32 {
         results.display()
     );
     code
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bundle's suite names no path of this machine: run.sh fills in the bundle's, the
+    /// job's Mesa install and the results directory where the job runs it, then hands the
+    /// suite to deqp-runner (here a stand-in that keeps what it was given) and writes JUnit.
+    #[test]
+    fn the_bundle_suite_has_its_paths_filled_in_where_it_runs() {
+        let tmp = std::env::temp_dir().join(format!("umbra-mesa-ci-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&tmp);
+        let out = tmp.join("bundle");
+        std::fs::create_dir_all(&out).expect("mkdir");
+        let listed = vec![Listed {
+            name: "umbra.gl33.llvmpipe.l-occluder.0".into(),
+            run: "gl33/llvmpipe/l-occluder".into(),
+            expected: "Pass".into(),
+        }];
+        write_files(
+            "llvmpipe",
+            &out,
+            Path::new("/nowhere"),
+            &out.join("umbra"),
+            &listed,
+            Place::Bundle,
+        )
+        .expect("write");
+        let template =
+            std::fs::read_to_string(out.join("umbra-llvmpipe.toml.in")).expect("template");
+        assert!(
+            !template.contains("/nowhere") && template.contains("--umbra-mesa=@MESA@"),
+            "{template}"
+        );
+        std::fs::write(out.join("run.sh"), RUN_SH).expect("run.sh");
+        let runner = tmp.join("deqp-runner");
+        std::fs::write(
+            &runner,
+            "#!/bin/sh\necho \"$@\" >> \"$(dirname \"$0\")/calls\"\nif [ \"$1\" = suite ]; then cp \"$3\" \"$(dirname \"$0\")/suite.toml\"; fi\n",
+        )
+        .expect("runner");
+        crate::gpu_bundle::executable(&runner).expect("chmod");
+        let job = tmp.join("job");
+        std::fs::create_dir_all(job.join("install")).expect("mkdir");
+        let status = Command::new("sh")
+            .arg(out.join("run.sh"))
+            .arg("results")
+            .current_dir(&job)
+            .env("DEQP_RUNNER", &runner)
+            .env("MESA_INSTALL", "install")
+            .status()
+            .expect("run.sh");
+        assert!(status.success());
+        let suite =
+            std::fs::read_to_string(tmp.join("suite.toml")).expect("the suite deqp-runner got");
+        assert!(!suite.contains('@'), "{suite}");
+        assert!(
+            suite.contains(&format!("--umbra-mesa={}", job.join("install").display())),
+            "{suite}"
+        );
+        assert!(
+            suite.contains(&format!("deqp = \"{}\"", out.join("umbra").display())),
+            "{suite}"
+        );
+        assert!(
+            suite.contains(&format!("{}/umbra-pictures", job.join("results").display())),
+            "{suite}"
+        );
+        let calls = std::fs::read_to_string(tmp.join("calls")).expect("calls");
+        assert!(
+            calls.contains("suite --suite") && calls.contains("--fraction 1"),
+            "{calls}"
+        );
+        assert!(
+            calls.contains("junit --testsuite umbra --results results/failures.csv"),
+            "{calls}"
+        );
+        let _ = std::fs::remove_dir_all(&tmp);
+    }
 }

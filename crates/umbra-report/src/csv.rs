@@ -1,5 +1,5 @@
 //! The CSV files of a conformance run, in deqp-runner's spirit: `results.csv` (`test,status,
-//! time`), `failures.csv` (the regressions only), `errors.csv` (every judged figure of a run)
+//! time`, deqp-runner's own status names), `failures.csv` (the regressions only), `errors.csv` (every judged figure of a run)
 //! `twins.csv` (one row per metamorphic twin) and `goldens.csv` (every picture that differs
 //! from its golden: how much, between which driver versions, and whether every changed
 //! pixel is legal). One row per run, one header line naming every column; fields quoted per
@@ -86,9 +86,11 @@ pub fn tables(results: &[RunResult]) -> Tables {
         );
     }
     for r in results {
-        let _ = writeln!(csv, "{},{},{:.3}", csv_field(&r.name), r.status, r.time_s);
+        // deqp-runner's status names, which Mesa's tools parse ([`crate::Status::deqp_name`]).
+        let status = r.status.deqp_name();
+        let _ = writeln!(csv, "{},{status},{:.3}", csv_field(&r.name), r.time_s);
         if r.status.is_regression() {
-            let _ = writeln!(failures, "{},{}", csv_field(&r.name), r.status);
+            let _ = writeln!(failures, "{},{status}", csv_field(&r.name));
         }
         if let Some(m) = &r.metrics {
             let _ = writeln!(

@@ -53,6 +53,19 @@ impl Status {
         }
     }
 
+    /// The name deqp-runner's parser reads (`RunnerStatus`'s FromStr in deqp-runner 0.24's
+    /// `runner_results.rs`), for results.csv and failures.csv, which Mesa's CI tools read:
+    /// an unexpected pass is `UnexpectedImprovement(Pass)` since deqp-runner 0.16, and an
+    /// order-dependent failure, which deqp-runner has no word for, is a `Fail` (report.json
+    /// keeps umbra's name and the reason).
+    pub fn deqp_name(&self) -> &'static str {
+        match self {
+            Status::UnexpectedPass => "UnexpectedImprovement(Pass)",
+            Status::OrderDependent => "Fail",
+            s => s.name(),
+        }
+    }
+
     /// The status a name stands for ([`Status::name`]'s inverse; a skip's reason is not in
     /// its name, so it reads back empty): how a status written to report.json or a CSV is
     /// counted again.
@@ -64,7 +77,7 @@ impl Status {
             "Timeout" => Status::Timeout,
             "Skip" => Status::Skip(String::new()),
             "ExpectedFail" => Status::ExpectedFail,
-            "UnexpectedPass" => Status::UnexpectedPass,
+            "UnexpectedPass" | "UnexpectedImprovement(Pass)" => Status::UnexpectedPass,
             "OrderDependent" => Status::OrderDependent,
             "Flake" => Status::Flake,
             _ => return None,

@@ -18,4 +18,5 @@ pub mod reduction;
 pub mod repro;
 pub mod run_dir;
 pub mod shards;
+pub mod tier;
 pub mod version;

@@ -120,3 +120,22 @@ pub const EMIT: &str = "internal: write the bundle's program and pictures for an
 pub const COUNT: &str = "how many cases to generate (case K of a seed is the same in every count)";
 /// `--count` of the self-test.
 pub const SELFTEST_COUNT: &str = "run the faults on this many generated cases instead of the catalogue (20 when only --seed is given)";
+/// `selftest --catches`.
+pub const CATCHES_OUT: &str = "write the catch matrix (each fault × backend pair and the case points that caught it) to FILE: what `umbra tier` chooses from";
+/// `selftest --tier`.
+pub const TIER_SELFTEST: &str =
+    "hunt each fault with the tier's runs only, every one of them run: what the tier catches";
+/// `conformance --tier`.
+pub const TIER: &str = "run only the runs of this tier file (`umbra tier` writes one); the file is kept in the run directory";
+/// `conformance --budget`, `tier --budget`.
+pub const BUDGET: &str = "choose the runs for this much wall time (90s, 5m, premerge = 5m, smoke = 1m) by what they catch: every fault × backend pair the catalogue catches first, then more catches per pair (from tiers/catches.json and tiers/durations.csv)";
+/// `tier --catches`.
+pub const CATCHES_IN: &str =
+    "the self-test's catch matrix (`umbra selftest --catches FILE` writes one)";
+/// `tier --durations`.
+pub const TIER_DURATIONS: &str = "a full conformance run's results.csv: each run's duration";
+/// `tier --jobs`.
+pub const TIER_JOBS: &str =
+    "the worker processes the expected wall time assumes (the CI machine kind has 2 cores)";
+/// `tier --random`.
+pub const RANDOM: &str = "draw a random tier of the same expected time with this seed instead (deqp-runner's --fraction, sized to the budget's choice): the comparison";

@@ -80,6 +80,11 @@ pub enum Command {
         about = "Find the first Mesa commit that breaks the chosen case points: build, install and test each step with git bisect"
     )]
     Bisect(BisectArgs),
+    /// `umbra tier`.
+    #[command(
+        about = "Choose a pre-merge tier for a time budget from the self-test's catch matrix and recorded durations: every fault × backend pair the catalogue catches by at least one run, then more; prints its expected time and coverage and writes the tier file conformance --tier and selftest --tier run (--random SEED: a random draw of equal time, to compare)"
+    )]
+    Tier(TierArgs),
     /// `umbra reduce`.
     #[command(
         about = "Shrink a failing case point to a minimal case that still fails the same way on the backend, for a bug report"
@@ -233,6 +238,13 @@ pub struct ConformanceArgs {
     /// `--durations`.
     #[arg(long, value_name = "results.csv", help = help::DURATIONS)]
     pub durations: Option<PathBuf>,
+    /// `--tier FILE`: run the tier's runs only (kept in the run directory).
+    #[arg(long, value_name = "FILE", help = help::TIER, conflicts_with = "budget")]
+    pub tier: Option<PathBuf>,
+    /// `--budget DURATION`: choose a tier for the budget from the recorded catches and
+    /// durations (`tiers/`), and run it.
+    #[arg(long, value_name = "DURATION", help = help::BUDGET)]
+    pub budget: Option<String>,
     /// Execution flags.
     #[command(flatten)]
     pub execution: Execution,
@@ -292,6 +304,12 @@ pub struct SelftestArgs {
     /// `--count`.
     #[arg(long, value_name = "N", help = help::SELFTEST_COUNT)]
     pub count: Option<Count>,
+    /// `--catches FILE`: write the catch matrix (what a tier is chosen from).
+    #[arg(long, value_name = "FILE", help = help::CATCHES_OUT)]
+    pub catches: Option<PathBuf>,
+    /// `--tier FILE`: hunt with the tier's runs only.
+    #[arg(long, value_name = "FILE", help = help::TIER_SELFTEST)]
+    pub tier: Option<PathBuf>,
     /// Output flags.
     #[command(flatten)]
     pub output: Output,
@@ -424,6 +442,29 @@ pub struct BisectArgs {
     /// `--card KEY=VALUE`: bisect a behaviour-card entry instead of case verdicts.
     #[arg(long, value_name = "KEY=VALUE", help = help::BISECT_CARD)]
     pub card: Option<String>,
+}
+
+/// `umbra tier`.
+#[derive(Args, Debug, Clone)]
+pub struct TierArgs {
+    /// `--budget`: wall time, `90s`, `5m`, `premerge`, `smoke`.
+    #[arg(long, value_name = "DURATION", help = help::BUDGET)]
+    pub budget: String,
+    /// `--catches`: the catch matrix.
+    #[arg(long, value_name = "FILE", help = help::CATCHES_IN, default_value = crate::tier::CATCHES)]
+    pub catches: PathBuf,
+    /// `--durations`: a full run's results.csv.
+    #[arg(long, value_name = "results.csv", help = help::TIER_DURATIONS, default_value = crate::tier::DURATIONS)]
+    pub durations: PathBuf,
+    /// `--jobs`: the worker processes the wall time assumes.
+    #[arg(long, value_name = "N", help = help::TIER_JOBS, default_value_t = 2)]
+    pub jobs: usize,
+    /// `--random SEED`: a random tier of the same expected time.
+    #[arg(long, value_name = "SEED", help = help::RANDOM)]
+    pub random: Option<u64>,
+    /// `--out`: the tier file.
+    #[arg(short = 'o', long, value_name = "FILE", help = help::OUT, default_value = "target/umbra/tier.json")]
+    pub out: PathBuf,
 }
 
 /// `umbra reduce`.

@@ -21,7 +21,8 @@
 //! names side by side.
 //!
 //! - `umbra deqp --deqp-caselist-file=F [--cases=DIR] [--umbra-pictures=DIR]
-//!   [--umbra-judge-cache=DIR] [--deqp-…]`: runs the listed tests (deqp-runner starts the
+//!   [--umbra-judge-cache=DIR] [--umbra-mesa=DIR] [--deqp-…]`: runs the listed tests (on the
+//!   Mesa in `--umbra-mesa`, a CI job's freshly built install, checked as `--mesa` checks it) (deqp-runner starts the
 //!   binary in its own directory, so the suite gives absolute paths) (other `--deqp-*` flags are accepted and ignored, as deqp-runner
 //!   adds its log, shader-cache and flush flags).
 //! - `umbra deqp --list [--backend=ID]… [--cases=DIR] [--expectations=DIR]`: one line per
@@ -83,6 +84,7 @@ const FLAGS: &[&str] = &[
     "umbra-expectations",
     "umbra-pictures",
     "umbra-judge-cache",
+    "umbra-mesa",
 ];
 
 /// Refuses a flag umbra deqp does not take (a mistyped `--umbra-picture=` would otherwise
@@ -135,13 +137,16 @@ const HELP: &str = "umbra deqp: umbra as a dEQP test binary, for Mesa's deqp-run
 
 Usage:
   umbra deqp --deqp-caselist-file=FILE [--deqp-case=NAME[,NAME]] [--cases=DIR]
-             [--umbra-expectations=DIR] [--umbra-pictures=DIR] [--umbra-judge-cache=DIR] [--deqp-...]
+             [--umbra-expectations=DIR] [--umbra-pictures=DIR] [--umbra-judge-cache=DIR]
+             [--umbra-mesa=DIR] [--deqp-...]
   umbra deqp --list [--backend=ID]... [--cases=DIR] [--expectations=DIR]
 
 Tests are named umbra.API.DRIVER.CASE.K; each runs in a worker of its backend and prints
 `Test case 'NAME'..` and `  STATUS (detail)` (Pass, Fail, QualityWarning for a failure an
 expectation by cause explains, NotSupported, Crash, Timeout, InternalError). Other --deqp-*
 flags are accepted and ignored. --list prints NAME, run name and expected status, tab-separated.
+--umbra-mesa=DIR runs the tests on the Mesa in DIR (an install prefix: a CI job's install/),
+checking that each worker loaded it, as umbra conformance --mesa does.
 ";
 
 /// Runs `umbra deqp ARGS` (`argv`: the arguments after `deqp`); returns its outcome.
@@ -159,6 +164,14 @@ pub fn main(argv: &[String]) -> Outcome {
             )));
         }
     }
+    // `--umbra-mesa=DIR` (or UMBRA_MESA): the tree's freshly built install, as `--mesa`.
+    let mesa = values(argv, "umbra-mesa")
+        .first()
+        .map(|v| v.parse::<crate::harness::mesa_build::MesaChoice>())
+        .transpose()
+        .map_err(|e| Error::new(format!("umbra deqp: --umbra-mesa: {e}")))?;
+    crate::harness::mesa_build::select(mesa.as_ref())
+        .map_err(|e| Error::new(format!("umbra deqp: {e}")))?;
     let index = CaseIndex::load(&cases).map_err(Error::new)?;
     if argv.iter().any(|a| a == "--list") {
         return list(argv, &index);

@@ -14,3 +14,4 @@ pub mod repro;
 pub mod selftest;
 pub mod soak;
 pub mod sweep;
+pub mod tier;

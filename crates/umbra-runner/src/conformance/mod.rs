@@ -160,6 +160,12 @@ pub fn run_in(args: &ConformanceArgs, run_dir: Option<RunDir>, extra: Option<Ext
             .into();
         }
     };
+    // The tier run is kept with the run: the same file runs it again.
+    if let Some(t) = &opts.tier {
+        if let Err(e) = t.write(&run_dir.dir.join("tier.json")) {
+            return Error::new(format!("cannot keep the tier with the run: {e}")).into();
+        }
+    }
     let started = Instant::now();
     let settings = settings(args, &opts, no_goldens, &run_dir);
     let Plan {

@@ -35,6 +35,8 @@ pub(crate) struct Options {
     pub(crate) bless: bool,
     /// Whether expectation lines that match no loaded point are warned about.
     pub(crate) stale_check: bool,
+    /// `--tier` or `--budget`: the only runs to make ([`crate::tier`]).
+    pub(crate) tier: Option<crate::tier::Tier>,
 }
 
 impl Options {
@@ -78,6 +80,7 @@ impl Options {
             crate::cli::usage_error("conformance", format!("--out {}: {e}", out.display()))
         })?;
         let selected = selection.resolve(crate::harness::registry::known())?;
+        let tier = tier_of(args, jobs)?;
         let (cases_dir, expectations_dir) = (&selected.cases, &selected.expectations_dir);
         let digest = |d: &Path| {
             crate::shards::record::Digest::of(d)
@@ -117,8 +120,33 @@ impl Options {
             files: selected.files,
             bless: args.bless,
             stale_check: true,
+            tier,
         })
     }
+}
+
+/// `--tier FILE`, or `--budget DURATION` chosen from the recorded catches and durations
+/// ([`crate::tier::make`]); said on the terminal.
+fn tier_of(args: &ConformanceArgs, jobs: usize) -> Result<Option<crate::tier::Tier>, Error> {
+    let usage = |e: String| crate::cli::usage_error("conformance", e);
+    let tier = match (&args.tier, &args.budget) {
+        (Some(file), _) => crate::tier::Tier::read(file).map_err(usage)?,
+        (None, Some(budget)) => {
+            let seconds =
+                crate::tier::parse_budget(budget).map_err(|e| usage(format!("--budget {e}")))?;
+            crate::tier::make(
+                seconds,
+                Path::new(crate::tier::CATCHES),
+                Path::new(crate::tier::DURATIONS),
+                jobs,
+                None,
+            )
+            .map_err(|e| usage(format!("--budget: {e}")))?
+        }
+        (None, None) => return Ok(None),
+    };
+    print!("{}", tier.describe());
+    Ok(Some(tier))
 }
 
 /// `--out`'s default for a conformance run.
@@ -177,6 +205,7 @@ pub(crate) fn plan_runs(opts: &Options) -> Result<Plan, Error> {
     if let Some(e) = duplicate_names(&points) {
         return Err(crate::cli::usage_error("conformance", e));
     }
+    let tier = opts.tier.as_ref().map(crate::tier::Tier::run_set);
     let mut plan = Vec::new();
     for b in &opts.backends {
         for (_, ids) in &points {
@@ -187,8 +216,10 @@ pub(crate) fn plan_runs(opts: &Options) -> Result<Plan, Error> {
                     point: point.clone(),
                     case: case.clone(),
                 };
-                if crate::glob::matches(&opts.filter, id)
-                    || crate::glob::matches(&opts.filter, &p.name())
+                let in_tier = tier.as_ref().is_none_or(|t| t.contains(p.name().as_str()));
+                if in_tier
+                    && (crate::glob::matches(&opts.filter, id)
+                        || crate::glob::matches(&opts.filter, &p.name()))
                 {
                     plan.push(p);
                 }

@@ -130,6 +130,10 @@ pub(crate) struct Setup {
     generated: Option<PathBuf>,
     /// Worker processes at once.
     pub(crate) jobs: usize,
+    /// `--tier`'s runs.
+    tier: Option<std::collections::BTreeSet<String>>,
+    /// `--catches`: where the catch matrix goes.
+    catches: Option<PathBuf>,
     /// Each backend's calibration, from its card measured without a fault (none with
     /// `--spec-only`, or where the card could not be measured): a fault is a driver that
     /// changed since its card was taken, judged as conformance judges it.
@@ -146,6 +150,7 @@ impl Setup {
             verbose: self.verbose,
             every_point: self.generated.is_some(),
             calibrations: &self.calibrations,
+            tier: self.tier.as_ref(),
         }
     }
 }
@@ -231,6 +236,13 @@ pub(crate) fn setup(args: &SelftestArgs) -> Result<Setup, Error> {
             std::path::Path::new(crate::judge::judge_cache::DEFAULT_ROOT),
         ))
     };
+    let tier = args
+        .tier
+        .as_deref()
+        .map(crate::tier::Tier::read)
+        .transpose()
+        .map_err(|e| crate::cli::usage_error("selftest", e))?
+        .map(|t| t.runs.into_iter().collect());
     let calibrations = if args.execution.spec_only || args.mode() != SelftestMode::Faults {
         BTreeMap::new()
     } else {
@@ -248,6 +260,8 @@ pub(crate) fn setup(args: &SelftestArgs) -> Result<Setup, Error> {
         verbose: args.output.verbose,
         generated,
         jobs,
+        tier,
+        catches: args.catches.clone(),
     })
 }
 
@@ -290,10 +304,42 @@ pub(crate) fn hunt_all(setup: &Setup) -> Outcome {
     });
     let mut results = results;
     results.sort_by(|a, b| (a.1.name(), &a.0).cmp(&(b.1.name(), &b.0)));
+    if let Some(path) = &setup.catches {
+        write_catches(path, &results).map_err(Error::new)?;
+        println!("selftest: the catch matrix is in {}", path.display());
+    }
     if setup.generated.is_some() {
         return rates(&results);
     }
     summary(&results)
+}
+
+/// `--catches`: every pair hunted and the points that caught it.
+fn write_catches(path: &Path, results: &[(String, Fault, Hunt)]) -> Result<(), String> {
+    let mesa = crate::harness::mesa_build::selected()
+        .map_or("the system's Mesa".to_string(), |b| b.describe());
+    let catches = crate::tier::Catches {
+        measured: format!(
+            "umbra {} on {mesa}",
+            std::env::args().skip(1).collect::<Vec<_>>().join(" ")
+        ),
+        pairs: results
+            .iter()
+            .map(|(backend, fault, h)| crate::tier::Pair {
+                fault: fault.name(),
+                backend: backend.clone(),
+                exercising: h.exercising,
+                tried: h.tried,
+                caught: h.caught.iter().map(|(p, _)| p.clone()).collect(),
+            })
+            .collect(),
+    };
+    if let Some(d) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(d).map_err(|e| format!("--catches {}: {e}", d.display()))?;
+    }
+    let text = serde_json::to_string_pretty(&catches).unwrap_or_default();
+    crate::atomic_file::write(path, text.as_bytes())
+        .map_err(|e| format!("--catches {}: {e}", path.display()))
 }
 
 /// With `--seed` and `--count`, the directory the generated cases were written to.
@@ -544,6 +590,9 @@ pub(crate) struct How<'a> {
     pub(crate) every_point: bool,
     /// Each backend's calibration ([`Setup`]'s).
     pub(crate) calibrations: &'a BTreeMap<String, String>,
+    /// `--tier`: the only runs (`backend/Case@point`) a hunt may make (it runs them as it
+    /// runs the catalogue's: a sample, then on until enough catch).
+    pub(crate) tier: Option<&'a std::collections::BTreeSet<String>>,
 }
 
 /// A worker running `backend` with one fault on, and the expectations of its driver.
@@ -689,6 +738,10 @@ fn hunt(
     let candidates: Vec<&(PathBuf, usize, umbra_case::CasePoint)> = points
         .iter()
         .filter(|(_, _, p)| fault.exercises(&p.case, es2))
+        .filter(|(_, _, p)| {
+            how.tier
+                .is_none_or(|t| t.contains(&format!("{backend}/{}", p.id())))
+        })
         .collect();
     h.exercising = candidates.len();
     if candidates.is_empty() {
