@@ -52,22 +52,31 @@ pub struct Catches {
 impl Catches {
     /// Reads a catch matrix; the error names the file and the fix.
     pub fn read(path: &Path) -> Result<Catches, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            format!(
-                "{}: {e}; give a catch matrix (`umbra selftest --catches FILE` writes one; tiers/catches.json is the recorded one)",
-                path.display()
-            )
-        })?;
-        let de = &mut serde_json::Deserializer::from_str(&text);
-        serde_path_to_error::deserialize(de).map_err(|e| {
-            format!(
-                "{}: field {}: {}; fix: write it again with `umbra selftest --catches FILE`",
-                path.display(),
-                e.path(),
-                e.inner()
-            )
-        })
+        read_json(
+            path,
+            "a catch matrix (`umbra selftest --catches FILE` writes one; tiers/catches.json is the recorded one)",
+            "write it again with `umbra selftest --catches FILE`",
+        )
     }
+}
+
+/// A JSON file read into `T`; an error names the file, the field, and `what`/`fix`.
+fn read_json<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    what: &str,
+    fix: &str,
+) -> Result<T, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("{}: {e}; give {what}", path.display()))?;
+    let de = &mut serde_json::Deserializer::from_str(&text);
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        format!(
+            "{}: field {}: {}; fix: {fix}",
+            path.display(),
+            e.path(),
+            e.inner()
+        )
+    })
 }
 
 /// A chosen tier: the runs, what they are expected to cost and catch, and where the choice
@@ -103,21 +112,12 @@ pub struct Tier {
 impl Tier {
     /// Reads a tier file; the error names the file and the fix.
     pub fn read(path: &Path) -> Result<Tier, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            format!(
-                "--tier {}: {e}; give a tier file (`umbra tier --budget DURATION` writes one)",
-                path.display()
-            )
-        })?;
-        let de = &mut serde_json::Deserializer::from_str(&text);
-        serde_path_to_error::deserialize(de).map_err(|e| {
-            format!(
-                "--tier {}: field {}: {}; fix: write it again with `umbra tier`",
-                path.display(),
-                e.path(),
-                e.inner()
-            )
-        })
+        read_json(
+            path,
+            "a tier file (`umbra tier --budget DURATION` writes one)",
+            "write it again with `umbra tier`",
+        )
+        .map_err(|e| format!("--tier {e}"))
     }
 
     /// Writes it as pretty JSON.
@@ -247,5 +247,23 @@ pub fn parse_budget(text: &str) -> Result<f64, String> {
         _ => Err(format!(
             "{text:?}: a budget is a positive duration: 90s, 5m, 1h, premerge or smoke"
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_budget;
+
+    #[test]
+    fn budgets_take_units_and_names_and_refuse_the_rest() {
+        assert_eq!(parse_budget("300"), Ok(300.0));
+        assert_eq!(parse_budget("90s"), Ok(90.0));
+        assert_eq!(parse_budget("5m"), Ok(300.0));
+        assert_eq!(parse_budget("1h"), Ok(3600.0));
+        assert_eq!(parse_budget("premerge"), Ok(300.0));
+        assert_eq!(parse_budget("smoke"), Ok(60.0));
+        for bad in ["", "0", "-5m", "5d", "fast", "nan"] {
+            assert!(parse_budget(bad).is_err(), "{bad}");
+        }
     }
 }

@@ -109,17 +109,20 @@ pub fn choose(inputs: &Inputs, budget_s: f64, jobs: usize) -> Tier {
     let pairs = pairs(inputs);
     let deepest = pairs.values().map(Vec::len).max().unwrap_or(0);
     let runs = greedy(&pairs, inputs.durations, budget_s, jobs, deepest);
-    let full = greedy(&pairs, inputs.durations, f64::INFINITY, jobs, 1);
-    let full_worker: f64 = full.iter().filter_map(|r| inputs.durations.get(r)).sum();
-    tier_of(
-        inputs,
-        &pairs,
-        runs,
-        budget_s,
-        jobs,
-        "by catches".into(),
-        wall(full_worker, jobs),
-    )
+    tier_of(inputs, &pairs, runs, budget_s, jobs, "by catches".into())
+}
+
+/// The expected wall time of the greedy cover of every pair, without a budget.
+fn full_cover_wall(
+    pairs: &BTreeMap<String, Vec<String>>,
+    durations: &BTreeMap<String, f64>,
+    jobs: usize,
+) -> f64 {
+    let worker: f64 = greedy(pairs, durations, f64::INFINITY, jobs, 1)
+        .iter()
+        .filter_map(|r| durations.get(r))
+        .sum();
+    wall(worker, jobs)
 }
 
 /// A random tier of the catalogue's runs, drawn with `seed`, as large as fits
@@ -164,10 +167,6 @@ pub fn random(inputs: &Inputs, seed: u64, worker_s: f64, budget_s: f64, jobs: us
             runs.insert(r.clone());
         }
     }
-    let full_worker: f64 = greedy(&pairs, inputs.durations, f64::INFINITY, jobs, 1)
-        .iter()
-        .filter_map(|r| inputs.durations.get(r))
-        .sum();
     tier_of(
         inputs,
         &pairs,
@@ -175,7 +174,6 @@ pub fn random(inputs: &Inputs, seed: u64, worker_s: f64, budget_s: f64, jobs: us
         budget_s,
         jobs,
         format!("random, seed {seed}"),
-        wall(full_worker, jobs),
     )
 }
 
@@ -186,8 +184,8 @@ fn tier_of(
     budget_s: f64,
     jobs: usize,
     chosen: String,
-    full_cover_wall_s: f64,
 ) -> Tier {
+    let full_cover_wall_s = full_cover_wall(pairs, inputs.durations, jobs);
     let worker: f64 = runs.iter().filter_map(|r| inputs.durations.get(r)).sum();
     let mut covered = [0; 3];
     let mut uncovered = Vec::new();
