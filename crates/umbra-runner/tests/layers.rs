@@ -114,6 +114,8 @@ fn known_layer(module: &str) -> Option<u8> {
         "exit" | "glob" | "atomic_file" | "run_dir" | "case_size" | "version" => 0,
         "judge" => 1,
         "harness" | "shards" | "repro" => 2,
+        // The pre-merge tiers: files of catches and durations, and the choice from them.
+        "tier" => 2,
         // The command line's tables name the commands' help only.
         "cli" => 3,
         // A conformance run and a reduction as libraries (plan, execution, gathering,
