@@ -45,6 +45,14 @@ pub struct Options {
 
 /// Runs the command.
 pub fn main(o: &Options, root: &Path) -> i32 {
+    // A bundle replaces its cases, expectations and tiers: only in a directory umbra made
+    // (or an empty one), never one that holds a user's files (`--out .` in a checkout).
+    if o.bundle {
+        if let Err(e) = umbra_owned::fresh(&o.out, "cargo xtask mesa-ci --bundle") {
+            eprintln!("error: --out: {e}");
+            return 125;
+        }
+    }
     if let Err(e) = std::fs::create_dir_all(&o.out) {
         eprintln!("error: --out {}: {e}", o.out.display());
         return 125;
@@ -430,6 +438,25 @@ fn run_suite(o: &Options, out: &Path) -> i32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A bundle replaces its cases and expectations: never in a directory of the user's.
+    #[test]
+    fn a_bundle_is_never_written_into_a_users_directory() {
+        let dir = std::env::temp_dir().join(format!("umbra-mesa-ci-own-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("cases")).expect("mkdir");
+        std::fs::write(dir.join("cases/mine.json"), "{}").expect("write");
+        let o = Options {
+            driver: "llvmpipe".into(),
+            out: dir.clone(),
+            fraction: None,
+            run: false,
+            budget: None,
+            bundle: true,
+        };
+        assert_eq!(main(&o, Path::new("/nowhere")), 125);
+        assert!(dir.join("cases/mine.json").is_file());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     /// The bundle's suite names no path of this machine: run.sh fills in the bundle's, the
     /// job's Mesa install and the results directory where the job runs it, then hands the

@@ -145,6 +145,18 @@ fn the_recorded_tier_covers_every_pair_and_runs_as_chosen() {
         t.contains("480 of 480") || t.contains(&format!("{pairs} of {pairs}")),
         "{t}"
     );
+    // A file that is not a tier is never written over.
+    let foreign = out.join("notes.json");
+    std::fs::write(&foreign, "my notes").expect("write");
+    let o = Command::new(env!("CARGO_BIN_EXE_umbra"))
+        .current_dir(repo())
+        .args(["tier", "--budget", "smoke", "--out"])
+        .arg(&foreign)
+        .output()
+        .expect("umbra tier");
+    assert_eq!(o.status.code(), Some(125), "{}", text(&o));
+    assert!(text(&o).contains("is not a tier file"), "{}", text(&o));
+    assert_eq!(std::fs::read_to_string(&foreign).expect("kept"), "my notes");
     // The same inputs, the same tier.
     let again = out.join("again.json");
     let o = Command::new(env!("CARGO_BIN_EXE_umbra"))

@@ -12,6 +12,8 @@ pub fn main(args: &TierArgs) -> Outcome {
     if args.jobs == 0 {
         return Err(crate::cli::usage_error("tier", "--jobs 0: give at least 1"));
     }
+    crate::tier::replaceable(&args.out, crate::tier::Tier::read, "a tier file")
+        .map_err(|e| crate::cli::usage_error("tier", format!("--out {e}")))?;
     let tier = crate::tier::make(
         budget,
         &args.catches,

@@ -39,6 +39,11 @@ pub struct Durations {
 }
 
 impl Durations {
+    /// Each run's recorded duration in seconds, by run name.
+    pub fn times(&self) -> &HashMap<String, f64> {
+        &self.times
+    }
+
     /// Reads a results.csv (deqp-runner's `test,status,duration`, umbra's or deqp-runner's
     /// own). An error names the file and the line, and says what the file should be.
     pub fn read(path: &Path) -> Result<Durations, String> {

@@ -60,6 +60,23 @@ impl Catches {
     }
 }
 
+/// Refuses to replace `path` unless it is absent or already a file of this kind (`read`
+/// takes it): umbra writes over only what it wrote (`--out tiers/catches.json` by mistake
+/// must not destroy the matrix).
+pub fn replaceable<T>(
+    path: &Path,
+    read: impl Fn(&Path) -> Result<T, String>,
+    what: &str,
+) -> Result<(), String> {
+    if path.exists() && read(path).is_err() {
+        return Err(format!(
+            "{} exists and is not {what}: umbra replaces only a file it wrote; give another path",
+            path.display()
+        ));
+    }
+    Ok(())
+}
+
 /// A JSON file read into `T`; an error names the file, the field, and `what`/`fix`.
 fn read_json<T: serde::de::DeserializeOwned>(
     path: &Path,
@@ -185,33 +202,21 @@ pub fn make(
     random: Option<u64>,
 ) -> Result<Tier, String> {
     let c = Catches::read(catches)?;
-    let bytes = std::fs::read(durations).map_err(|e| {
-        format!(
-            "{}: {e}; give a full run's results.csv ({DURATIONS} is the recorded one)",
-            durations.display()
-        )
-    })?;
-    let text = String::from_utf8_lossy(&bytes);
-    let rows = umbra_report::csv::parse_results(&text).map_err(|e| {
-        format!(
-            "{}: {e}; it should be a results.csv (test,status,duration seconds per line)",
-            durations.display()
-        )
-    })?;
+    let d = crate::shards::balance::Durations::read(durations)?;
     let times: std::collections::BTreeMap<String, f64> =
-        rows.into_iter().map(|(n, _, t)| (n, t)).collect();
-    let digest = |b: &[u8]| {
-        format!(
-            "{:016x}",
-            crate::judge::basis_key::fnv(crate::judge::basis_key::FNV_START, b)
+        d.times().iter().map(|(n, t)| (n.clone(), *t)).collect();
+    let catches_digest = format!(
+        "{:016x}",
+        crate::judge::basis_key::fnv(
+            crate::judge::basis_key::FNV_START,
+            &std::fs::read(catches).unwrap_or_default()
         )
-    };
-    let catches_bytes = std::fs::read(catches).unwrap_or_default();
+    );
     let inputs = select::Inputs {
         catches: &c,
         durations: &times,
-        catches_source: format!("{} ({})", catches.display(), digest(&catches_bytes)),
-        durations_source: format!("{} ({})", durations.display(), digest(&bytes)),
+        catches_source: format!("{} ({catches_digest})", catches.display()),
+        durations_source: format!("{} ({})", d.source, d.digest),
     };
     let by_catches = select::choose(&inputs, budget_s, jobs);
     Ok(match random {

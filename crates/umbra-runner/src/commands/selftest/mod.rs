@@ -236,6 +236,10 @@ pub(crate) fn setup(args: &SelftestArgs) -> Result<Setup, Error> {
             std::path::Path::new(crate::judge::judge_cache::DEFAULT_ROOT),
         ))
     };
+    if let Some(path) = &args.catches {
+        crate::tier::replaceable(path, crate::tier::Catches::read, "a catch matrix")
+            .map_err(|e| crate::cli::usage_error("selftest", format!("--catches {e}")))?;
+    }
     let tier = args
         .tier
         .as_deref()
