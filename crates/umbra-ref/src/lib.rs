@@ -49,7 +49,7 @@ pub fn convention(case: &Case, clip: ClipDepth) -> Convention {
 
 /// Renders both passes of `run` in clip convention `clip`.
 pub fn render(run: &Prepared, clip: ClipDepth) -> Frame {
-    each_light(run, |one| render_inner(one, clip, None, None, None).0)
+    each_light(run, |one| render_inner(one, clip, None, None, None, None).0)
 }
 
 /// A case as every backend renders it: each light's run ([`Prepared::lights`]) by `one`, the
@@ -107,7 +107,7 @@ pub fn add_lights(frames: Vec<Frame>, format: ColorFormat) -> Frame {
 /// reads `UMBRA_FAULT`.
 pub fn render_with_fault(run: &Prepared, clip: ClipDepth, fault: Fault) -> Frame {
     each_light(run, |one| {
-        render_inner(one, clip, None, None, Some(fault)).0
+        render_inner(one, clip, None, None, Some(fault), None).0
     })
 }
 
@@ -201,7 +201,39 @@ pub fn explain_light(
     profile: Profile,
     pixel: Option<(u32, u32)>,
 ) -> (Judged, String) {
-    let (frame, legal, map, trace) = render_inner(run, clip, Some(profile), pixel, None);
+    judged_of(run, clip, profile, pixel, None)
+}
+
+/// [`explain_light`] for `profile`, a behaviour card's narrowing of the specs' freedom
+/// ([`umbra_case::calibration`]), given `spec`: the same light's run judged for the specs
+/// (`profile` without its calibration). Where `spec` allows the reference's value alone and
+/// marks nothing ambiguous, so does the card (a calibration only narrows, and the reference
+/// lies inside its own card's interval), and the judged lookup is not evaluated again; the
+/// map's ranges, every other pixel and every pixel's colour bounds are computed as
+/// [`explain_light`] computes them. The result is [`explain_light`]'s value for value, but
+/// where its card model is wider than the specs at a pixel the specs settle (it should never
+/// be: a card is the specs' freedom narrowed; three-lights has one such pixel, where the
+/// card's map model lets a texel's coverage go that the specs' does not): there it is the
+/// specs' value, the intersection the card stands for (tests/card_within.rs). Most of a
+/// frame is settled so: a card's judged render costs its shadow pass and its few open
+/// pixels. A `spec` of another size is not used.
+pub fn judged_light_within(
+    run: &LightRun,
+    clip: ClipDepth,
+    profile: Profile,
+    spec: &JudgedLight,
+) -> Judged {
+    judged_of(run, clip, profile, None, Some(&spec.legal)).0
+}
+
+fn judged_of(
+    run: &LightRun,
+    clip: ClipDepth,
+    profile: Profile,
+    pixel: Option<(u32, u32)>,
+    settled: Option<&[PixelLegal]>,
+) -> (Judged, String) {
+    let (frame, legal, map, trace) = render_inner(run, clip, Some(profile), pixel, None, settled);
     (
         Judged {
             frame,
@@ -246,12 +278,15 @@ pub fn judged_layers(
         .collect()
 }
 
+/// `settled` (judged renders, top row first): what the specs allow at each pixel, for a
+/// card's render ([`judged_light_within`]).
 fn render_inner(
     run: &LightRun,
     clip: ClipDepth,
     profile: Option<Profile>,
     pixel: Option<(u32, u32)>,
     fault: Option<Fault>,
+    settled: Option<&[PixelLegal]>,
 ) -> (Frame, Vec<PixelLegal>, Vec<(f32, f32)>, String) {
     let start = Instant::now();
     let case = run.case();
@@ -295,12 +330,17 @@ fn render_inner(
         let row = if conv.window_y_down() { y } else { ch - 1 - y };
         (row * cw + x) as usize
     });
+    // The lit pass walks raster rows: rows run up in the GL convention.
+    let settled = settled
+        .filter(|s| s.len() == (cw * ch) as usize)
+        .map(|s| top_first(s.to_vec(), cw as usize, 1, !conv.window_y_down()));
     let lit = lit_pass::render(
         run,
         conv,
         &lookup,
         camera_kinds.as_deref().zip(profile),
         explain,
+        settled.as_deref(),
     );
     let lit_done = Instant::now();
     let [w, h] = run.camera.size;

@@ -98,13 +98,17 @@ fn camera_raster(run: &LightRun, conv: Convention) -> Rasterizer {
 }
 
 /// Renders the camera view of `run`, looking shadows up with `lookup`; with `judged` (the
-/// camera view's edge kinds and the profile), also what every pixel allows.
+/// camera view's edge kinds and the profile), also what every pixel allows. `settled`
+/// (raster row order, judged renders only): what a wider profile already allows at each
+/// pixel; where it allows one value and nothing is ambiguous, the judged lookup is not
+/// evaluated again ([`settled_value`]).
 pub fn render(
     run: &LightRun,
     conv: Convention,
     lookup: &Lookup,
     judged: Option<(&[[EdgeKind; 3]], Profile)>,
     explain: Option<usize>,
+    settled: Option<&[PixelLegal]>,
 ) -> LitImage {
     let [w, h] = run.camera.size;
     let geo: &Geometry = &run.geometry;
@@ -122,7 +126,11 @@ pub fn render(
     let bg = background(case.camera.clear, format);
     let light = Vec3::from(run.as_written().radiance());
     // The judged lookup at a surface point: its value and what it allows.
-    let judge = |pt: &Point, free: u8| judged_point(run, &tris, lookup, pt, free);
+    // What the wider profile settles at a pixel (raster index), unless it is explained.
+    let settled = settled.filter(|s| s.len() == (w * h) as usize);
+    let known = |i: usize| settled.filter(|_| explain != Some(i)).map(|s| &s[i]);
+    let judge =
+        |pt: &Point, free: u8, i: usize| judged_point(run, &tris, lookup, pt, free, known(i));
     // Shade row by row straight into the outputs, a run of pixels that show the same
     // triangle at a time, in stages (surface points, lookups, colours): each pixel is
     // computed on its own with the same arithmetic, so the result does not depend on the
@@ -195,7 +203,7 @@ pub fn render(
                                 to_eye: surfaces.eye_dir(k),
                             };
                             let look = || match &surface_free {
-                                Some(_) => judge(&pt, free(x)),
+                                Some(_) => judge(&pt, free(x), y * wu + x),
                                 None if lookup.mipmapped() => (
                                     lookup.visibility_mip(
                                         pt.p,
@@ -283,14 +291,29 @@ fn nearest_surfaces(tris: &[Tri], w: u32, h: u32) -> Vec<Nearest> {
     nearest
 }
 
+/// The value a pixel's judged lookup would give, without evaluating it, where `known` (what a
+/// wider profile allows there: the specs', of which `lookup`'s profile is a behaviour card's
+/// narrowing) settles it: one value, no ambiguity flag, and the reference's own value under
+/// `lookup`'s profile that same value, bit for bit. A calibration only narrows the specs'
+/// freedom ([`umbra_case::calibration`]) and the reference lies inside its own interval, so
+/// the narrowed interval there is that one value too. Anywhere else, `None`: the lookup is
+/// judged in full.
+fn settled_value(lookup: &Lookup, p: Vec3, n: Vec3, known: Option<&PixelLegal>) -> Option<f32> {
+    let k = known.filter(|k| k.flags == 0 && k.lo.to_bits() == k.hi.to_bits())?;
+    let vis = lookup.visibility(p, n);
+    (vis.to_bits() == k.lo.to_bits()).then_some(vis)
+}
+
 /// The judged lookup at surface point `pt` (its pixel's surface freedoms `free`): the value
-/// the reference computes and everything the specs allow there, colour included.
+/// the reference computes and everything the specs allow there, colour included; where
+/// `known` settles the lookup ([`settled_value`]), it is not evaluated.
 fn judged_point(
     run: &LightRun,
     tris: &[Tri],
     lookup: &Lookup,
     pt: &Point,
     free: u8,
+    known: Option<&PixelLegal>,
 ) -> (f32, PixelLegal) {
     let (geo, case, eye) = (&run.geometry, run.case(), run.camera.eye);
     let (tri, t) = (&tris[pt.tri as usize], pt.source as usize);
@@ -305,7 +328,19 @@ fn judged_point(
     let moves = [(px_ - p) * snap, (py_ - p) * snap];
     let turn = Turn([(nx - n) * snap, (ny - n) * snap]);
     let normal_moves = turn.reach();
-    let (vis, l): (f32, Legal) = if lookup.mipmapped() {
+    let settled = (!lookup.mipmapped())
+        .then(|| settled_value(lookup, p, n, known))
+        .flatten();
+    let (vis, l): (f32, Legal) = if let Some(v) = settled {
+        (
+            v,
+            Legal {
+                lo: v,
+                hi: v,
+                flags: 0,
+            },
+        )
+    } else if lookup.mipmapped() {
         lookup.judged_mip(p, n, moves, turn, &neighbours(tri, geo, pt.x, pt.y))
     } else {
         lookup.judged(p, n, moves, turn)

@@ -27,6 +27,7 @@ pub mod model;
 pub mod names;
 pub mod pareto;
 pub mod summary;
+pub mod timing;
 
 pub use json::{DriverRow, Header, Report, ReportRun};
 pub use model::{

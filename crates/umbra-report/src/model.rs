@@ -228,6 +228,15 @@ pub struct Metrics {
     /// See `judge_ms`.
     #[serde(default)]
     pub golden_ms: f64,
+    /// The kind of run (light count, map shape, placement, filter, mips) that decides what
+    /// judging it costs: the rows of `umbra timing`.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub kind: String,
+    /// The run's harness time stage by stage, ms, each exclusive (truth rays or read, judged
+    /// render or read, waiting for another worker's entry, compare, card, twin renders, twin
+    /// judging, golden): what `umbra timing` sums.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub stages_ms: std::collections::BTreeMap<String, f64>,
     /// 64-bit FNV-1a of the frame's colour bytes: two builds' frames are the same picture
     /// exactly when these match (`umbra drivers`).
     #[serde(default)]

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use umbra_runner::cli::{self, Command};
 use umbra_runner::commands::{
     backends, bisect, card, conformance, deqp, drivers, merge, reduce, render, repro, selftest,
-    soak, sweep, tier,
+    soak, sweep, tier, timing,
 };
 use umbra_runner::exit::{self, Error, Exit};
 use umbra_runner::harness;
@@ -69,6 +69,7 @@ fn dispatch(command: &Command) -> exit::Outcome {
         Command::Bisect(a) => bisect::main(a),
         Command::Reduce(a) => reduce::main(a),
         Command::Tier(a) => tier::main(a),
+        Command::Timing(a) => timing::main(a),
         Command::Repro(a) => repro::main(a),
         Command::Card(a) => card::main(a),
         Command::Backends(a) => backends::main(a),

@@ -85,6 +85,11 @@ pub enum Command {
         about = "Choose a pre-merge tier for a time budget from the self-test's catch matrix and recorded durations: every fault × backend pair the catalogue catches by at least one run, then more; prints its expected time and coverage and writes the tier file conformance --tier and selftest --tier run (--random SEED: a random draw of equal time, to compare)"
     )]
     Tier(TierArgs),
+    /// `umbra timing`.
+    #[command(
+        about = "Where a conformance run's worker time went: per kind of run (or per backend), the backends' frames and each stage of judging (truth rays, the judged reference, cache reads, waiting, comparison, card, twins, golden), from its report.json"
+    )]
+    Timing(TimingArgs),
     /// `umbra reduce`.
     #[command(
         about = "Shrink a failing case point to a minimal case that still fails the same way on the backend, for a bug report"
@@ -465,6 +470,31 @@ pub struct TierArgs {
     /// `--out`: the tier file.
     #[arg(short = 'o', long, value_name = "FILE", help = help::OUT, default_value = "target/umbra/tier.json")]
     pub out: PathBuf,
+}
+
+/// `umbra timing`.
+#[derive(Args, Debug, Clone)]
+pub struct TimingArgs {
+    /// The report, or the run directory holding it.
+    #[arg(
+        value_name = "REPORT",
+        help = "a report.json, or a run directory holding one",
+        default_value = "target/umbra/latest"
+    )]
+    pub report: PathBuf,
+    /// `--by`: what a row gathers.
+    #[arg(long, value_enum, default_value_t = TimingBy::Kind, help = "what a row gathers")]
+    pub by: TimingBy,
+}
+
+/// `umbra timing --by`.
+#[derive(ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TimingBy {
+    /// The kind of run: light count, map shape, placement, filter, mips.
+    #[default]
+    Kind,
+    /// The backend.
+    Backend,
 }
 
 /// `umbra reduce`.

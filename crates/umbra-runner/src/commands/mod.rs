@@ -15,3 +15,4 @@ pub mod selftest;
 pub mod soak;
 pub mod sweep;
 pub mod tier;
+pub mod timing;

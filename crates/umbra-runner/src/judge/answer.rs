@@ -93,6 +93,9 @@ fn judged(
         }
     };
     let again = (!deviations.is_empty()).then(|| (deviations, point.clone()));
+    // The stages of this run alone (the card's probes, or an earlier request, left nothing
+    // that is this run's).
+    crate::judge::stages::take();
     match run_point_as(
         backend,
         point,
@@ -117,33 +120,45 @@ fn judged(
             let golden_start = std::time::Instant::now();
             let mut identical_to_golden = false;
             let mut held = None;
-            let golden = req.golden.as_ref().map(|dir| {
-                let (word, checked_held, identical) = golden_of(
-                    backend,
-                    dir,
-                    &name,
-                    &j,
-                    &mut problems,
-                    &mut failed,
-                    &mut metrics,
-                );
-                identical_to_golden = identical;
-                held = Some(checked_held);
-                word
+            let golden_stage = crate::judge::stages::Stage::Golden;
+            let (golden, mut storage) = crate::judge::stages::time(golden_stage, || {
+                let golden = req.golden.as_ref().map(|dir| {
+                    let (word, checked_held, identical) = golden_of(
+                        backend,
+                        dir,
+                        &name,
+                        &j,
+                        &mut problems,
+                        &mut failed,
+                        &mut metrics,
+                    );
+                    identical_to_golden = identical;
+                    held = Some(checked_held);
+                    word
+                });
+                let storage = gallery_of(req, &name, &j, held.as_ref(), identical_to_golden);
+                (golden, storage)
             });
-            let mut storage = gallery_of(req, &name, &j, held.as_ref(), identical_to_golden);
             // Goldens and pictures: the PNG share of the time budget.
-            metrics.golden_ms = golden_start.elapsed().as_secs_f64() * 1e3;
             let failing = !problems.is_empty();
             if let Some(dir) = req.failures.as_ref().filter(|_| failing) {
                 let at = dir.join(umbra_report::names::file_name(&name));
-                if let Err(e) = crate::judge::pictures::write_images(&at, &j) {
+                let written = crate::judge::stages::time(golden_stage, || {
+                    crate::judge::pictures::write_images(&at, &j)
+                });
+                if let Err(e) = written {
                     storage = Some(format!("cannot write pictures under {}: {e}", at.display()));
                 }
             }
+            metrics.golden_ms = golden_start.elapsed().as_secs_f64() * 1e3;
+            // Judged again under its expectation's deviations: judging time too (the same
+            // frames, nothing rendered).
+            let again_start = std::time::Instant::now();
             let under_deviation = again
                 .filter(|_| failing)
-                .map(|(d, point)| judged_again(backend, point, !req.no_twins, d));
+                .map(|(d, point)| judged_again(backend, point, !req.no_twins, d, &j));
+            metrics.judge_ms += again_start.elapsed().as_secs_f64() * 1e3;
+            metrics.stages_ms = crate::judge::stages::take();
             RunReport {
                 under_deviation,
                 storage,
@@ -169,14 +184,16 @@ fn judged(
 /// The checks a failing run still fails judged again under the deviations `d` its
 /// expectation names: what the deviation does not explain. By the spec and the deviation
 /// alone: a modelled deviation is where the driver departs from what its card's probes read
-/// (softpipe's Z16 span stepping is not its probed rounding), so no card narrows it.
+/// (softpipe's Z16 span stepping is not its probed rounding), so no card narrows it. The
+/// frames judged are the run's own (`j`'s, its twins' too): nothing is rendered again.
 fn judged_again(
     backend: &mut dyn umbra_case::Backend,
     point: umbra_case::CasePoint,
     twins: bool,
     d: umbra_case::Deviations,
+    j: &crate::judge::run::Judged,
 ) -> Vec<umbra_report::FailedCheck> {
-    match run_point_as(backend, point, twins, d, Default::default()) {
+    match crate::judge::run::judge_again(backend, point, twins, d, j) {
         Outcome::Done(j) => j.failed,
         // Judged again, it did not render: the check that fails is rendering.
         Outcome::Skip(_) | Outcome::Error(_) => vec![umbra_report::FailedCheck {
@@ -301,6 +318,8 @@ fn metrics_of(backend: &dyn umbra_case::Backend, j: &crate::judge::run::Judged) 
         judge_ms: j.judge_time.as_secs_f64() * 1e3,
         twins_ms: j.twins_time.as_secs_f64() * 1e3,
         golden_ms: 0.0,
+        kind: crate::judge::stages::run_kind(j.prepared.case()),
+        stages_ms: Default::default(),
         color_hash: umbra_report::names::fnv64(j.frame.color.iter().copied()),
         // Every light's visibility, light after light (one light's is the light's alone).
         visibility_hash: umbra_report::names::fnv64(

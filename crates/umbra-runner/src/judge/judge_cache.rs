@@ -39,7 +39,9 @@
 //! not (the reference's answer stays inside), which is why the checksum is keyed.
 //!
 //! Every entry is stored deflated ([`pack`]: `UMBZ1`, the inflated length (u64), then a raw
-//! deflate stream at flate2's fastest level) and sealed after packing: the file ends with a
+//! deflate stream at flate2's fastest level; a judged render in two parts, [`pack_parts`]:
+//! `UMBZ2`, the count, each part's lengths, then each part's own stream, so that a reader
+//! inflates the map's ranges only when it judges a map) and sealed after packing: the file ends with a
 //! u64 checksum ([`checksum`]) of every byte before it, so a change to any stored byte is
 //! found before anything is inflated. (Sealed inside the deflate stream, a damaged stream
 //! could inflate to the very bytes it held: 28 % of the single-bit flips of a packed truth
@@ -54,11 +56,14 @@
 //! profile's name for a judged render):
 //! - `truth-KEY.bin` (`UMBT2`): per pixel the class (u8), the edge flag (u8), the face (u32).
 //!   The hit points are not kept (the judge does not read them).
-//! - `judged-KEY.bin` (`UMBJ5`): the quantum (f32), the reference's RGBA8 colour, its
+//! - `judged-KEY.bin` (`UMBJ6`): the quantum (f32), the reference's RGBA8 colour, its
 //!   visibility (f32), whether a surface buffer follows (u8) and its face ids (u32), then per
 //!   pixel what is legal: lo, hi (f32), flags (u8), c0, c1 (3 × f32 each) and the colour
-//!   tolerance (f32); then the number of shadow-map texels kept (u32, 0 unless the profile is
-//!   desktop GL's, whose backends read their map back) and their (lo, hi) ranges (f32 each).
+//!   tolerance (f32). Its second part: the number of shadow-map texels kept (u32, 0 unless
+//!   the profile is desktop GL's, whose backends read their map back) and their (lo, hi)
+//!   ranges (f32 each). Inflated, the ranges are most of a desktop GL entry (8 MB for a 1024²
+//!   map, against 37 bytes a pixel), and of the backends judged as `gl` only those that read
+//!   their map back (GL 3.3's, the reference) are judged by them.
 
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -73,7 +78,7 @@ use umbra_ref::{Judged, JudgedLight, PixelLegal};
 pub const ENV: &str = "UMBRA_JUDGE_CACHE";
 
 const TRUTH_MAGIC: &[u8; 5] = b"UMBT2";
-const JUDGED_MAGIC: &[u8; 5] = b"UMBJ5";
+const JUDGED_MAGIC: &[u8; 5] = b"UMBJ6";
 
 /// How many pixels of a truth read back are recomputed and compared (spread over the frame,
 /// the same for every read of an entry): enough that damage to a few per cent of a frame's
@@ -277,20 +282,20 @@ fn gcd(a: usize, b: usize) -> usize {
 }
 
 /// The basis of `prepared` for a backend of `profile`: from the cache when the run has one,
-/// else computed.
-pub fn basis(prepared: &Prepared, profile: Profile) -> Basis {
+/// else computed. `map`: with the map's ranges (for a frame that carries its shadow map).
+pub fn basis(prepared: &Prepared, profile: Profile, map: bool) -> Basis {
     let truths = truths(prepared);
-    let judged = judged(prepared, profile);
+    let judged = judged(prepared, profile, map);
     Basis { truths, judged }
 }
 
 /// The reference's judged render of `prepared` for `profile`: each light's run judged on its
 /// own ([`judged_light`]), the frame's colour all lights'.
-pub fn judged(prepared: &Prepared, profile: Profile) -> Judged {
+pub fn judged(prepared: &Prepared, profile: Profile, map: bool) -> Judged {
     let each = prepared
         .lights
         .iter()
-        .map(|light| judged_light(light, profile))
+        .map(|light| judged_light(light, profile, map))
         .collect();
     let case = prepared.case();
     Judged::of_lights(each, profile.effective_for(case), case.camera.color_format)
@@ -298,8 +303,11 @@ pub fn judged(prepared: &Prepared, profile: Profile) -> Judged {
 
 /// One light's judged run for `profile` (its effective profile), cached like [`basis`]'s:
 /// each light's run is its own entry, which a case's light shares with the one-light case
-/// that is the same run, and the entry format stays one light's.
-pub fn judged_light(prepared: &LightRun, profile: Profile) -> Judged {
+/// that is the same run, and the entry format stays one light's. `map`: with the map's
+/// ranges where the profile keeps them (read from the cache only when asked for: they are
+/// most of a desktop GL entry, and only a frame that carries its shadow map is judged by
+/// them); a computed entry has them either way.
+pub fn judged_light(prepared: &LightRun, profile: Profile, map: bool) -> Judged {
     let profile = profile.effective_for(prepared.case());
     let dir = std::env::var_os(ENV).map(PathBuf::from);
     cached(
@@ -307,13 +315,37 @@ pub fn judged_light(prepared: &LightRun, profile: Profile) -> Judged {
         "judged",
         key(&prepared.point, &profile.name()),
         write_judged,
-        |bytes, k| read_judged(bytes, k, profile, prepared.case().camera.color_format),
+        |bytes, k| read_judged(bytes, k, profile, prepared.case().camera.color_format, map),
         || {
-            let mut j =
-                umbra_ref::explain_light(prepared, ClipDepth::MinusOneToOne, profile, None).0;
+            // A card's narrowing is computed over the specs' judgement of the same light
+            // (cached too, and usually computed already for the run's own judgement): only
+            // the pixels the specs leave open are judged again
+            // ([`umbra_ref::judged_light_within`]).
+            let uncalibrated = profile.with_calibration(Default::default());
+            let mut j = if uncalibrated == profile {
+                umbra_ref::explain_light(prepared, ClipDepth::MinusOneToOne, profile, None).0
+            } else {
+                let spec = judged_light(prepared, uncalibrated, false);
+                match spec.lights.first() {
+                    Some(s) => umbra_ref::judged_light_within(
+                        prepared,
+                        ClipDepth::MinusOneToOne,
+                        profile,
+                        s,
+                    ),
+                    None => {
+                        umbra_ref::explain_light(prepared, ClipDepth::MinusOneToOne, profile, None)
+                            .0
+                    }
+                }
+            };
+            // The render's own clock divides its time: the shadow pass with the map's
+            // ranges, the lit pass with the judged lookups.
+            use crate::judge::stages::{Stage, attribute};
+            attribute(Stage::JudgedMap, j.frame.timings.shadow_pass);
+            attribute(Stage::JudgedLookups, j.frame.timings.lit_pass);
             // Only the GL 3.3 backends read their shadow map back; keep its ranges for them
             // (under their card's narrowing too).
-            let uncalibrated = profile.with_calibration(Default::default());
             if uncalibrated != Profile::GL {
                 j.lights.iter_mut().for_each(|l| l.map = Vec::new());
             }
@@ -332,6 +364,13 @@ fn cached<T>(
     reader: impl Fn(&[u8], u64) -> Result<T, String>,
     compute: impl FnOnce() -> T,
 ) -> T {
+    use crate::judge::stages::{Stage, time};
+    let (computing, reading) = if kind == "truth" {
+        (Stage::TruthRays, Stage::TruthRead)
+    } else {
+        (Stage::JudgedRender, Stage::JudgedRead)
+    };
+    let compute = || time(computing, compute);
     // No cache, or one that is not a directory ([`prepare`] said so, once, for the run).
     let Some(dir) = dir.filter(|d| d.is_dir() && load_secret(d)) else {
         return compute();
@@ -348,7 +387,7 @@ fn cached<T>(
             None
         }
     };
-    if let Some(v) = read() {
+    if let Some(v) = time(reading, read) {
         return v;
     }
     // Every backend's worker goes through the points in the same order, so two workers miss
@@ -356,33 +395,39 @@ fn cached<T>(
     // process) and the others wait for the file, unless the holder is gone.
     let lock = dir.join(format!("{kind}-{key:016x}.lock"));
     let _ = std::fs::create_dir_all(dir);
-    let held = loop {
-        match std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&lock)
-        {
-            Ok(mut f) => {
-                let _ = write!(f, "{}", std::process::id());
-                break true;
-            }
-            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                if let Some(v) = read() {
-                    return v;
+    let held = time(Stage::Wait, || {
+        loop {
+            match std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&lock)
+            {
+                Ok(mut f) => {
+                    let _ = write!(f, "{}", std::process::id());
+                    break Ok(true);
                 }
-                if holder_gone(&lock) {
-                    let _ = std::fs::remove_file(&lock);
-                    continue;
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    if let Some(v) = read() {
+                        break Err(v);
+                    }
+                    if holder_gone(&lock) {
+                        let _ = std::fs::remove_file(&lock);
+                        continue;
+                    }
+                    std::thread::sleep(Duration::from_millis(10));
                 }
-                std::thread::sleep(Duration::from_millis(10));
+                // A directory that cannot be written: compute without the cache.
+                Err(_) => break Ok(false),
             }
-            // A directory that cannot be written: compute without the cache.
-            Err(_) => break false,
         }
+    });
+    let held = match held {
+        Ok(held) => held,
+        Err(v) => return v,
     };
     if held {
         // The holder may have finished between our read and our lock.
-        if let Some(v) = read() {
+        if let Some(v) = time(reading, read) {
             let _ = std::fs::remove_file(&lock);
             return v;
         }
@@ -394,7 +439,10 @@ fn cached<T>(
     use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
     static STORE_FAILED: AtomicBool = AtomicBool::new(false);
     if !STORE_FAILED.load(Relaxed) {
-        if let Err(e) = store(dir, &file, &writer(&value, key)) {
+        let stored = time(Stage::CacheWrite, || {
+            store(dir, &file, &writer(&value, key))
+        });
+        if let Err(e) = stored {
             let first = !STORE_FAILED.swap(true, Relaxed);
             if held && first {
                 warn_once(
@@ -603,14 +651,102 @@ const MAX_INFLATED: u64 = 2 << 30;
 /// tenth of the size for a few tens of ms an entry, against the hundreds of ms (truth) to
 /// seconds (a judged render) that computing one costs.
 fn pack(bytes: &[u8]) -> Vec<u8> {
-    use flate2::{Compression, write::DeflateEncoder};
     let mut out = Vec::with_capacity(bytes.len() / 8 + 64);
     out.extend_from_slice(PACKED_MAGIC);
     out.extend_from_slice(&(bytes.len() as u64).to_le_bytes());
+    deflate_into(out, bytes)
+}
+
+/// `out` followed by `bytes` deflated at the fastest level.
+fn deflate_into(out: Vec<u8>, bytes: &[u8]) -> Vec<u8> {
+    use flate2::{Compression, write::DeflateEncoder};
     let mut z = DeflateEncoder::new(out, Compression::fast());
     // Writing into a Vec cannot fail.
     let _ = z.write_all(bytes);
     z.finish().unwrap_or_default()
+}
+
+/// The magic of an entry packed in parts ([`pack_parts`]).
+const PARTS_MAGIC: &[u8; 5] = b"UMBZ2";
+
+/// `parts` each deflated on its own behind [`PARTS_MAGIC`], their count (u32) and each one's
+/// inflated and deflated lengths (u64 each): a reader inflates only the parts it needs (a
+/// judged entry's map ranges, the larger part of a desktop GL entry, are read only by a
+/// backend that reads its map back).
+fn pack_parts(parts: &[&[u8]]) -> Vec<u8> {
+    let streams: Vec<Vec<u8>> = parts.iter().map(|p| deflate_into(Vec::new(), p)).collect();
+    let mut out = Vec::with_capacity(64 + streams.iter().map(Vec::len).sum::<usize>());
+    out.extend_from_slice(PARTS_MAGIC);
+    out.extend_from_slice(&(parts.len() as u32).to_le_bytes());
+    for (part, stream) in parts.iter().zip(&streams) {
+        out.extend_from_slice(&(part.len() as u64).to_le_bytes());
+        out.extend_from_slice(&(stream.len() as u64).to_le_bytes());
+    }
+    streams.iter().for_each(|s| out.extend_from_slice(s));
+    out
+}
+
+/// The first `wanted` parts [`pack_parts`] packed, inflated one after the other, or what is
+/// wrong with the entry (its checksum, around it, is checked before this).
+fn unpack_parts(bytes: &[u8], wanted: usize) -> Result<Vec<u8>, String> {
+    let head = PARTS_MAGIC.len() + 4;
+    if bytes.len() < head {
+        return Err(format!("is truncated ({} bytes)", bytes.len()));
+    }
+    if &bytes[..PARTS_MAGIC.len()] != PARTS_MAGIC {
+        return Err(format!(
+            "is not an entry packed in parts (starts {:?}; an older layout or another file)",
+            String::from_utf8_lossy(&bytes[..PARTS_MAGIC.len()])
+        ));
+    }
+    let u64_at = |at: usize| -> Option<u64> {
+        Some(u64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?))
+    };
+    let count = u32::from_le_bytes(
+        bytes[PARTS_MAGIC.len()..head]
+            .try_into()
+            .unwrap_or_default(),
+    ) as usize;
+    if count > 16 || wanted > count {
+        return Err(format!(
+            "has {count} parts where {wanted} are read (damaged or another layout)"
+        ));
+    }
+    let mut at = head + count * 16;
+    let mut lens = Vec::with_capacity(count);
+    for k in 0..count {
+        let (Some(len), Some(packed)) = (u64_at(head + 16 * k), u64_at(head + 16 * k + 8)) else {
+            return Err(format!("is truncated ({} bytes)", bytes.len()));
+        };
+        lens.push((len, packed));
+    }
+    let total: u64 = lens.iter().take(wanted).map(|l| l.0).sum();
+    if total > MAX_INFLATED {
+        return Err(format!(
+            "claims {total} bytes inflated, more than any entry (damaged)"
+        ));
+    }
+    let mut out = Vec::with_capacity(total as usize);
+    for &(len, packed) in lens.iter().take(wanted) {
+        let end = usize::try_from(packed)
+            .ok()
+            .and_then(|p| at.checked_add(p))
+            .filter(|e| *e <= bytes.len())
+            .ok_or_else(|| format!("is truncated ({} bytes)", bytes.len()))?;
+        let before = out.len() as u64;
+        flate2::read::DeflateDecoder::new(&bytes[at..end])
+            .take(len + 1)
+            .read_to_end(&mut out)
+            .map_err(|e| format!("cannot be inflated ({e}: truncated or damaged)"))?;
+        if out.len() as u64 - before != len {
+            return Err(format!(
+                "inflates to {} bytes, not the {len} its header says (truncated or damaged)",
+                out.len() as u64 - before
+            ));
+        }
+        at = end;
+    }
+    Ok(out)
 }
 
 /// What [`pack`] packed, or what is wrong with it (the file's checksum, around it, is
@@ -785,28 +921,34 @@ fn write_judged(j: &Judged, key: u64) -> Vec<u8> {
             put_f32s(&mut out, &l.c1);
             put_f32s(&mut out, &[l.ctol]);
         }
-        out.extend_from_slice(&(light.map.len() as u32).to_le_bytes());
+    }
+    // The map's ranges, each light's, in a part of their own ([`pack_parts`]).
+    let mut maps = Vec::new();
+    for light in &j.lights {
+        maps.extend_from_slice(&(light.map.len() as u32).to_le_bytes());
         for (lo, hi) in &light.map {
-            put_f32s(&mut out, &[*lo, *hi]);
+            put_f32s(&mut maps, &[*lo, *hi]);
         }
     }
-    sealed(pack(&out))
+    sealed(pack_parts(&[&out, &maps]))
 }
 
-/// A judged entry; `profile` and `color_format` are the key's case's (not stored).
+/// A judged entry; `profile` and `color_format` are the key's case's (not stored). Without
+/// `map`, the map's ranges are not inflated (the entry's lights have none).
 fn read_judged(
     bytes: &[u8],
     key: u64,
     profile: Profile,
     color_format: ColorFormat,
+    map: bool,
 ) -> Result<Judged, String> {
-    let inflated = unpack(unsealed(bytes)?)?;
+    let inflated = unpack_parts(unsealed(bytes)?, if map { 2 } else { 1 })?;
     let mut r = Reader {
         bytes: &inflated,
         at: 0,
     };
     let dims = r.header(JUDGED_MAGIC, key)?;
-    parse_judged(r, dims, profile, color_format)
+    parse_judged(r, dims, profile, color_format, map)
         .ok_or_else(|| "has a valid checksum but not the judged render's layout".to_string())
 }
 
@@ -815,6 +957,7 @@ fn parse_judged(
     (width, height, n): (u32, u32, usize),
     profile: Profile,
     color_format: ColorFormat,
+    map: bool,
 ) -> Option<Judged> {
     let color = r.take(n * 4)?.to_vec();
     let count = r.u32()? as usize;
@@ -824,6 +967,17 @@ fn parse_judged(
         let (plane, light) = parse_light(&mut r, n, profile)?;
         planes.push(plane);
         lights.push(light);
+    }
+    if map {
+        let f = |b: &[u8]| f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        for light in &mut lights {
+            let texels = r.u32()? as usize;
+            light.map = r
+                .take(texels.checked_mul(8)?)?
+                .chunks_exact(8)
+                .map(|b| (f(&b[..4]), f(&b[4..])))
+                .collect();
+        }
     }
     r.done()?;
     Some(Judged {
@@ -868,12 +1022,6 @@ fn parse_light(
             ctol: f(b, 33),
         })
         .collect();
-    let texels = r.u32()? as usize;
-    let map = r
-        .take(texels.checked_mul(8)?)?
-        .chunks_exact(8)
-        .map(|b| (f(b, 0), f(b, 4)))
-        .collect();
     let plane = umbra_case::LightPlane {
         visibility,
         surface,
@@ -883,7 +1031,7 @@ fn parse_light(
         legal,
         quantum,
         profile,
-        map,
+        map: Vec::new(),
     };
     Some((plane, light))
 }
@@ -1026,13 +1174,18 @@ mod tests {
         );
         let bytes = write_judged(&judged, kj);
         // What packing is for: a judged render is mostly runs of equal values.
-        let inflated = unpack(&bytes).expect("packed").len();
+        let inflated = unpack_parts(unsealed(&bytes).expect("sealed"), 2)
+            .expect("packed")
+            .len();
         assert!(
             bytes.len() * 4 < inflated,
             "packed {} bytes of {inflated}",
             bytes.len()
         );
-        let back = read_judged(&bytes, kj, profile, ColorFormat::Rgba8).expect("judged");
+        let back = read_judged(&bytes, kj, profile, ColorFormat::Rgba8, true).expect("judged");
+        let lit = read_judged(&bytes, kj, profile, ColorFormat::Rgba8, false).expect("judged");
+        assert!(lit.lights.iter().all(|l| l.map.is_empty()));
+        assert_eq!(lit.lights[0].legal, judged.lights[0].legal);
         assert_eq!(back.frame.color, judged.frame.color);
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(back.lights.len(), judged.lights.len());
@@ -1047,8 +1200,11 @@ mod tests {
             assert_eq!(b.map, j.map);
         }
         // Another key (another case or profile) is refused, and so is a truncated file.
-        assert!(read_judged(&bytes, kj ^ 1, profile, ColorFormat::Rgba8).is_err());
-        assert!(read_judged(&bytes[..bytes.len() - 1], kj, profile, ColorFormat::Rgba8).is_err());
+        for map in [true, false] {
+            assert!(read_judged(&bytes, kj ^ 1, profile, ColorFormat::Rgba8, map).is_err());
+            let cut = &bytes[..bytes.len() - 1];
+            assert!(read_judged(cut, kj, profile, ColorFormat::Rgba8, map).is_err());
+        }
         assert!(read_truth(&write_truth(&truth, kt)[1..], kt).is_err());
     }
 

@@ -27,3 +27,4 @@ pub mod measure;
 pub mod pictures;
 pub mod protocol;
 pub mod run;
+pub mod stages;

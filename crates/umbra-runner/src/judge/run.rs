@@ -14,6 +14,8 @@ use umbra_ref::truth::Truth;
 use umbra_report::check::Check;
 use umbra_report::{FailedCheck, TwinMetric};
 
+use crate::judge::stages::{Stage, time};
+
 /// One judged run.
 pub struct Judged {
     /// The run's inputs.
@@ -51,6 +53,23 @@ pub struct Judged {
     pub fingerprint: Fingerprint,
     /// The second judgement, against the backend's card (None without a calibration).
     pub card: Option<CardJudged>,
+    /// Each twin's frame as judged (see [`Rendered::twins`]), kept with `frame` so that the
+    /// run can be judged again under other deviations without rendering anything again.
+    pub twin_frames: Vec<Option<(Frame, bool)>>,
+}
+
+/// What a run rendered: its frame, and per twin of the point (in
+/// [`umbra_case::twin::twins_of`]'s order) the twin's frame and whether it was drawn over
+/// the case's own shadow map, where it was rendered. Judging it again under other deviations
+/// ([`judge_again`]) judges these same frames: the pictures that failed, not new renders of
+/// the same point, which cost a softpipe run seconds and would be the same frames anyway on
+/// a deterministic driver.
+#[derive(Clone, Default)]
+pub struct Rendered {
+    /// The run's own frame.
+    pub frame: Option<Frame>,
+    /// Each twin's frame (shadow maps dropped) and whether its shadow pass was shared.
+    pub twins: Vec<Option<(Frame, bool)>>,
 }
 
 /// A run judged against its backend's card: the spec's freedom narrowed to what the card's
@@ -95,6 +114,49 @@ pub fn run_point_as(
     deviations: umbra_case::Deviations,
     calibration: Calibration,
 ) -> Outcome {
+    run_point_over(
+        backend,
+        point,
+        twins,
+        deviations,
+        calibration,
+        Rendered::default(),
+    )
+}
+
+/// A run that was judged (`judged`, by [`run_point_as`]) judged again, its same frames (its
+/// own and its twins'), with `deviations` allowed and no card: its failed checks are what
+/// those deviations do not explain. Nothing is rendered again.
+pub fn judge_again(
+    backend: &mut dyn Backend,
+    point: CasePoint,
+    twins: bool,
+    deviations: umbra_case::Deviations,
+    judged: &Judged,
+) -> Outcome {
+    run_point_over(
+        backend,
+        point,
+        twins,
+        deviations,
+        Calibration::default(),
+        Rendered {
+            frame: Some(judged.frame.clone()),
+            twins: judged.twin_frames.clone(),
+        },
+    )
+}
+
+/// [`run_point_as`] over what `given` holds already rendered (nothing: everything is
+/// rendered).
+fn run_point_over(
+    backend: &mut dyn Backend,
+    point: CasePoint,
+    twins: bool,
+    deviations: umbra_case::Deviations,
+    calibration: Calibration,
+    given: Rendered,
+) -> Outcome {
     let profile = backend.profile().with_deviations(deviations);
     if let Support::Unsupported(why) = backend.supports(&Needs::of(&point.case)) {
         return Outcome::Skip(why);
@@ -103,17 +165,22 @@ pub fn run_point_as(
     // which a twin that sets the offset would no longer move anything.
     let as_written = point.clone();
     let prepared = Prepared::new(point);
-    let frame = match rendered(backend, &prepared) {
-        Ok(f) => f,
-        Err(o) => return o,
+    let frame = match given.frame {
+        Some(f) => f,
+        None => match rendered(backend, &prepared) {
+            Ok(f) => f,
+            Err(o) => return o,
+        },
     };
     let start = Instant::now();
     // The truth, and the reference's judged render for this backend's profile (which also
     // judges the twins, so even the reference needs it): computed once per point and profile
     // in a conformance run.
     let crate::judge::judge_cache::Basis { truths, judged } =
-        crate::judge::judge_cache::basis(&prepared, profile);
-    let error = crate::judge::judge_cache::truth_error(&frame, &truths);
+        crate::judge::judge_cache::basis(&prepared, profile, carries_map(&frame));
+    let error = time(Stage::Compare, || {
+        crate::judge::judge_cache::truth_error(&frame, &truths)
+    });
     let mut problems = Vec::new();
     let mut failed = Vec::new();
     let is_ref = backend.id().0 == "ref";
@@ -121,7 +188,9 @@ pub fn run_point_as(
     // must lie in its own interval, and its map in its own ranges. Anything else is a bug in
     // umbra's model, caught on every case in every conformance run.
     let (agreement, pixels) = {
-        let (a, px) = umbra_compare::reference::judge(&judged, &frame);
+        let (a, px) = time(Stage::Compare, || {
+            umbra_compare::reference::judge(&judged, &frame)
+        });
         if is_ref && (a.illegal > 0 || a.illegal_map > 0) {
             problems.push(format!(
                 "umbra's reference is not legal under its own model here ({}; {} map texels): a bug in umbra's tolerance model, not in a driver",
@@ -135,27 +204,38 @@ pub fn run_point_as(
         }
         (Some(a), px)
     };
-    let ssim = (!is_ref)
-        .then(|| umbra_compare::ssim(&judged.frame, &frame))
-        .flatten();
-    let legal = if is_ref {
-        Vec::new()
-    } else {
-        umbra_compare::reference::free_pixels(&judged)
-    };
+    let (ssim, legal) = time(Stage::Compare, || {
+        if is_ref {
+            (None, Vec::new())
+        } else {
+            (
+                umbra_compare::ssim(&judged.frame, &frame),
+                umbra_compare::reference::free_pixels(&judged),
+            )
+        }
+    });
     let twins_start = Instant::now();
+    let mut twin_frames = given.twins;
     let (twins, twin_failures): (Vec<TwinMetric>, Vec<(String, Failed)>) = if twins {
-        run_twins(backend, &as_written, &prepared, &frame, &error, &judged)
-            .into_iter()
-            .map(|(m, f)| {
-                let name = m.name.clone();
-                (m, (name, f))
-            })
-            .unzip()
+        time(Stage::TwinJudge, || {
+            run_twins(
+                backend,
+                &as_written,
+                &prepared,
+                (&frame, &error, &judged),
+                &mut twin_frames,
+            )
+        })
+        .into_iter()
+        .map(|(m, f)| {
+            let name = m.name.clone();
+            (m, (name, f))
+        })
+        .unzip()
     } else {
         (Vec::new(), Vec::new())
     };
-    let fingerprint = Fingerprint {
+    let fingerprint = time(Stage::Compare, || Fingerprint {
         profile: judged.profile.name(),
         frame: umbra_compare::reference::frame_failures(&frame, &pixels),
         map: umbra_compare::reference::map_failures(&judged, &frame),
@@ -163,7 +243,7 @@ pub fn run_point_as(
             .into_iter()
             .filter(|(_, f)| f.total > 0)
             .collect(),
-    };
+    });
     let twins_time = twins_start.elapsed();
     twins_failed(&twins, &mut failed, &mut problems);
     let reference = (!is_ref).then_some(judged.frame);
@@ -176,14 +256,18 @@ pub fn run_point_as(
         .as_ref()
         .is_some_and(|a| a.illegal == 0 && a.illegal_map == 0);
     let card = (!calibration.is_empty()).then(|| {
-        let c = judged_by_card(&prepared, &frame, profile.with_calibration(calibration));
+        let c = time(Stage::Card, || {
+            judged_by_card(&prepared, &frame, profile.with_calibration(calibration))
+        });
         if spec_legal && prepared.case().expect.backends_agree {
             card_failed(&c, is_ref, &mut failed, &mut problems);
         }
         c
     });
     let judge_time = start.elapsed().saturating_sub(twins_time);
-    interior_failed(&prepared, &error, &mut failed, &mut problems);
+    time(Stage::Compare, || {
+        interior_failed(&prepared, &error, &mut failed, &mut problems)
+    });
     Outcome::Done(Box::new(Judged {
         prepared,
         frame,
@@ -201,17 +285,23 @@ pub fn run_point_as(
         problems,
         fingerprint,
         card,
+        twin_frames,
     }))
 }
 
 /// `frame` judged against the reference's render for `profile`, a calibrated profile.
 fn judged_by_card(prepared: &Prepared, frame: &Frame, profile: umbra_case::Profile) -> CardJudged {
-    let judged = crate::judge::judge_cache::judged(prepared, profile);
+    let judged = crate::judge::judge_cache::judged(prepared, profile, carries_map(frame));
     let (agreement, _) = umbra_compare::reference::judge(&judged, frame);
     CardJudged {
         judged_as: judged.profile.name(),
         agreement,
     }
+}
+
+/// Whether `frame` carries a shadow map, which the judge then holds to the map's ranges.
+fn carries_map(frame: &Frame) -> bool {
+    frame.lights.iter().any(|p| p.shadow_map.is_some())
 }
 
 /// A run legal under the spec but not under its card: a failed `card` check and its line.
@@ -350,19 +440,23 @@ fn interior_failed(
 
 /// Renders every twin of the run on the same backend and compares it with `frame` (`legal`
 /// twins: the twin's frame is judged against the case's own judged render, as a backend's
-/// frame is, since the twin's change must not matter).
+/// frame is, since the twin's change must not matter). `frames`: per twin, its frame where
+/// one was rendered already (judged again, [`judge_again`]); each twin rendered here is kept
+/// there.
 fn run_twins(
     backend: &mut dyn Backend,
     as_written: &CasePoint,
     prepared: &Prepared,
-    frame: &Frame,
-    error: &TruthError,
-    judged: &umbra_ref::Judged,
+    (frame, error, judged): (&Frame, &TruthError, &umbra_ref::Judged),
+    frames: &mut Vec<Option<(Frame, bool)>>,
 ) -> Vec<(TwinMetric, Failed)> {
     let interior = |e: &TruthError| e.away_from_edges.false_shadow + e.away_from_edges.false_light;
-    umbra_case::twin::twins_of(as_written)
+    let plans = umbra_case::twin::twins_of(as_written);
+    frames.resize(plans.len(), None);
+    plans
         .into_iter()
-        .map(|plan| {
+        .zip(frames.iter_mut())
+        .map(|(plan, kept)| {
             let mut m = TwinMetric {
                 name: plan.name.clone(),
                 agree: serde_json::to_value(plan.agree)
@@ -396,13 +490,20 @@ fn run_twins(
                 return (m, Failed::default());
             }
             let twin_prepared = Prepared::new(point);
-            let twin = match backend.render_twin(&twin_prepared, prepared) {
+            let mut render = || match kept.clone() {
+                Some(given) => Ok(given),
+                None => time(Stage::TwinRender, || {
+                    backend.render_twin(&twin_prepared, prepared)
+                }),
+            };
+            let twin = match render() {
                 // A twin may change the shadow pass on purpose (another frustum, a moved
                 // scene): only its frame is held to the case, not its map.
                 Ok((mut f, shared)) => {
                     m.shared_shadow_pass = shared;
                     // Every light's map (only the first light's was dropped once).
                     f.lights.iter_mut().for_each(|p| p.shadow_map = None);
+                    *kept = Some((f.clone(), shared));
                     f
                 }
                 Err(e) => {

@@ -70,7 +70,7 @@ pub fn emit(case_file: &Path, backend_id: &str, out: &Path) -> Outcome {
     };
     let prepared = Prepared::new(point.clone());
     let crate::judge::judge_cache::Basis { judged: basis, .. } =
-        crate::judge::judge_cache::basis(&prepared, profile);
+        crate::judge::judge_cache::basis(&prepared, profile, true);
     let (frame, program) = match backend.render_recorded(&prepared) {
         Ok(r) => (Some(r.0), Some(r.1)),
         Err(BackendError::Unsupported(why)) => {
