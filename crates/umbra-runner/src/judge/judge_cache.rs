@@ -733,17 +733,7 @@ fn unpack_parts(bytes: &[u8], wanted: usize) -> Result<Vec<u8>, String> {
             .and_then(|p| at.checked_add(p))
             .filter(|e| *e <= bytes.len())
             .ok_or_else(|| format!("is truncated ({} bytes)", bytes.len()))?;
-        let before = out.len() as u64;
-        flate2::read::DeflateDecoder::new(&bytes[at..end])
-            .take(len + 1)
-            .read_to_end(&mut out)
-            .map_err(|e| format!("cannot be inflated ({e}: truncated or damaged)"))?;
-        if out.len() as u64 - before != len {
-            return Err(format!(
-                "inflates to {} bytes, not the {len} its header says (truncated or damaged)",
-                out.len() as u64 - before
-            ));
-        }
+        inflate_into(&mut out, &bytes[at..end], len)?;
         at = end;
     }
     Ok(out)
@@ -776,17 +766,25 @@ fn unpack(bytes: &[u8]) -> Result<Vec<u8>, String> {
         ));
     }
     let mut out = Vec::with_capacity(len.min(64 << 20) as usize);
-    flate2::read::DeflateDecoder::new(&bytes[head..])
+    inflate_into(&mut out, &bytes[head..], len)?;
+    Ok(out)
+}
+
+/// `stream` inflated onto the end of `out`, which must give exactly `len` bytes (the
+/// header's word: more or fewer is a damaged entry).
+fn inflate_into(out: &mut Vec<u8>, stream: &[u8], len: u64) -> Result<(), String> {
+    let before = out.len() as u64;
+    flate2::read::DeflateDecoder::new(stream)
         .take(len + 1)
-        .read_to_end(&mut out)
+        .read_to_end(out)
         .map_err(|e| format!("cannot be inflated ({e}: truncated or damaged)"))?;
-    if out.len() as u64 != len {
+    let got = out.len() as u64 - before;
+    if got != len {
         return Err(format!(
-            "inflates to {} bytes, not the {len} its header says (truncated or damaged)",
-            out.len()
+            "inflates to {got} bytes, not the {len} its header says (truncated or damaged)"
         ));
     }
-    Ok(out)
+    Ok(())
 }
 
 /// Whether the process named in `lock` has ended (killed on a timeout, crashed): its entry
