@@ -264,7 +264,20 @@ fn test(extra: &[String]) -> i32 {
         mesa::ensure_test_tools();
         0
     });
-    let code = phases.time("cargo test (build and run)", || {
+    // Built first on its own (`--no-run`), so the phase table separates the build from the
+    // tests: on a clean clone the build is half of this phase. A build that fails is 125, a
+    // failing test 1, as before.
+    let build = phases.time("cargo test: build (--no-run)", || {
+        let mut cmd = cargo();
+        cmd.args(["test", "--workspace", "--no-run"]);
+        cmd.args(extra);
+        status_of(cmd, false)
+    });
+    if build != 0 {
+        phases.print();
+        return build;
+    }
+    let code = phases.time("cargo test: run", || {
         let mut cmd = cargo();
         cmd.args(["test", "--workspace"]);
         cmd.args(extra);
@@ -423,8 +436,14 @@ fn workspace_root() -> std::path::PathBuf {
         .unwrap_or_default()
 }
 
-fn status(mut cmd: Command) -> i32 {
+fn status(cmd: Command) -> i32 {
     let tests = cmd.get_args().next().is_some_and(|a| a == "test");
+    status_of(cmd, tests)
+}
+
+/// `cmd`'s exit in umbra's four codes; `tests`: its 101 is a failed test (1), not a failed
+/// build (125).
+fn status_of(mut cmd: Command, tests: bool) -> i32 {
     let what = cmd.get_program().to_string_lossy().into_owned();
     match cmd.status() {
         Ok(s) => four(s, &what, tests),
