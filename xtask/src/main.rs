@@ -265,8 +265,9 @@ fn test(extra: &[String]) -> i32 {
         0
     });
     // Built first on its own (`--no-run`), so the phase table separates the build from the
-    // tests: on a clean clone the build is half of this phase. A build that fails is 125, a
-    // failing test 1, as before.
+    // tests (on a clean clone the build is half of the time). A test build that fails could
+    // not run (125, like any build of umbra under xtask; it was 1 while one command did both);
+    // a failing test is 1.
     let build = phases.time("cargo test: build (--no-run)", || {
         let mut cmd = cargo();
         cmd.args(["test", "--workspace", "--no-run"]);
