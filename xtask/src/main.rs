@@ -269,20 +269,18 @@ fn test(extra: &[String]) -> i32 {
     // not run (125, like any build of umbra under xtask; it was 1 while one command did both);
     // a failing test is 1.
     let build = phases.time("cargo test: build (--no-run)", || {
-        let mut cmd = cargo();
-        cmd.args(["test", "--workspace", "--no-run"]);
+        let mut cmd = cargo_args(&["test", "--workspace", "--no-run"]);
         cmd.args(extra);
-        status_of(cmd, false)
+        status(cmd)
     });
     if build != 0 {
         phases.print();
         return build;
     }
     let code = phases.time("cargo test: run", || {
-        let mut cmd = cargo();
-        cmd.args(["test", "--workspace"]);
+        let mut cmd = cargo_args(&["test", "--workspace"]);
         cmd.args(extra);
-        status(cmd)
+        status_of(cmd, true)
     });
     if code != 0 {
         phases.print();
@@ -437,13 +435,13 @@ fn workspace_root() -> std::path::PathBuf {
         .unwrap_or_default()
 }
 
+/// `cmd`'s exit in umbra's four codes, its 101 a build that failed or a panic (125).
 fn status(cmd: Command) -> i32 {
-    let tests = cmd.get_args().next().is_some_and(|a| a == "test");
-    status_of(cmd, tests)
+    status_of(cmd, false)
 }
 
-/// `cmd`'s exit in umbra's four codes; `tests`: its 101 is a failed test (1), not a failed
-/// build (125).
+/// `cmd`'s exit in umbra's four codes; `tests` (the one `cargo test` that runs the tests):
+/// its 101 is a failed test (1), not a failed build (125).
 fn status_of(mut cmd: Command, tests: bool) -> i32 {
     let what = cmd.get_program().to_string_lossy().into_owned();
     match cmd.status() {

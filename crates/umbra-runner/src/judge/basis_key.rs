@@ -117,7 +117,7 @@ pub fn workspace_key(root: &Path, toolchain: &str) -> Result<String, String> {
     for p in workspace_watched(root) {
         if p.is_dir() {
             files.extend(files_under(&p).map_err(|e| format!("{}: {e}", p.display()))?);
-        } else if p.exists() {
+        } else {
             files.push(p);
         }
     }
