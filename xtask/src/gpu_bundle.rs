@@ -84,7 +84,7 @@ fn bundle(out: Option<PathBuf>, profile: &str, root: &Path) -> Result<(), String
         return Err("cargo build failed".into());
     }
     let dir = if profile == "dev" { "debug" } else { profile };
-    assemble(&target_dir(root).join(dir).join("umbra"), &out, root)?;
+    assemble(&crate::target_dir(root).join(dir).join("umbra"), &out, root)?;
     let size = size_of(&out);
     println!(
         "gpu-bundle: {} ({:.1} MiB: umbra {:.1} MiB, cases and expectations {:.2} MiB) in {:.0} s\ngpu-bundle: run it with {}/run.sh (see its README.md)",
@@ -137,14 +137,6 @@ fn assemble(binary: &Path, out: &Path, root: &Path) -> Result<(), String> {
     executable(&script)
 }
 
-/// Cargo's target directory (`CARGO_TARGET_DIR`, else the workspace's `target/`).
-fn target_dir(root: &Path) -> PathBuf {
-    std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .map(|d| if d.is_absolute() { d } else { root.join(d) })
-        .unwrap_or_else(|| root.join("target"))
-}
-
 pub(crate) fn copy_tree(from: &Path, to: &Path) -> Result<(), String> {
     std::fs::create_dir_all(to).map_err(|e| format!("cannot create {}: {e}", to.display()))?;
     let entries =
@@ -193,7 +185,7 @@ mod tests {
             .parent()
             .expect("workspace")
             .to_path_buf();
-        let binary = target_dir(&root).join("debug/umbra");
+        let binary = crate::target_dir(&root).join("debug/umbra");
         assert!(
             binary.is_file(),
             "{} is not built: run cargo test --workspace",

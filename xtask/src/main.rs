@@ -37,6 +37,7 @@ mod fetch_mesa;
 mod gpu_bundle;
 mod mesa;
 mod mesa_ci;
+mod test_pool;
 
 use std::path::PathBuf;
 use std::process::{Command, ExitCode};
@@ -266,21 +267,28 @@ fn test(extra: &[String]) -> i32 {
     });
     // Built first on its own (`--no-run`), so the phase table separates the build from the
     // tests (on a clean clone the build is half of the time). A test build that fails could
-    // not run (125, like any build of umbra under xtask; it was 1 while one command did both);
-    // a failing test is 1.
+    // not run (125, like any build of umbra under xtask); a failing test is 1. The binaries
+    // then run two at a time (test_pool says why); what follows `--` goes to each of them.
+    let (cargo_extra, test_extra) = match extra.iter().position(|a| a == "--") {
+        Some(i) => (&extra[..i], &extra[i + 1..]),
+        None => (extra, &[][..]),
+    };
+    let mut binaries = Vec::new();
     let build = phases.time("cargo test: build (--no-run)", || {
-        let mut cmd = cargo_args(&["test", "--workspace", "--no-run"]);
-        cmd.args(extra);
-        status(cmd)
+        match test_pool::build(cargo_extra) {
+            Ok(b) => {
+                binaries = b;
+                0
+            }
+            Err(code) => code,
+        }
     });
     if build != 0 {
         phases.print();
         return build;
     }
-    let code = phases.time("cargo test: run", || {
-        let mut cmd = cargo_args(&["test", "--workspace"]);
-        cmd.args(extra);
-        status_of(cmd, true)
+    let code = phases.time("cargo test: run (two binaries at a time)", || {
+        test_pool::run(binaries, cargo_extra, test_extra)
     });
     if code != 0 {
         phases.print();
@@ -426,6 +434,15 @@ fn cargo() -> Command {
     let mut cmd = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
     cmd.current_dir(workspace_root());
     cmd
+}
+
+/// Cargo's target directory (`CARGO_TARGET_DIR`, relative to `root` when relative, else the
+/// workspace's `target/`).
+fn target_dir(root: &std::path::Path) -> PathBuf {
+    std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .map(|d| if d.is_absolute() { d } else { root.join(d) })
+        .unwrap_or_else(|| root.join("target"))
 }
 
 fn workspace_root() -> std::path::PathBuf {

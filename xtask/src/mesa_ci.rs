@@ -69,7 +69,7 @@ pub fn main(o: &Options, root: &Path) -> i32 {
     if build != 0 {
         return build;
     }
-    let umbra = target_dir(root).join("debug/umbra");
+    let umbra = crate::target_dir(root).join("debug/umbra");
     let backends = backends(&o.driver);
     let listed = match list(&umbra, root, &backends) {
         Ok(l) => l,
@@ -129,10 +129,6 @@ fn backends(driver: &str) -> Vec<String> {
             .map(|api| format!("{api}/{d}"))
             .collect(),
     }
-}
-
-fn target_dir(root: &Path) -> PathBuf {
-    std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from)
 }
 
 /// One test as `umbra deqp --list` gives it.
@@ -313,7 +309,7 @@ fn write_files(
             root.join("cases").display().to_string(),
             root.join("expectations").display().to_string(),
             out.join("results/umbra-pictures").display().to_string(),
-            target_dir(root)
+            crate::target_dir(root)
                 .join("umbra/cache/judge")
                 .display()
                 .to_string(),
