@@ -3,9 +3,10 @@
 //!
 //! Why: each test binary already runs its tests on every core, but many of umbra's tests wait
 //! on child processes (umbra itself, a driver's worker) and the longest binaries hold one or
-//! two long tests, so `cargo test --workspace` kept 1.5 of CI's 2 cores busy on average
+//! two long tests, so `cargo test --workspace` kept 1.6 of CI's 2 cores busy on average
 //! (measured on a clean build: 538 s of CPU in 340 s of wall time). A second binary beside the
-//! first fills those waits: 281 s for the same binaries (docs/performance.md, "The tests").
+//! first fills those waits: 281 s for the same binaries (docs/performance.md, "The build and
+//! the tests, faster").
 //!
 //! What it keeps of `cargo test`: the same binaries (cargo builds them and names them, with
 //! `--no-run --message-format=json-render-diagnostics`), each run from its package's directory
@@ -195,11 +196,13 @@ fn run_one(b: TestBinary, test_args: &[String]) -> Ran {
         Ok(o) => Err(ended(o.status)),
         Err(e) => Err(format!("could not start: {e}")),
     };
+    // Printed when it ends (cargo says "Running" when one starts): with its time.
     let mut text = format!(
-        "     Running {} ({}) [{}]\n",
+        "     Ran {} ({}) [{}] in {:.1} s\n",
         b.src,
         b.exe.display(),
-        b.package
+        b.package,
+        took.as_secs_f64()
     );
     if let Ok(o) = &out {
         text.push_str(&String::from_utf8_lossy(&o.stdout));
