@@ -133,21 +133,32 @@ struct Ran {
 pub fn run(binaries: Vec<TestBinary>, cargo_args: &[String], test_args: &[String]) -> i32 {
     let record = crate::target_dir(&crate::workspace_root()).join("xtask/test-durations.tsv");
     let last = read_durations(&record);
-    let queue = Mutex::new(VecDeque::from(longest_first(binaries, &last)));
-    let done: Mutex<Vec<Ran>> = Mutex::new(Vec::new());
-    std::thread::scope(|s| {
-        for _ in 0..LANES {
-            s.spawn(|| {
-                while let Some(b) = queue.lock().ok().and_then(|mut q| q.pop_front()) {
-                    let ran = run_one(b, test_args);
-                    if let Ok(mut d) = done.lock() {
-                        d.push(ran);
+    let order = longest_first(binaries, &last);
+    let expected = order.len();
+    let queue = Mutex::new(VecDeque::from(order));
+    // Each lane hands back what it ran; a binary is never dropped unreported (a poisoned
+    // queue is still a queue: taking from it cannot leave it half-changed).
+    let ran: Vec<Ran> = std::thread::scope(|s| {
+        let lanes: Vec<_> = (0..LANES)
+            .map(|_| {
+                s.spawn(|| {
+                    let mut ran = Vec::new();
+                    while let Some(b) = queue
+                        .lock()
+                        .unwrap_or_else(std::sync::PoisonError::into_inner)
+                        .pop_front()
+                    {
+                        ran.push(run_one(b, test_args));
                     }
-                }
-            });
-        }
+                    ran
+                })
+            })
+            .collect();
+        lanes
+            .into_iter()
+            .flat_map(|lane| lane.join().unwrap_or_default())
+            .collect()
     });
-    let ran = done.into_inner().unwrap_or_default();
     write_durations(&record, &ran, last);
     summary(&ran);
     let doc = {
@@ -158,6 +169,13 @@ pub fn run(binaries: Vec<TestBinary>, cargo_args: &[String], test_args: &[String
         }
         crate::status_of(cmd, true)
     };
+    if ran.len() != expected {
+        eprintln!(
+            "FAILED: {} of {expected} test binaries ran to an end (a lane of xtask stopped)",
+            ran.len()
+        );
+        return 1;
+    }
     if ran.iter().any(|r| r.outcome.is_err()) {
         return 1;
     }
