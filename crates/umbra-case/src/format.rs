@@ -883,8 +883,9 @@ pub enum Filter {
     Linear,
     /// `{ "pcf": N }`: N x N NEAREST compares averaged in the shader, N in 2..=15.
     Pcf(u32),
-    /// `"castano13"`: Castano's 13-tap filter of The Witness (Bevy's default directional and
-    /// spot filter, `ShadowFilteringMethod::Gaussian`): nine LINEAR compares placed and
+    /// `"castano13"`: Castano's filter of The Witness as Bevy's default directional and spot
+    /// filter (`ShadowFilteringMethod::Gaussian`) runs it, `sample_shadow_map_castano_thirteen`
+    /// (nine samples: the name is for Castaño's 2013 article): nine LINEAR compares placed and
     /// weighted so that their sum, over 144, is a separable 6x6-texel tent (weights
     /// 4 − 3s, 7, 1 + 3s per axis). 2D maps only (Bevy filters cube maps otherwise).
     Castano13,

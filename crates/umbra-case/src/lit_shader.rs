@@ -66,7 +66,7 @@ pub trait Dialect {
     /// the sampler (a LINEAR compare sampler) or, `manual`, by the shader's four `tap`s with
     /// bilinear weights ([`Taps::Castano13`]'s taps).
     fn compare_at(&self, manual: bool) -> String;
-    /// Castano's 13-tap filter at `c.xy`, written as Bevy's
+    /// Castano's nine-sample filter at `c.xy`, written as Bevy's
     /// `sample_shadow_map_castano_thirteen` writes it (same operations, same order), each
     /// of its nine taps a `compare_at`; returns the sum over 144.
     fn castano(&self) -> &'static str;

@@ -187,7 +187,7 @@ pub enum Taps {
         /// (the threshold sweep's filter-weights error; 0 = exact).
         weight_gain_ppm: i32,
     },
-    /// Castano's 13-tap filter: nine bilinear compares (the sampler's, or the shader's
+    /// Castano's filter (Bevy's `castano_thirteen`, named for the 2013 article): nine bilinear compares (the sampler's, or the shader's
     /// four taps where it compares itself) weighted into a 6 × 6-texel tent.
     Castano13,
     /// N × N nearest taps around c, averaged.
