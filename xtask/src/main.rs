@@ -32,6 +32,7 @@
 //!   --good REV --bad REV`, `cargo xtask reduce CASE --point ID --backend ID`: the same set-up,
 //!   then `umbra drivers`, `umbra bisect`, `umbra reduce`.
 
+mod bless_patch;
 mod disk;
 mod fetch_mesa;
 mod gpu_bundle;
@@ -202,6 +203,10 @@ fn main() -> ExitCode {
                 &workspace_root(),
             )
         }
+        "conformance" => {
+            mesa::ensure();
+            conformance_ci(&args)
+        }
         cmd => {
             mesa::ensure();
             umbra(&[cmd], &args)
@@ -298,9 +303,7 @@ fn test(extra: &[String]) -> i32 {
     // the judge on scenes it was not developed against (a fixed seed: the same 60 generated
     // cases in every CI run, about a minute on 2 cores), then the catalogue again on the
     // newest Mesa Debian ships, so umbra stays green on what its users run today.
-    let conformance = phases.time("conformance (this machine's Mesa)", || {
-        umbra(&["conformance"], &[])
-    });
+    let conformance = phases.time("conformance (this machine's Mesa)", || conformance_ci(&[]));
     let selftest = phases.time("selftest", || umbra(&["selftest"], &[]));
     let soak = phases.time("soak", || umbra(&["soak"], &CI_SOAK.map(String::from)));
     let current = phases.time("conformance (sid's Mesa, fetch included)", current_mesa);
@@ -369,10 +372,17 @@ fn current_mesa() -> i32 {
         return code;
     }
     let dir = root.join("target").join("mesa").join(NEWEST_SUITE);
-    umbra(
-        &["conformance"],
-        &["--mesa".into(), dir.display().to_string()],
-    )
+    conformance_ci(&["--mesa".into(), dir.display().to_string()])
+}
+
+/// `umbra conformance ARGS`, and under CI, where it changed pictures, the patch that blesses
+/// them for review ([`bless_patch`]): the exit code is the run's.
+fn conformance_ci(args: &[String]) -> i32 {
+    let code = umbra(&["conformance"], args);
+    if under_ci() && code != COULD_NOT_RUN {
+        bless_patch::after_phase(&workspace_root(), args);
+    }
+    code
 }
 
 /// The soak `cargo xtask test` runs (README, "Generated scenes").
