@@ -53,6 +53,23 @@ impl Status {
         }
     }
 
+    /// Where the report's gallery puts a run (issue 59): failures first (every regression:
+    /// a failure, a crash, a timeout, an unexpected pass, an order-dependent failure), then
+    /// flakes, expected failures, skips and passes, the order a driver developer reads in.
+    pub fn glance_rank(&self) -> u8 {
+        match self {
+            Status::Fail
+            | Status::Crash
+            | Status::Timeout
+            | Status::UnexpectedPass
+            | Status::OrderDependent => 0,
+            Status::Flake => 1,
+            Status::ExpectedFail => 2,
+            Status::Skip(_) => 3,
+            Status::Pass => 4,
+        }
+    }
+
     /// The name deqp-runner's parser reads (`RunnerStatus`'s FromStr in deqp-runner 0.24's
     /// `runner_results.rs`), for results.csv and failures.csv, which Mesa's CI tools read:
     /// an unexpected pass is `UnexpectedImprovement(Pass)` since deqp-runner 0.16, and an

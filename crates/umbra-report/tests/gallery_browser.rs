@@ -85,6 +85,21 @@ fn attribute<'a>(dom: &'a str, name: &str) -> Option<&'a str> {
     dom[at..].split('"').next()
 }
 
+/// report.html of `results` (pictures under `pictures`) written in `dir`: its path.
+fn write_page(dir: &Path, results: &[RunResult], pictures: &Path) -> PathBuf {
+    let html = umbra_report::html::report(
+        results,
+        "ref: umbra | CPU reference",
+        &dir.join("failures"),
+        pictures,
+        "umbra conformance",
+        &TimeBudget::default(),
+    );
+    let page = dir.join("report.html");
+    std::fs::write(&page, html).expect("write page");
+    page
+}
+
 #[test]
 fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
     let dir = scratch("page");
@@ -92,16 +107,7 @@ fn the_gallery_loads_in_chromium_with_one_cell_per_run_and_opens_a_run() {
     let mut results = runs_of_every_status(&pictures);
     let changed = changed_legal_run(&pictures);
     results.push(changed.clone());
-    let html = umbra_report::html::report(
-        &results,
-        "ref: umbra | CPU reference",
-        &dir.join("failures"),
-        &pictures,
-        "umbra conformance",
-        &TimeBudget::default(),
-    );
-    let page = dir.join("report.html");
-    std::fs::write(&page, html).expect("write page");
+    let page = write_page(&dir, &results, &pictures);
 
     let (dom, log) = dump(&page, "");
     the_page_runs_with_one_closed_cell_per_run(&dom, &log, &results);
@@ -289,6 +295,116 @@ fn a_failing_run_opens_with_its_pictures_and_commands(page: &Path, results: &[Ru
         )) && !dom.contains("id=\"g-repro-line\" hidden"),
         "the detail view of a driver's failed run shows the umbra repro command"
     );
+}
+
+/// Issue 59's glance: the gallery puts failures first (then flakes, expected failures, skips
+/// and passes), its legend counts each status and tells it by more than shade, no name is cut,
+/// and a run's detail view zooms with whole pixels and sets another backend's frame of the
+/// same point beside it with their difference, counted in the page.
+#[test]
+fn the_gallery_reads_at_a_glance_failures_first_zoomed_and_side_by_side() {
+    let dir = scratch("glance");
+    let pictures = dir.join("pictures");
+    let mut results = runs_of_every_status(&pictures);
+    // Two backends' frames of one point that differ by 3 in red at every pixel, and a name
+    // far longer than a cell is wide.
+    let long = "a-case-whose-name-is-far-longer-than-any-cell-is-wide@shadow.bias.polygon_offset=[2.0,4.0]";
+    for (backend, status, shade) in [
+        ("gl33/llvmpipe", Status::Fail, 100u8),
+        ("gles3/llvmpipe", Status::Pass, 103u8),
+    ] {
+        let r = run(backend, long, status);
+        let d = pictures.join(umbra_report::names::file_name(&r.name));
+        std::fs::create_dir_all(&d).expect("run dir");
+        png(&d.join("thumb.png"), 48, 36, shade);
+        png(&d.join("color.png"), 160, 120, shade);
+        png(&d.join("reference.png"), 160, 120, 0);
+        results.push(r);
+    }
+    let page = write_page(&dir, &results, &pictures);
+
+    let (dom, log) = dump(&page, "");
+    assert!(!log.contains("Uncaught"), "console: {log}");
+    assert_eq!(attribute(&dom, "data-script-errors"), None, "script errors");
+    // Failures first: the cells' statuses in page order never go back up the list.
+    let rank = |s: &str| match s {
+        "Fail" | "Crash" | "Timeout" | "UnexpectedPass" | "OrderDependent" => 0,
+        "Flake" => 1,
+        "ExpectedFail" => 2,
+        "Skip" => 3,
+        _ => 4,
+    };
+    let order: Vec<u8> = dom
+        .split("class=\"cell ")
+        .skip(1)
+        .map(|c| rank(c.split(['"', ' ']).next().unwrap_or("")))
+        .collect();
+    assert_eq!(order.len(), results.len());
+    assert!(
+        order.windows(2).all(|w| w[0] <= w[1]),
+        "failures first: {order:?}"
+    );
+    assert_eq!(order[0], 0, "a failure leads");
+    // The legend: each status present, with its count, in the gallery's order.
+    for (status, word) in [
+        ("Fail", "fail"),
+        ("Crash", "crash"),
+        ("ExpectedFail", "expected fail"),
+        ("Skip", "skip"),
+        ("Pass", "pass"),
+    ] {
+        let n = results.iter().filter(|r| r.status.name() == status).count();
+        assert!(
+            dom.contains(&format!("data-status=\"{status}\">{word} {n}</button>")),
+            "legend entry for {status} ({n})"
+        );
+    }
+    // Each cell says its status in words, and no shown name overflows its cell.
+    assert!(dom.contains("<span class=\"badge\">fail</span>"));
+    assert!(dom.contains("<span class=\"badge\">expected fail</span>"));
+    assert_eq!(
+        attribute(&dom, "data-gallery-clipped"),
+        Some("0"),
+        "no name is cut"
+    );
+
+    // The failing run zoomed 4x, the other backend's frame beside it and their difference.
+    let failing = format!("gl33/llvmpipe/{long}");
+    let (dom, log) = dump(
+        &page,
+        &format!(
+            "#run={}&zoom=4&beside=gles3/llvmpipe",
+            umbra_report::names::url_component(&failing)
+        ),
+    );
+    assert!(!log.contains("Uncaught"), "console: {log}");
+    assert!(
+        dom.contains("<div id=\"g-detail\">"),
+        "the link opens the run"
+    );
+    assert_eq!(attribute(&dom, "data-gallery-zoom"), Some("4"));
+    let detail = &dom[dom.find("id=\"g-pictures\"").expect("pictures box")..];
+    assert!(
+        detail.contains("style=\"width: 640px;\""),
+        "a 160-px frame at 4x is 640 px wide: {}",
+        &detail[..detail.len().min(600)]
+    );
+    assert_eq!(
+        attribute(&dom, "data-gallery-drawn-width"),
+        Some("640"),
+        "and drawn so, whole pixels 4 wide"
+    );
+    assert_eq!(
+        attribute(&dom, "data-gallery-beside"),
+        Some("gles3/llvmpipe")
+    );
+    assert_eq!(
+        attribute(&dom, "data-gallery-diff-px"),
+        Some("19200"),
+        "every pixel of 160x120 differs"
+    );
+    assert_eq!(attribute(&dom, "data-gallery-diff-step"), Some("3"));
+    assert!(detail.contains("19200 px differ, largest step 3/255"));
 }
 
 /// What a case's name, a driver's string or an error may hold: a comment opener and a script
