@@ -830,6 +830,23 @@ impl Expectations {
             // A cause does not show on every scene: a pass under it is a pass.
             (Status::Pass | Status::Flake, _) if !e.when.is_empty() => (raw, None),
             (Status::Pass | Status::Flake, _) => (Status::UnexpectedPass, Some(why)),
+            // A deviation models how a driver departs from the specs, which the judge's
+            // intervals then allow; a picture that changed from its own golden on the release
+            // it was blessed on is a change of the driver's output, which no deviation
+            // explains. Re-judged under one, the golden check's tolerance (the pixels the
+            // judge leaves free) widens with it and let such a change read as an expected
+            // failure (bevy-sun's corrected bias on softpipe, issue 59: 39 px changed).
+            (Status::Fail, Expected::Deviation(d))
+                if failed.iter().any(|c| c.check == Check::Golden) =>
+            {
+                (
+                    Status::Fail,
+                    Some(format!(
+                        "fails differently than expected: its picture changed from its golden, which the deviation {} cannot explain (a deviation widens what the judge allows, not the driver's own picture); review the change and `cargo xtask bless`; {why}",
+                        d.name()
+                    )),
+                )
+            }
             (Status::Fail, Expected::Deviation(d)) => match under_deviation {
                 Some([]) if !failed.is_empty() => (Status::ExpectedFail, Some(why)),
                 Some(still) if !still.is_empty() => (
@@ -1433,6 +1450,21 @@ mod tests {
         );
         assert_eq!(status, Status::Fail);
         assert!(why.unwrap_or_default().contains("still fails value=3"));
+        // A changed picture is not a deviation's to explain, even where the judgement under
+        // the deviation has nothing left.
+        let (status, why) = e.apply(
+            "gl33/zink/new-case",
+            &with_units,
+            Status::Fail,
+            &failed(&[("golden", 1)]),
+            Some(&[]),
+            &[],
+        );
+        assert_eq!(status, Status::Fail);
+        assert!(
+            why.unwrap_or_default()
+                .contains("its picture changed from its golden")
+        );
         // Not judged again (a crash, say, or no judged check): not explained.
         let (status, _) = e.apply(
             "gl33/zink/new-case",
