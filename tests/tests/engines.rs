@@ -129,7 +129,7 @@ fn leaves(v: &Value, at: String, out: &mut Vec<(String, Value)>) {
                 leaves(x, format!("{at}/{k}"), out);
             }
         }
-        // An array of numbers is one value (a size, a position) unless a row names its items.
+        // Item by item: a row that names the array whole covers them (`drift`'s `named`).
         Value::Array(a) => {
             for (i, x) in a.iter().enumerate() {
                 leaves(x, format!("{at}/{i}"), out);

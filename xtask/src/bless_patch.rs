@@ -167,7 +167,7 @@ fn make(
         std::fs::remove_dir_all(&repo).map_err(|e| format!("{}: {e}", repo.display()))?;
     }
     std::fs::create_dir_all(&repo).map_err(|e| format!("{}: {e}", repo.display()))?;
-    copy_tree(golden, &repo.join("golden"))?;
+    crate::gpu_bundle::copy_tree(golden, &repo.join("golden"))?;
     git(&repo, &["init", "--quiet"])?;
     git(&repo, &["add", "--all"])?;
     git(
@@ -199,33 +199,24 @@ fn make(
         }
     }
     git(&repo, &["add", "--all"])?;
-    let diff = Command::new("git")
-        .current_dir(&repo)
-        .args(["diff", "--cached", "--binary"])
-        .output()
-        .map_err(|e| format!("git diff: {e}"))?;
-    if !diff.status.success() {
-        return Err(format!(
-            "git diff: {}",
-            String::from_utf8_lossy(&diff.stderr).trim()
-        ));
-    }
-    if diff.stdout.is_empty() {
+    let diff = git(&repo, &["diff", "--cached", "--binary"])?;
+    if diff.is_empty() {
         return Ok(None);
     }
     let patch = dir.join("bless.patch");
-    std::fs::write(&patch, &diff.stdout).map_err(|e| format!("{}: {e}", patch.display()))?;
+    std::fs::write(&patch, &diff).map_err(|e| format!("{}: {e}", patch.display()))?;
     Ok(Some(patch))
 }
 
-fn git(dir: &Path, args: &[&str]) -> Result<(), String> {
+/// `git ARGS` in `dir`: its standard output, or what it said on failure.
+fn git(dir: &Path, args: &[&str]) -> Result<Vec<u8>, String> {
     let out = Command::new("git")
         .current_dir(dir)
         .args(args)
         .output()
         .map_err(|e| format!("git {}: {e}", args.join(" ")))?;
     if out.status.success() {
-        Ok(())
+        Ok(out.stdout)
     } else {
         Err(format!(
             "git {}: {}",
@@ -233,22 +224,6 @@ fn git(dir: &Path, args: &[&str]) -> Result<(), String> {
             String::from_utf8_lossy(&out.stderr).trim()
         ))
     }
-}
-
-/// `from` copied to `to`, files and folders (no links: a golden directory holds none).
-fn copy_tree(from: &Path, to: &Path) -> Result<(), String> {
-    std::fs::create_dir_all(to).map_err(|e| format!("{}: {e}", to.display()))?;
-    let entries = std::fs::read_dir(from).map_err(|e| format!("{}: {e}", from.display()))?;
-    for e in entries {
-        let e = e.map_err(|e| format!("{}: {e}", from.display()))?;
-        let (src, dst) = (e.path(), to.join(e.file_name()));
-        if src.is_dir() {
-            copy_tree(&src, &dst)?;
-        } else {
-            std::fs::copy(&src, &dst).map_err(|e| format!("{}: {e}", src.display()))?;
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]
@@ -336,13 +311,9 @@ mod tests {
         std::fs::write(scratch.join("golden/ref/a.snap.png"), [9u8, 0, 7]).expect("write");
         std::fs::write(scratch.join("golden/ref/new.snap.png"), [1u8, 2]).expect("write");
         git(&scratch, &["add", "--all"]).expect("add");
-        let diff = Command::new("git")
-            .current_dir(&scratch)
-            .args(["diff", "--cached", "--binary"])
-            .output()
-            .expect("diff");
+        let diff = git(&scratch, &["diff", "--cached", "--binary"]).expect("diff");
         let patch = base.join("p.patch");
-        std::fs::write(&patch, &diff.stdout).expect("write");
+        std::fs::write(&patch, &diff).expect("write");
         git(&user, &["init", "--quiet"]).expect("init");
         git(&user, &["apply", &patch.display().to_string()]).expect("git apply takes it");
         assert_eq!(
