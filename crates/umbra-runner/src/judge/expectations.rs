@@ -833,9 +833,11 @@ impl Expectations {
             // A deviation models how a driver departs from the specs, which the judge's
             // intervals then allow; a picture that changed from its own golden on the release
             // it was blessed on is a change of the driver's output, which no deviation
-            // explains. Re-judged under one, the golden check's tolerance (the pixels the
-            // judge leaves free) widens with it and let such a change read as an expected
-            // failure (bevy-sun's corrected bias on softpipe, issue 59: 39 px changed).
+            // explains. The judgement again under the deviation (`judge::run::judge_again`)
+            // makes the judged checks only, never the golden check (made once, on the frame,
+            // in `judge::answer`), so `under_deviation` cannot hold it, and a changed picture
+            // read as explained: an expected failure (bevy-sun's corrected bias on softpipe,
+            // issue 59, while every other backend failed).
             (Status::Fail, Expected::Deviation(d))
                 if failed.iter().any(|c| c.check == Check::Golden) =>
             {
