@@ -361,6 +361,7 @@ impl MesaBuild {
         };
         env.push(("VK_ICD_FILENAMES".into(), icd.clone()));
         env.push(("VK_DRIVER_FILES".into(), icd));
+        env.extend(shader_cache_env(&self.root, |k| std::env::var_os(k)));
         env
     }
 
@@ -714,9 +715,52 @@ pub fn check_loaded(root: &Path, libs: &[PathBuf]) -> Result<(), String> {
     Ok(())
 }
 
+/// Mesa's on-disk shader cache for the build at `root`, apart from every other Mesa's:
+/// `MESA_SHADER_CACHE_DIR` under the user's cache directory, named for the build's path.
+/// Two releases sharing the default `~/.cache/mesa_shader_cache` tear each other's index: a
+/// worker of sid's 26.2.6 died of SIGBUS in `libgallium` reading that index while 22.3.6's
+/// workers wrote it (a catalogue and a bless on the two releases at once; the rerun on a
+/// fresh worker passed, a flake). Left as it is where the user chose a cache or turned it
+/// off (`environ` reads the environment).
+fn shader_cache_env(
+    root: &Path,
+    environ: impl Fn(&str) -> Option<std::ffi::OsString>,
+) -> Option<(String, String)> {
+    let chosen = ["MESA_SHADER_CACHE_DIR", "MESA_SHADER_CACHE_DISABLE"]
+        .iter()
+        .any(|k| environ(k).is_some());
+    if chosen {
+        return None;
+    }
+    let base = environ("XDG_CACHE_HOME")
+        .map(PathBuf::from)
+        .or_else(|| environ("HOME").map(|h| PathBuf::from(h).join(".cache")))
+        .unwrap_or_else(std::env::temp_dir);
+    let dir = base.join(format!(
+        "umbra-mesa-{:08x}",
+        umbra_report::names::fnv1a(&root.to_string_lossy())
+    ));
+    Some((
+        "MESA_SHADER_CACHE_DIR".into(),
+        dir.to_string_lossy().into_owned(),
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_build_keeps_its_own_shader_cache_unless_the_user_chose_one() {
+        let home = |k: &str| (k == "HOME").then(|| std::ffi::OsString::from("/home/u"));
+        let (k, a) = shader_cache_env(Path::new("/m/sid"), home).expect("a cache of its own");
+        assert_eq!(k, "MESA_SHADER_CACHE_DIR");
+        assert!(a.starts_with("/home/u/.cache/umbra-mesa-"), "{a}");
+        let (_, b) = shader_cache_env(Path::new("/m/25.0"), home).expect("a cache of its own");
+        assert_ne!(a, b, "two builds, two caches");
+        let chosen = |k: &str| (k == "MESA_SHADER_CACHE_DISABLE").then(|| "1".into());
+        assert_eq!(shader_cache_env(Path::new("/m/sid"), chosen), None);
+    }
 
     #[test]
     fn a_library_outside_the_build_is_refused_by_path() {
