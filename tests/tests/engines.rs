@@ -26,7 +26,7 @@ struct Row {
     source: String,
 }
 
-/// One engine's section: its release line (`release: ENGINE TAG COMMIT`) and rows.
+/// One engine's section: its release line (`release: ENGINE TAG PIN`) and rows.
 #[derive(Debug, Default)]
 struct Section {
     release: Option<(String, String)>,
@@ -50,16 +50,12 @@ fn parse(text: &str) -> Result<BTreeMap<String, Section>, Vec<String>> {
         if let Some(r) = line.strip_prefix("release: ") {
             let words: Vec<&str> = r.split_whitespace().collect();
             match words.as_slice() {
-                [name, tag, commit]
-                    if *name == e
-                        && commit.len() == 40
-                        && commit.chars().all(|c| c.is_ascii_hexdigit()) =>
-                {
+                [name, tag, pin] if *name == e && is_pin(pin) => {
                     sections.entry(e).or_default().release =
-                        Some((tag.to_string(), commit.to_string()));
+                        Some((tag.to_string(), pin.to_string()));
                 }
                 _ => errors.push(format!(
-                    "cases/engines.md:{n}: a release line is `release: {e} TAG COMMIT` (the 40-digit commit the tag names), not `{line}`"
+                    "cases/engines.md:{n}: a release line is `release: {e} TAG PIN`, PIN the 40-digit commit the tag names or `npm:PACKAGE@VERSION#sha1=SHASUM` (the registry's 40-digit shasum of the release's tarball), not `{line}`"
                 )),
             }
             continue;
@@ -111,6 +107,21 @@ fn parse(text: &str) -> Result<BTreeMap<String, Section>, Vec<String>> {
     }
 }
 
+/// What pins a release's tree: the 40-digit git commit its tag names, or, where the tree was
+/// read from a package registry's tarball (three.js's npm package: its repository is too
+/// large to fetch here), `npm:PACKAGE@VERSION#sha1=SHASUM` with the registry's shasum.
+fn is_pin(pin: &str) -> bool {
+    let hex40 = |h: &str| h.len() == 40 && h.chars().all(|c| c.is_ascii_hexdigit());
+    match pin.strip_prefix("npm:") {
+        Some(rest) => rest.split_once("#sha1=").is_some_and(|(package, sum)| {
+            package.rsplit_once('@').is_some_and(|(name, version)| {
+                !name.is_empty() && !version.is_empty() && hex40(sum)
+            })
+        }),
+        None => hex40(pin),
+    }
+}
+
 /// `path/to/file.ext:LINE`, the line a positive number.
 fn is_path_line(s: &str) -> bool {
     s.rsplit_once(':').is_some_and(|(path, line)| {
@@ -157,7 +168,7 @@ fn drift(sections: &BTreeMap<String, Section>, cases: &Path) -> Vec<String> {
     for (engine, s) in sections {
         if s.release.is_none() {
             errors.push(format!(
-                "cases/engines.md: the {engine} section has no `release: {engine} TAG COMMIT` line"
+                "cases/engines.md: the {engine} section has no `release: {engine} TAG PIN` line"
             ));
         }
         for r in &s.rows {
@@ -250,6 +261,15 @@ fn every_engine_peer_is_what_its_pinned_release_sets() {
         .expect("Bevy's normal bias has a row");
     let expected = 1.8f32 * std::f32::consts::SQRT_2;
     assert_eq!(bias.value.as_f64().map(|v| v as f32), Some(expected));
+    // three.js's peer is in the pack, under its current PCF filter.
+    let three = &sections["three.js"];
+    assert!(
+        three
+            .rows
+            .iter()
+            .any(|r| r.field == "/shadow/filter" && r.value == "vogel5"),
+        "three.js's filter has a row"
+    );
 }
 
 /// The check fails where it should: a value changed in the case, a field left without a
@@ -261,6 +281,14 @@ fn a_peer_case_edited_without_the_pack_fails_naming_the_field() {
     let mut doc: Value =
         serde_json::from_str(&std::fs::read_to_string(&src).expect("bevy-sun")).expect("json");
     let dir = std::env::temp_dir().join(format!("umbra-engines-{}", std::process::id()));
+    // Every other peer the pack names, copied as it is.
+    for s in sections.values() {
+        for r in &s.rows {
+            let to = dir.join(&r.case);
+            std::fs::create_dir_all(to.parent().expect("a case's folder")).expect("dir");
+            std::fs::copy(root().join("cases").join(&r.case), to).expect("copy");
+        }
+    }
     let write = |doc: &Value| {
         std::fs::create_dir_all(dir.join("cascades")).expect("dir");
         std::fs::write(
@@ -304,6 +332,9 @@ fn a_malformed_pack_line_is_named() {
     let bad = "## Bevy\n\nrelease: Bevy v1 abc\n\n| a.json | /x | `nope | src/x.rs:1 | how |\n| a.json | /y | `1` | somewhere | how |\n";
     let e = parse(bad).expect_err("three bad lines");
     assert_eq!(e.len(), 3, "{e:?}");
+    let sum = "face29ee2de9bcc31a1b573a76f224e35e0b2894";
+    assert!(is_pin(sum) && is_pin(&format!("npm:three@0.187.0#sha1={sum}")));
+    assert!(!is_pin("npm:three@0.187.0") && !is_pin(&format!("npm:three#sha1={sum}")));
     assert!(e[0].contains(":3:") && e[0].contains("release"), "{e:?}");
     assert!(e[1].contains(":5:") && e[1].contains("not JSON"), "{e:?}");
     assert!(e[2].contains(":6:") && e[2].contains("PATH:LINE"), "{e:?}");

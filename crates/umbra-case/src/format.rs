@@ -889,13 +889,28 @@ pub enum Filter {
     /// weighted so that their sum, over 144, is a separable 6x6-texel tent (weights
     /// 4 − 3s, 7, 1 + 3s per axis). 2D maps only (Bevy filters cube maps otherwise).
     Castano13,
+    /// `"vogel5"`: three.js's `PCFShadowMap` as r187's `shadowmap_pars_fragment` writes it
+    /// for 2D maps: five LINEAR compares at `c.xy + vogelDiskSample(k, 5, φ) · radius`,
+    /// averaged (× 0.2), with `radius` one texel along each axis (`shadow.radius` 1, its
+    /// default, times r187's vec2 `texelSize`) and tap k at distance √((k + ½)/5) and angle
+    /// k · 2.399963229728653 + φ. φ rotates the disk per pixel: 2π times the interleaved
+    /// gradient noise fract(52.9829189 · fract(dot(window, (0.06711056, 0.00583715)))) of the
+    /// pixel's window position (GL's gl_FragCoord.xy: pixel centres, y up from the frame's
+    /// bottom row). 2D maps only (three.js filters point lights' cube maps otherwise).
+    Vogel5,
 }
 
 impl Filter {
-    /// Whether the sampler filters LINEAR where it compares (LINEAR itself, and each of
-    /// Castano's nine taps).
+    /// Whether the sampler filters LINEAR where it compares (LINEAR itself, each of
+    /// Castano's nine taps and each of the Vogel disk's five).
     pub fn sampler_linear(self) -> bool {
-        matches!(self, Filter::Linear | Filter::Castano13)
+        matches!(self, Filter::Linear | Filter::Castano13 | Filter::Vogel5)
+    }
+
+    /// The shader places several LINEAR compares itself (Castano's, the Vogel disk's): the
+    /// sampler filters each, the shader sums them.
+    pub fn shader_taps(self) -> bool {
+        matches!(self, Filter::Castano13 | Filter::Vogel5)
     }
 }
 

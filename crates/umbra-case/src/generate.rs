@@ -144,7 +144,8 @@ impl Gen {
         let s = &case.shadow;
         if !point
             && s.compare == Compare::Hardware
-            && !matches!(s.filter, Filter::Pcf(_) | Filter::Castano13)
+            && !matches!(s.filter, Filter::Pcf(_))
+            && !s.filter.shader_taps()
             && s.size.iter().all(|n| n.is_power_of_two())
             && self.rng.chance(0.3)
         {
@@ -234,9 +235,9 @@ impl Gen {
         for _ in 0..self.rng.int(1, 2) {
             let mut light = self.light();
             // A point light's cube map needs square faces, has no mip levels and no Castano
-            // filter.
+            // or Vogel filter.
             let cube_fits =
-                square && case.shadow.mipmaps.is_none() && case.shadow.filter != Filter::Castano13;
+                square && case.shadow.mipmaps.is_none() && !case.shadow.filter.shader_taps();
             while matches!(light, Light::Point(_)) && !cube_fits {
                 light = self.light();
             }
@@ -610,6 +611,8 @@ impl Gen {
             4..=6 => Filter::Linear,
             // Bevy's default on its directional and spot maps.
             7 if !point => Filter::Castano13,
+            // three.js's PCFShadowMap (r187) on its directional and spot maps.
+            8 if !point => Filter::Vogel5,
             _ => Filter::Pcf(self.rng.int(2, 5)),
         };
         Shadow {
@@ -1047,14 +1050,14 @@ mod tests {
                 }
             }
         }
-        // 4 formats, 4 filters, 2 compares, 3 culls, 2 orders, 2 attachments, 4 outside,
+        // 4 formats, 5 filters (Castano's and the Vogel disk among them), 2 compares, 3 culls, 2 orders, 2 attachments, 4 outside,
         // 2 guards, 2 depth orders, 2 depth clamps, 9 bias entries, 4 split schemes, a
         // cascade blend, distance, band of the far bound and stable fit, 3 lights, 2 shadings, a tinted light, one above 1, a
         // clear colour, 3 lit-pass culls, strict and inclusive depth functions, 2 colour
         // targets, 4 objects, sweep, offset.
         assert_eq!(
             seen.len(),
-            4 + 4 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 9 + 4 + 4 + 3 + 2 + 3 + 3 + 2 + 2 + 4 + 2,
+            4 + 5 + 2 + 3 + 2 + 2 + 4 + 2 + 2 + 2 + 9 + 4 + 4 + 3 + 2 + 3 + 3 + 2 + 2 + 4 + 2,
             "{seen:?}"
         );
     }

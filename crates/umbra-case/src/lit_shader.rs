@@ -13,6 +13,8 @@
 //! snippets with no decisions in it. A method a language does not need (GLSL's accessors for
 //! the face matrices, WGSL's cube rows) returns an empty string there.
 
+use std::fmt::Write as _;
+
 use crate::format::{DepthOrder, Outside, Shading, ShadingModel};
 pub use crate::technique::CascadeSelect;
 use crate::technique::{CompareOp, Coordinate, Taps, Technique};
@@ -70,6 +72,18 @@ pub trait Dialect {
     /// `sample_shadow_map_castano_thirteen` writes it (same operations, same order), each
     /// of its nine taps a `compare_at`; returns the sum over 144.
     fn castano(&self) -> &'static str;
+    /// The pixel's window position as GL's gl_FragCoord.xy gives it (its centre, y up from
+    /// the frame's bottom row; `FRAME_HEIGHT` the frame's height), or with y down from the
+    /// top row (`y_down`, the self-test's NoiseYDown).
+    fn window(&self, y_down: bool) -> &'static str;
+    /// A two-component float vector's constructor.
+    fn vec2(&self) -> &'static str;
+    /// The lookup coordinate's v runs down the map's rows, against GL's texture v (the
+    /// zero-to-one convention's bias matrix, `Convention::bias_matrix`): an offset meant
+    /// along GL's v is negated.
+    fn v_down(&self) -> bool;
+    /// What declares a mutable local of GLSL type `glsl` (that type, or WGSL's `var`).
+    fn local(&self, glsl: &'static str) -> &'static str;
     /// A uniform's name (with its component where the language packs it in a vector).
     fn uniform(&self, u: Uniform) -> &'static str;
     /// Opens `visibility(p, n)` and moves `p` by `offset` along `n`.
@@ -135,8 +149,9 @@ pub trait Dialect {
     /// A vec3 literal.
     fn vec3(&self, v: [f32; 3]) -> String;
     /// Opens `main`: the normal `n` (renormalised), and `vis` from `visibility(p, N)` with
-    /// `N` the renormalised normal, or the raw interpolant when `raw_normal` (a fault).
-    fn main_start(&self, raw_normal: bool) -> String;
+    /// `N` the renormalised normal, or the raw interpolant when `raw_normal` (a fault); with
+    /// `window`, first keeps the fragment's position where [`Dialect::window`] reads it.
+    fn main_start(&self, raw_normal: bool, window: bool) -> String;
     /// The shaded colour `col` (and the face id) from `vis`.
     fn main_colour(&self) -> &'static str;
     /// Writes the outputs and closes the entry point.
@@ -160,12 +175,16 @@ pub fn lit_fragment(d: &impl Dialect, t: &Technique) -> String {
         s += &d.fetch(t.cube, t.texel_wrap(), t.reads_wrong_component());
     }
     s += &d.tap(t.manual(), t.cube, t.compare_op());
-    if t.taps() == Taps::Castano13 {
+    let vogel = matches!(t.taps(), Taps::Vogel5 { .. });
+    if t.taps() == Taps::Castano13 || vogel {
         s += &d.compare_at(t.manual());
+    }
+    if vogel {
+        s += &d.constant("FRAME_HEIGHT", &format!("{:?}", t.frame_height as f32));
     }
     lookup(&mut s, d, t);
     shade(&mut s, d, t);
-    s += &d.main_start(t.lookup_normal_raw());
+    s += &d.main_start(t.lookup_normal_raw(), vogel);
     if let Some(steps) = t.visibility_steps() {
         s += &format!("  vis = floor(vis * {steps}.0 + 0.5) / {steps}.0;\n");
     }
@@ -291,6 +310,11 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
                     + (1.0 - a.x) * a.y * tap(f, i0.x, i0.y + 1.0, r) + a.x * a.y * tap(f, i0.x + 1.0, i0.y + 1.0, r);\n";
         }
         Taps::Castano13 => *s += d.castano(),
+        Taps::Vogel5 {
+            rotated,
+            window_y_down,
+            sqrt_radius,
+        } => vogel(s, d, rotated, window_y_down, sqrt_radius),
         Taps::Pcf {
             n,
             off_centre,
@@ -313,6 +337,59 @@ fn lookup(s: &mut String, d: &impl Dialect, t: &Technique) {
     if let Some(c) = cascades {
         *s += &d.cascaded_visibility(&offset, &c);
     }
+}
+
+/// three.js's PCF (`umbra_ref::lookup`'s `vogel`): `getShadow`'s five `texture` compares at
+/// `shadowCoord.xy + vogelDiskSample(k, 5, phi) * radius`, same operations, same order, the
+/// sum times 0.2; `phi` from `interleavedGradientNoise(gl_FragCoord.xy)` unless the disk
+/// is not `rotated`, the window read with y down under `window_y_down`, the taps' radii
+/// without their square root unless `sqrt_radius` (the self-test's faults).
+fn vogel(s: &mut String, d: &impl Dialect, rotated: bool, window_y_down: bool, sqrt_radius: bool) {
+    let (v2, f) = (d.vec2(), d.local("float"));
+    let phi = if rotated {
+        // A highp copy of the window position: ESSL 1.00 declares gl_FragCoord mediump, and
+        // an operation takes its operands' precision (literals have none), so the noise would
+        // be computed in mediump, fp16 on Mesa's llvmpipe and zink, which scrambles it; WebGL 2
+        // (three.js's only target since r163) and every other language here have it highp.
+        // Pixel centres are exact in fp16 below 1024.
+        let _ = writeln!(
+            s,
+            "  {} window = {};",
+            d.local("highp vec2"),
+            d.window(window_y_down)
+        );
+        format!(
+            "fract(52.982918900 * fract(dot(window, {v2}(0.067110560, 0.005837150)))) * 6.283185307"
+        )
+    } else {
+        "0.0".to_string()
+    };
+    let _ = writeln!(s, "  {f} phi = {phi};");
+    // `shadowRadius * texelSize`, shadow.radius 1 (three.js's default), a vec2 since r187.
+    let _ = writeln!(
+        s,
+        "  {} radius = 1.0 * ({v2}(1.0) / {v2}({}, {}));",
+        d.local("vec2"),
+        d.uniform(Uniform::MapWidth),
+        d.uniform(Uniform::MapHeight)
+    );
+    let _ = writeln!(s, "  {f} sum = 0.0;");
+    for k in 0..5 {
+        let share = format!("({k}.0 + 0.5) / 5.0");
+        let rk = if sqrt_radius {
+            format!("sqrt({share})")
+        } else {
+            format!("({share})")
+        };
+        // three.js adds the disk along GL's texture v (WebGL's shadowCoord).
+        let sin = if d.v_down() { "-sin" } else { "sin" };
+        let _ = writeln!(
+            s,
+            "  {f} theta{k} = {k}.0 * 2.399963230 + phi;\n  \
+             sum += compare_at(f, c.xy + {v2}(cos(theta{k}), {sin}(theta{k})) * {rk} * radius, r);"
+        );
+    }
+    *s += "  return sum * 0.2;\n";
 }
 
 /// The guard, the outside test and the beyond-far test: each returns lit.

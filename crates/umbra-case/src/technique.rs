@@ -73,6 +73,9 @@ pub struct Technique {
     pub mipmapped: bool,
     /// The illumination model and its constants (written into the shader).
     pub shading: Shading,
+    /// The frame's height in pixels: WGSL's fragment position runs down from the top, and
+    /// the Vogel disk's rotation reads GL's window position, up from the bottom.
+    pub frame_height: u32,
     /// The light's colour times its intensity (written into the shader where it is not
     /// white: [`Technique::light_colour`]).
     radiance: [f32; 3],
@@ -190,6 +193,18 @@ pub enum Taps {
     /// Castano's filter (Bevy's `castano_thirteen`, named for the 2013 article): nine bilinear compares (the sampler's, or the shader's
     /// four taps where it compares itself) weighted into a 6 × 6-texel tent.
     Castano13,
+    /// three.js's PCF: five LINEAR compares on a Vogel disk of one texel, rotated per pixel
+    /// by interleaved gradient noise of the window position (`Filter::Vogel5`).
+    Vogel5 {
+        /// The disk is rotated per pixel (VogelUnrotated drops the noise: φ = 0).
+        rotated: bool,
+        /// The noise reads the window position with y down from the top row, as WGSL's
+        /// `@builtin(position)` gives it, instead of GL's gl_FragCoord (NoiseYDown).
+        window_y_down: bool,
+        /// Tap k lies at √((k + ½)/5) of the radius; without the root (VogelNoSqrt), at
+        /// (k + ½)/5, bunched towards the centre.
+        sqrt_radius: bool,
+    },
     /// N × N nearest taps around c, averaged.
     Pcf {
         /// N.
@@ -245,6 +260,7 @@ impl Technique {
             beyond_far_lit: s.beyond_far == BeyondFar::Lit,
             mipmapped: s.mipmaps.is_some(),
             shading: case.shading.clone(),
+            frame_height: case.camera.size[1],
             radiance: run.as_written().radiance(),
             fault,
         }
@@ -418,7 +434,7 @@ impl Technique {
     /// no projective compare (GLSL's textureProj takes no layer).
     pub fn taps(&self) -> Taps {
         let sampler_filters =
-            !self.manual() && !matches!(self.filter, Filter::Pcf(_) | Filter::Castano13);
+            !self.manual() && !matches!(self.filter, Filter::Pcf(_)) && !self.filter.shader_taps();
         match self.filter {
             _ if sampler_filters && self.cube => Taps::HardwareCube,
             _ if sampler_filters && self.mipmapped => Taps::HardwareMipmapped,
@@ -442,6 +458,11 @@ impl Technique {
                 },
             },
             Filter::Castano13 => Taps::Castano13,
+            Filter::Vogel5 => Taps::Vogel5 {
+                rotated: !self.is(Fault::VogelUnrotated),
+                window_y_down: self.is(Fault::NoiseYDown),
+                sqrt_radius: !self.is(Fault::VogelNoSqrt),
+            },
             Filter::Pcf(n) => Taps::Pcf {
                 n,
                 off_centre: self.is(Fault::PcfOffCentre),

@@ -846,13 +846,16 @@ impl Validator<'_> {
                 );
             }
         }
-        if c.shadow.filter == Filter::Castano13
-            && c.lights.iter().any(|l| matches!(l, Light::Point(_)))
-        {
+        if c.shadow.filter.shader_taps() && c.lights.iter().any(|l| matches!(l, Light::Point(_))) {
+            let name = if c.shadow.filter == Filter::Castano13 {
+                "castano13"
+            } else {
+                "vogel5"
+            };
             self.err(
                 "shadow.filter",
-                "castano13 places its taps on a 2D map's texel grid; a point light's map is a cube",
-                "use \"linear\" or { \"pcf\": 3 } with point lights (Bevy filters cube maps another way)",
+                format!("{name} places its taps on a 2D map's texel grid; a point light's map is a cube"),
+                "use \"linear\" or { \"pcf\": 3 } with point lights (Bevy and three.js filter cube maps another way)",
             );
         }
     }
@@ -883,7 +886,7 @@ impl Validator<'_> {
                 "set \"compare\": \"hardware\" or remove shadow.mipmaps",
             );
         }
-        if matches!(s.filter, Filter::Pcf(_) | Filter::Castano13) {
+        if matches!(s.filter, Filter::Pcf(_)) || s.filter.shader_taps() {
             self.err(
                 "shadow.filter",
                 "a mipmapped map is filtered by the sampler: `nearest` or `linear` within a level",

@@ -441,6 +441,26 @@ impl Dialect for Glsl {
            return sum * (1.0 / 144.0);\n"
     }
 
+    fn window(&self, y_down: bool) -> &'static str {
+        if y_down {
+            "vec2(gl_FragCoord.x, FRAME_HEIGHT - gl_FragCoord.y)"
+        } else {
+            "gl_FragCoord.xy"
+        }
+    }
+
+    fn vec2(&self) -> &'static str {
+        "vec2"
+    }
+
+    fn v_down(&self) -> bool {
+        false
+    }
+
+    fn local(&self, glsl: &'static str) -> &'static str {
+        glsl
+    }
+
     fn uniform(&self, u: Uniform) -> &'static str {
         match u {
             Uniform::MapWidth => "u_size.x",
@@ -646,7 +666,8 @@ impl Dialect for Glsl {
     }
 
     /// Outputs: colour; visibility in R and face id + 1 in G, B, A (base 256).
-    fn main_start(&self, raw_normal: bool) -> String {
+    /// gl_FragCoord is read where it is needed: `window` changes nothing here.
+    fn main_start(&self, raw_normal: bool, _window: bool) -> String {
         format!(
             "vec4 encode(float vis, float face) {{\n  float id = face + 1.0;\n\
                return vec4(vis, mod(id, 256.0) / 255.0, mod(floor(id / 256.0), 256.0) / 255.0, floor(id / 65536.0) / 255.0);\n}}\n\

@@ -16,10 +16,13 @@
 
 use glam::Vec3;
 use rayon::prelude::*;
+use umbra_case::format::Filter;
 use umbra_case::{Convention, Geometry, LightRun, Profile};
 
 use crate::bands::for_each_band;
-use crate::lookup::{Legal, Lookup, Neighbours, Turn, ambiguity, position_freedom};
+use crate::lookup::{
+    Legal, Lookup, Neighbours, Turn, ambiguity, at_window, position_freedom, window_of,
+};
 use crate::raster::{Coverage, EdgeKind, Rasterizer, Tri};
 use crate::shading::{background, shade_linear, shade_run, shade_tolerance};
 use crate::shadow_pass::setup_all;
@@ -167,27 +170,23 @@ pub fn render(
                     let xs = x0..x0 + len;
                     x0 += len;
                     if winner == NONE {
-                        for x in xs {
-                            c_row[4 * x..4 * x + 4].copy_from_slice(&bg);
-                            v_row[x] = f32::NAN;
-                            s_row[x] = 0;
-                            // The clear colour exactly: the judge holds the background to it.
-                            if let Some(slot) = l_row.get_mut(x) {
-                                *slot = PixelLegal {
-                                    flags: free(x),
-                                    c0: case.camera.clear,
-                                    c1: case.camera.clear,
-                                    ..Default::default()
-                                };
-                            }
-                        }
+                        let row = (&mut *c_row, &mut *v_row, &mut *s_row, &mut *l_row);
+                        background_run(xs, row, &bg, case.camera.clear, free);
                         continue;
                     }
                     let tri = &tris[winner as usize];
                     let t = tri.source as usize;
                     surfaces.fill(tri, geo, xs.start as i32, y as i32, len, eye, &run.light);
                     let vis = &mut v_row[xs.clone()];
-                    if surface_free.is_none() && explain.is_none() && !lookup.mipmapped() {
+                    // The per-pixel lookups know their pixel (the Vogel disk's rotation reads
+                    // its window position); a run's lookups do not, so a filter that reads it
+                    // takes the per-pixel path.
+                    let per_pixel = case.shadow.filter == Filter::Vogel5;
+                    if surface_free.is_none()
+                        && explain.is_none()
+                        && !lookup.mipmapped()
+                        && !per_pixel
+                    {
                         lookup.visibility_run(surfaces, vis, coords);
                     } else {
                         for (k, x) in xs.clone().enumerate() {
@@ -202,17 +201,20 @@ pub fn render(
                                 to_light: surfaces.light_dir(k),
                                 to_eye: surfaces.eye_dir(k),
                             };
-                            let look = || match &surface_free {
-                                Some(_) => judge(&pt, free(x), y * wu + x),
-                                None if lookup.mipmapped() => (
-                                    lookup.visibility_mip(
-                                        pt.p,
-                                        pt.n,
-                                        &neighbours(tri, geo, pt.x, pt.y),
+                            let window = window_of(x as u32, y as u32, h, conv.window_y_down());
+                            let look = || {
+                                at_window(window, || match &surface_free {
+                                    Some(_) => judge(&pt, free(x), y * wu + x),
+                                    None if lookup.mipmapped() => (
+                                        lookup.visibility_mip(
+                                            pt.p,
+                                            pt.n,
+                                            &neighbours(tri, geo, pt.x, pt.y),
+                                        ),
+                                        PixelLegal::default(),
                                     ),
-                                    PixelLegal::default(),
-                                ),
-                                None => (lookup.visibility(pt.p, pt.n), PixelLegal::default()),
+                                    None => (lookup.visibility(pt.p, pt.n), PixelLegal::default()),
+                                })
                             };
                             let (v, l) = if explain == Some(y * wu + x) {
                                 let (out, t) = crate::lookup::explaining(look);
@@ -250,6 +252,31 @@ pub fn render(
         surface: surface_ids,
         legal,
         trace: trace.into_inner().unwrap_or_default(),
+    }
+}
+
+/// Pixels `xs` of a row that show no surface: the clear colour, no visibility, no surface,
+/// and, for a judged render, the clear colour exactly (the judge holds the background to it)
+/// with the pixel's surface freedoms `free`.
+fn background_run(
+    xs: std::ops::Range<usize>,
+    (color, vis, surface, legal): (&mut [u8], &mut [f32], &mut [u32], &mut [PixelLegal]),
+    bg: &[u8; 4],
+    clear: [f32; 3],
+    free: impl Fn(usize) -> u8,
+) {
+    for x in xs {
+        color[4 * x..4 * x + 4].copy_from_slice(bg);
+        vis[x] = f32::NAN;
+        surface[x] = 0;
+        if let Some(slot) = legal.get_mut(x) {
+            *slot = PixelLegal {
+                flags: free(x),
+                c0: clear,
+                c1: clear,
+                ..Default::default()
+            };
+        }
     }
 }
 

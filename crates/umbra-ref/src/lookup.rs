@@ -20,7 +20,8 @@
 //! 7. Filter: NEAREST texel floor(u·size); LINEAR = 2x2 at floor(u·size − ½) with bilinear
 //!    weights of the compare results (never of depths); PCF N = N×N NEAREST compares at
 //!    offsets (k − (N−1)/2) texels, averaged; Castano's filter = nine weighted LINEAR
-//!    compares ([`castano_taps`]).
+//!    compares ([`castano_taps`]); the Vogel disk = five LINEAR compares around the point,
+//!    rotated per pixel ([`vogel_taps`], [`vogel_rotation`]).
 //! 8. Texels beyond the map: border (clear depth), clamp to edge (also for `lit`), or repeat.
 //!    Cube faces: the sampler clamps to the face; taps the shader addresses itself go through
 //!    the direction of their texel's centre, so a PCF tap beyond a face's edge reads the
@@ -65,12 +66,14 @@ mod precision;
 mod steps;
 #[cfg(test)]
 mod tests;
+mod vogel;
 
 use addressing::Addressing;
 pub use filters::castano_taps;
 use filters::span;
 use grid::Grid;
 pub use mip::Neighbours;
+pub use vogel::{at_window, vogel_rotation, vogel_taps, window_of};
 
 thread_local! {
     /// The trace of the lookup being explained on this thread (see [`explaining`]).
@@ -210,7 +213,7 @@ impl Legal {
 }
 
 /// The step between the values a filter can produce: NEAREST returns 0 or 1, PCF N sums of
-/// N² results over N², LINEAR and Castano's filter anything (0); a blend of two mip levels
+/// N² results over N², LINEAR, Castano's filter and the Vogel disk anything (0); a blend of two mip levels
 /// anything too, and so does a blend of two cascades (`light`'s blend band).
 pub fn quantum(shadow: &Shadow, light: &LightSetup) -> f32 {
     // A band exists where there are two cascades or more.
@@ -227,7 +230,7 @@ pub fn quantum(shadow: &Shadow, light: &LightSetup) -> f32 {
     }
     match shadow.filter {
         Filter::Nearest => 1.0,
-        Filter::Linear | Filter::Castano13 => 0.0,
+        Filter::Linear | Filter::Castano13 | Filter::Vogel5 => 0.0,
         Filter::Pcf(n) => 1.0 / (n * n) as f32,
     }
 }

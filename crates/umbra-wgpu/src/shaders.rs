@@ -223,6 +223,29 @@ impl Dialect for Wgsl {
            return sum * (1.0 / 144.0);\n"
     }
 
+    /// `frag` is the fragment's `@builtin(position).xy`, y down from the top row, kept by
+    /// [`Dialect::main_start`].
+    fn window(&self, y_down: bool) -> &'static str {
+        if y_down {
+            "frag"
+        } else {
+            "vec2<f32>(frag.x, FRAME_HEIGHT - frag.y)"
+        }
+    }
+
+    fn vec2(&self) -> &'static str {
+        "vec2<f32>"
+    }
+
+    /// The zero-to-one bias matrix: v runs down the rows.
+    fn v_down(&self) -> bool {
+        true
+    }
+
+    fn local(&self, _glsl: &'static str) -> &'static str {
+        "var"
+    }
+
     fn uniform(&self, u: Uniform) -> &'static str {
         match u {
             Uniform::MapWidth => "u.size.x",
@@ -444,10 +467,15 @@ impl Dialect for Wgsl {
         format!("vec3<f32>({:.9}, {:.9}, {:.9})", v[0], v[1], v[2])
     }
 
-    fn main_start(&self, raw_normal: bool) -> String {
+    fn main_start(&self, raw_normal: bool, window: bool) -> String {
+        let (frag, keep) = if window {
+            ("var<private> frag: vec2<f32>;\n", "  frag = v.clip.xy;\n")
+        } else {
+            ("", "")
+        };
         format!(
-            "struct FOut {{\n  @location(0) color: vec4<f32>,\n  @location(1) vis: vec4<f32>,\n  @location(2) face: u32,\n}}\n\
-             @fragment fn fs(v: VOut) -> FOut {{\n  let n = normalize(v.normal);\n  var vis = visibility(v.pos, {});\n",
+            "{frag}struct FOut {{\n  @location(0) color: vec4<f32>,\n  @location(1) vis: vec4<f32>,\n  @location(2) face: u32,\n}}\n\
+             @fragment fn fs(v: VOut) -> FOut {{\n{keep}  let n = normalize(v.normal);\n  var vis = visibility(v.pos, {});\n",
             if raw_normal { "v.normal" } else { "n" }
         )
     }

@@ -75,6 +75,9 @@ impl Fault {
             Fault::OffsetUnitsLow => s.bias.polygon_offset[1] != 0.0,
             Fault::SlopeShort => s.bias.slope.is_some(),
             Fault::PcfOffCentre | Fault::PcfDoubleCentre => matches!(s.filter, Filter::Pcf(_)),
+            Fault::VogelUnrotated | Fault::NoiseYDown | Fault::VogelNoSqrt => {
+                s.filter == Filter::Vogel5
+            }
             Fault::BilinearCoarse => {
                 s.filter == Filter::Linear && (s.compare == Compare::Manual || es2)
             }
@@ -148,6 +151,9 @@ impl Fault {
             | Fault::PcfDoubleCentre
             | Fault::BilinearCoarse
             | Fault::Vis4Bit => &["filters-magnified", "filters"],
+            Fault::VogelUnrotated | Fault::NoiseYDown | Fault::VogelNoSqrt => {
+                &["filters-magnified", "filters", "three-directional"]
+            }
             Fault::NoGuard => &["guard-magnified", "behind-spot", "bias-matrix"],
             Fault::Repeat => &["outside"],
             Fault::ClampIgnored => &["pancake", "near-crossing-clamped"],

@@ -331,6 +331,17 @@ pub enum Fault {
     /// 1 − cos(π/segments) at a quad's middle (7.6 % on an 8-segment cylinder, 5·10⁻⁴ on a
     /// 96-segment sphere).
     NormalUnnormalized,
+    /// The Vogel disk is not rotated per pixel (φ = 0: the noise dropped, as a port that
+    /// wants a stable picture does): every pixel samples the same five offsets, and a soft
+    /// edge turns from grain into a fixed pattern.
+    VogelUnrotated,
+    /// The Vogel disk's noise reads the window position with y down from the top row, as
+    /// WGSL's `@builtin(position)` gives it, instead of GL's gl_FragCoord (a WebGL shader
+    /// ported to WebGPU without the flip): each pixel gets another pixel's rotation.
+    NoiseYDown,
+    /// The Vogel disk's taps lie at (k + ½)/5 of the radius instead of √((k + ½)/5): the
+    /// area law forgotten, the taps bunched towards the centre.
+    VogelNoSqrt,
     /// State leaks from one case point to the next: the lit pass keeps the texture matrices
     /// of the first case a worker process rendered for every later case (a uniform upload
     /// skipped once a program has one, a stale binding). Each point alone renders right; a
@@ -360,7 +371,7 @@ impl Fault {
     /// three stand for them here (a wrong handedness on the +x face, the one the
     /// four-fold symmetric point-light cases could not see; a wrong up vector on the −y face;
     /// a transposed 2D map), and `umbra selftest --fault` or `--orientations` runs any.
-    pub const ALL: [Fault; 47] = [
+    pub const ALL: [Fault; 50] = [
         Fault::CompareFlipped,
         Fault::NoDivide,
         Fault::NoGuard,
@@ -405,6 +416,9 @@ impl Fault {
         Fault::ArrayLayerZero,
         Fault::StaleUniform,
         Fault::NormalUnnormalized,
+        Fault::VogelUnrotated,
+        Fault::NoiseYDown,
+        Fault::VogelNoSqrt,
         Fault::Oriented {
             face: Some(0),
             orientation: Orientation::MirrorX,
@@ -476,6 +490,9 @@ impl Fault {
             Fault::ArrayLayerZero => "array-layer-zero",
             Fault::StaleUniform => "stale-uniform",
             Fault::NormalUnnormalized => "normal-unnormalized",
+            Fault::VogelUnrotated => "vogel-unrotated",
+            Fault::NoiseYDown => "noise-y-down",
+            Fault::VogelNoSqrt => "vogel-no-sqrt",
             Fault::Oriented { face, orientation } => {
                 return match face {
                     Some(f) => format!("face{f}-{}", orientation.name()),
@@ -502,6 +519,9 @@ impl Fault {
             Fault::PcfOffCentre
             | Fault::PcfDoubleCentre
             | Fault::BilinearCoarse
+            | Fault::VogelUnrotated
+            | Fault::NoiseYDown
+            | Fault::VogelNoSqrt
             | Fault::Vis4Bit
             | Fault::MipBaseOnly
             | Fault::MipLevelCoarse => Subtlety::Filtered,

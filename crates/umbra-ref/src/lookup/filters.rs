@@ -73,6 +73,7 @@ impl Lookup<'_> {
                 Self::linear_shader(x, (ex, ey), tap)
             }
             Filter::Castano13 => self.castano(&st, r, (ex, ey), addressing),
+            Filter::Vogel5 => self.vogel(&st, r, (ex, ey), addressing),
             Filter::Pcf(k) => {
                 let half = (k as f32 - 1.0) * 0.5;
                 let (mut lo, mut hi, mut flags) = (0.0, 0.0, 0);

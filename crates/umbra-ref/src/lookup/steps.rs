@@ -247,6 +247,7 @@ impl Lookup<'_> {
                 }
                 sum * (1.0 / 144.0)
             }
+            Filter::Vogel5 => self.vogel_value(st, bilinear),
             Filter::Pcf(k) => {
                 let half = (k as f32 - 1.0) * 0.5;
                 let mut sum = 0.0;

@@ -43,21 +43,48 @@ fn the_interval_holds_across_cascade_splits_and_bands() {
 fn the_interval_holds_for_castanos_taps() {
     let mut rand = crate::test_rng::uniform(0x5EED_0C13);
     let mut checked = 0;
-    for mut case in umbra_case::generate::cases(13, 24) {
-        if case
-            .lights
-            .iter()
-            .any(|l| matches!(l, umbra_case::format::Light::Point(_)))
-            || case.shadow.mipmaps.is_some()
-        {
-            continue;
-        }
-        case.shadow.filter = Filter::Castano13;
-        let text = umbra_case::generate::to_json(&case);
-        let point = umbra_case::load_str(&text, std::path::Path::new("g.json"))
-            .expect("a 2D generated case takes castano13")
-            .swap_remove(0);
+    for point in two_d_cases(13, 24, Filter::Castano13) {
         checked += every_light(point, &mut rand, 120);
+    }
+    assert!(checked > 20_000, "{checked}");
+}
+
+/// The generated cases of `seed` (the first `count`) that can have a 2D map's filter (no
+/// point light, no mip levels), each with `filter`, as case points.
+fn two_d_cases(seed: u64, count: usize, filter: Filter) -> Vec<umbra_case::CasePoint> {
+    umbra_case::generate::cases(seed, count)
+        .into_iter()
+        .filter(|case| {
+            !case
+                .lights
+                .iter()
+                .any(|l| matches!(l, umbra_case::format::Light::Point(_)))
+                && case.shadow.mipmaps.is_none()
+        })
+        .map(|mut case| {
+            case.shadow.filter = filter;
+            let text = umbra_case::generate::to_json(&case);
+            umbra_case::load_str(&text, std::path::Path::new("g.json"))
+                .unwrap_or_else(|e| panic!("a 2D generated case takes {filter:?}: {e}"))
+                .swap_remove(0)
+        })
+        .collect()
+}
+
+/// The same for three.js's Vogel disk at pixels all over a frame: each pixel's rotation
+/// (its arcs, where the noise's arithmetic allows two) and each tap's move within it.
+#[test]
+fn the_interval_holds_for_the_vogel_disk() {
+    let mut rand = crate::test_rng::uniform(0x5EED_7003);
+    let mut checked = 0;
+    for point in two_d_cases(17, 16, Filter::Vogel5) {
+        for _ in 0..4 {
+            let window = [
+                (rand() * 400.0).floor() + 0.5,
+                (rand() * 300.0).floor() + 0.5,
+            ];
+            checked += at_window(window, || every_light(point.clone(), &mut rand, 40));
+        }
     }
     assert!(checked > 20_000, "{checked}");
 }

@@ -86,6 +86,8 @@ pub fn edge_radius(filter: Filter) -> i32 {
         Filter::Pcf(n) => 1 + (n as i32 - 1 + 1) / 2,
         // Its nine bilinear taps reach from 3 texels before the point to 2¼ + 1 after it.
         Filter::Castano13 => 4,
+        // Its five bilinear taps lie within one texel of the point, each reading one more.
+        Filter::Vogel5 => 2,
     }
 }
 

@@ -180,6 +180,7 @@ pub fn run_kind(case: &umbra_case::Case) -> String {
         Filter::Linear => ", linear",
         Filter::Pcf(_) => ", pcf",
         Filter::Castano13 => ", castano",
+        Filter::Vogel5 => ", vogel",
     };
     if case.shadow.mipmaps.is_some() {
         kind += ", mips";
