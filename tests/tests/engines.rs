@@ -282,12 +282,14 @@ fn a_peer_case_edited_without_the_pack_fails_naming_the_field() {
         serde_json::from_str(&std::fs::read_to_string(&src).expect("bevy-sun")).expect("json");
     let dir = std::env::temp_dir().join(format!("umbra-engines-{}", std::process::id()));
     // Every other peer the pack names, copied as it is.
-    for s in sections.values() {
-        for r in &s.rows {
-            let to = dir.join(&r.case);
-            std::fs::create_dir_all(to.parent().expect("a case's folder")).expect("dir");
-            std::fs::copy(root().join("cases").join(&r.case), to).expect("copy");
-        }
+    let named: std::collections::BTreeSet<&str> = sections
+        .values()
+        .flat_map(|s| s.rows.iter().map(|r| r.case.as_str()))
+        .collect();
+    for case in named {
+        let to = dir.join(case);
+        std::fs::create_dir_all(to.parent().expect("a case's folder")).expect("dir");
+        std::fs::copy(root().join("cases").join(case), to).expect("copy");
     }
     let write = |doc: &Value| {
         std::fs::create_dir_all(dir.join("cascades")).expect("dir");

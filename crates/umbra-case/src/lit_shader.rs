@@ -175,16 +175,16 @@ pub fn lit_fragment(d: &impl Dialect, t: &Technique) -> String {
         s += &d.fetch(t.cube, t.texel_wrap(), t.reads_wrong_component());
     }
     s += &d.tap(t.manual(), t.cube, t.compare_op());
-    let vogel = matches!(t.taps(), Taps::Vogel5 { .. });
-    if t.taps() == Taps::Castano13 || vogel {
+    let disk = matches!(t.taps(), Taps::Vogel5 { .. });
+    if t.taps() == Taps::Castano13 || disk {
         s += &d.compare_at(t.manual());
     }
-    if vogel {
+    if disk {
         s += &d.constant("FRAME_HEIGHT", &format!("{:?}", t.frame_height as f32));
     }
     lookup(&mut s, d, t);
     shade(&mut s, d, t);
-    s += &d.main_start(t.lookup_normal_raw(), vogel);
+    s += &d.main_start(t.lookup_normal_raw(), disk);
     if let Some(steps) = t.visibility_steps() {
         s += &format!("  vis = floor(vis * {steps}.0 + 0.5) / {steps}.0;\n");
     }

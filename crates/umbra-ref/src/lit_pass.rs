@@ -141,6 +141,9 @@ pub fn render(
     // and the compiler and the processor overlap them. What a pixel allows only for judged
     // renders.
     let trace = std::sync::Mutex::new(String::new());
+    // The per-pixel lookups know their pixel (the Vogel disk's rotation reads its window
+    // position); a run's lookups do not, so a filter that reads it takes the per-pixel path.
+    let per_pixel = case.shadow.filter == Filter::Vogel5;
     let n = nearest.len();
     let (wu, hu) = (w as usize, h as usize);
     let mut color = vec![0u8; n * 4];
@@ -178,10 +181,6 @@ pub fn render(
                     let t = tri.source as usize;
                     surfaces.fill(tri, geo, xs.start as i32, y as i32, len, eye, &run.light);
                     let vis = &mut v_row[xs.clone()];
-                    // The per-pixel lookups know their pixel (the Vogel disk's rotation reads
-                    // its window position); a run's lookups do not, so a filter that reads it
-                    // takes the per-pixel path.
-                    let per_pixel = case.shadow.filter == Filter::Vogel5;
                     if surface_free.is_none()
                         && explain.is_none()
                         && !lookup.mipmapped()

@@ -58,19 +58,17 @@ impl Lookup<'_> {
                 let (t, differ) = taps(u * fw, v * fh, (ex + sampler, ey + sampler));
                 legal(t.min(), t.max(), t.flags() | texel_flag(differ))
             }
-            Filter::Linear if self.hardware() => {
-                let x = (u * fw - 0.5, v * fh - 0.5);
-                self.linear_hardware(x, (ex, ey), |i, j| self.linear_tap(st.face, i, j, r))
-            }
             Filter::Linear => {
-                // The shader's own bilinear weights: exact but for the coordinate's
-                // arithmetic, which may also pick the next footprint.
-                let x = (
-                    f64::from(st.c.u * w as f32 - 0.5),
-                    f64::from(st.c.v * h as f32 - 0.5),
-                );
-                let tap = |i, j| self.possible(st.face, i, j, r, addressing);
-                Self::linear_shader(x, (ex, ey), tap)
+                // The sampler's coordinate, or the shader's own in its f32 arithmetic.
+                let x = if self.hardware() {
+                    (u * fw - 0.5, v * fh - 0.5)
+                } else {
+                    (
+                        f64::from(st.c.u * w as f32 - 0.5),
+                        f64::from(st.c.v * h as f32 - 0.5),
+                    )
+                };
+                self.linear_compare(st.face, x, (ex, ey), r, addressing)
             }
             Filter::Castano13 => self.castano(&st, r, (ex, ey), addressing),
             Filter::Vogel5 => self.vogel(&st, r, (ex, ey), addressing),
@@ -92,6 +90,24 @@ impl Lookup<'_> {
                 let n = f64::from(k * k);
                 legal(lo / n, hi / n, flags)
             }
+        }
+    }
+
+    /// One LINEAR compare at texel coordinates `x` (the first texel's centre at 0) within
+    /// `err`: the sampler's where it compares ([`Lookup::linear_hardware`]), else the
+    /// shader's own 2×2 ([`Lookup::linear_shader`]); `r` the reference value's interval.
+    pub(super) fn linear_compare(
+        &self,
+        face: usize,
+        x: (f64, f64),
+        err: (f64, f64),
+        r: (f64, f64),
+        addressing: Addressing,
+    ) -> Legal {
+        if self.hardware() {
+            self.linear_hardware(x, err, |i, j| self.linear_tap(face, i, j, r))
+        } else {
+            Self::linear_shader(x, err, |i, j| self.possible(face, i, j, r, addressing))
         }
     }
 

@@ -104,12 +104,13 @@ fn rotations(window: Option<[f32; 2]>) -> Vec<(f64, f64)> {
     // its floor (exact); then the product by k and its floor, and the product by 2π.
     let e = 4.0 * U * (f64::from(x) * a + f64::from(y) * b) + ulp(t);
     let whole = t.floor();
-    let mut branches = vec![(t - e - whole, t + e - whole)];
-    if t - e < whole {
-        branches = vec![(0.0, t + e - whole), (t - e - (whole - 1.0), 1.0)];
+    let branches = if t - e < whole {
+        vec![(0.0, t + e - whole), (t - e - (whole - 1.0), 1.0)]
     } else if t + e >= whole + 1.0 {
-        branches = vec![(t - e - whole, 1.0), (0.0, t + e - (whole + 1.0))];
-    }
+        vec![(t - e - whole, 1.0), (0.0, t + e - (whole + 1.0))]
+    } else {
+        vec![(t - e - whole, t + e - whole)]
+    };
     branches
         .into_iter()
         .map(|(lo, hi)| {
@@ -159,6 +160,7 @@ impl Lookup<'_> {
         let [w, h] = self.shadow.size;
         let (fw, fh) = (f64::from(w), f64::from(h));
         let (x, y) = (f64::from(st.c.u) * fw, f64::from(st.c.v) * fh);
+        let up = f64::from(self.v_up());
         let mut out: Option<Legal> = None;
         for (a, b) in rotations(window()) {
             let (mut lo, mut hi, mut flags) = (0.0, 0.0, 0);
@@ -176,20 +178,12 @@ impl Lookup<'_> {
                 // may be: the point's own error, the tap's move, and the roundings of the
                 // offset's product by the radius, of its sum with c and of the sampler's
                 // product by the size (each within an ulp of the coordinate in texels).
-                let (tx, ty) = (x + ox - 0.5, y + f64::from(self.v_up()) * oy - 0.5);
+                let (tx, ty) = (x + ox - 0.5, y + up * oy - 0.5);
                 let (ex, ey) = (
                     err.0 + move_by + 4.0 * ulp(x.abs() + 2.0),
                     err.1 + move_by + 4.0 * ulp(y.abs() + 2.0),
                 );
-                let t = if self.hardware() {
-                    self.linear_hardware((tx, ty), (ex, ey), |i, j| {
-                        self.linear_tap(st.face, i, j, r)
-                    })
-                } else {
-                    Self::linear_shader((tx, ty), (ex, ey), |i, j| {
-                        self.possible(st.face, i, j, r, addressing)
-                    })
-                };
+                let t = self.linear_compare(st.face, (tx, ty), (ex, ey), r, addressing);
                 lo += f64::from(t.lo);
                 hi += f64::from(t.hi);
                 flags |= t.flags;

@@ -175,10 +175,7 @@ impl MesaBuild {
                 "{e}; fix: give a Mesa install prefix (meson install --destdir DIR), a Mesa build directory, or a directory of unpacked Debian packages (cargo xtask fetch-mesa)"
             )
         })?;
-        let generated = std::env::temp_dir().join(format!(
-            "umbra-mesa-{:08x}",
-            umbra_report::names::fnv1a(&root.to_string_lossy())
-        ));
+        let generated = std::env::temp_dir().join(build_tag(&root));
         if let Some(fake) =
             crate::harness::fake::marker(&root).filter(|_| crate::harness::fake::enabled())
         {
@@ -715,6 +712,15 @@ pub fn check_loaded(root: &Path, libs: &[PathBuf]) -> Result<(), String> {
     Ok(())
 }
 
+/// The name umbra gives what it keeps for the build at `root` (its loader files in the temp
+/// directory, its shader cache): `umbra-mesa-` and the hash of the path.
+fn build_tag(root: &Path) -> String {
+    format!(
+        "umbra-mesa-{:08x}",
+        umbra_report::names::fnv1a(&root.to_string_lossy())
+    )
+}
+
 /// Mesa's on-disk shader cache for the build at `root`, apart from every other Mesa's:
 /// `MESA_SHADER_CACHE_DIR` under the user's cache directory, named for the build's path.
 /// Two releases sharing the default `~/.cache/mesa_shader_cache` tear each other's index: a
@@ -736,10 +742,7 @@ fn shader_cache_env(
         .map(PathBuf::from)
         .or_else(|| environ("HOME").map(|h| PathBuf::from(h).join(".cache")))
         .unwrap_or_else(std::env::temp_dir);
-    let dir = base.join(format!(
-        "umbra-mesa-{:08x}",
-        umbra_report::names::fnv1a(&root.to_string_lossy())
-    ));
+    let dir = base.join(build_tag(root));
     Some((
         "MESA_SHADER_CACHE_DIR".into(),
         dir.to_string_lossy().into_owned(),
